@@ -1,0 +1,109 @@
+//! What each CLI subcommand does, as library functions (so tests call them
+//! directly and the binary stays a thin clap front end).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::error::Result;
+use crate::event_folder::{self, LoadedEvent};
+use crate::pipeline::{self, PipelineFile, StageOutcome};
+use crate::vocab::format_epoch_ns;
+
+/// `quaketwin inspect EVENT`: a table of the channels, what was inferred and
+/// what is missing.
+pub fn inspect(event: &Path) -> Result<String> {
+    let loaded = event_folder::load(event)?;
+    Ok(render_inventory(&loaded))
+}
+
+/// Human-readable inventory of a loaded event.
+pub fn render_inventory(loaded: &LoadedEvent) -> String {
+    let e = &loaded.event;
+    let mut s = String::new();
+    let _ = writeln!(s, "event     {}", e.name);
+    if let Some(t) = e.origin_ns {
+        let _ = writeln!(s, "origin    {}", format_epoch_ns(t));
+    }
+    if let Some(m) = e.magnitude {
+        let _ = writeln!(s, "magnitude {m}");
+    }
+    if let Some(st) = &e.structure {
+        let _ = writeln!(
+            s,
+            "structure {} ({} storey heights, {} masses{})",
+            st.name.as_deref().unwrap_or("unnamed"),
+            st.storey_heights_m.len(),
+            st.masses_kg.len(),
+            st.twin
+                .as_ref()
+                .map(|t| format!(", twin {t}"))
+                .unwrap_or_default()
+        );
+    }
+    let _ = writeln!(s, "\nfiles ({}):", loaded.files.len());
+    for f in &loaded.files {
+        let what = match (&f.skipped, f.format) {
+            (Some(why), _) => format!("skipped: {why}"),
+            (None, Some(fmt)) => format!("{fmt}, {} channel(s)", f.channels),
+            (None, None) => "?".into(),
+        };
+        let _ = writeln!(s, "  {:<60} {}", f.name, what);
+    }
+    let _ = writeln!(s, "\nchannels ({}):", e.records.len());
+    let _ = writeln!(
+        s,
+        "  {:<22} {:<7} {:<9} {:>5} {:<7} {:<7} {:>8} {:>7} {:<25}",
+        "id", "format", "dir", "level", "role", "units", "fs_hz", "npts", "start (UTC)"
+    );
+    for r in &e.records {
+        let c = &r.channel;
+        let _ = writeln!(
+            s,
+            "  {:<22} {:<7} {:<9} {:>5} {:<7} {:<7} {:>8.3} {:>7} {:<25}",
+            c.id,
+            c.source.format,
+            c.direction
+                .map(|d| d.to_string())
+                .unwrap_or_else(|| "?".into()),
+            c.level.map(|l| l.to_string()).unwrap_or_else(|| "?".into()),
+            c.role.name(),
+            c.units.name(),
+            c.sampling_rate_hz,
+            r.samples.len(),
+            c.start_ns
+                .map(format_epoch_ns)
+                .unwrap_or_else(|| "?".into()),
+        );
+        for i in &c.inferred {
+            let _ = writeln!(s, "      inferred: {i}");
+        }
+        if !c.missing.is_empty() {
+            let _ = writeln!(s, "      missing:  {}", c.missing.join(", "));
+        }
+        for q in &c.qa {
+            let _ = writeln!(
+                s,
+                "      qa:       {}",
+                serde_json::to_string(q).unwrap_or_default()
+            );
+        }
+    }
+    if !e.notes.is_empty() {
+        let _ = writeln!(s, "\nnotes:");
+        for n in &e.notes {
+            let _ = writeln!(s, "  - {n}");
+        }
+    }
+    s
+}
+
+/// `quaketwin run PIPELINE EVENT --out DIR`.
+pub fn run_pipeline(
+    pipeline_path: &Path,
+    event: &Path,
+    out: &Path,
+    quiet: bool,
+) -> Result<Vec<(String, StageOutcome)>> {
+    let p = PipelineFile::load(pipeline_path)?;
+    pipeline::run(&p, event, out, quiet)
+}

@@ -1,0 +1,120 @@
+//! Integration of acceleration to velocity and displacement with drift
+//! control (METHODS §1: "integration to velocity and displacement with
+//! drift control"; the nonlinear stage runs on "drift control only").
+//!
+//! Integration is the cumulative trapezoid rule in the time domain, from
+//! rest (v(0) = 0, u(0) = 0). Drift control is one of:
+//! - `Polynomial`: after each integration a least-squares polynomial is
+//!   fitted to the result and removed, and its derivatives are removed from
+//!   the lower derivatives too, so acceleration, velocity and displacement
+//!   stay mutually consistent (to trapezoid-rule accuracy). This changes
+//!   the acceleration by a low-order polynomial only (a constant for the
+//!   default orders), which leaves hysteresis loops undistorted.
+//! - `Highpass`: zero-phase Butterworth high-pass of the velocity and then
+//!   of the displacement after each integration; acceleration is untouched
+//!   (consistent when the acceleration was band-passed with the same corner).
+//! - `None`: plain integration (drift grows with time).
+
+use serde::{Deserialize, Serialize};
+
+use super::baseline::{evaluate_polynomial_with_derivatives, fit_polynomial};
+use super::butterworth::{butter_sos, BandType};
+use super::sosfilt::sosfiltfilt;
+use crate::error::{Error, Result};
+
+/// How integration drift is controlled.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", rename_all = "snake_case")]
+pub enum DriftControl {
+    None,
+    /// Consistent polynomial baseline removal (orders of the polynomials
+    /// fitted to velocity and to displacement).
+    Polynomial { velocity_order: usize, displacement_order: usize },
+    /// Zero-phase Butterworth high-pass after each integration.
+    Highpass { corner_hz: f64, order: usize },
+}
+
+impl Default for DriftControl {
+    fn default() -> Self {
+        DriftControl::Polynomial { velocity_order: 1, displacement_order: 2 }
+    }
+}
+
+/// Acceleration (m/s²), velocity (m/s) and displacement (m) of one channel
+/// on the same time grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Motion {
+    pub channel_id: String,
+    /// Sampling interval, s.
+    pub dt: f64,
+    pub acceleration: Vec<f64>,
+    pub velocity: Vec<f64>,
+    pub displacement: Vec<f64>,
+}
+
+/// Cumulative trapezoid integral from zero: y[0] = 0,
+/// y[i] = y[i−1] + dt (x[i−1] + x[i]) / 2.
+pub fn cumulative_trapezoid(data: &[f64], dt: f64) -> Vec<f64> {
+    let mut out = Vec::with_capacity(data.len());
+    let mut acc = 0.0;
+    if let Some(&first) = data.first() {
+        out.push(0.0);
+        let mut prev = first;
+        for &x in &data[1..] {
+            acc += 0.5 * dt * (prev + x);
+            out.push(acc);
+            prev = x;
+        }
+    }
+    out
+}
+
+/// Removes a least-squares polynomial of `order` from `target` and its
+/// time derivatives from `lower` (first derivative) and `lowest` (second).
+fn remove_consistent_polynomial(target: &mut [f64], lower: &mut [f64], lowest: Option<&mut [f64]>, order: usize, dt: f64) -> Result<()> {
+    let n = target.len();
+    let coefficients = fit_polynomial(target, order)?;
+    let [value, d1, d2] = evaluate_polynomial_with_derivatives(&coefficients, n);
+    // Scaled time s = 2 i/(n−1) − 1 ⇒ ds/dt = 2 / ((n−1) dt).
+    let ds_dt = if n > 1 { 2.0 / ((n - 1) as f64 * dt) } else { 0.0 };
+    for i in 0..n {
+        target[i] -= value[i];
+        lower[i] -= d1[i] * ds_dt;
+    }
+    if let Some(lowest) = lowest {
+        for i in 0..n {
+            lowest[i] -= d2[i] * ds_dt * ds_dt;
+        }
+    }
+    Ok(())
+}
+
+/// Integrates acceleration to velocity and displacement with the chosen
+/// drift control. Returns the (possibly baseline-corrected) acceleration
+/// with the velocity and displacement.
+pub fn integrate_motion(channel_id: &str, acceleration: &[f64], dt: f64, drift: &DriftControl) -> Result<Motion> {
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(Error::usage(format!("sampling interval must be positive, got {dt}")));
+    }
+    let mut acc = acceleration.to_vec();
+    let mut vel = cumulative_trapezoid(&acc, dt);
+    let disp;
+    match drift {
+        DriftControl::None => {
+            disp = cumulative_trapezoid(&vel, dt);
+        }
+        DriftControl::Polynomial { velocity_order, displacement_order } => {
+            remove_consistent_polynomial(&mut vel, &mut acc, None, *velocity_order, dt)?;
+            let mut d = cumulative_trapezoid(&vel, dt);
+            remove_consistent_polynomial(&mut d, &mut vel, Some(&mut acc), *displacement_order, dt)?;
+            disp = d;
+        }
+        DriftControl::Highpass { corner_hz, order } => {
+            let sos = butter_sos(*order, BandType::Highpass, &[*corner_hz], 1.0 / dt)?;
+            vel = sosfiltfilt(&sos, &vel)?;
+            let d = cumulative_trapezoid(&vel, dt);
+            disp = sosfiltfilt(&sos, &d)?;
+        }
+    }
+    Ok(Motion { channel_id: channel_id.to_string(), dt, acceleration: acc, velocity: vel, displacement: disp })
+}

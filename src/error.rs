@@ -1,0 +1,125 @@
+//! Errors that help the user: every input error names the file, and where it
+//! applies the zip member, channel, line or byte offset.
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// Where in the input something went wrong. Rendered as
+/// `file[:member] [channel C] [line L] [byte B]`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Location {
+    pub file: String,
+    /// Member inside a zip (nested members joined with `:`).
+    pub member: Option<String>,
+    pub channel: Option<String>,
+    /// 1-based line number in a text file.
+    pub line: Option<usize>,
+    /// 0-based byte offset in a binary file.
+    pub byte_offset: Option<u64>,
+}
+
+impl Location {
+    pub fn file(file: impl Into<String>) -> Self {
+        Location {
+            file: file.into(),
+            ..Default::default()
+        }
+    }
+    pub fn with_member(mut self, member: impl Into<String>) -> Self {
+        self.member = Some(member.into());
+        self
+    }
+    pub fn with_channel(mut self, channel: impl Into<String>) -> Self {
+        self.channel = Some(channel.into());
+        self
+    }
+    pub fn at_line(mut self, line: usize) -> Self {
+        self.line = Some(line);
+        self
+    }
+    pub fn at_byte(mut self, offset: u64) -> Self {
+        self.byte_offset = Some(offset);
+        self
+    }
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file)?;
+        if let Some(m) = &self.member {
+            write!(f, ":{m}")?;
+        }
+        if let Some(c) = &self.channel {
+            write!(f, " channel {c}")?;
+        }
+        if let Some(l) = self.line {
+            write!(f, " line {l}")?;
+        }
+        if let Some(b) = self.byte_offset {
+            write!(f, " byte {b}")?;
+        }
+        Ok(())
+    }
+}
+
+/// The one error type of the library. `Input` errors are the user's data
+/// (exit code 1); `Usage` errors are the user's command or settings (exit code 2).
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Bad input data: names the place and says what is wrong.
+    #[error("{location}: {message}")]
+    Input { location: Location, message: String },
+    /// Bad settings, pipeline file or command-line usage.
+    #[error("{0}")]
+    Usage(String),
+    /// A method could not produce a trustworthy answer from valid data
+    /// (e.g. a non-yielding response for Bouc-Wen identification).
+    #[error("{stage}: {message}")]
+    NotIdentifiable { stage: String, message: String },
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A numerical routine failed (singular matrix, no convergence).
+    #[error("{0}")]
+    Numerical(String),
+    #[error("writing {path}: {message}")]
+    Output { path: PathBuf, message: String },
+}
+
+impl Error {
+    pub fn input(location: Location, message: impl Into<String>) -> Self {
+        Error::Input {
+            location,
+            message: message.into(),
+        }
+    }
+    pub fn usage(message: impl Into<String>) -> Self {
+        Error::Usage(message.into())
+    }
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+    pub fn numerical(message: impl Into<String>) -> Self {
+        Error::Numerical(message.into())
+    }
+    pub fn output(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
+        Error::Output {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+    /// Process exit code: 1 for bad input or failed processing, 2 for usage errors.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Error::Usage(_) => 2,
+            _ => 1,
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,193 @@
+//! `event.toml`: the user's statement of what the files are.  It is a user
+//! contract documented in docs/event-folder.md; unknown keys are errors so a
+//! typo never silently drops a setting.
+
+use serde::Deserialize;
+
+use crate::error::{Error, Location, Result};
+use crate::vocab::Structure;
+
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    #[serde(default)]
+    pub event: EventSection,
+    pub structure: Option<StructureSection>,
+    #[serde(default, rename = "channel")]
+    pub channels: Vec<ChannelEntry>,
+}
+
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EventSection {
+    pub name: Option<String>,
+    /// ISO-8601 UTC origin time.
+    pub origin_time: Option<String>,
+    pub magnitude: Option<f64>,
+    /// Free text.
+    pub description: Option<String>,
+}
+
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StructureSection {
+    pub name: Option<String>,
+    #[serde(default)]
+    pub storey_heights_m: Vec<f64>,
+    #[serde(default)]
+    pub masses_kg: Vec<f64>,
+    /// Digital-twin file relative to the event folder.
+    pub twin: Option<String>,
+    /// Azimuth (degrees clockwise from north) of the building X axis; used to
+    /// rotate azimuth-labelled sensors to building axes.
+    pub x_axis_azimuth_deg: Option<f64>,
+}
+
+impl StructureSection {
+    pub fn to_structure(&self) -> Structure {
+        Structure {
+            name: self.name.clone(),
+            storey_heights_m: self.storey_heights_m.clone(),
+            masses_kg: self.masses_kg.clone(),
+            twin: self.twin.clone(),
+        }
+    }
+}
+
+/// A column may be named or given as a 0-based index.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum ColumnRef {
+    Index(usize),
+    Name(String),
+}
+
+impl ColumnRef {
+    pub fn as_string(&self) -> String {
+        match self {
+            ColumnRef::Index(i) => i.to_string(),
+            ColumnRef::Name(s) => s.clone(),
+        }
+    }
+}
+
+/// Direction as the manifest states it: `"X"`, `"Y"`, `"Z"`, `"UP"` or an azimuth number.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum DirectionEntry {
+    Azimuth(f64),
+    Label(String),
+}
+
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChannelEntry {
+    /// Relative path; zip members as `bundle.zip:member`.
+    pub file: String,
+    /// Column name/index (CSV), or the channel to pick in a multi-channel file
+    /// (its id, channel code, or 0-based index).
+    pub column: Option<ColumnRef>,
+    pub id: Option<String>,
+    pub level: Option<i32>,
+    pub direction: Option<DirectionEntry>,
+    pub role: Option<String>,
+    pub units: Option<String>,
+    /// Counts per m/s² when `units = "counts"`.
+    pub sensitivity: Option<f64>,
+    pub sampling_rate_hz: Option<f64>,
+    /// Time column for CSV files.
+    pub time_column: Option<String>,
+    /// Force a reader (`cosmos`, `dmg`, `smc`, `at2`, `mseed`, `sac`, `geonet`, `csv`, `mcap`).
+    pub format: Option<String>,
+    /// FE node of the twin.
+    pub node: Option<String>,
+    pub elevation_m: Option<f64>,
+    /// Multiply samples by −1 (sensor mounted reversed).
+    #[serde(default)]
+    pub reversed: bool,
+}
+
+impl Manifest {
+    /// Parses manifest text; errors name the manifest file and line.
+    pub fn parse(text: &str, file: &str) -> Result<Manifest> {
+        let m: Manifest = toml::from_str(text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+            let mut loc = Location::file(file);
+            loc.line = line;
+            Error::input(loc, format!("invalid event manifest: {}", e.message()))
+        })?;
+        m.validate(file)?;
+        Ok(m)
+    }
+
+    fn validate(&self, file: &str) -> Result<()> {
+        let loc = || Location::file(file);
+        if let Some(s) = &self.structure {
+            if s.storey_heights_m
+                .iter()
+                .any(|h| !(h.is_finite() && *h > 0.0))
+            {
+                return Err(Error::input(
+                    loc(),
+                    "structure.storey_heights_m must be positive numbers",
+                ));
+            }
+            if s.masses_kg.iter().any(|m| !(m.is_finite() && *m > 0.0)) {
+                return Err(Error::input(
+                    loc(),
+                    "structure.masses_kg must be positive numbers",
+                ));
+            }
+        }
+        let mut ids = std::collections::HashSet::new();
+        for (i, c) in self.channels.iter().enumerate() {
+            let at = |msg: String| {
+                Error::input(
+                    loc().with_channel(c.id.clone().unwrap_or_else(|| format!("#{i}"))),
+                    msg,
+                )
+            };
+            if c.file.trim().is_empty() {
+                return Err(at("channel entry without `file`".into()));
+            }
+            if let Some(id) = &c.id {
+                if !ids.insert(id.clone()) {
+                    return Err(at(format!("channel id {id:?} is used twice")));
+                }
+            }
+            if let Some(r) = &c.role {
+                if !matches!(r.as_str(), "input" | "output") {
+                    return Err(at(format!("role {r:?} must be \"input\" or \"output\"")));
+                }
+            }
+            if let Some(u) = &c.units {
+                u.parse::<crate::vocab::Units>().map_err(at)?;
+            }
+            if let Some(fs) = c.sampling_rate_hz {
+                if !(fs.is_finite() && fs > 0.0) {
+                    return Err(at(format!("sampling_rate_hz {fs} must be positive")));
+                }
+            }
+            if let Some(s) = c.sensitivity {
+                if !(s.is_finite() && s != 0.0) {
+                    return Err(at(format!("sensitivity {s} must be a non-zero number")));
+                }
+            }
+            if let Some(DirectionEntry::Label(d)) = &c.direction {
+                if crate::vocab::Direction::parse(d).is_none() {
+                    return Err(at(format!(
+                        "direction {d:?} is not X, Y, Z, UP or an azimuth"
+                    )));
+                }
+            }
+            if let Some(f) = &c.format {
+                if crate::readers::Format::from_name(f).is_none() {
+                    return Err(at(format!("unknown format {f:?}")));
+                }
+            }
+        }
+        Ok(())
+    }
+}

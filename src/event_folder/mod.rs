@@ -1,0 +1,533 @@
+//! Event folder → `Event`: finds the files (directory or zip, nested zips),
+//! reads the optional `event.toml` manifest, dispatches each file to its
+//! reader, applies StationXML and manifest metadata, and says what was
+//! inferred and what later stages will miss.  See docs/event-folder.md.
+
+mod archive;
+pub mod manifest;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+pub use archive::{collect, ArchiveLimits, EventFile};
+pub use manifest::{ChannelEntry, ColumnRef, DirectionEntry, Manifest};
+
+use crate::error::{Error, Location, Result};
+use crate::readers::{self, FileContents, FileSpectrum, Format, ReadOptions};
+use crate::vocab::{Direction, Event, Record, Role, SourceRef, Units};
+
+/// Name of the manifest at the root of an event folder or zip.
+pub const MANIFEST_NAME: &str = "event.toml";
+
+/// What happened to one file of the folder.
+#[derive(Debug, Clone)]
+pub struct FileReport {
+    pub name: String,
+    pub format: Option<&'static str>,
+    /// Number of channels read from it.
+    pub channels: usize,
+    /// Why it was skipped, when it was.
+    pub skipped: Option<String>,
+}
+
+/// An ingested event plus the account of how it was read.
+#[derive(Debug, Clone)]
+pub struct LoadedEvent {
+    pub event: Event,
+    pub files: Vec<FileReport>,
+    /// Spectra stated by the files (V3), for cross-checks.
+    pub file_spectra: Vec<FileSpectrum>,
+    pub manifest: Option<Manifest>,
+}
+
+/// Loads the event at `path` (directory or zip).
+pub fn load(path: &Path) -> Result<LoadedEvent> {
+    load_with_limits(path, &ArchiveLimits::default())
+}
+
+pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEvent> {
+    let files = collect(path, limits)?;
+    let manifest_file = files.iter().find(|f| is_manifest(f));
+    let manifest = match manifest_file {
+        Some(f) => {
+            let text = std::str::from_utf8(&f.bytes)
+                .map_err(|e| Error::input(f.location(), format!("manifest is not UTF-8: {e}")))?;
+            Some(Manifest::parse(text, &f.display_name())?)
+        }
+        None => None,
+    };
+    let default_name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "event".to_string());
+
+    let mut reports = Vec::new();
+    let mut spectra = Vec::new();
+    let mut records: Vec<Record> = Vec::new();
+    let mut hints = Vec::new();
+    let mut history_notes = Vec::new();
+
+    let listed_channels = manifest
+        .as_ref()
+        .map(|m| !m.channels.is_empty())
+        .unwrap_or(false);
+    if listed_channels {
+        let m = manifest.as_ref().expect("checked above"); // ok: listed_channels implies Some
+                                                           // Group entries by file, keeping manifest order within a file.
+        let mut by_file: BTreeMap<String, Vec<&ChannelEntry>> = BTreeMap::new();
+        for c in &m.channels {
+            by_file.entry(normalise_name(&c.file)).or_default().push(c);
+        }
+        let manifest_name = manifest_file
+            .map(|f| f.display_name())
+            .unwrap_or_else(|| MANIFEST_NAME.into());
+        let mut picked: Vec<(usize, Record)> = Vec::new();
+        for (name, entries) in &by_file {
+            let Some(file) = files
+                .iter()
+                .find(|f| normalise_name(&f.display_name()) == *name || strip_root(f) == *name)
+            else {
+                let first = entries[0];
+                return Err(Error::input(
+                    Location::file(&manifest_name)
+                        .with_channel(first.id.clone().unwrap_or_default()),
+                    format!(
+                        "file {:?} named by the manifest is not in the event folder",
+                        first.file
+                    ),
+                ));
+            };
+            let format = match entries.iter().find_map(|e| e.format.as_deref()) {
+                Some(f) => Format::from_name(f)
+                    .ok_or_else(|| Error::usage(format!("unknown format {f}")))?,
+                None => readers::sniff(file.base_name(), &file.bytes).ok_or_else(|| {
+                    Error::input(
+                        file.location(),
+                        "cannot tell the file format; set `format` in the manifest",
+                    )
+                })?,
+            };
+            let opts = ReadOptions {
+                sampling_rate_hz: entries.iter().find_map(|e| e.sampling_rate_hz),
+                columns: if format == Format::Csv && entries.iter().all(|e| e.column.is_some()) {
+                    Some(
+                        entries
+                            .iter()
+                            .filter_map(|e| e.column.as_ref().map(|c| c.as_string()))
+                            .collect(),
+                    )
+                } else {
+                    None
+                },
+                time_column: entries.iter().find_map(|e| e.time_column.clone()),
+            };
+            let contents = read_file(file, format, &opts)?;
+            reports.push(FileReport {
+                name: file.display_name(),
+                format: Some(format.name()),
+                channels: entries.len(),
+                skipped: None,
+            });
+            spectra.extend(contents.spectra.iter().cloned());
+            hints.push(contents.event.clone());
+            for entry in entries {
+                let rec = pick_record(&contents, entry, file)?;
+                let order = m
+                    .channels
+                    .iter()
+                    .position(|c| std::ptr::eq(c, *entry))
+                    .unwrap_or(usize::MAX);
+                let rec = apply_entry(rec, entry, &mut history_notes, file)?;
+                picked.push((order, rec));
+            }
+        }
+        picked.sort_by_key(|(order, _)| *order);
+        records = picked.into_iter().map(|(_, r)| r).collect();
+    } else {
+        for file in &files {
+            if is_manifest(file) {
+                continue;
+            }
+            let Some(format) = readers::sniff(file.base_name(), &file.bytes) else {
+                reports.push(FileReport {
+                    name: file.display_name(),
+                    format: None,
+                    channels: 0,
+                    skipped: Some("not a record file".into()),
+                });
+                continue;
+            };
+            if format == Format::StationXml {
+                reports.push(FileReport {
+                    name: file.display_name(),
+                    format: Some(format.name()),
+                    channels: 0,
+                    skipped: Some("metadata (applied to matching channels)".into()),
+                });
+                continue;
+            }
+            let contents = read_file(file, format, &ReadOptions::default())?;
+            reports.push(FileReport {
+                name: file.display_name(),
+                format: Some(format.name()),
+                channels: contents.records.len(),
+                skipped: None,
+            });
+            spectra.extend(contents.spectra.iter().cloned());
+            hints.push(contents.event.clone());
+            records.extend(contents.records);
+        }
+    }
+
+    // StationXML metadata for SEED-named channels (MiniSEED).
+    let mut station_meta = Vec::new();
+    for f in files
+        .iter()
+        .filter(|f| readers::sniff(f.base_name(), &f.bytes) == Some(Format::StationXml))
+    {
+        let source = SourceRef {
+            file: f.file.clone(),
+            member: f.member.clone(),
+            column: None,
+            format: "stationxml".into(),
+        };
+        station_meta.extend(readers::stationxml::parse(&f.bytes, &source)?);
+    }
+    if !station_meta.is_empty() {
+        readers::stationxml::apply(&mut records, &station_meta);
+    }
+
+    make_ids_unique(&mut records);
+    let mut event = Event {
+        name: default_name,
+        ..Default::default()
+    };
+    if let Some(m) = &manifest {
+        if let Some(n) = &m.event.name {
+            event.name = n.clone();
+        }
+        if let Some(t) = &m.event.origin_time {
+            event.origin_ns = Some(crate::vocab::parse_iso8601_ns(t).ok_or_else(|| {
+                Error::input(
+                    Location::file(MANIFEST_NAME),
+                    format!("event.origin_time {t:?} is not ISO-8601 UTC"),
+                )
+            })?);
+        }
+        event.magnitude = m.event.magnitude;
+        event.structure = m.structure.as_ref().map(|s| s.to_structure());
+    }
+    if manifest
+        .as_ref()
+        .and_then(|m| m.event.name.as_ref())
+        .is_none()
+    {
+        if let Some(n) = hints.iter().find_map(|h| h.name.clone()) {
+            event.name = n;
+        }
+    }
+    event.origin_ns = event
+        .origin_ns
+        .or_else(|| hints.iter().find_map(|h| h.origin_ns));
+    event.magnitude = event
+        .magnitude
+        .or_else(|| hints.iter().find_map(|h| h.magnitude));
+    for (step, params) in history_notes {
+        event.history.push(step, params);
+    }
+    event.records = records;
+    infer_and_report_missing(&mut event, manifest.is_some());
+    if event.records.is_empty() {
+        return Err(Error::input(
+            Location::file(path.display().to_string()),
+            "no record files found in the event",
+        ));
+    }
+    Ok(LoadedEvent {
+        event,
+        files: reports,
+        file_spectra: spectra,
+        manifest,
+    })
+}
+
+fn is_manifest(f: &EventFile) -> bool {
+    match &f.member {
+        None => f.file == MANIFEST_NAME,
+        // A zip given as the event: the manifest sits at the zip's root.
+        Some(m) => m == MANIFEST_NAME,
+    }
+}
+
+fn normalise_name(s: &str) -> String {
+    s.trim().trim_start_matches("./").replace('\\', "/")
+}
+
+/// For a zip given as the event, manifest paths are relative to the zip's root.
+fn strip_root(f: &EventFile) -> String {
+    f.member.clone().unwrap_or_else(|| f.file.clone())
+}
+
+fn read_file(file: &EventFile, format: Format, opts: &ReadOptions) -> Result<FileContents> {
+    let source = SourceRef {
+        file: file.file.clone(),
+        member: file.member.clone(),
+        column: None,
+        format: format.name().into(),
+    };
+    let contents = readers::read(format, &file.bytes, &source, opts)?;
+    for r in &contents.records {
+        if !(r.channel.sampling_rate_hz.is_finite() && r.channel.sampling_rate_hz > 0.0) {
+            return Err(Error::input(
+                file.location().with_channel(r.channel.id.clone()),
+                "no valid sampling rate (give `sampling_rate_hz` in the manifest)",
+            ));
+        }
+        if r.samples.is_empty() {
+            return Err(Error::input(
+                file.location().with_channel(r.channel.id.clone()),
+                "channel has no samples",
+            ));
+        }
+    }
+    Ok(contents)
+}
+
+/// The record a manifest entry designates in a file.
+fn pick_record(contents: &FileContents, entry: &ChannelEntry, file: &EventFile) -> Result<Record> {
+    let recs = &contents.records;
+    let err = |msg: String| {
+        Error::input(
+            file.location()
+                .with_channel(entry.id.clone().unwrap_or_default()),
+            msg,
+        )
+    };
+    match &entry.column {
+        None if recs.len() == 1 => Ok(recs[0].clone()),
+        None => Err(err(format!(
+            "file holds {} channels ({}); say which with `column`",
+            recs.len(),
+            recs.iter()
+                .map(|r| r.channel.id.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))),
+        Some(col) => {
+            let by_name = |name: &str| {
+                recs.iter().find(|r| {
+                    r.channel.source.column.as_deref() == Some(name)
+                        || r.channel.id == name
+                        || r.channel.channel_code.as_deref() == Some(name)
+                        || r.channel.location_code.as_deref() == Some(name)
+                })
+            };
+            let found = match col {
+                ColumnRef::Name(n) => by_name(n),
+                ColumnRef::Index(i) => by_name(&i.to_string()).or_else(|| recs.get(*i)),
+            };
+            found.cloned().ok_or_else(|| {
+                err(format!(
+                    "column {:?} not found; the file has {}",
+                    col.as_string(),
+                    recs.iter()
+                        .map(|r| r
+                            .channel
+                            .source
+                            .column
+                            .clone()
+                            .unwrap_or_else(|| r.channel.id.clone()))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })
+        }
+    }
+}
+
+/// Applies what the manifest states over what the header said.
+fn apply_entry(
+    mut rec: Record,
+    entry: &ChannelEntry,
+    history: &mut Vec<(String, serde_json::Value)>,
+    file: &EventFile,
+) -> Result<Record> {
+    let ch = &mut rec.channel;
+    if let Some(id) = &entry.id {
+        ch.id = id.clone();
+    }
+    let err = |msg: String| {
+        Error::input(
+            file.location()
+                .with_channel(entry.id.clone().unwrap_or_default()),
+            msg,
+        )
+    };
+    if let Some(level) = entry.level {
+        ch.level = Some(level);
+    }
+    if let Some(d) = &entry.direction {
+        ch.direction = Some(match d {
+            DirectionEntry::Azimuth(a) => Direction::Azimuth(a.rem_euclid(360.0)),
+            DirectionEntry::Label(s) => {
+                Direction::parse(s).ok_or_else(|| err(format!("bad direction {s:?}")))?
+            }
+        });
+    }
+    if let Some(r) = &entry.role {
+        ch.role = if r == "input" {
+            Role::Input
+        } else {
+            Role::Output
+        };
+    }
+    if let Some(u) = &entry.units {
+        ch.units = u.parse::<Units>().map_err(err)?;
+    }
+    if let Some(s) = entry.sensitivity {
+        match &mut ch.units {
+            Units::Counts { counts_per_si } => *counts_per_si = Some(s),
+            _ => {
+                return Err(err(
+                    "`sensitivity` applies only to units = \"counts\"".into()
+                ))
+            }
+        }
+    }
+    if let Some(fs) = entry.sampling_rate_hz {
+        ch.sampling_rate_hz = fs;
+    }
+    if let Some(n) = &entry.node {
+        ch.node = Some(n.clone());
+    }
+    if let Some(e) = entry.elevation_m {
+        ch.elevation_m = Some(e);
+    }
+    if let Some(c) = &entry.column {
+        ch.source.column = Some(c.as_string());
+    }
+    if entry.reversed {
+        for v in &mut rec.samples {
+            *v = -*v;
+        }
+        history.push((
+            "reverse_sign".into(),
+            serde_json::json!({ "channel": rec.channel.id, "reason": "manifest: reversed = true" }),
+        ));
+    }
+    Ok(rec)
+}
+
+fn make_ids_unique(records: &mut [Record]) {
+    let mut seen: BTreeMap<String, usize> = BTreeMap::new();
+    for r in records.iter() {
+        *seen.entry(r.channel.id.clone()).or_default() += 1;
+    }
+    let mut used: BTreeMap<String, usize> = BTreeMap::new();
+    for r in records.iter_mut() {
+        if seen.get(&r.channel.id).copied().unwrap_or(0) > 1 {
+            let n = used.entry(r.channel.id.clone()).or_default();
+            *n += 1;
+            let new_id = format!("{}#{}", r.channel.id, n);
+            r.channel.inferred.push(format!(
+                "id {new_id} made unique (duplicate id {} in the folder)",
+                r.channel.id
+            ));
+            r.channel.id = new_id;
+        }
+    }
+}
+
+/// Words in a sensor's location text that mark ground/base sensors.
+const GROUND_WORDS: [&str; 7] = [
+    "FREE FIELD",
+    "FREE-FIELD",
+    "GROUND",
+    "BASEMENT",
+    "BASE OF",
+    "FOOTING",
+    "EMBANKMENT",
+];
+
+/// Fills role from level, guesses base sensors from location text (saying
+/// so), and lists what later stages will miss.
+fn infer_and_report_missing(event: &mut Event, has_manifest: bool) {
+    for r in &mut event.records {
+        let ch = &mut r.channel;
+        if ch.role == Role::Unknown {
+            match ch.level {
+                Some(0) => {
+                    ch.role = Role::Input;
+                    ch.inferred.push("role=input from level 0".into());
+                }
+                Some(l) if l > 0 => {
+                    ch.role = Role::Output;
+                    ch.inferred.push(format!("role=output from level {l}"));
+                }
+                _ => {
+                    let text = ch
+                        .location_text
+                        .clone()
+                        .unwrap_or_default()
+                        .to_ascii_uppercase();
+                    if let Some(w) = GROUND_WORDS.iter().find(|w| text.contains(*w)) {
+                        ch.role = Role::Input;
+                        ch.inferred
+                            .push(format!("role=input from location text containing {w:?}"));
+                    }
+                }
+            }
+        }
+        let mut missing = Vec::new();
+        if ch.level.is_none() {
+            missing.push("level");
+        }
+        if ch.role == Role::Unknown {
+            missing.push("role");
+        }
+        if ch.direction.is_none() {
+            missing.push("direction");
+        }
+        if let Units::Counts {
+            counts_per_si: None,
+        } = ch.units
+        {
+            missing.push("sensitivity");
+        }
+        if ch.start_ns.is_none() {
+            missing.push("start_time");
+        }
+        for m in missing {
+            if !ch.missing.iter().any(|x| x == m) {
+                ch.missing.push(m.to_string());
+            }
+        }
+    }
+    if !has_manifest {
+        event
+            .notes
+            .push("no event.toml manifest: channel metadata comes from file headers only".into());
+    }
+    let has_input = event.records.iter().any(|r| r.channel.role == Role::Input);
+    if !has_input {
+        event.notes.push("no base (input) channel identified: input–output modal identification and Bouc-Wen identification need one".into());
+    }
+    match &event.structure {
+        None => event.notes.push(
+            "no [structure] section: storey heights (drift ratios) and masses (Bouc-Wen) unknown"
+                .into(),
+        ),
+        Some(s) => {
+            if s.storey_heights_m.is_empty() {
+                event.notes.push(
+                    "storey heights unknown: inter-storey drift ratios will not be computed".into(),
+                );
+            }
+            if s.masses_kg.is_empty() {
+                event
+                    .notes
+                    .push("masses unknown: Bouc-Wen identification needs them (or a twin)".into());
+            }
+        }
+    }
+}

@@ -1,0 +1,21 @@
+//! quaketwin: from a monitored building's earthquake records to decisions.
+//!
+//! Data flows one way: **readers** (file formats) → **event folder**
+//! (manifest, channel metadata) → **conditioning** → **metrics** →
+//! identification stages (modal, hysteresis, damage) → **twin** updating →
+//! **test design** → **sinks** (Parquet, MCAP, report).  The `vocab` module
+//! holds the types every stage speaks.
+
+pub mod commands;
+pub mod conditioning;
+pub mod error;
+pub mod event_folder;
+pub mod metrics;
+pub mod readers;
+pub mod pipeline;
+pub mod sinks;
+pub mod stages;
+pub mod synth;
+pub mod vocab;
+
+pub use error::{Error, Location, Result};

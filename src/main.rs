@@ -1,0 +1,59 @@
+//! The `quaketwin` command: a thin clap front end over the library.
+//! Exit codes: 0 success, 1 bad input or failed processing, 2 usage error.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(
+    name = "quaketwin",
+    version,
+    about = "From a building's earthquake records to damage decisions"
+)]
+struct Cli {
+    /// No progress output on stderr.
+    #[arg(long, short, global = true)]
+    quiet: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// List the channels of an event folder (or zip): what was read, inferred, missing.
+    Inspect {
+        /// Event folder or zip.
+        event: PathBuf,
+    },
+    /// Run a pipeline file on an event folder.
+    Run {
+        /// Pipeline file (pipelines/*.toml).
+        pipeline: PathBuf,
+        /// Event folder or zip.
+        event: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Inspect { event } => quaketwin::commands::inspect(event).map(|s| print!("{s}")),
+        Command::Run {
+            pipeline,
+            event,
+            out,
+        } => quaketwin::commands::run_pipeline(pipeline, event, out, cli.quiet).map(|_| ()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("quaketwin: error: {e}");
+            ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}

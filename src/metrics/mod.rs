@@ -1,0 +1,151 @@
+//! Strong-motion metrics per channel (METHODS §1): PGA, PGV, PGD, Arias
+//! intensity, significant duration D5–95, CAV, damped response spectra and
+//! inter-storey drift ratios. Inputs in SI (m/s², m/s, m); no I/O.
+
+pub mod spectra;
+
+pub use spectra::{default_periods, response_spectrum, sdof_response, ResponseSpectrum};
+
+use serde::{Deserialize, Serialize};
+
+use crate::conditioning::Motion;
+use crate::error::{Error, Result};
+use crate::vocab::STANDARD_GRAVITY;
+
+/// Largest absolute value (peak ground/floor acceleration, velocity or displacement).
+pub fn peak_abs(data: &[f64]) -> f64 {
+    data.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+/// Cumulative trapezoid integral of a², scaled by π/(2g): the Husid curve
+/// of Arias intensity, m/s. Ia(t) = π/(2g) ∫₀ᵗ a² dτ.
+pub fn arias_husid(acceleration: &[f64], dt: f64) -> Vec<f64> {
+    let scale = std::f64::consts::PI / (2.0 * STANDARD_GRAVITY);
+    let mut out = Vec::with_capacity(acceleration.len());
+    let mut acc = 0.0;
+    if let Some(&first) = acceleration.first() {
+        out.push(0.0);
+        let mut prev = first * first;
+        for &a in &acceleration[1..] {
+            let sq = a * a;
+            acc += 0.5 * dt * (prev + sq) * scale;
+            out.push(acc);
+            prev = sq;
+        }
+    }
+    out
+}
+
+/// Arias intensity Ia = π/(2g) ∫ a² dt, m/s (trapezoid rule).
+pub fn arias_intensity(acceleration: &[f64], dt: f64) -> f64 {
+    arias_husid(acceleration, dt).last().copied().unwrap_or(0.0)
+}
+
+/// Time at which a non-decreasing cumulative curve first reaches `level`,
+/// with linear interpolation between samples.
+fn crossing_time(cumulative: &[f64], level: f64, dt: f64) -> f64 {
+    match cumulative.iter().position(|&c| c >= level) {
+        None => (cumulative.len().saturating_sub(1)) as f64 * dt,
+        Some(0) => 0.0,
+        Some(i) => {
+            let (c0, c1) = (cumulative[i - 1], cumulative[i]);
+            let frac = if c1 > c0 { (level - c0) / (c1 - c0) } else { 0.0 };
+            (i as f64 - 1.0 + frac) * dt
+        }
+    }
+}
+
+/// Significant duration between `from` and `to` fractions of the Arias
+/// intensity (D5–95: from = 0.05, to = 0.95), s, and the start time, s.
+pub fn significant_duration(acceleration: &[f64], dt: f64, from: f64, to: f64) -> Result<(f64, f64)> {
+    if !(0.0..1.0).contains(&from) || !(from..=1.0).contains(&to) {
+        return Err(Error::usage(format!("significant duration fractions must satisfy 0 ≤ from < to ≤ 1, got {from}, {to}")));
+    }
+    let husid = arias_husid(acceleration, dt);
+    let total = husid.last().copied().unwrap_or(0.0);
+    if total <= 0.0 {
+        return Ok((0.0, 0.0));
+    }
+    let t0 = crossing_time(&husid, from * total, dt);
+    let t1 = crossing_time(&husid, to * total, dt);
+    Ok((t1 - t0, t0))
+}
+
+/// Cumulative absolute velocity CAV = ∫ |a| dt, m/s (trapezoid rule on |a|).
+pub fn cumulative_absolute_velocity(acceleration: &[f64], dt: f64) -> f64 {
+    acceleration.windows(2).map(|w| 0.5 * dt * (w[0].abs() + w[1].abs())).sum()
+}
+
+/// Peak inter-storey drift ratio max_t |u_upper − u_lower| / h between the
+/// displacement histories of two consecutive levels (same time grid).
+pub fn interstorey_drift(lower: &[f64], upper: &[f64], height_m: f64) -> Result<f64> {
+    if !(height_m.is_finite() && height_m > 0.0) {
+        return Err(Error::usage(format!("storey height must be positive, got {height_m} m")));
+    }
+    if lower.len() != upper.len() {
+        return Err(Error::usage(format!(
+            "displacement histories of consecutive levels differ in length ({} vs {}): align them first",
+            lower.len(),
+            upper.len()
+        )));
+    }
+    Ok(lower.iter().zip(upper).fold(0.0f64, |m, (l, u)| m.max((u - l).abs())) / height_m)
+}
+
+/// Peak drift ratios of every storey from displacement histories of levels
+/// 0 (base), 1, …, n and storey heights h_1..h_n (`Structure::storey_heights_m`).
+pub fn interstorey_drifts(levels: &[&[f64]], storey_heights_m: &[f64]) -> Result<Vec<f64>> {
+    if levels.len() != storey_heights_m.len() + 1 {
+        return Err(Error::usage(format!(
+            "{} level histories need {} storey heights, got {}",
+            levels.len(),
+            levels.len().saturating_sub(1),
+            storey_heights_m.len()
+        )));
+    }
+    levels.windows(2).zip(storey_heights_m).map(|(w, &h)| interstorey_drift(w[0], w[1], h)).collect()
+}
+
+/// Settings of `strong_motion_metrics`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct MetricsSettings {
+    pub damping: f64,
+    /// Oscillator periods, s (T = 0 is added in front).
+    pub periods_s: Vec<f64>,
+}
+
+impl Default for MetricsSettings {
+    fn default() -> Self {
+        MetricsSettings { damping: 0.05, periods_s: default_periods() }
+    }
+}
+
+/// Metrics of one channel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StrongMotionMetrics {
+    pub channel_id: String,
+    pub pga_m_per_s2: f64,
+    pub pgv_m_per_s: f64,
+    pub pgd_m: f64,
+    pub arias_m_per_s: f64,
+    pub d5_95_s: f64,
+    pub cav_m_per_s: f64,
+    pub spectrum: ResponseSpectrum,
+}
+
+/// All metrics of one channel from its conditioned motion.
+pub fn strong_motion_metrics(motion: &Motion, settings: &MetricsSettings) -> Result<StrongMotionMetrics> {
+    let a = &motion.acceleration;
+    let (d5_95, _) = significant_duration(a, motion.dt, 0.05, 0.95)?;
+    Ok(StrongMotionMetrics {
+        channel_id: motion.channel_id.clone(),
+        pga_m_per_s2: peak_abs(a),
+        pgv_m_per_s: peak_abs(&motion.velocity),
+        pgd_m: peak_abs(&motion.displacement),
+        arias_m_per_s: arias_intensity(a, motion.dt),
+        d5_95_s: d5_95,
+        cav_m_per_s: cumulative_absolute_velocity(a, motion.dt),
+        spectrum: response_spectrum(a, motion.dt, &settings.periods_s, settings.damping)?,
+    })
+}

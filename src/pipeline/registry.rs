@@ -1,0 +1,65 @@
+//! The stage kinds this build knows, what files each writes, and the run
+//! context through which stages hand products to later stages.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use super::config::StageDecl;
+use crate::error::{Error, Result};
+use crate::event_folder::LoadedEvent;
+use crate::stages;
+
+/// Stage kinds available in this build, in pipeline order.
+pub const KINDS: &[&str] = &["ingest"];
+
+/// Output files (relative to the output directory) a stage declares.
+pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
+    Ok(match stage.kind.as_str() {
+        "ingest" => vec!["event.json".into()],
+        other => return Err(Error::usage(format!("unknown stage kind {other:?}"))),
+    })
+}
+
+/// Runs one stage.
+pub fn run_stage(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
+    match stage.kind.as_str() {
+        "ingest" => stages::ingest::run(stage, ctx),
+        other => Err(Error::usage(format!("unknown stage kind {other:?}"))),
+    }
+}
+
+/// Products of the stages of one run.  A product is computed by its stage,
+/// or — when that stage was skipped as up to date — loaded back from the
+/// stage's output files on first use.
+pub struct RunContext {
+    pub event_path: PathBuf,
+    pub out_dir: PathBuf,
+    pub quiet: bool,
+    skipped: BTreeSet<String>,
+    pub loaded: Option<LoadedEvent>,
+}
+
+impl RunContext {
+    pub fn new(event_path: &Path, out_dir: &Path, quiet: bool) -> Self {
+        RunContext {
+            event_path: event_path.to_path_buf(),
+            out_dir: out_dir.to_path_buf(),
+            quiet,
+            skipped: BTreeSet::new(),
+            loaded: None,
+        }
+    }
+    pub fn mark_skipped(&mut self, stage: &str) {
+        self.skipped.insert(stage.to_string());
+    }
+    pub fn was_skipped(&self, stage: &str) -> bool {
+        self.skipped.contains(stage)
+    }
+    /// The ingested (raw) event; read from the event folder on first use.
+    pub fn loaded_event(&mut self) -> Result<&LoadedEvent> {
+        if self.loaded.is_none() {
+            self.loaded = Some(crate::event_folder::load(&self.event_path)?);
+        }
+        Ok(self.loaded.as_ref().expect("just set")) // ok: set above
+    }
+}

@@ -1,0 +1,535 @@
+//! COSMOS strong-motion format v1.20 (V0 raw counts, V1 uncorrected, V2
+//! corrected), one or more channels per file.  Each channel block is:
+//! - text header, its length stated on line 1 (`(Format v01.20 with 13 text
+//!   lines)`): event name, origin, `Statn No: … Code:NP-8040 …`, record start,
+//!   `Sta Chan   1: 90 Deg (Rcrdr Chan  ?) Location:Basement NW corner`, and
+//!   on the last text line the codes used for unknown values (`-999, -999.00`);
+//! - `100 Integer-header values follow on 10 lines, Format= (10I8)`;
+//! - `100 Real-header values follow on 20 lines, Format= (5F15.6)`;
+//! - `2 Comment line(s) follow, each starting with a "|":` (a `<SCNL>` comment
+//!   names station, channel, network, location);
+//! - `42000 raw accel. pts, approx 210 secs, units= counts(50),Format=(1I8)`
+//!   and the samples in that Fortran format;
+//! - an `End-of-data` line.
+//!
+//! Header indices used (0-based, COSMOS v1.20 tables): integers [1] data
+//! type (1 acceleration, 2 velocity, 3 displacement), [2] physical units,
+//! [19]/[20] reference azimuths, [39] year, [40] day of year, [43] hour,
+//! [44] minute, [49] station channel number, [53] orientation from north
+//! (or a code: 400 up … 700 H1), [54] orientation from the reference,
+//! [55] location index; reals [0..3] station latitude, longitude, elevation
+//! (m), [9..13] hypocentre and magnitude, [21] recorder LSB (µV/count), [29]
+//! start second, [41] sensor sensitivity (V/g), [46] gain, [61] sampling
+//! interval (ms).
+
+use super::textfmt::{self, Layout, Lines};
+use super::{FileContents, ReadOptions};
+use crate::error::Result;
+use crate::vocab::{
+    epoch_ns_from_ordinal, parse_iso8601_ns, Channel, Direction, Record, SourceRef, Units,
+    STANDARD_GRAVITY,
+};
+
+pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
+    let text = textfmt::decode(bytes);
+    let lines = Lines::new(&text, source);
+    let mut contents = FileContents::default();
+    let mut b = 0;
+    let mut blocks = 0;
+    while b < lines.len() {
+        if lines.get(b).trim().is_empty() {
+            b += 1;
+            continue;
+        }
+        b = read_channel(&lines, b, source, &mut contents)?;
+        blocks += 1;
+    }
+    if blocks == 0 {
+        return Err(lines.err_file("empty COSMOS file"));
+    }
+    Ok(contents)
+}
+
+/// A numeric header block announced by a line such as
+/// ` 100 Integer-header values follow on  10 lines, Format= (10I8)`.
+fn header_block(lines: &Lines, at: usize, what: &str) -> Result<(Vec<f64>, usize)> {
+    let line = lines.get(at);
+    if !lines.exists(at)
+        || !line
+            .to_ascii_lowercase()
+            .contains(&what.to_ascii_lowercase())
+    {
+        return Err(lines.err(
+            at,
+            format!(
+                "expected the \"… {what} values follow on … lines, Format= (…)\" line, found {:?}",
+                line.trim()
+            ),
+        ));
+    }
+    let count = textfmt::split_free(line)
+        .first()
+        .and_then(|t| textfmt::parse_int(t))
+        .filter(|&n| n > 0);
+    let layout = line
+        .find("Format=")
+        .and_then(|p| Layout::from_fortran(&line[p + "Format=".len()..]));
+    let (Some(count), Some(layout)) = (count, layout) else {
+        return Err(lines.err(
+            at,
+            format!(
+                "cannot read the value count and Fortran format of {:?}",
+                line.trim()
+            ),
+        ));
+    };
+    let block = textfmt::read_block(lines, at + 1, count as usize, layout, what)?;
+    Ok((block.values, block.next_line))
+}
+
+fn read_channel(
+    lines: &Lines,
+    b: usize,
+    source: &SourceRef,
+    contents: &mut FileContents,
+) -> Result<usize> {
+    let first = lines.get(b);
+    let lower = first.to_ascii_lowercase();
+    let Some(p) = lower.find("(format v") else {
+        return Err(lines.err(b, format!("expected a COSMOS header line \"… (Format v01.20 with 13 text lines)\", found {:?}", first.trim())));
+    };
+    // "(Format v01.20 with 13 text lines)"
+    let n_text = textfmt::number_after(&lower[p..], "with")
+        .map(|n| n as usize)
+        .filter(|&n| (3..=100).contains(&n))
+        .unwrap_or(13);
+    if !lines.exists(b + n_text) {
+        return Err(lines.err(
+            lines.len().saturating_sub(1),
+            "file ends inside the COSMOS text header (truncated file?)",
+        ));
+    }
+    let text_line = |k: usize| lines.get(b + k);
+    // Last text line: "Values used when parameter or data value is unknown/unspecified:   -999, -999.00".
+    let unknown_line = text_line(n_text - 1);
+    let unknowns: Vec<f64> = unknown_line
+        .split(':')
+        .nth(1)
+        .map(|s| {
+            s.split(',')
+                .filter_map(|t| textfmt::parse_number(t).ok())
+                .collect()
+        })
+        .unwrap_or_default();
+    let int_unknown = unknowns.first().copied().unwrap_or(-999.0);
+    let real_unknown = unknowns.get(1).copied().unwrap_or(-999.0);
+
+    let (ints, after_ints) = header_block(lines, b + n_text, "Integer-header")?;
+    let (reals, after_reals) = header_block(lines, after_ints, "Real-header")?;
+    let int_at = |k: usize| {
+        ints.get(k)
+            .copied()
+            .filter(|&v| v != int_unknown)
+            .map(|v| v as i64)
+    };
+    let real_at = |k: usize| {
+        reals
+            .get(k)
+            .copied()
+            .filter(|&v| (v - real_unknown).abs() > 1e-9)
+    };
+
+    // Comments.
+    let comment_head = lines.get(after_reals);
+    if !comment_head.to_ascii_lowercase().contains("comment") {
+        return Err(lines.err(
+            after_reals,
+            format!(
+                "expected the \"N Comment line(s) follow\" line, found {:?}",
+                comment_head.trim()
+            ),
+        ));
+    }
+    let n_comments = textfmt::split_free(comment_head)
+        .first()
+        .and_then(|t| textfmt::parse_int(t))
+        .filter(|&n| n >= 0)
+        .ok_or_else(|| lines.err(after_reals, "cannot read the number of comment lines"))?
+        as usize;
+    let comments: Vec<&str> = (after_reals + 1..after_reals + 1 + n_comments)
+        .map(|i| lines.get(i))
+        .collect();
+    let data_head_at = after_reals + 1 + n_comments;
+    if !lines.exists(data_head_at) {
+        return Err(lines.err(
+            lines.len().saturating_sub(1),
+            "file ends before the data block (truncated file?)",
+        ));
+    }
+
+    // Data header: "   42000 raw accel.   pts, approx  210 secs, units= counts(50),Format=(1I8)".
+    let data_head = lines.get(data_head_at);
+    let npts = textfmt::split_free(data_head)
+        .first()
+        .and_then(|t| textfmt::parse_int(t))
+        .filter(|&n| n > 0)
+        .ok_or_else(|| {
+            lines.err(
+                data_head_at,
+                format!(
+                    "cannot read the number of points from {:?}",
+                    data_head.trim()
+                ),
+            )
+        })? as usize;
+    let layout = data_head
+        .to_ascii_lowercase()
+        .find("format=")
+        .and_then(|p| Layout::from_fortran(&data_head[p + "format=".len()..]))
+        .ok_or_else(|| {
+            lines.err(
+                data_head_at,
+                format!(
+                    "no Fortran Format=(…) on the data header {:?}",
+                    data_head.trim()
+                ),
+            )
+        })?;
+
+    // Identity: "Code:NP-8040" on the station line, or the <SCNL> comment.
+    let scnl = comments.iter().find_map(|c| {
+        c.find("<SCNL>").map(|p| {
+            c[p + 6..]
+                .split_whitespace()
+                .next()
+                .unwrap_or("")
+                .to_string()
+        })
+    });
+    let (mut station, mut network, mut scnl_channel, mut scnl_location) = (None, None, None, None);
+    if let Some(s) = &scnl {
+        // station.channel.network.location
+        let parts: Vec<&str> = s.split('.').collect();
+        if parts.len() == 4 {
+            station = Some(parts[0].to_string());
+            scnl_channel = Some(parts[1].to_string());
+            network = Some(parts[2].to_string());
+            scnl_location = Some(parts[3].to_string()).filter(|l| !l.is_empty() && l != "--");
+        }
+    }
+    let station_line = text_line(4);
+    if let Some(p) = station_line.find("Code:") {
+        let code = station_line[p + 5..]
+            .split_whitespace()
+            .next()
+            .unwrap_or("");
+        if let Some((net, sta)) = code.split_once('-') {
+            network.get_or_insert_with(|| net.to_string());
+            station.get_or_insert_with(|| sta.to_string());
+        }
+    }
+    let station_name = station_line
+        .find("Code:")
+        .map(|p| {
+            station_line[p..]
+                .split_whitespace()
+                .skip(2)
+                .collect::<Vec<_>>()
+                .join(" ")
+        })
+        .filter(|s| !s.is_empty());
+
+    // "Sta Chan   1: 90 Deg (Rcrdr Chan  ?) Location:Basement NW corner"
+    let chan_line = text_line(8);
+    let sta_chan = textfmt::number_after(chan_line, "Sta Chan")
+        .map(|v| v as i64)
+        .or_else(|| int_at(49));
+    let orientation_text = chan_line
+        .find(':')
+        .map(|p| {
+            chan_line[p + 1..]
+                .split('(')
+                .next()
+                .unwrap_or("")
+                .trim()
+                .to_string()
+        })
+        .filter(|s| !s.is_empty());
+    let location_text = chan_line
+        .find("Location:")
+        .map(|p| chan_line[p + 9..].trim().to_string())
+        .filter(|s| !s.is_empty());
+
+    // Units: integer header [2], cross-checked with the data header's words.
+    let units_text = data_head.to_ascii_lowercase().find("units=").map(|p| {
+        let rest = &data_head[p + 6..];
+        rest.split(',').next().unwrap_or("").trim().to_string()
+    });
+    let units = match int_at(2) {
+        Some(50) => Units::Counts {
+            counts_per_si: None,
+        },
+        Some(4) | Some(10) => Units::CmPerS2,
+        Some(2) => Units::G,
+        Some(5) => Units::CmPerS,
+        Some(6) => Units::Cm,
+        Some(code) => {
+            return Err(lines.err(
+                b + n_text + 1,
+                format!(
+                    "COSMOS physical-units code {code} ({}) is not a units quaketwin reads",
+                    units_text.unwrap_or_default()
+                ),
+            ))
+        }
+        None => {
+            let word = units_text.ok_or_else(|| {
+                lines.err(
+                    data_head_at,
+                    "no units code in the header and no units= on the data line",
+                )
+            })?;
+            textfmt::units_from_text(&word)
+                .map_err(|e| lines.err(data_head_at, format!("unknown units {word:?}: {e}")))?
+        }
+    };
+    if let Some(word) = &units_text {
+        if let Ok(stated) = textfmt::units_from_text(word) {
+            if std::mem::discriminant(&stated) != std::mem::discriminant(&units) {
+                return Err(lines.err(
+                    data_head_at,
+                    format!("data line says units {word:?} but the header code says {units}"),
+                ));
+            }
+        }
+    }
+
+    // Sampling interval: real [61] in ms.
+    let dt = real_at(61)
+        .map(|ms| ms / 1000.0)
+        .filter(|d| *d > 0.0)
+        .or_else(|| {
+            let secs = textfmt::number_after(data_head, "approx")?;
+            (secs > 0.0).then(|| secs / npts as f64)
+        });
+    let dt = dt.ok_or_else(|| {
+        lines.err(
+            b + n_text + 1,
+            "no sampling interval (real header value 62)",
+        )
+    })?;
+    let rate = 1.0 / dt;
+
+    // Direction.
+    let direction_code = int_at(53).filter(|&a| (1..=360).contains(&a) || a >= 400);
+    let mut direction = None;
+    let mut inferred = Vec::new();
+    let mut code_orientation: Option<char> = None;
+    match direction_code {
+        Some(a) if (1..=360).contains(&a) => {
+            direction = Some(Direction::Azimuth((a as f64).rem_euclid(360.0)))
+        }
+        Some(400) | Some(402) => direction = Some(Direction::Up),
+        Some(401) => direction = Some(Direction::Down),
+        Some(_) => {} // Radial/transverse/longitudinal/H1/H2/other: no azimuth.
+        None => {
+            let reference = int_at(19).or_else(|| int_at(20));
+            if let (Some(rel), Some(reference)) =
+                (int_at(54).filter(|a| (0..=360).contains(a)), reference)
+            {
+                direction = Some(Direction::Azimuth(
+                    ((rel + reference) as f64).rem_euclid(360.0),
+                ));
+                inferred.push(format!("direction = {rel} deg from the reference azimuth {reference} deg (header values 55, 20/21)"));
+            } else if let Some(d) = orientation_text.as_deref().and_then(Direction::parse) {
+                direction = Some(d);
+            } else if let Some(last) = scnl_channel.as_deref().and_then(|c| c.chars().last()) {
+                direction = match last {
+                    'Z' => Some(Direction::Up),
+                    'N' => Some(Direction::Azimuth(0.0)),
+                    'E' => Some(Direction::Azimuth(90.0)),
+                    _ => None,
+                };
+                if direction.is_some() {
+                    inferred.push(format!(
+                        "direction from the SCNL channel code {:?} (orientation code missing)",
+                        scnl_channel.as_deref().unwrap_or("")
+                    ));
+                }
+            }
+        }
+    }
+    if direction.is_none() {
+        code_orientation = match direction_code {
+            Some(600) | Some(500) | Some(700) => Some('1'),
+            Some(601) | Some(501) | Some(701) => Some('2'),
+            _ => None,
+        };
+    }
+    // SEED-style code as gmprocess builds it: band from the rate, N for an
+    // accelerometer, then Z / 1 (north-ish) / 2 (east-ish).
+    let band = if rate >= 80.0 {
+        'H'
+    } else if rate >= 10.0 {
+        'B'
+    } else {
+        'L'
+    };
+    let orient = match direction {
+        Some(Direction::Up)
+        | Some(Direction::Down)
+        | Some(Direction::Axis(crate::vocab::Axis::Z)) => Some('Z'),
+        Some(Direction::Azimuth(a)) => Some(
+            if !(45.0..=315.0).contains(&a) || (135.0..225.0).contains(&a) {
+                '1'
+            } else {
+                '2'
+            },
+        ),
+        _ => code_orientation,
+    };
+    let channel_code = orient.map(|o| format!("{band}N{o}"));
+    if let (Some(c), Some(s)) = (&channel_code, &scnl_channel) {
+        if c != s {
+            inferred.push(format!("channel_code={c} from orientation and {rate} Hz (gmprocess convention); the SCNL comment says {s}"));
+        }
+    }
+
+    let location_code = scnl_location
+        .or_else(|| int_at(55).map(|l| format!("{l:02}")))
+        .or_else(|| sta_chan.map(|c| format!("{c:02}")));
+    let id = format!(
+        "{}.{}.{}.{}",
+        network.as_deref().unwrap_or("--"),
+        station
+            .clone()
+            .unwrap_or_else(|| super::at2::file_stem(source)),
+        location_code.as_deref().unwrap_or("--"),
+        channel_code
+            .clone()
+            .or_else(|| scnl_channel.clone())
+            .unwrap_or_else(|| "CH".into())
+    );
+
+    let block = textfmt::read_block(lines, data_head_at + 1, npts, layout, &id)?;
+    if block.extra_on_last_line > 0 {
+        return Err(lines.err_ch(
+            block.next_line - 1,
+            &id,
+            format!("more values than the {npts} points the data header declares"),
+        ));
+    }
+    let mut next = block.next_line;
+    while lines.exists(next) && lines.get(next).trim().is_empty() {
+        next += 1;
+    }
+    if lines.exists(next) {
+        let l = lines.get(next);
+        if textfmt::is_numeric_line(l) {
+            return Err(lines.err_ch(
+                next,
+                &id,
+                format!("more values than the {npts} points the data header declares"),
+            ));
+        }
+        if l.to_ascii_lowercase().starts_with("end-of-data") {
+            next += 1;
+        }
+    }
+
+    // Only acceleration channels become records.
+    let data_type = int_at(1);
+    let head_lower = data_head.to_ascii_lowercase();
+    let is_accel = match data_type {
+        Some(1) => true,
+        Some(_) => false,
+        None => head_lower.contains("accel"),
+    };
+    if !is_accel || !units.is_acceleration() {
+        return Ok(next);
+    }
+
+    let mut units = units;
+    if let Units::Counts { .. } = units {
+        // counts → m/s²: LSB (µV/count) / sensitivity (V/g) / gain × g.
+        if let (Some(lsb_uv), Some(v_per_g)) = (real_at(21), real_at(41)) {
+            let gain = real_at(46).filter(|g| *g > 0.0).unwrap_or(1.0);
+            let si_per_count = lsb_uv * 1e-6 / v_per_g / gain * STANDARD_GRAVITY;
+            if si_per_count > 0.0 && si_per_count.is_finite() {
+                units = Units::Counts {
+                    counts_per_si: Some(1.0 / si_per_count),
+                };
+                inferred.push(format!(
+                    "counts_per_si={:.6e} from the header's recorder LSB {lsb_uv} uV/count, sensor sensitivity {v_per_g} V/g and gain {gain}",
+                    1.0 / si_per_count
+                ));
+            }
+        }
+    }
+
+    let mut channel = Channel::new(id, units, rate, source.clone());
+    channel.network = network;
+    channel.station = station;
+    channel.location_code = location_code;
+    channel.channel_code = channel_code;
+    channel.location_text = location_text.or(station_name);
+    channel.direction = direction;
+    if direction.is_none() {
+        channel.missing.push("direction".into());
+    }
+    channel.elevation_m = real_at(2);
+    channel.start_ns = match (int_at(39), int_at(40), int_at(43), int_at(44)) {
+        (Some(y), Some(doy), Some(h), Some(m))
+            if (1..=366).contains(&doy) && (0..24).contains(&h) && (0..60).contains(&m) =>
+        {
+            epoch_ns_from_ordinal(
+                y,
+                doy as u32,
+                h as u32,
+                m as u32,
+                real_at(29).unwrap_or(0.0),
+            )
+        }
+        _ => text_time(text_line(7), "Rcrd start time:"),
+    };
+    if channel.start_ns.is_none() {
+        channel.missing.push("start_time".into());
+    }
+    channel.inferred = inferred;
+    contents.records.push(Record::new(channel, block.values));
+
+    if contents.event.name.is_none() {
+        // "Record of Point MacKenzie Earthquake of Fri Nov 30, 2018 17:29 UTC"
+        let l = text_line(1);
+        contents.event.name = l
+            .find("Record of ")
+            .map(|p| &l[p + 10..])
+            .map(|r| {
+                r.rfind(" of ")
+                    .map(|q| &r[..q])
+                    .unwrap_or(r)
+                    .trim()
+                    .to_string()
+            })
+            .filter(|s| !s.is_empty());
+        contents.event.origin_ns = text_time(text_line(3), "Origin:");
+        contents.event.magnitude = real_at(12);
+        if let (Some(lat), Some(lon), Some(depth_km)) = (real_at(9), real_at(10), real_at(11)) {
+            contents.event.hypocenter = Some((lat, lon, depth_km));
+        }
+    }
+    Ok(next)
+}
+
+/// `Origin: 2018/11/30 17:29:29    UTC` → epoch ns (UTC only).
+fn text_time(line: &str, key: &str) -> Option<i64> {
+    let p = line.find(key)? + key.len();
+    let mut it = line[p..].split_whitespace();
+    let date = it.next()?.replace('/', "-");
+    let time = it.next()?;
+    let zone = it.next().unwrap_or("");
+    if !matches!(zone, "UTC" | "GMT" | "UT") {
+        return None;
+    }
+    parse_iso8601_ns(&format!("{date}T{time}"))
+}

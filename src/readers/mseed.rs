@@ -1,0 +1,788 @@
+//! MiniSEED 2 reader (SEED 2.4 data-only records).
+//!
+//! Written by hand: the `mseed` crate binds libmseed through bindgen and needs
+//! libclang, which build machines lack, and `miniseed` downloads C sources at
+//! build time.  The format is small: a fixed 48-byte header, a chain of
+//! blockettes (1000: encoding, word order, record length; 1001: extra
+//! microseconds, frame count; 100: exact sampling rate) and a data section.
+//!
+//! What is read:
+//! - both byte orders (header order detected from the BTIME year/day; data
+//!   order from blockette 1000);
+//! - encodings INT16 (1), INT32 (3), FLOAT32 (4), FLOAT64 (5), Steim-1 (10),
+//!   Steim-2 (11).  Steim integration constants are verified: the first
+//!   decoded sample must equal X0 (forward constant) and the last must equal
+//!   Xn (reverse constant); a mismatch is an `Error::Input` naming the byte
+//!   offset of the record;
+//! - ASCII log records (encoding 0) and records without samples are skipped;
+//! - several channels per file, keyed `NET.STA.LOC.CHA`; the records of one
+//!   channel are ordered by start time and concatenated.
+//!
+//! Record joins (shared with the MCAP reader through [`join_segments`]): a
+//! record that starts within half a sample of where the previous one ended
+//! continues it.  A later start is a gap: the missing samples are filled by
+//! linear interpolation between the bordering samples and flagged
+//! `QaFlag::Gap { at_s, duration_s }` plus a `QaFlag::Note` saying how many
+//! samples were filled.  An earlier start is an overlap: samples already
+//! present are kept, the overlapping ones dropped; if they differ from what is
+//! kept the overlap is flagged `QaFlag::Gap` with a *negative* duration and a
+//! note (identical duplicates, common in archives, are dropped silently).
+//!
+//! Values are raw counts: `Units::Counts { counts_per_si: None }` until the
+//! StationXML of the folder (see `stationxml::apply`) gives the sensitivity.
+
+use std::collections::BTreeMap;
+
+use super::{FileContents, ReadOptions};
+use crate::error::{Error, Result};
+use crate::vocab::{epoch_ns_from_ordinal, Channel, QaFlag, Record, SourceRef, Units};
+
+const FIXED_HEADER_LEN: usize = 48;
+const NS_PER_S: f64 = 1e9;
+
+/// One decoded data record.
+#[derive(Debug, Clone)]
+struct DataRecord {
+    id: String,
+    network: String,
+    station: String,
+    location: String,
+    channel: String,
+    start_ns: i64,
+    rate_hz: f64,
+    samples: Vec<f64>,
+    /// Byte offset of the record in the file (for error messages).
+    offset: usize,
+}
+
+/// A run of samples on a uniform grid, to be joined with others of the same channel.
+#[derive(Debug, Clone)]
+pub(crate) struct Segment {
+    pub start_ns: i64,
+    pub rate_hz: f64,
+    pub samples: Vec<f64>,
+    /// Where the segment came from (byte offset, message index), for messages.
+    pub origin: String,
+}
+
+/// The result of joining segments: one uniform series and its quality flags.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Joined {
+    pub start_ns: i64,
+    pub rate_hz: f64,
+    pub samples: Vec<f64>,
+    pub qa: Vec<QaFlag>,
+}
+
+/// Joins segments of one channel (sorted here by start time, stable) into one
+/// series on the grid of the first segment.  Contiguity tolerance: half a
+/// sample.  Gaps are filled by linear interpolation and flagged; overlaps keep
+/// the samples already present (see the module documentation).  All segments
+/// must share the sampling rate (relative difference below 1e-6).
+pub(crate) fn join_segments(mut segments: Vec<Segment>) -> std::result::Result<Joined, String> {
+    segments.retain(|s| !s.samples.is_empty());
+    segments.sort_by_key(|s| s.start_ns);
+    let Some(first) = segments.first() else {
+        return Err("no samples".into());
+    };
+    let rate = first.rate_hz;
+    if !(rate.is_finite() && rate > 0.0) {
+        return Err(format!(
+            "invalid sampling rate {rate} Hz ({})",
+            first.origin
+        ));
+    }
+    let start_ns = first.start_ns;
+    let dt_ns = NS_PER_S / rate;
+    let mut samples: Vec<f64> = Vec::new();
+    let mut qa = Vec::new();
+    let mut filled_total = 0usize;
+    for seg in &segments {
+        if ((seg.rate_hz - rate) / rate).abs() > 1e-6 {
+            return Err(format!(
+                "sampling rate changes from {rate} Hz to {} Hz ({})",
+                seg.rate_hz, seg.origin
+            ));
+        }
+        // Position of this segment's first sample on the grid of the first segment.
+        let offset_samples = (seg.start_ns - start_ns) as f64 / dt_ns;
+        let expected = samples.len() as f64;
+        let shift = offset_samples - expected;
+        if samples.is_empty() || shift.abs() <= 0.5 {
+            samples.extend_from_slice(&seg.samples);
+        } else if shift > 0.5 {
+            // Gap: fill with a straight line between the bordering samples.
+            let missing = shift.round() as usize;
+            let left = samples.last().copied().unwrap_or(0.0);
+            let right = seg.samples[0];
+            for k in 1..=missing {
+                let w = k as f64 / (missing + 1) as f64;
+                samples.push(left + (right - left) * w);
+            }
+            filled_total += missing;
+            qa.push(QaFlag::Gap {
+                at_s: expected / rate,
+                duration_s: shift / rate,
+            });
+            samples.extend_from_slice(&seg.samples);
+        } else {
+            // Overlap of `overlap` samples: keep what we have.
+            let overlap = (-shift).round() as usize;
+            let begin = samples.len().saturating_sub(overlap);
+            let kept = &samples[begin..];
+            let differs = kept
+                .iter()
+                .zip(seg.samples.iter())
+                .any(|(a, b)| a != b && !(a.is_nan() && b.is_nan()));
+            if differs {
+                qa.push(QaFlag::Gap {
+                    at_s: begin as f64 / rate,
+                    duration_s: shift / rate,
+                });
+                qa.push(QaFlag::Note {
+                    text: format!(
+                        "overlap of {overlap} samples at {:.6} s ({}) with different values: the earlier samples were kept",
+                        begin as f64 / rate,
+                        seg.origin
+                    ),
+                });
+            }
+            if overlap < seg.samples.len() {
+                samples.extend_from_slice(&seg.samples[overlap..]);
+            }
+        }
+    }
+    if filled_total > 0 {
+        qa.push(QaFlag::Note {
+            text: format!(
+                "{filled_total} missing samples filled by linear interpolation across gaps"
+            ),
+        });
+    }
+    Ok(Joined {
+        start_ns,
+        rate_hz: rate,
+        samples,
+        qa,
+    })
+}
+
+/// Reads a whole MiniSEED file: one record per `NET.STA.LOC.CHA`, in order of
+/// first appearance.
+pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
+    let mut src = source.clone();
+    src.format = "mseed".into();
+    let data_records = parse_records(bytes, &src)?;
+    // Group by channel, keeping the order of first appearance (stable output).
+    let mut order: Vec<String> = Vec::new();
+    let mut groups: BTreeMap<String, Vec<DataRecord>> = BTreeMap::new();
+    for r in data_records {
+        if !groups.contains_key(&r.id) {
+            order.push(r.id.clone());
+        }
+        groups.entry(r.id.clone()).or_default().push(r);
+    }
+    let mut records = Vec::new();
+    for id in order {
+        let Some(group) = groups.remove(&id) else {
+            continue;
+        };
+        let first = group[0].clone();
+        let segments: Vec<Segment> = group
+            .into_iter()
+            .map(|r| Segment {
+                start_ns: r.start_ns,
+                rate_hz: r.rate_hz,
+                samples: r.samples,
+                origin: format!("record at byte {}", r.offset),
+            })
+            .collect();
+        let joined = join_segments(segments).map_err(|m| {
+            Error::input(
+                super::location(&src)
+                    .with_channel(&id)
+                    .at_byte(first.offset as u64),
+                m,
+            )
+        })?;
+        let mut ch = Channel::new(
+            id.clone(),
+            Units::Counts {
+                counts_per_si: None,
+            },
+            joined.rate_hz,
+            src.clone(),
+        );
+        ch.network = non_empty(&first.network);
+        ch.station = non_empty(&first.station);
+        ch.location_code = non_empty(&first.location);
+        ch.channel_code = non_empty(&first.channel);
+        ch.start_ns = Some(joined.start_ns);
+        ch.qa = joined.qa;
+        ch.missing.push("sensitivity".into());
+        records.push(Record::new(ch, joined.samples));
+    }
+    if records.is_empty() {
+        return Err(Error::input(
+            super::location(&src),
+            "no data records with samples in this MiniSEED file",
+        ));
+    }
+    Ok(FileContents {
+        records,
+        ..Default::default()
+    })
+}
+
+fn non_empty(s: &str) -> Option<String> {
+    (!s.is_empty()).then(|| s.to_string())
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum ByteOrder {
+    Big,
+    Little,
+}
+
+fn u16_at(b: &[u8], at: usize, o: ByteOrder) -> Option<u16> {
+    let s: [u8; 2] = b.get(at..at + 2)?.try_into().ok()?;
+    Some(match o {
+        ByteOrder::Big => u16::from_be_bytes(s),
+        ByteOrder::Little => u16::from_le_bytes(s),
+    })
+}
+fn i16_at(b: &[u8], at: usize, o: ByteOrder) -> Option<i16> {
+    u16_at(b, at, o).map(|v| v as i16)
+}
+fn u32_at(b: &[u8], at: usize, o: ByteOrder) -> Option<u32> {
+    let s: [u8; 4] = b.get(at..at + 4)?.try_into().ok()?;
+    Some(match o {
+        ByteOrder::Big => u32::from_be_bytes(s),
+        ByteOrder::Little => u32::from_le_bytes(s),
+    })
+}
+fn u64_at(b: &[u8], at: usize, o: ByteOrder) -> Option<u64> {
+    let s: [u8; 8] = b.get(at..at + 8)?.try_into().ok()?;
+    Some(match o {
+        ByteOrder::Big => u64::from_be_bytes(s),
+        ByteOrder::Little => u64::from_le_bytes(s),
+    })
+}
+
+fn ascii_field(b: &[u8]) -> String {
+    String::from_utf8_lossy(b)
+        .trim_matches(|c: char| c == ' ' || c == '\0')
+        .to_string()
+}
+
+/// Nominal sampling rate from the SEED rate factor and multiplier (SEED 2.4 manual, fixed header field 10/11).
+fn rate_from_factor(factor: i16, multiplier: i16) -> f64 {
+    let (f, m) = (factor as f64, multiplier as f64);
+    match (factor, multiplier) {
+        (0, _) | (_, 0) => 0.0,
+        (f_, m_) if f_ > 0 && m_ > 0 => f * m,
+        (f_, _) if f_ > 0 => -f / m,
+        (_, m_) if m_ > 0 => -m / f,
+        _ => 1.0 / (f * m),
+    }
+}
+
+fn parse_records(bytes: &[u8], src: &SourceRef) -> Result<Vec<DataRecord>> {
+    let err =
+        |offset: usize, msg: String| Error::input(super::location(src).at_byte(offset as u64), msg);
+    let mut out = Vec::new();
+    let mut offset = 0usize;
+    while offset < bytes.len() {
+        let rest = &bytes[offset..];
+        // Trailing padding (zeros or spaces) after the last record is tolerated.
+        if rest.iter().all(|&b| b == 0 || b == b' ') {
+            break;
+        }
+        if rest.len() < FIXED_HEADER_LEN {
+            return Err(err(
+                offset,
+                format!("truncated MiniSEED record: {} bytes left, a fixed header needs {FIXED_HEADER_LEN}", rest.len()),
+            ));
+        }
+        if rest.starts_with(b"MS") && rest.get(2) == Some(&3) {
+            return Err(err(
+                offset,
+                "MiniSEED 3 records are not supported (only MiniSEED 2)".into(),
+            ));
+        }
+        let seq_ok = rest[..6]
+            .iter()
+            .all(|c| c.is_ascii_digit() || *c == b' ' || *c == 0);
+        let quality = rest[6];
+        if !seq_ok || !matches!(quality, b'D' | b'R' | b'Q' | b'M') {
+            return Err(err(
+                offset,
+                "not a MiniSEED 2 record header (sequence number / quality indicator invalid)"
+                    .into(),
+            ));
+        }
+        // Header byte order: the BTIME year and day must be plausible.
+        let order = [ByteOrder::Big, ByteOrder::Little]
+            .into_iter()
+            .find(|&o| {
+                let y = u16_at(rest, 20, o).unwrap_or(0);
+                let d = u16_at(rest, 22, o).unwrap_or(0);
+                (1900..=2500).contains(&y) && (1..=366).contains(&d)
+            })
+            .ok_or_else(|| {
+                err(
+                    offset,
+                    "record start time (BTIME) is invalid in either byte order".into(),
+                )
+            })?;
+        let h = |at: usize| u16_at(rest, at, order).unwrap_or(0);
+        let station = ascii_field(&rest[8..13]);
+        let location = ascii_field(&rest[13..15]);
+        let channel = ascii_field(&rest[15..18]);
+        let network = ascii_field(&rest[18..20]);
+        let (year, day) = (h(20), h(22));
+        let (hour, minute, second) = (rest[24], rest[25], rest[26]);
+        let fract_100us = h(28);
+        let nsamples = h(30) as usize;
+        let factor = i16_at(rest, 32, order).unwrap_or(0);
+        let multiplier = i16_at(rest, 34, order).unwrap_or(0);
+        let activity = rest[36];
+        let nblockettes = rest[39];
+        let time_correction = u32_at(rest, 40, order).unwrap_or(0) as i32;
+        let data_offset = h(44) as usize;
+        let first_blockette = h(46) as usize;
+
+        // Blockette chain.
+        let mut encoding: Option<u8> = None;
+        let mut data_order = order;
+        let mut record_len: Option<usize> = None;
+        let mut microseconds: i64 = 0;
+        let mut frame_count: usize = 0;
+        let mut exact_rate: Option<f64> = None;
+        let mut at = first_blockette;
+        let mut seen = 0usize;
+        while at != 0 {
+            if at < FIXED_HEADER_LEN || seen > nblockettes.max(8) as usize + 8 {
+                return Err(err(
+                    offset,
+                    format!("blockette chain is broken (next blockette at {at})"),
+                ));
+            }
+            let btype = u16_at(rest, at, order).ok_or_else(|| {
+                err(
+                    offset + at,
+                    "truncated MiniSEED record inside a blockette".into(),
+                )
+            })?;
+            let next = u16_at(rest, at + 2, order).unwrap_or(0) as usize;
+            match btype {
+                1000 => {
+                    let b = rest.get(at + 4..at + 7).ok_or_else(|| {
+                        err(
+                            offset + at,
+                            "truncated MiniSEED record inside blockette 1000".into(),
+                        )
+                    })?;
+                    encoding = Some(b[0]);
+                    data_order = if b[1] == 0 {
+                        ByteOrder::Little
+                    } else {
+                        ByteOrder::Big
+                    };
+                    if !(7..=20).contains(&b[2]) {
+                        return Err(err(
+                            offset + at,
+                            format!(
+                                "blockette 1000 record length exponent {} is out of range",
+                                b[2]
+                            ),
+                        ));
+                    }
+                    record_len = Some(1usize << b[2]);
+                }
+                1001 => {
+                    let b = rest.get(at + 4..at + 8).ok_or_else(|| {
+                        err(
+                            offset + at,
+                            "truncated MiniSEED record inside blockette 1001".into(),
+                        )
+                    })?;
+                    microseconds = b[1] as i8 as i64;
+                    frame_count = b[3] as usize;
+                }
+                100 => {
+                    let v = u32_at(rest, at + 4, order).ok_or_else(|| {
+                        err(
+                            offset + at,
+                            "truncated MiniSEED record inside blockette 100".into(),
+                        )
+                    })?;
+                    let r = f32::from_bits(v) as f64;
+                    if r.is_finite() && r > 0.0 {
+                        exact_rate = Some(r);
+                    }
+                }
+                _ => {}
+            }
+            if next != 0 && next <= at {
+                return Err(err(
+                    offset + at,
+                    format!("blockette chain loops back (next blockette at {next})"),
+                ));
+            }
+            at = next;
+            seen += 1;
+        }
+        let record_len = record_len.ok_or_else(|| {
+            err(
+                offset,
+                "MiniSEED record without blockette 1000 (record length and encoding unknown)"
+                    .into(),
+            )
+        })?;
+        if rest.len() < record_len {
+            return Err(err(
+                offset,
+                format!(
+                    "truncated MiniSEED record: blockette 1000 says {record_len} bytes, only {} remain in the file",
+                    rest.len()
+                ),
+            ));
+        }
+        let record = &rest[..record_len];
+        let encoding = encoding.unwrap_or(0);
+        let rate = exact_rate.unwrap_or_else(|| rate_from_factor(factor, multiplier));
+        let id = format!("{network}.{station}.{location}.{channel}");
+        if nsamples == 0 || rate <= 0.0 || encoding == 0 {
+            offset += record_len;
+            continue; // log, detection or empty record: no samples
+        }
+        if data_offset < FIXED_HEADER_LEN || data_offset > record_len {
+            return Err(err(
+                offset,
+                format!("data offset {data_offset} outside the {record_len}-byte record"),
+            ));
+        }
+        let data = &record[data_offset..];
+        let decoded = decode(data, encoding, data_order, nsamples, frame_count)
+            .map_err(|m| err(offset, format!("{id}: {m}")))?;
+
+        let mut start_ns = epoch_ns_from_ordinal(
+            year as i64,
+            day as u32,
+            hour as u32,
+            minute as u32,
+            second as f64,
+        )
+        .ok_or_else(|| {
+            err(
+                offset,
+                format!("invalid record start time {year},{day} {hour}:{minute}:{second}"),
+            )
+        })?;
+        start_ns += fract_100us as i64 * 100_000 + microseconds * 1_000;
+        // Activity flag bit 1: time correction already applied to BTIME.
+        if activity & 0x02 == 0 {
+            start_ns += time_correction as i64 * 100_000;
+        }
+        out.push(DataRecord {
+            id,
+            network,
+            station,
+            location,
+            channel,
+            start_ns,
+            rate_hz: rate,
+            samples: decoded,
+            offset,
+        });
+        offset += record_len;
+    }
+    Ok(out)
+}
+
+/// Decodes a record's data section.
+fn decode(
+    data: &[u8],
+    encoding: u8,
+    order: ByteOrder,
+    n: usize,
+    frame_count: usize,
+) -> std::result::Result<Vec<f64>, String> {
+    let need = |width: usize| -> std::result::Result<(), String> {
+        if data.len() < n * width {
+            Err(format!(
+                "data section holds {} bytes, {n} samples of {width} bytes need {}",
+                data.len(),
+                n * width
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    match encoding {
+        1 => {
+            need(2)?;
+            Ok((0..n).map(|i| i16_at(data, 2 * i, order).unwrap_or(0) as f64).collect())
+        }
+        3 => {
+            need(4)?;
+            Ok((0..n).map(|i| u32_at(data, 4 * i, order).unwrap_or(0) as i32 as f64).collect())
+        }
+        4 => {
+            need(4)?;
+            Ok((0..n).map(|i| f32::from_bits(u32_at(data, 4 * i, order).unwrap_or(0)) as f64).collect())
+        }
+        5 => {
+            need(8)?;
+            Ok((0..n).map(|i| f64::from_bits(u64_at(data, 8 * i, order).unwrap_or(0))).collect())
+        }
+        10 | 11 => {
+            let frames = if frame_count > 0 { frame_count.min(data.len() / 64) } else { data.len() / 64 };
+            decode_steim(&data[..frames * 64], encoding == 11, order, n).map(|v| v.into_iter().map(|x| x as f64).collect())
+        }
+        other => Err(format!(
+            "unsupported MiniSEED data encoding {other} (read: 1 INT16, 3 INT32, 4 FLOAT32, 5 FLOAT64, 10 Steim-1, 11 Steim-2)"
+        )),
+    }
+}
+
+/// Sign-extends the low `bits` bits of `v`.
+fn sign_extend(v: u32, bits: u32) -> i32 {
+    let shift = 32 - bits;
+    ((v << shift) as i32) >> shift
+}
+
+/// Steim-1/2 decompression (SEED 2.4 manual, appendix B): 64-byte frames of
+/// sixteen 32-bit words; word 0 holds 2-bit nibbles describing words 1..15.
+/// Frame 0 words 1 and 2 hold the forward (X0) and reverse (Xn) integration
+/// constants.  The first difference refers to the previous record and is not
+/// used: x0 = X0, x_i = x_{i−1} + d_i.  Checks x_{n−1} = Xn.
+fn decode_steim(
+    frames: &[u8],
+    steim2: bool,
+    order: ByteOrder,
+    n: usize,
+) -> std::result::Result<Vec<i32>, String> {
+    let name = if steim2 { "Steim-2" } else { "Steim-1" };
+    if frames.len() < 64 {
+        return Err(format!(
+            "{name} data section holds no complete 64-byte frame"
+        ));
+    }
+    let word = |f: usize, w: usize| u32_at(frames, f * 64 + w * 4, order).unwrap_or(0);
+    let x0 = word(0, 1) as i32;
+    let xn = word(0, 2) as i32;
+    let mut diffs: Vec<i32> = Vec::with_capacity(n + 8);
+    'frames: for f in 0..frames.len() / 64 {
+        let nibbles = word(f, 0);
+        for w in 1..16 {
+            if diffs.len() >= n {
+                break 'frames;
+            }
+            let nib = (nibbles >> (30 - 2 * w)) & 0b11;
+            let v = word(f, w);
+            if f == 0 && (w == 1 || w == 2) {
+                continue; // integration constants
+            }
+            match (nib, steim2) {
+                (0, _) => {}
+                (1, _) => {
+                    for k in 0..4 {
+                        diffs.push(sign_extend(v >> (24 - 8 * k), 8));
+                    }
+                }
+                (2, false) => {
+                    diffs.push(sign_extend(v >> 16, 16));
+                    diffs.push(sign_extend(v, 16));
+                }
+                (3, false) => diffs.push(v as i32),
+                (2, true) => match v >> 30 {
+                    1 => diffs.push(sign_extend(v, 30)),
+                    2 => {
+                        diffs.push(sign_extend(v >> 15, 15));
+                        diffs.push(sign_extend(v, 15));
+                    }
+                    3 => {
+                        for k in 0..3 {
+                            diffs.push(sign_extend(v >> (20 - 10 * k), 10));
+                        }
+                    }
+                    d => {
+                        return Err(format!(
+                            "{name} frame {f} word {w}: invalid sub-code {d} for nibble 2"
+                        ))
+                    }
+                },
+                (3, true) => match v >> 30 {
+                    0 => {
+                        for k in 0..5 {
+                            diffs.push(sign_extend(v >> (24 - 6 * k), 6));
+                        }
+                    }
+                    1 => {
+                        for k in 0..6 {
+                            diffs.push(sign_extend(v >> (25 - 5 * k), 5));
+                        }
+                    }
+                    2 => {
+                        for k in 0..7 {
+                            diffs.push(sign_extend(v >> (24 - 4 * k), 4));
+                        }
+                    }
+                    d => {
+                        return Err(format!(
+                            "{name} frame {f} word {w}: invalid sub-code {d} for nibble 3"
+                        ))
+                    }
+                },
+                _ => unreachable!("a 2-bit nibble is 0..=3"),
+            }
+        }
+    }
+    if diffs.len() < n {
+        return Err(format!(
+            "{name} data ends after {} of {n} samples",
+            diffs.len()
+        ));
+    }
+    let mut out = Vec::with_capacity(n);
+    let mut x = x0;
+    out.push(x);
+    for d in &diffs[1..n] {
+        x = x.wrapping_add(*d);
+        out.push(x);
+    }
+    if x != xn {
+        return Err(format!(
+            "{name} integration constants do not match: last decoded sample {x} differs from the reverse constant Xn = {xn} (X0 = {x0})"
+        ));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn src() -> SourceRef {
+        SourceRef {
+            file: "t.mseed".into(),
+            format: "mseed".into(),
+            ..Default::default()
+        }
+    }
+
+    /// Builds one 512-byte record (big- or little-endian) with the given encoding and data bytes.
+    fn make_record(
+        order: ByteOrder,
+        encoding: u8,
+        nsamples: u16,
+        start_sec: u8,
+        data: &[u8],
+    ) -> Vec<u8> {
+        let mut r = vec![0u8; 512];
+        r[..8].copy_from_slice(b"000001D ");
+        r[8..13].copy_from_slice(b"STA  ");
+        r[13..15].copy_from_slice(b"00");
+        r[15..18].copy_from_slice(b"HNZ");
+        r[18..20].copy_from_slice(b"XX");
+        let put16 = |r: &mut Vec<u8>, at: usize, v: u16| {
+            let b = if order == ByteOrder::Big {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            };
+            r[at..at + 2].copy_from_slice(&b);
+        };
+        put16(&mut r, 20, 2020);
+        put16(&mut r, 22, 32);
+        r[24] = 1;
+        r[25] = 2;
+        r[26] = start_sec;
+        put16(&mut r, 28, 5000); // 0.5 s
+        put16(&mut r, 30, nsamples);
+        put16(&mut r, 32, 100);
+        put16(&mut r, 34, 1);
+        r[39] = 1;
+        put16(&mut r, 44, 64);
+        put16(&mut r, 46, 48);
+        put16(&mut r, 48, 1000);
+        put16(&mut r, 50, 0);
+        r[52] = encoding;
+        r[53] = if order == ByteOrder::Big { 1 } else { 0 };
+        r[54] = 9;
+        r[64..64 + data.len()].copy_from_slice(data);
+        r
+    }
+
+    #[test]
+    fn int32_both_byte_orders_and_gap_join() {
+        for order in [ByteOrder::Big, ByteOrder::Little] {
+            let vals = [1i32, -2, 300_000, -4];
+            let data: Vec<u8> = vals
+                .iter()
+                .flat_map(|v| {
+                    if order == ByteOrder::Big {
+                        v.to_be_bytes()
+                    } else {
+                        v.to_le_bytes()
+                    }
+                })
+                .collect();
+            let mut bytes = make_record(order, 3, 4, 10, &data);
+            // Second record 0.06 s after the first ends (4 samples at 100 Hz = 0.04 s): 2 samples missing.
+            let mut second = make_record(order, 3, 4, 10, &data);
+            let fract: u16 = 5000 + 1000; // 0.6 s
+            let b = if order == ByteOrder::Big {
+                fract.to_be_bytes()
+            } else {
+                fract.to_le_bytes()
+            };
+            second[28..30].copy_from_slice(&b);
+            bytes.extend(second);
+            let fc = read(&bytes, &src(), &ReadOptions::default()).unwrap();
+            assert_eq!(fc.records.len(), 1);
+            let r = &fc.records[0];
+            assert_eq!(r.channel.id, "XX.STA.00.HNZ");
+            assert_eq!(r.channel.sampling_rate_hz, 100.0);
+            assert_eq!(r.samples.len(), 10);
+            assert_eq!(&r.samples[..4], &[1.0, -2.0, 300_000.0, -4.0]);
+            // Interpolated between -4 and 1 over two missing samples.
+            assert!((r.samples[4] - (-4.0 + 5.0 / 3.0)).abs() < 1e-12);
+            assert!(r.channel.qa.iter().any(
+                |q| matches!(q, QaFlag::Gap { duration_s, .. } if (duration_s - 0.02).abs() < 1e-9)
+            ));
+            let expect = crate::vocab::epoch_ns_from_civil(2020, 2, 1, 1, 2, 10.5).unwrap();
+            assert_eq!(r.channel.start_ns, Some(expect));
+        }
+    }
+
+    #[test]
+    fn steim1_hand_built_frame() {
+        // Samples 10, 12, 9, 9, 1000: differences (d0 unused) 2, -3, 0, 991.
+        let mut frame = vec![0u8; 64];
+        // nibbles: w0=0, w1=0 (X0), w2=0 (Xn), w3=1 (four bytes), w4=3 (one 32-bit)
+        let nibbles: u32 = (1 << (30 - 6)) | (3 << (30 - 8));
+        frame[0..4].copy_from_slice(&nibbles.to_be_bytes());
+        frame[4..8].copy_from_slice(&10i32.to_be_bytes());
+        frame[8..12].copy_from_slice(&1000i32.to_be_bytes());
+        frame[12..16].copy_from_slice(&[0u8, 2, (-3i8) as u8, 0]);
+        frame[16..20].copy_from_slice(&991i32.to_be_bytes());
+        let out = decode_steim(&frame, false, ByteOrder::Big, 5).unwrap();
+        assert_eq!(out, vec![10, 12, 9, 9, 1000]);
+        // Wrong reverse constant.
+        frame[8..12].copy_from_slice(&999i32.to_be_bytes());
+        let e = decode_steim(&frame, false, ByteOrder::Big, 5).unwrap_err();
+        assert!(e.contains("reverse constant"), "{e}");
+    }
+
+    #[test]
+    fn rate_factor_multiplier_rules() {
+        assert_eq!(rate_from_factor(200, 1), 200.0);
+        assert_eq!(rate_from_factor(-10, 1), 0.1);
+        assert_eq!(rate_from_factor(1, -10), 0.1);
+        assert_eq!(rate_from_factor(-10, -10), 0.01);
+        assert_eq!(rate_from_factor(20, -2), 10.0);
+    }
+}

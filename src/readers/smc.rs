@@ -1,0 +1,351 @@
+//! USGS SMC strong-motion files (one channel per file).
+//!
+//! Layout: 11 text lines (line 1 `2 CORRECTED ACCELEROGRAM` or
+//! `1 UNCORRECTED ACCELEROGRAM`), 48 integers (8I10 on 6 lines; the first is
+//! the "missing" code, then year, day-of-year, hour, minute, second,
+//! millisecond …, [13] horizontal orientation, [15] comment-line count,
+//! [16] number of samples), 50 reals (5E15.7 on 10 lines; the first is the
+//! "missing" value, then the sampling rate, epicentre latitude, longitude,
+//! depth, moment/surface/local magnitudes …), comment lines starting `|`,
+//! then the samples in 8E10.4 fixed fields that may touch.
+//!
+//! Two variants are handled besides evenly sampled data:
+//! - files with values after the declared count: the declared count is kept
+//!   and a `QaFlag::Note` says how many were ignored;
+//! - uncorrected files of uneven `(time, value)` pairs (digitised film
+//!   records): they are resampled onto a uniform grid by linear
+//!   interpolation (at the header rate, or the median time step when the
+//!   header has none), flagged `QaFlag::Resampled`, and the step is recorded
+//!   in the channel's `inferred` list.
+
+use super::textfmt::{self, Layout, Lines};
+use super::{FileContents, ReadOptions};
+use crate::error::Result;
+use crate::vocab::{epoch_ns_from_ordinal, Channel, Direction, QaFlag, Record, SourceRef, Units};
+
+const TEXT_LINES: usize = 11;
+const INT_LINES: usize = 6;
+const INT_COUNT: usize = 48;
+const REAL_LINES: usize = 10;
+const REAL_COUNT: usize = 50;
+const DATA_LAYOUT: Layout = Layout::Fixed {
+    per_line: 8,
+    width: 10,
+};
+
+pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
+    let text = textfmt::decode(bytes);
+    let lines = Lines::new(&text, source);
+    let first = lines.get(0).trim().to_ascii_uppercase();
+    if first.contains("VELOCITY") || first.contains("DISPLACEMENT") {
+        return Err(lines.err(
+            0,
+            format!("SMC {first:?}: only acceleration files are read"),
+        ));
+    }
+    let uncorrected = first.contains("UNCORRECTED");
+    if !first.contains("ACCELEROGRAM") {
+        return Err(lines.err(
+            0,
+            format!("first line {:?} is not an SMC accelerogram label (e.g. \"2 CORRECTED ACCELEROGRAM\")", lines.get(0).trim()),
+        ));
+    }
+    if lines.len() < TEXT_LINES + INT_LINES + REAL_LINES {
+        return Err(lines.err(
+            lines.len().saturating_sub(1),
+            format!(
+                "file ends inside the header ({} lines; the SMC header alone has {})",
+                lines.len(),
+                TEXT_LINES + INT_LINES + REAL_LINES
+            ),
+        ));
+    }
+
+    // Integer header, 8I10.
+    let mut ints = Vec::with_capacity(INT_COUNT);
+    for i in TEXT_LINES..TEXT_LINES + INT_LINES {
+        for f in textfmt::fixed_fields(lines.get(i), 10, 8) {
+            ints.push(textfmt::parse_int(&f).ok_or_else(|| {
+                lines.err(
+                    i,
+                    format!("integer header field {:?} is not an integer", f.trim()),
+                )
+            })?);
+        }
+    }
+    if ints.len() < INT_COUNT {
+        return Err(lines.err(
+            TEXT_LINES + INT_LINES - 1,
+            format!("integer header has {} of {INT_COUNT} values", ints.len()),
+        ));
+    }
+    let int_missing = ints[0];
+    let int_at = |k: usize| ints.get(k).copied().filter(|&v| v != int_missing);
+
+    // Real header, 5E15.7.
+    let real_start = TEXT_LINES + INT_LINES;
+    let mut reals = Vec::with_capacity(REAL_COUNT);
+    for i in real_start..real_start + REAL_LINES {
+        for f in textfmt::fixed_fields(lines.get(i), 15, 5) {
+            reals.push(textfmt::parse_number(&f).map_err(|_| {
+                lines.err(
+                    i,
+                    format!("real header field {:?} is not a number", f.trim()),
+                )
+            })?);
+        }
+    }
+    if reals.len() < REAL_COUNT {
+        return Err(lines.err(
+            real_start + REAL_LINES - 1,
+            format!("real header has {} of {REAL_COUNT} values", reals.len()),
+        ));
+    }
+    let real_missing = reals[0];
+    let real_at = |k: usize| {
+        reals
+            .get(k)
+            .copied()
+            .filter(|&v| (v - real_missing).abs() > 1e-6 * real_missing.abs().max(1.0))
+    };
+
+    // Comment lines start with '|'; the header says how many.
+    let mut data_start = real_start + REAL_LINES;
+    while lines.exists(data_start) && lines.get(data_start).starts_with('|') {
+        data_start += 1;
+    }
+    let declared_comments = int_at(15).unwrap_or(0);
+    if declared_comments >= 0 && (data_start - real_start - REAL_LINES) as i64 != declared_comments
+    {
+        return Err(lines.err(
+            data_start,
+            format!(
+                "the header declares {declared_comments} comment lines but {} lines starting with '|' were found",
+                data_start - real_start - REAL_LINES
+            ),
+        ));
+    }
+
+    let npts = int_at(16).filter(|&n| n > 0).ok_or_else(|| {
+        lines.err(
+            TEXT_LINES + 2,
+            "integer header field 17 (number of samples) is missing or not positive",
+        )
+    })? as usize;
+    let rate = real_at(1).filter(|&r| r > 0.0 && r < 1e5);
+
+    // Station, component and channel identity.
+    let station_code: String = lines
+        .get(2)
+        .chars()
+        .take(4)
+        .collect::<String>()
+        .trim()
+        .trim_matches('\0')
+        .to_string();
+    let station_line = lines.get(5);
+    let (station_name, component) = match station_line.to_ascii_lowercase().find("component=") {
+        Some(p) => (
+            station_line[..p]
+                .trim()
+                .trim_start_matches("station")
+                .trim()
+                .trim_start_matches('=')
+                .trim()
+                .to_string(),
+            station_line[p + "component=".len()..].trim().to_string(),
+        ),
+        None => (String::new(), String::new()),
+    };
+    let direction = Direction::parse(&component)
+        .or_else(|| int_at(13).map(|a| Direction::Azimuth((a as f64).rem_euclid(360.0))));
+    let station = if station_code.is_empty() {
+        super::at2::file_stem(source)
+    } else {
+        station_code.clone()
+    };
+    let id = if component.is_empty() {
+        station.clone()
+    } else {
+        format!("{station}.{}", component.to_ascii_uppercase())
+    };
+
+    let (values, marks) = textfmt::read_to_end(&lines, data_start, DATA_LAYOUT, &id)?;
+    let mut qa = Vec::new();
+    let mut inferred = vec![
+        "units=cm/s2 (USGS SMC convention for acceleration; the file does not name units)"
+            .to_string(),
+    ];
+    let mut start_offset_s = 0.0;
+
+    let pairs = values.len() >= 2 * npts && npts >= 2 && (uncorrected || rate.is_none()) && {
+        let times: Vec<f64> = values[..2 * npts].iter().step_by(2).copied().collect();
+        times[0] >= 0.0 && times.windows(2).all(|w| w[1] > w[0])
+    };
+    let (samples, rate_hz) = if pairs {
+        let times: Vec<f64> = values[..2 * npts].iter().step_by(2).copied().collect();
+        let accel: Vec<f64> = values[..2 * npts]
+            .iter()
+            .skip(1)
+            .step_by(2)
+            .copied()
+            .collect();
+        let dt = match rate {
+            Some(r) => 1.0 / r,
+            None => median_step(&times),
+        };
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(lines.err_ch(
+                data_start,
+                &id,
+                "cannot find a time step for the (time, value) pairs",
+            ));
+        }
+        let uniform = resample_linear(&times, &accel, dt);
+        qa.push(QaFlag::Resampled {
+            from: "uneven (time,value) pairs".into(),
+        });
+        inferred.push(format!(
+            "samples resampled from {npts} uneven (time,value) pairs onto a uniform grid dt={dt} s ({}) by linear interpolation",
+            if rate.is_some() { "header rate" } else { "median time step" }
+        ));
+        start_offset_s = times[0];
+        if values.len() > 2 * npts {
+            qa.push(QaFlag::Note {
+                text: format!(
+                    "{} values after the {npts} declared (time,value) pairs were ignored",
+                    values.len() - 2 * npts
+                ),
+            });
+        }
+        (uniform, 1.0 / dt)
+    } else {
+        if values.len() < npts {
+            let last = marks.last().map(|&(i, _)| i).unwrap_or(data_start);
+            return Err(lines.err_ch(
+                last,
+                &id,
+                format!(
+                    "the data has {} values but the header declares {npts} (truncated file?)",
+                    values.len()
+                ),
+            ));
+        }
+        let rate = rate.ok_or_else(|| {
+            lines.err(real_start, "real header field 2 (sampling rate) is missing")
+        })?;
+        if values.len() > npts {
+            let at = textfmt::line_of_value(&marks, npts)
+                .map(|i| i + 1)
+                .unwrap_or(0);
+            qa.push(QaFlag::Note {
+                text: format!(
+                    "{} values after the {npts} declared by the header (from line {at}) were ignored",
+                    values.len() - npts
+                ),
+            });
+        }
+        (values[..npts].to_vec(), rate)
+    };
+
+    let mut channel = Channel::new(id, Units::CmPerS2, rate_hz, source.clone());
+    channel.station = Some(station).filter(|s| !s.is_empty());
+    channel.channel_code = Some(component.clone()).filter(|s| !s.is_empty());
+    channel.location_text = Some(station_name).filter(|s| !s.is_empty());
+    channel.direction = direction;
+    if direction.is_none() {
+        channel.missing.push("direction".into());
+    }
+    // Start: year, day of year, hour, minute, second, millisecond.
+    channel.start_ns = match (int_at(1), int_at(2), int_at(3), int_at(4)) {
+        (Some(y), Some(doy), Some(h), Some(m))
+            if (0..=366).contains(&doy) && (0..24).contains(&h) && (0..60).contains(&m) =>
+        {
+            let sec = int_at(5).unwrap_or(0) as f64 + int_at(6).unwrap_or(0) as f64 / 1000.0;
+            epoch_ns_from_ordinal(y, doy as u32, h as u32, m as u32, sec)
+                .map(|t| t + (start_offset_s * 1e9).round() as i64)
+        }
+        _ => None,
+    };
+    if channel.start_ns.is_none() {
+        channel.missing.push("start_time".into());
+    }
+    channel.qa = qa;
+    channel.inferred = inferred;
+
+    let mut contents = FileContents::default();
+    // Line 4: "     1989  10  18    0004 Loma Prieta, CA".
+    let event_line = lines.get(3);
+    let name: String = event_line
+        .split_whitespace()
+        .skip_while(|t| t.chars().all(|c| c.is_ascii_digit()))
+        .collect::<Vec<_>>()
+        .join(" ");
+    contents.event.name = Some(name).filter(|s| !s.is_empty());
+    contents.event.magnitude =
+        textfmt::number_after(lines.get(4), "Moment Mag=").or_else(|| real_at(5));
+    if let (Some(lat), Some(lon), Some(depth_km)) = (real_at(2), real_at(3), real_at(4)) {
+        contents.event.hypocenter = Some((lat, lon, depth_km));
+    }
+    contents.records.push(Record::new(channel, samples));
+    Ok(contents)
+}
+
+/// Median of successive differences of increasing times.
+fn median_step(times: &[f64]) -> f64 {
+    let mut d: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    if d.is_empty() {
+        return f64::NAN;
+    }
+    d.sort_by(f64::total_cmp);
+    let m = d.len() / 2;
+    if d.len() % 2 == 1 {
+        d[m]
+    } else {
+        0.5 * (d[m - 1] + d[m])
+    }
+}
+
+/// Linear interpolation of `(times, values)` (times strictly increasing)
+/// onto `t0, t0 + dt, …` up to the last time.
+pub(crate) fn resample_linear(times: &[f64], values: &[f64], dt: f64) -> Vec<f64> {
+    let (Some(&t0), Some(&t_end)) = (times.first(), times.last()) else {
+        return Vec::new();
+    };
+    // Small tolerance so a grid point that lands on t_end by rounding is kept.
+    let n = ((t_end - t0) / dt + 1e-9).floor() as usize + 1;
+    let mut out = Vec::with_capacity(n);
+    let mut j = 0;
+    for k in 0..n {
+        let t = t0 + k as f64 * dt;
+        while j + 2 < times.len() && times[j + 1] < t {
+            j += 1;
+        }
+        if times.len() == 1 {
+            out.push(values[0]);
+            continue;
+        }
+        let (ta, tb) = (times[j], times[j + 1]);
+        let w = ((t - ta) / (tb - ta)).clamp(0.0, 1.0);
+        out.push(values[j] + w * (values[j + 1] - values[j]));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn linear_resampling_reproduces_a_line() {
+        // A straight line is reproduced exactly by linear interpolation.
+        let t = [0.0, 0.013, 0.02, 0.041, 0.05];
+        let v: Vec<f64> = t.iter().map(|x| 3.0 * x - 1.0).collect();
+        let r = resample_linear(&t, &v, 0.01);
+        assert_eq!(r.len(), 6);
+        for (k, y) in r.iter().enumerate() {
+            assert!((y - (3.0 * (k as f64 * 0.01) - 1.0)).abs() < 1e-12);
+        }
+        assert!((median_step(&t) - 0.011).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,4 @@
+//! Sinks: where results leave the pipeline (Parquet tables, MCAP replays).
+//! I/O lives here, at the edge; stages hand over plain data.
+
+pub mod parquet;

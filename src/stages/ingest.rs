@@ -1,0 +1,82 @@
+//! `ingest`: read the event folder and write `event.json`, the inventory of
+//! what was read, inferred and missing.
+
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::event_folder::LoadedEvent;
+use crate::pipeline::{RunContext, StageDecl};
+use crate::vocab::{format_epoch_ns, Channel, Structure};
+
+#[derive(Serialize)]
+struct FileJson<'a> {
+    name: &'a str,
+    format: Option<&'a str>,
+    channels: usize,
+    skipped: Option<&'a str>,
+}
+
+#[derive(Serialize)]
+struct ChannelJson<'a> {
+    #[serde(flatten)]
+    channel: &'a Channel,
+    npts: usize,
+    start_time: Option<String>,
+}
+
+#[derive(Serialize)]
+struct EventJson<'a> {
+    name: &'a str,
+    origin_time: Option<String>,
+    magnitude: Option<f64>,
+    structure: Option<&'a Structure>,
+    notes: &'a [String],
+    files: Vec<FileJson<'a>>,
+    channels: Vec<ChannelJson<'a>>,
+    history: &'a crate::vocab::ProcessingHistory,
+}
+
+/// The inventory of a loaded event as pretty JSON.
+pub fn inventory_json(loaded: &LoadedEvent) -> Result<Vec<u8>> {
+    let e = &loaded.event;
+    let doc = EventJson {
+        name: &e.name,
+        origin_time: e.origin_ns.map(format_epoch_ns),
+        magnitude: e.magnitude,
+        structure: e.structure.as_ref(),
+        notes: &e.notes,
+        files: loaded
+            .files
+            .iter()
+            .map(|f| FileJson {
+                name: &f.name,
+                format: f.format,
+                channels: f.channels,
+                skipped: f.skipped.as_deref(),
+            })
+            .collect(),
+        channels: e
+            .records
+            .iter()
+            .map(|r| ChannelJson {
+                channel: &r.channel,
+                npts: r.samples.len(),
+                start_time: r.channel.start_ns.map(format_epoch_ns),
+            })
+            .collect(),
+        history: &e.history,
+    };
+    serde_json::to_vec_pretty(&doc)
+        .map_err(|err| Error::numerical(format!("serialising the inventory: {err}")))
+}
+
+pub fn run(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
+    if !stage.params.is_empty() {
+        return Err(Error::usage(
+            "the ingest stage takes no params (set channel metadata in event.toml)",
+        ));
+    }
+    let path = ctx.out_dir.join("event.json");
+    let json = inventory_json(ctx.loaded_event()?)?;
+    crate::sinks::parquet::write_bytes_atomically(&path, &json)
+}

@@ -1,0 +1,5 @@
+//! Stage implementations: thin glue between the pipeline's run context, the
+//! numerical modules and the sinks.  Numerical work lives in its module;
+//! nothing here does mathematics.
+
+pub mod ingest;

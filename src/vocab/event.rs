@@ -1,0 +1,64 @@
+use serde::{Deserialize, Serialize};
+
+use super::{Channel, ProcessingHistory};
+
+/// One channel's samples on a uniform time grid (`channel.sampling_rate_hz`,
+/// first sample at `channel.start_ns` when known).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Record {
+    pub channel: Channel,
+    pub samples: Vec<f64>,
+}
+
+impl Record {
+    pub fn new(channel: Channel, samples: Vec<f64>) -> Self {
+        Record { channel, samples }
+    }
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+    pub fn duration_s(&self) -> f64 {
+        self.samples.len() as f64 / self.channel.sampling_rate_hz
+    }
+}
+
+/// What is known of the monitored structure (from the event manifest).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Structure {
+    pub name: Option<String>,
+    /// Storey heights in metres, level 1..n above the base.
+    #[serde(default)]
+    pub storey_heights_m: Vec<f64>,
+    /// Lumped mass per level 1..n, kg.
+    #[serde(default)]
+    pub masses_kg: Vec<f64>,
+    /// Path of a digital-twin file, relative to the event folder.
+    pub twin: Option<String>,
+}
+
+/// An earthquake (or ambient) event as ingested: records of every channel,
+/// event and structure metadata, and what was done to the data.
+#[derive(Debug, Clone, Default)]
+pub struct Event {
+    pub name: String,
+    /// Event origin time, ns since the Unix epoch, when known.
+    pub origin_ns: Option<i64>,
+    pub magnitude: Option<f64>,
+    pub structure: Option<Structure>,
+    pub records: Vec<Record>,
+    pub history: ProcessingHistory,
+    /// Event-level notes: what was inferred, what is missing for later stages.
+    pub notes: Vec<String>,
+}
+
+impl Event {
+    pub fn channel_ids(&self) -> Vec<&str> {
+        self.records.iter().map(|r| r.channel.id.as_str()).collect()
+    }
+    pub fn record(&self, id: &str) -> Option<&Record> {
+        self.records.iter().find(|r| r.channel.id == id)
+    }
+}

@@ -1,0 +1,17 @@
+//! The shared vocabulary every stage speaks: channels, records, events,
+//! structures and the processing history.  Nothing here does I/O.
+
+mod channel;
+mod event;
+mod history;
+mod time;
+mod units;
+
+pub use channel::{Axis, Channel, Direction, QaFlag, Role, SourceRef};
+pub use event::{Event, Record, Structure};
+pub use history::{ProcessingHistory, ProcessingStep};
+pub use time::{epoch_ns_from_civil, epoch_ns_from_ordinal, format_epoch_ns, parse_iso8601_ns};
+pub use units::Units;
+
+/// Standard gravity, m/s² (units conversion from `g`).
+pub const STANDARD_GRAVITY: f64 = 9.80665;
