@@ -107,3 +107,22 @@ pub fn run_pipeline(
     let p = PipelineFile::load(pipeline_path)?;
     pipeline::run(&p, event, out, quiet)
 }
+
+/// The pipeline `quaketwin ingest` runs (a copy of pipelines/ingest.toml
+/// embedded in the binary, so the command works from any directory).
+pub const INGEST_PIPELINE: &str = include_str!("../pipelines/ingest.toml");
+
+/// `quaketwin ingest EVENT --out DIR`: read, condition, metrics.
+pub fn ingest(event: &Path, out: &Path, quiet: bool) -> Result<Vec<(String, StageOutcome)>> {
+    let p = PipelineFile::parse(INGEST_PIPELINE, "built-in ingest pipeline")?;
+    pipeline::run(&p, event, out, quiet)
+}
+
+/// `quaketwin synth --out DIR`: writes the sample events.
+pub fn synth(out: &Path, seed: u64) -> Result<Vec<std::path::PathBuf>> {
+    let settings = crate::synth_event::SynthSettings {
+        seed,
+        ..Default::default()
+    };
+    crate::synth_event::write_sample_events(out, &settings)
+}

@@ -16,6 +16,7 @@ pub mod pipeline;
 pub mod sinks;
 pub mod stages;
 pub mod synth;
+pub mod synth_event;
 pub mod vocab;
 
 pub use error::{Error, Location, Result};

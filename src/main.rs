@@ -27,6 +27,24 @@ enum Command {
         /// Event folder or zip.
         event: PathBuf,
     },
+    /// Read an event folder, condition it and compute strong-motion metrics
+    /// (channels.parquet, samples.parquet, spectra.parquet, drift.parquet).
+    Ingest {
+        /// Event folder or zip.
+        event: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Generate the synthetic sample events (known model, with truth files).
+    Synth {
+        /// Directory to write the event folders into.
+        #[arg(long, default_value = "sample-records")]
+        out: PathBuf,
+        /// Random seed (same seed, same files).
+        #[arg(long, default_value_t = 2026)]
+        seed: u64,
+    },
     /// Run a pipeline file on an event folder.
     Run {
         /// Pipeline file (pipelines/*.toml).
@@ -43,6 +61,14 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Inspect { event } => quaketwin::commands::inspect(event).map(|s| print!("{s}")),
+        Command::Ingest { event, out } => {
+            quaketwin::commands::ingest(event, out, cli.quiet).map(|_| ())
+        }
+        Command::Synth { out, seed } => quaketwin::commands::synth(out, *seed).map(|dirs| {
+            for d in dirs {
+                println!("wrote {}", d.display());
+            }
+        }),
         Command::Run {
             pipeline,
             event,

@@ -130,6 +130,44 @@ fn butterworth_prototype(order: usize) -> Zpk {
     Zpk { zeros: Vec::new(), poles, gain: 1.0 }
 }
 
+/// Complex division as numpy computes it (Smith's algorithm with a
+/// reciprocal scale), so that designs round exactly like scipy's: pole
+/// pairing compares distances that can tie to the last bit.
+fn c_div(a: Complex64, b: Complex64) -> Complex64 {
+    let (ar, ai, br, bi) = (a.re, a.im, b.re, b.im);
+    if br.abs() >= bi.abs() {
+        let rat = bi / br;
+        let scl = 1.0 / (br + bi * rat);
+        Complex64::new((ar + ai * rat) * scl, (ai - ar * rat) * scl)
+    } else {
+        let rat = br / bi;
+        let scl = 1.0 / (bi + br * rat);
+        Complex64::new((ar * rat + ai) * scl, (ai * rat - ar) * scl)
+    }
+}
+
+/// Principal complex square root as C99 `csqrt` (glibc, used by numpy)
+/// computes it: uses 2·Re·Im = Im x to avoid cancellation.
+fn c_sqrt(z: Complex64) -> Complex64 {
+    let (x, y) = (z.re, z.im);
+    if y == 0.0 {
+        return if x < 0.0 { Complex64::new(0.0, (-x).sqrt().copysign(y)) } else { Complex64::new(x.sqrt().abs(), 0.0f64.copysign(y)) };
+    }
+    if x == 0.0 {
+        let r = (0.5 * y.abs()).sqrt();
+        return Complex64::new(r, r.copysign(y));
+    }
+    let d = x.hypot(y);
+    let (r, s) = if x > 0.0 {
+        let r = (0.5 * (d + x)).sqrt();
+        (r, 0.5 * (y / r))
+    } else {
+        let s = (0.5 * (d - x)).sqrt();
+        ((0.5 * (y / s)).abs(), s)
+    };
+    Complex64::new(r, s.copysign(y))
+}
+
 fn relative_degree(zpk: &Zpk) -> usize {
     zpk.poles.len().saturating_sub(zpk.zeros.len())
 }
@@ -152,17 +190,17 @@ fn lowpass_to_lowpass(zpk: Zpk, wo: f64) -> Zpk {
 fn lowpass_to_highpass(zpk: Zpk, wo: f64) -> Zpk {
     let degree = relative_degree(&zpk);
     let wo_c = Complex64::new(wo, 0.0);
-    let mut zeros: Vec<Complex64> = zpk.zeros.iter().map(|z| wo_c / z).collect();
+    let mut zeros: Vec<Complex64> = zpk.zeros.iter().map(|z| c_div(wo_c, *z)).collect();
     zeros.extend(std::iter::repeat_n(Complex64::new(0.0, 0.0), degree));
-    let ratio = product(zpk.zeros.iter().map(|z| -z)) / product(zpk.poles.iter().map(|p| -p));
-    Zpk { zeros, poles: zpk.poles.iter().map(|p| wo_c / p).collect(), gain: zpk.gain * ratio.re }
+    let ratio = c_div(product(zpk.zeros.iter().map(|z| -z)), product(zpk.poles.iter().map(|p| -p)));
+    Zpk { zeros, poles: zpk.poles.iter().map(|p| c_div(wo_c, *p)).collect(), gain: zpk.gain * ratio.re }
 }
 
 /// Roots of s² − 2·x·s + wo² for each x: x ± sqrt(x² − wo²), the "+" half
 /// first then the "−" half (scipy's concatenation order).
 fn split_band(values: &[Complex64], wo: f64) -> Vec<Complex64> {
     let wo2 = Complex64::new(wo * wo, 0.0);
-    let roots: Vec<Complex64> = values.iter().map(|x| (x * x - wo2).sqrt()).collect();
+    let roots: Vec<Complex64> = values.iter().map(|x| c_sqrt(x * x - wo2)).collect();
     let mut out: Vec<Complex64> = values.iter().zip(&roots).map(|(x, r)| x + r).collect();
     out.extend(values.iter().zip(&roots).map(|(x, r)| x - r));
     out
@@ -182,12 +220,12 @@ fn lowpass_to_bandpass(zpk: Zpk, wo: f64, bw: f64) -> Zpk {
 fn lowpass_to_bandstop(zpk: Zpk, wo: f64, bw: f64) -> Zpk {
     let degree = relative_degree(&zpk);
     let half = Complex64::new(bw / 2.0, 0.0);
-    let z_hp: Vec<Complex64> = zpk.zeros.iter().map(|z| half / z).collect();
-    let p_hp: Vec<Complex64> = zpk.poles.iter().map(|p| half / p).collect();
+    let z_hp: Vec<Complex64> = zpk.zeros.iter().map(|z| c_div(half, *z)).collect();
+    let p_hp: Vec<Complex64> = zpk.poles.iter().map(|p| c_div(half, *p)).collect();
     let mut zeros = split_band(&z_hp, wo);
     zeros.extend(std::iter::repeat_n(Complex64::new(0.0, wo), degree));
     zeros.extend(std::iter::repeat_n(Complex64::new(0.0, -wo), degree));
-    let ratio = product(zpk.zeros.iter().map(|z| -z)) / product(zpk.poles.iter().map(|p| -p));
+    let ratio = c_div(product(zpk.zeros.iter().map(|z| -z)), product(zpk.poles.iter().map(|p| -p)));
     Zpk { zeros, poles: split_band(&p_hp, wo), gain: zpk.gain * ratio.re }
 }
 
@@ -195,10 +233,10 @@ fn lowpass_to_bandstop(zpk: Zpk, wo: f64, bw: f64) -> Zpk {
 fn bilinear(zpk: Zpk, fs: f64) -> Zpk {
     let degree = relative_degree(&zpk);
     let fs2 = Complex64::new(2.0 * fs, 0.0);
-    let mut zeros: Vec<Complex64> = zpk.zeros.iter().map(|z| (fs2 + z) / (fs2 - z)).collect();
+    let mut zeros: Vec<Complex64> = zpk.zeros.iter().map(|z| c_div(fs2 + z, fs2 - z)).collect();
     zeros.extend(std::iter::repeat_n(Complex64::new(-1.0, 0.0), degree));
-    let ratio = product(zpk.zeros.iter().map(|z| fs2 - z)) / product(zpk.poles.iter().map(|p| fs2 - p));
-    Zpk { zeros, poles: zpk.poles.iter().map(|p| (fs2 + p) / (fs2 - p)).collect(), gain: zpk.gain * ratio.re }
+    let ratio = c_div(product(zpk.zeros.iter().map(|z| fs2 - z)), product(zpk.poles.iter().map(|p| fs2 - p)));
+    Zpk { zeros, poles: zpk.poles.iter().map(|p| c_div(fs2 + p, fs2 - p)).collect(), gain: zpk.gain * ratio.re }
 }
 
 /// scipy `_cplxreal`: one member (positive imaginary part) of each complex
@@ -234,7 +272,7 @@ fn complex_pairs_then_reals(values: &[Complex64]) -> Result<Vec<Complex64>> {
         if (p - n.conj()).norm() > tol * n.norm() {
             return Err(Error::numerical("filter design: complex value without a matching conjugate"));
         }
-        out.push((p + n.conj()) / 2.0);
+        out.push(c_div(p + n.conj(), Complex64::new(2.0, 0.0)));
     }
     out.extend(reals.into_iter().map(|r| Complex64::new(r, 0.0)));
     Ok(out)

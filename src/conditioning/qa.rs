@@ -128,7 +128,11 @@ pub fn spike_indices(data: &[f64], threshold: f64) -> Vec<usize> {
         let lo = b.saturating_sub(1);
         let hi = (b + 1).min(scales.len() - 1);
         let scale = scales[lo..=hi].iter().fold(0.0f64, |m, &s| m.max(s)).max(floor);
-        if ej.abs() > threshold * scale {
+        // The neighbours of a spike of height h deviate by −h/2: only the
+        // local maximum of |e| is the spike.
+        let left = if j > 0 { e[j - 1].abs() } else { 0.0 };
+        let right = e.get(j + 1).map_or(0.0, |v| v.abs());
+        if ej.abs() > threshold * scale && ej.abs() >= left && ej.abs() > right {
             out.push(j + 1);
         }
     }

@@ -4,7 +4,9 @@
 //! method of scipy's `resample_poly`): the anti-aliasing filter is a
 //! Kaiser-windowed sinc (β = 5, 2·10·max(L, M) + 1 taps) with its cut-off
 //! at the lower of the two Nyquist frequencies, normalised to unit DC
-//! gain, applied with zero delay. Chosen over FFT resampling because it
+//! gain, applied with zero delay. The transition band is not a brick
+//! wall: attenuation is ½ at the cut-off and about 50 dB some 15–20 % above
+//! it, so content just below the new Nyquist is attenuated too. Chosen over FFT resampling because it
 //! does not assume the record is periodic (no wrap-around at the ends).
 //! The ratio must be a fraction with denominator ≤ 1000 (e.g. 250 → 200 Hz
 //! is 4/5).

@@ -5,17 +5,25 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use super::config::StageDecl;
+use crate::conditioning::Motion;
 use crate::error::{Error, Result};
 use crate::event_folder::LoadedEvent;
 use crate::stages;
+use crate::vocab::Event;
 
 /// Stage kinds available in this build, in pipeline order.
-pub const KINDS: &[&str] = &["ingest"];
+pub const KINDS: &[&str] = &["ingest", "condition", "metrics"];
 
 /// Output files (relative to the output directory) a stage declares.
 pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
     Ok(match stage.kind.as_str() {
         "ingest" => vec!["event.json".into()],
+        "condition" => vec!["samples.parquet".into()],
+        "metrics" => vec![
+            "channels.parquet".into(),
+            "spectra.parquet".into(),
+            "drift.parquet".into(),
+        ],
         other => return Err(Error::usage(format!("unknown stage kind {other:?}"))),
     })
 }
@@ -24,6 +32,8 @@ pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
 pub fn run_stage(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
     match stage.kind.as_str() {
         "ingest" => stages::ingest::run(stage, ctx),
+        "condition" => stages::condition::run(stage, ctx),
+        "metrics" => stages::metrics::run(stage, ctx),
         other => Err(Error::usage(format!("unknown stage kind {other:?}"))),
     }
 }
@@ -37,6 +47,8 @@ pub struct RunContext {
     pub quiet: bool,
     skipped: BTreeSet<String>,
     pub loaded: Option<LoadedEvent>,
+    /// Conditioned event and its acceleration/velocity/displacement.
+    pub conditioned: Option<(Event, Vec<Motion>)>,
 }
 
 impl RunContext {
@@ -47,6 +59,7 @@ impl RunContext {
             quiet,
             skipped: BTreeSet::new(),
             loaded: None,
+            conditioned: None,
         }
     }
     pub fn mark_skipped(&mut self, stage: &str) {
@@ -61,5 +74,21 @@ impl RunContext {
             self.loaded = Some(crate::event_folder::load(&self.event_path)?);
         }
         Ok(self.loaded.as_ref().expect("just set")) // ok: set above
+    }
+
+    /// The conditioned event; loaded back from `samples.parquet` when the
+    /// `condition` stage was skipped as up to date.
+    pub fn conditioned_event(&mut self) -> Result<(&Event, &Vec<Motion>)> {
+        if self.conditioned.is_none() {
+            let path = self.out_dir.join("samples.parquet");
+            if !path.exists() {
+                return Err(Error::usage(
+                    "this stage needs a `condition` stage before it",
+                ));
+            }
+            self.conditioned = Some(crate::sinks::event_tables::read_samples(&path)?);
+        }
+        let (e, m) = self.conditioned.as_ref().expect("just set"); // ok: set above
+        Ok((e, m))
     }
 }

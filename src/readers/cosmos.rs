@@ -278,12 +278,12 @@ fn read_channel(
                 b + n_text + 1,
                 format!(
                     "COSMOS physical-units code {code} ({}) is not a units quaketwin reads",
-                    units_text.unwrap_or_default()
+                    units_text.clone().unwrap_or_default()
                 ),
             ))
         }
         None => {
-            let word = units_text.ok_or_else(|| {
+            let word = units_text.clone().ok_or_else(|| {
                 lines.err(
                     data_head_at,
                     "no units code in the header and no units= on the data line",

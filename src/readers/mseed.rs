@@ -733,7 +733,7 @@ mod tests {
             let mut bytes = make_record(order, 3, 4, 10, &data);
             // Second record 0.06 s after the first ends (4 samples at 100 Hz = 0.04 s): 2 samples missing.
             let mut second = make_record(order, 3, 4, 10, &data);
-            let fract: u16 = 5000 + 1000; // 0.6 s
+            let fract: u16 = 5000 + 600; // 10.56 s
             let b = if order == ByteOrder::Big {
                 fract.to_be_bytes()
             } else {

@@ -61,7 +61,11 @@ impl<'a> Lines<'a> {
 
 /// Decodes file bytes as text: UTF-8 when valid, otherwise Latin-1 (old
 /// strong-motion files are 7-bit ASCII, but degree signs and the like occur).
+/// A DOS end-of-file byte (Ctrl-Z, 0x1A) and anything after it is dropped:
+/// old CDMG files are padded with them.
 pub(crate) fn decode(bytes: &[u8]) -> String {
+    let end = bytes.iter().position(|&b| b == 0x1a).unwrap_or(bytes.len());
+    let bytes = &bytes[..end];
     match std::str::from_utf8(bytes) {
         Ok(s) => s.to_string(),
         Err(_) => bytes.iter().map(|&b| b as char).collect(),
@@ -83,8 +87,10 @@ pub(crate) fn parse_number(field: &str) -> Result<f64, NumError> {
     if t.is_empty() {
         return Err(NumError::NotANumber);
     }
+    // Fortran ignores blanks inside a numeric field (`.302E 00` is 0.302).
     let normalised: String = t
         .chars()
+        .filter(|c| !c.is_whitespace())
         .map(|c| if c == 'D' || c == 'd' { 'E' } else { c })
         .collect();
     let value = match normalised.parse::<f64>() {

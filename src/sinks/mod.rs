@@ -1,4 +1,5 @@
 //! Sinks: where results leave the pipeline (Parquet tables, MCAP replays).
 //! I/O lives here, at the edge; stages hand over plain data.
 
+pub mod event_tables;
 pub mod parquet;

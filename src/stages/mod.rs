@@ -2,4 +2,6 @@
 //! numerical modules and the sinks.  Numerical work lives in its module;
 //! nothing here does mathematics.
 
+pub mod condition;
 pub mod ingest;
+pub mod metrics;
