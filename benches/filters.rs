@@ -26,7 +26,9 @@ fn channels() -> Vec<Vec<f64>> {
                     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
                     let noise = (z ^ (z >> 31)) as f64 / u64::MAX as f64 - 0.5;
                     let t = i as f64 / RATE_HZ;
-                    (2.0 * std::f64::consts::PI * (1.0 + 0.1 * c as f64) * t).sin() + 0.3 * (2.0 * std::f64::consts::PI * 35.0 * t).sin() + 0.1 * noise
+                    (2.0 * std::f64::consts::PI * (1.0 + 0.1 * c as f64) * t).sin()
+                        + 0.3 * (2.0 * std::f64::consts::PI * 35.0 * t).sin()
+                        + 0.1 * noise
                 })
                 .collect()
         })
@@ -38,7 +40,10 @@ fn bench_sosfiltfilt(c: &mut Criterion) {
     assert_eq!(sos.len(), 4);
     let data = channels();
     let mut group = c.benchmark_group("sosfiltfilt");
-    group.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(8));
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(8));
     group.bench_function("64ch_1h_200Hz_bp4_0.5-20Hz", |b| {
         b.iter(|| black_box(sosfiltfilt_channels(&sos, black_box(&data)).expect("filtering")))
     });

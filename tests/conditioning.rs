@@ -3,8 +3,10 @@
 //! and closed-form checks of the other steps.
 
 use quaketwin::conditioning::{
-    self, align_records, butter_sos, cosine_taper, cumulative_trapezoid, integrate_motion, normalise_orientation, qa, remove_linear_trend,
-    remove_polynomial, resample_to_rate, sosfiltfilt, sosfiltfilt_channels, BandType, ConditioningSettings, DriftControl, OrientationSettings,
+    self, align_records, butter_sos, cosine_taper, cumulative_trapezoid, integrate_motion,
+    normalise_orientation, qa, remove_linear_trend, remove_polynomial, resample_to_rate,
+    sosfiltfilt, sosfiltfilt_channels, BandType, ConditioningSettings, DriftControl,
+    OrientationSettings,
 };
 use quaketwin::vocab::{Axis, Channel, Direction, Event, QaFlag, Record, SourceRef, Units};
 use quaketwin::Error;
@@ -19,7 +21,10 @@ struct ReferenceCase {
 }
 
 fn load_reference() -> (f64, Vec<f64>, Vec<ReferenceCase>) {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/filter_reference.txt");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/filter_reference.txt"
+    );
     let text = std::fs::read_to_string(path).expect("reference file");
     let mut lines = text.lines().filter(|l| !l.starts_with('#'));
     let mut next = || lines.next().expect("unexpected end of reference file");
@@ -43,13 +48,23 @@ fn load_reference() -> (f64, Vec<f64>, Vec<ReferenceCase>) {
         let ns: usize = next().strip_prefix("sos ").unwrap().parse().unwrap();
         let sos = (0..ns)
             .map(|_| {
-                let v: Vec<f64> = next().split_whitespace().map(|x| x.parse().unwrap()).collect();
+                let v: Vec<f64> = next()
+                    .split_whitespace()
+                    .map(|x| x.parse().unwrap())
+                    .collect();
                 [v[0], v[1], v[2], v[3], v[4], v[5]]
             })
             .collect();
         let no: usize = next().strip_prefix("output ").unwrap().parse().unwrap();
         let output = (0..no).map(|_| next().parse().unwrap()).collect();
-        cases.push(ReferenceCase { name: parts[1].into(), order: parts[2].parse().unwrap(), band, corners, sos, output });
+        cases.push(ReferenceCase {
+            name: parts[1].into(),
+            order: parts[2].parse().unwrap(),
+            band,
+            corners,
+            sos,
+            output,
+        });
     }
     (fs, input, cases)
 }
@@ -71,13 +86,27 @@ fn butterworth_and_sosfiltfilt_match_scipy() {
                 worst_coef = worst_coef.max((a - b).abs());
             }
         }
-        assert!(worst_coef <= 1e-12, "{}: sos differ from scipy by {worst_coef:e}", case.name);
+        assert!(
+            worst_coef <= 1e-12,
+            "{}: sos differ from scipy by {worst_coef:e}",
+            case.name
+        );
         let y = sosfiltfilt(&sos, &input).unwrap();
         let scale = case.output.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let diff = y.iter().zip(&case.output).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        let diff = y
+            .iter()
+            .zip(&case.output)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
         let relative = diff / scale;
-        eprintln!("{}: max sos diff {worst_coef:.2e}, sosfiltfilt relative diff {relative:.2e}", case.name);
-        assert!(relative <= 1e-9, "{}: sosfiltfilt differs from scipy by {relative:e} (relative)", case.name);
+        eprintln!(
+            "{}: max sos diff {worst_coef:.2e}, sosfiltfilt relative diff {relative:.2e}",
+            case.name
+        );
+        assert!(
+            relative <= 1e-9,
+            "{}: sosfiltfilt differs from scipy by {relative:e} (relative)",
+            case.name
+        );
     }
 }
 
@@ -85,7 +114,13 @@ fn butterworth_and_sosfiltfilt_match_scipy() {
 fn order4_bandpass_is_four_sections_and_parallel_equals_serial() {
     let sos = butter_sos(4, BandType::Bandpass, &[0.5, 20.0], 200.0).unwrap();
     assert_eq!(sos.len(), 4);
-    let channels: Vec<Vec<f64>> = (0..5).map(|c| (0..2000).map(|i| ((i * (c + 3)) as f64 * 0.013).sin()).collect()).collect();
+    let channels: Vec<Vec<f64>> = (0..5)
+        .map(|c| {
+            (0..2000)
+                .map(|i| ((i * (c + 3)) as f64 * 0.013).sin())
+                .collect()
+        })
+        .collect();
     let parallel = sosfiltfilt_channels(&sos, &channels).unwrap();
     for (c, p) in channels.iter().zip(&parallel) {
         assert_eq!(&sosfiltfilt(&sos, c).unwrap(), p);
@@ -130,14 +165,34 @@ fn taper_shape_and_detrend() {
 }
 
 fn channel(id: &str, units: Units, rate: f64) -> Channel {
-    Channel::new(id, units, rate, SourceRef { file: "event/records.csv".into(), member: None, column: Some(id.into()), format: "csv".into() })
+    Channel::new(
+        id,
+        units,
+        rate,
+        SourceRef {
+            file: "event/records.csv".into(),
+            member: None,
+            column: Some(id.into()),
+            format: "csv".into(),
+        },
+    )
 }
 
 #[test]
 fn counts_without_sensitivity_error_names_the_channel() {
     let mut event = Event::default();
-    event.records.push(Record::new(channel("B1", Units::Counts { counts_per_si: None }, 100.0), vec![1.0; 1000]));
-    let err = conditioning::condition_event(&mut event, &ConditioningSettings::default()).unwrap_err();
+    event.records.push(Record::new(
+        channel(
+            "B1",
+            Units::Counts {
+                counts_per_si: None,
+            },
+            100.0,
+        ),
+        vec![1.0; 1000],
+    ));
+    let err =
+        conditioning::condition_event(&mut event, &ConditioningSettings::default()).unwrap_err();
     match &err {
         Error::Input { location, .. } => assert_eq!(location.channel.as_deref(), Some("B1")),
         other => panic!("unexpected error {other}"),
@@ -151,29 +206,64 @@ fn non_finite_values_are_flagged_and_refused() {
     let mut x = vec![0.0; 1000];
     x[10] = f64::INFINITY;
     x[20] = f64::NAN;
-    event.records.push(Record::new(channel("F2", Units::G, 100.0), x));
-    let err = conditioning::condition_event(&mut event, &ConditioningSettings::default()).unwrap_err();
-    assert!(err.to_string().contains("F2") && err.to_string().contains("2 non-finite"), "{err}");
-    assert!(event.records[0].channel.qa.contains(&QaFlag::NonFinite { count: 2 }));
+    event
+        .records
+        .push(Record::new(channel("F2", Units::G, 100.0), x));
+    let err =
+        conditioning::condition_event(&mut event, &ConditioningSettings::default()).unwrap_err();
+    assert!(
+        err.to_string().contains("F2") && err.to_string().contains("2 non-finite"),
+        "{err}"
+    );
+    assert!(event.records[0]
+        .channel
+        .qa
+        .contains(&QaFlag::NonFinite { count: 2 }));
 }
 
 #[test]
 fn units_conversion_and_history_of_default_chain() {
     let mut event = Event::default();
     let n = 4000;
-    let x: Vec<f64> = (0..n).map(|i| 0.1 * (2.0 * std::f64::consts::PI * 2.0 * i as f64 / 200.0).sin() + 0.02).collect();
-    event.records.push(Record::new(channel("A", Units::G, 200.0), x.clone()));
-    let motions = conditioning::condition_event_with_motion(&mut event, &ConditioningSettings::default()).unwrap();
-    let steps: Vec<&str> = event.history.steps.iter().map(|s| s.step.as_str()).collect();
-    assert_eq!(steps, ["qa", "units_to_si", "detrend", "taper", "filter", "integrate"]);
+    let x: Vec<f64> = (0..n)
+        .map(|i| 0.1 * (2.0 * std::f64::consts::PI * 2.0 * i as f64 / 200.0).sin() + 0.02)
+        .collect();
+    event
+        .records
+        .push(Record::new(channel("A", Units::G, 200.0), x.clone()));
+    let motions =
+        conditioning::condition_event_with_motion(&mut event, &ConditioningSettings::default())
+            .unwrap();
+    let steps: Vec<&str> = event
+        .history
+        .steps
+        .iter()
+        .map(|s| s.step.as_str())
+        .collect();
+    assert_eq!(
+        steps,
+        [
+            "qa",
+            "units_to_si",
+            "detrend",
+            "taper",
+            "filter",
+            "integrate"
+        ]
+    );
     assert_eq!(event.records[0].channel.units, Units::MPerS2);
     assert_eq!(event.history.steps[4].params["order"], 4);
     assert_eq!(motions.len(), 1);
     // 2 Hz sine of 0.1 g is in the pass band: amplitude in the middle is kept
     // (taper and filter edges excluded) to 1e-3.
     let expected = 0.1 * 9.80665;
-    let mid_peak = event.records[0].samples[1000..3000].iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    assert!((mid_peak / expected - 1.0).abs() < 1e-3, "mid peak {mid_peak} vs {expected}");
+    let mid_peak = event.records[0].samples[1000..3000]
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(
+        (mid_peak / expected - 1.0).abs() < 1e-3,
+        "mid peak {mid_peak} vs {expected}"
+    );
 }
 
 #[test]
@@ -181,9 +271,15 @@ fn settings_deserialize_with_defaults_and_minimal_has_no_filter() {
     let s: ConditioningSettings = serde_json::from_str("{}").unwrap();
     assert_eq!(s, ConditioningSettings::default());
     let f = s.filter.as_ref().unwrap();
-    assert_eq!((f.order, f.band, f.corners_hz.clone(), f.zero_phase), (4, BandType::Bandpass, vec![0.5, 20.0], true));
+    assert_eq!(
+        (f.order, f.band, f.corners_hz.clone(), f.zero_phase),
+        (4, BandType::Bandpass, vec![0.5, 20.0], true)
+    );
     assert_eq!(s.taper_fraction, Some(0.05));
-    let s: ConditioningSettings = toml::from_str("taper_fraction = 0.1\n[filter]\norder = 2\nband = \"highpass\"\ncorners_hz = [0.1]\n").unwrap();
+    let s: ConditioningSettings = toml::from_str(
+        "taper_fraction = 0.1\n[filter]\norder = 2\nband = \"highpass\"\ncorners_hz = [0.1]\n",
+    )
+    .unwrap();
     assert_eq!(s.filter.unwrap().order, 2);
     let m = ConditioningSettings::minimal();
     assert!(m.filter.is_none() && m.taper_fraction.is_none() && m.integration.is_some());
@@ -204,8 +300,14 @@ fn reversed_sensor_is_flipped_and_off_axis_pair_rotated() {
     let x_az = 171.0f64;
     let y_az = x_az - 90.0;
     // A true motion vector along X with amplitude `signal`: sensor reading = s·cos(α − X).
-    let s1: Vec<f64> = signal.iter().map(|s| s * (az1 - x_az).to_radians().cos()).collect();
-    let s2: Vec<f64> = signal.iter().map(|s| s * (az2 - x_az).to_radians().cos()).collect();
+    let s1: Vec<f64> = signal
+        .iter()
+        .map(|s| s * (az1 - x_az).to_radians().cos())
+        .collect();
+    let s2: Vec<f64> = signal
+        .iter()
+        .map(|s| s * (az2 - x_az).to_radians().cos())
+        .collect();
     let mut p1 = channel("P1", Units::MPerS2, 100.0);
     p1.direction = Some(Direction::Azimuth(az1));
     p1.level = Some(2);
@@ -222,20 +324,49 @@ fn reversed_sensor_is_flipped_and_off_axis_pair_rotated() {
         Record::new(p2, s2),
         Record::new(lonely, signal.clone()),
     ];
-    let actions = normalise_orientation(&mut records, &OrientationSettings { x_azimuth_deg: x_az, y_azimuth_deg: None, tolerance_deg: 5.0 }).unwrap();
+    let actions = normalise_orientation(
+        &mut records,
+        &OrientationSettings {
+            x_azimuth_deg: x_az,
+            y_azimuth_deg: None,
+            tolerance_deg: 5.0,
+        },
+    )
+    .unwrap();
     assert_eq!(records[0].samples, signal);
     assert_eq!(records[0].channel.direction, Some(Direction::Axis(Axis::X)));
-    assert!(records[1].samples.iter().zip(&signal).all(|(a, b)| *a == -*b));
+    assert!(records[1]
+        .samples
+        .iter()
+        .zip(&signal)
+        .all(|(a, b)| *a == -*b));
     assert_eq!(records[1].channel.direction, Some(Direction::Axis(Axis::X)));
-    let x_rec = records.iter().find(|r| r.channel.direction == Some(Direction::Axis(Axis::X)) && r.channel.level == Some(2)).unwrap();
-    let y_rec = records.iter().find(|r| r.channel.direction == Some(Direction::Axis(Axis::Y)) && r.channel.level == Some(2)).unwrap();
+    let x_rec = records
+        .iter()
+        .find(|r| {
+            r.channel.direction == Some(Direction::Axis(Axis::X)) && r.channel.level == Some(2)
+        })
+        .unwrap();
+    let y_rec = records
+        .iter()
+        .find(|r| {
+            r.channel.direction == Some(Direction::Axis(Axis::Y)) && r.channel.level == Some(2)
+        })
+        .unwrap();
     for i in 0..n {
         assert!((x_rec.samples[i] - signal[i]).abs() < 1e-12);
         assert!(y_rec.samples[i].abs() < 1e-12);
     }
     assert_eq!(y_az, 81.0);
-    let kinds: Vec<(&str, &str)> = actions.iter().map(|a| (a.channel.as_str(), a.action.as_str())).collect();
-    assert!(kinds.contains(&("B1", "flip")) && kinds.contains(&("F1", "relabel")) && kinds.contains(&("L", "unresolved")));
+    let kinds: Vec<(&str, &str)> = actions
+        .iter()
+        .map(|a| (a.channel.as_str(), a.action.as_str()))
+        .collect();
+    assert!(
+        kinds.contains(&("B1", "flip"))
+            && kinds.contains(&("F1", "relabel"))
+            && kinds.contains(&("L", "unresolved"))
+    );
     assert_eq!(kinds.iter().filter(|k| k.1 == "rotate").count(), 2);
 }
 
@@ -248,12 +379,18 @@ fn resampling_keeps_passband_and_removes_alias() {
     let fs_in = 250.0;
     let n = 5000;
     let t = |i: usize, fs: f64| i as f64 / fs;
-    let low: Vec<f64> = (0..n).map(|i| (2.0 * std::f64::consts::PI * 5.0 * t(i, fs_in)).sin()).collect();
+    let low: Vec<f64> = (0..n)
+        .map(|i| (2.0 * std::f64::consts::PI * 5.0 * t(i, fs_in)).sin())
+        .collect();
     let y = resample_to_rate(&low, fs_in, 200.0).unwrap();
     assert_eq!(y.len(), 4000);
-    let worst = (200..3800).map(|k| (y[k] - (2.0 * std::f64::consts::PI * 5.0 * t(k, 200.0)).sin()).abs()).fold(0.0f64, f64::max);
+    let worst = (200..3800)
+        .map(|k| (y[k] - (2.0 * std::f64::consts::PI * 5.0 * t(k, 200.0)).sin()).abs())
+        .fold(0.0f64, f64::max);
     assert!(worst < 1e-3, "pass-band error {worst:e}");
-    let high: Vec<f64> = (0..n).map(|i| (2.0 * std::f64::consts::PI * 120.0 * t(i, fs_in)).sin()).collect();
+    let high: Vec<f64> = (0..n)
+        .map(|i| (2.0 * std::f64::consts::PI * 120.0 * t(i, fs_in)).sin())
+        .collect();
     let y = resample_to_rate(&high, fs_in, 200.0).unwrap();
     let leak = y[200..3800].iter().fold(0.0f64, |m, v| m.max(v.abs()));
     assert!(leak < 1e-2, "alias leakage {leak:e}");
@@ -266,7 +403,10 @@ fn alignment_trims_to_common_window_and_rejects_disjoint_records() {
     a.start_ns = Some(1_000_000_000);
     let mut b = channel("B", Units::MPerS2, 100.0);
     b.start_ns = Some(1_500_000_000); // starts 50 samples later
-    let mut records = vec![Record::new(a.clone(), (0..1000).map(|i| i as f64).collect()), Record::new(b.clone(), (0..800).map(|i| i as f64).collect())];
+    let mut records = vec![
+        Record::new(a.clone(), (0..1000).map(|i| i as f64).collect()),
+        Record::new(b.clone(), (0..800).map(|i| i as f64).collect()),
+    ];
     let al = align_records(&mut records).unwrap();
     assert_eq!(al.samples, 800.min(1000 - 50));
     assert_eq!(al.trimmed_start, vec![50, 0]);
@@ -274,7 +414,10 @@ fn alignment_trims_to_common_window_and_rejects_disjoint_records() {
     assert_eq!(records[0].channel.start_ns, Some(1_500_000_000));
     assert_eq!(records[0].len(), records[1].len());
     b.start_ns = Some(20_000_000_000);
-    let mut records = vec![Record::new(a, vec![0.0; 100]), Record::new(b, vec![0.0; 100])];
+    let mut records = vec![
+        Record::new(a, vec![0.0; 100]),
+        Record::new(b, vec![0.0; 100]),
+    ];
     assert!(align_records(&mut records).is_err());
 }
 
@@ -292,16 +435,48 @@ fn integration_drift_control_recovers_known_displacement() {
     let mut acc = Vec::with_capacity(n);
     for i in 0..n {
         let t = i as f64 * dt;
-        let (e, de, dde) = ((k * t).sin().powi(2), k * (2.0 * k * t).sin(), 2.0 * k * k * (2.0 * k * t).cos());
+        let (e, de, dde) = (
+            (k * t).sin().powi(2),
+            k * (2.0 * k * t).sin(),
+            2.0 * k * k * (2.0 * k * t).cos(),
+        );
         let (s, ds, dds) = ((w * t).sin(), w * (w * t).cos(), -w * w * (w * t).sin());
         truth_u.push(amp * e * s);
         acc.push(amp * (dde * s + 2.0 * de * ds + e * dds) + 0.002);
     }
-    let err = |u: &[f64]| u.iter().zip(&truth_u).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())) / amp;
+    let err = |u: &[f64]| {
+        u.iter()
+            .zip(&truth_u)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+            / amp
+    };
     let plain = integrate_motion("c", &acc, dt, &DriftControl::None).unwrap();
-    let poly = integrate_motion("c", &acc, dt, &DriftControl::Polynomial { velocity_order: 1, displacement_order: 2 }).unwrap();
-    let hp = integrate_motion("c", &acc, dt, &DriftControl::Highpass { corner_hz: 0.1, order: 4 }).unwrap();
-    eprintln!("relative displacement error: none {:.3e}, polynomial {:.3e}, highpass {:.3e}", err(&plain.displacement), err(&poly.displacement), err(&hp.displacement));
+    let poly = integrate_motion(
+        "c",
+        &acc,
+        dt,
+        &DriftControl::Polynomial {
+            velocity_order: 1,
+            displacement_order: 2,
+        },
+    )
+    .unwrap();
+    let hp = integrate_motion(
+        "c",
+        &acc,
+        dt,
+        &DriftControl::Highpass {
+            corner_hz: 0.1,
+            order: 4,
+        },
+    )
+    .unwrap();
+    eprintln!(
+        "relative displacement error: none {:.3e}, polynomial {:.3e}, highpass {:.3e}",
+        err(&plain.displacement),
+        err(&poly.displacement),
+        err(&hp.displacement)
+    );
     assert!(err(&plain.displacement) > 5.0);
     assert!(err(&poly.displacement) < 0.02);
     assert!(err(&hp.displacement) < 0.02);
@@ -309,7 +484,10 @@ fn integration_drift_control_recovers_known_displacement() {
     // corrected acceleration gives the corrected velocity (trapezoid-exact).
     let v_again = cumulative_trapezoid(&poly.acceleration, dt);
     let offset = poly.velocity[0] - v_again[0];
-    let worst = v_again.iter().zip(&poly.velocity).fold(0.0f64, |m, (a, b)| m.max((a + offset - b).abs()));
+    let worst = v_again
+        .iter()
+        .zip(&poly.velocity)
+        .fold(0.0f64, |m, (a, b)| m.max((a + offset - b).abs()));
     assert!(worst < 1e-9, "velocity inconsistency {worst:e}");
 }
 
@@ -329,7 +507,11 @@ fn qa_detects_clipping_flat_spikes_and_low_snr() {
     let mut x: Vec<f64> = (0..n)
         .map(|i| {
             let t = i as f64 * dt;
-            let burst = if (20.0..40.0).contains(&t) { (2.0 * std::f64::consts::PI * 2.0 * t).sin() } else { 0.0 };
+            let burst = if (20.0..40.0).contains(&t) {
+                (2.0 * std::f64::consts::PI * 2.0 * t).sin()
+            } else {
+                0.0
+            };
             burst + 0.001 * noise()
         })
         .collect();
@@ -342,7 +524,10 @@ fn qa_detects_clipping_flat_spikes_and_low_snr() {
     for &i in &[500usize, 2500, 5000] {
         x[i] += 0.5;
     }
-    assert_eq!(qa::spike_indices(&x, settings.spike_threshold), vec![500, 2500, 5000]);
+    assert_eq!(
+        qa::spike_indices(&x, settings.spike_threshold),
+        vec![500, 2500, 5000]
+    );
     // Clip the burst at 0.8: runs at ±0.8.
     let clipped: Vec<f64> = x.iter().map(|v| v.clamp(-0.8, 0.8)).collect();
     match qa::detect_clipping(&clipped, 5, 1e-9) {
@@ -361,11 +546,16 @@ fn qa_detects_clipping_flat_spikes_and_low_snr() {
     let flags = qa::detect_flat_segments(&flat, dt, 1.0);
     assert_eq!(flags.len(), 1);
     match flags[0] {
-        QaFlag::FlatSegment { at_s, duration_s } => assert!((at_s - 45.0).abs() < 1e-9 && (duration_s - 1.99).abs() < 1e-9),
+        QaFlag::FlatSegment { at_s, duration_s } => {
+            assert!((at_s - 45.0).abs() < 1e-9 && (duration_s - 1.99).abs() < 1e-9)
+        }
         _ => unreachable!(),
     }
     // Noise only: low SNR.
     let only_noise: Vec<f64> = (0..n).map(|_| noise()).collect();
     let flags = qa::quality_flags(&only_noise, dt, &settings);
-    assert!(flags.iter().any(|f| matches!(f, QaFlag::LowSnr { .. })), "{flags:?}");
+    assert!(
+        flags.iter().any(|f| matches!(f, QaFlag::LowSnr { .. })),
+        "{flags:?}"
+    );
 }

@@ -3,8 +3,9 @@
 
 use quaketwin::conditioning::Motion;
 use quaketwin::metrics::{
-    arias_intensity, cumulative_absolute_velocity, default_periods, interstorey_drift, interstorey_drifts, peak_abs, response_spectrum,
-    sdof_response, significant_duration, strong_motion_metrics, MetricsSettings,
+    arias_intensity, cumulative_absolute_velocity, default_periods, interstorey_drift,
+    interstorey_drifts, peak_abs, response_spectrum, sdof_response, significant_duration,
+    strong_motion_metrics, MetricsSettings,
 };
 use quaketwin::vocab::STANDARD_GRAVITY;
 
@@ -12,7 +13,9 @@ const PI: f64 = std::f64::consts::PI;
 
 fn sine(amp: f64, freq: f64, duration: f64, dt: f64) -> Vec<f64> {
     let n = (duration / dt).round() as usize + 1;
-    (0..n).map(|i| amp * (2.0 * PI * freq * i as f64 * dt).sin()).collect()
+    (0..n)
+        .map(|i| amp * (2.0 * PI * freq * i as f64 * dt).sin())
+        .collect()
 }
 
 /// Steady-state amplitude of a 5 %-damped oscillator (T = 1 s) under a
@@ -27,12 +30,20 @@ fn harmonic_steady_state_matches_closed_form() {
     let a = sine(amp, f_in, 120.0, dt);
     let (u, v) = sdof_response(&a, dt, period, damping).unwrap();
     let (w, big_w) = (2.0 * PI / period, 2.0 * PI * f_in);
-    let expected_u = amp / ((w * w - big_w * big_w).powi(2) + (2.0 * damping * w * big_w).powi(2)).sqrt();
+    let expected_u =
+        amp / ((w * w - big_w * big_w).powi(2) + (2.0 * damping * w * big_w).powi(2)).sqrt();
     let tail = a.len() - 2000;
     let got_u = peak_abs(&u[tail..]);
     let got_v = peak_abs(&v[tail..]);
-    assert!((got_u / expected_u - 1.0).abs() < 1e-3, "u {got_u} vs {expected_u}");
-    assert!((got_v / (expected_u * big_w) - 1.0).abs() < 1e-3, "v {got_v} vs {}", expected_u * big_w);
+    assert!(
+        (got_u / expected_u - 1.0).abs() < 1e-3,
+        "u {got_u} vs {expected_u}"
+    );
+    assert!(
+        (got_v / (expected_u * big_w) - 1.0).abs() < 1e-3,
+        "v {got_v} vs {}",
+        expected_u * big_w
+    );
 }
 
 /// The Nigam–Jennings recurrence is exact for piecewise-linear input:
@@ -42,10 +53,14 @@ fn harmonic_steady_state_matches_closed_form() {
 fn recurrence_equals_fine_rk4_on_piecewise_linear_input() {
     let dt = 0.02;
     let n = 500;
-    let a: Vec<f64> = (0..n).map(|i| {
-        let t = i as f64 * dt;
-        (2.0 * PI * 1.3 * t).sin() * (-0.2 * t).exp() + 0.5 * (2.0 * PI * 3.7 * t + 0.4).cos() + if i % 7 == 0 { 0.3 } else { 0.0 }
-    }).collect();
+    let a: Vec<f64> = (0..n)
+        .map(|i| {
+            let t = i as f64 * dt;
+            (2.0 * PI * 1.3 * t).sin() * (-0.2 * t).exp()
+                + 0.5 * (2.0 * PI * 3.7 * t + 0.4).cos()
+                + if i % 7 == 0 { 0.3 } else { 0.0 }
+        })
+        .collect();
     for &(period, damping) in &[(0.3, 0.05), (1.0, 0.02), (0.05, 0.1), (2.0, 0.0)] {
         let (u, v) = sdof_response(&a, dt, period, damping).unwrap();
         let w = 2.0 * PI / period;
@@ -70,7 +85,12 @@ fn recurrence_equals_fine_rk4_on_piecewise_linear_input() {
             worst_v = worst_v.max((xd - v[i + 1]).abs());
         }
         let (su, sv) = (peak_abs(&u), peak_abs(&v));
-        assert!(worst_u / su < 1e-8 && worst_v / sv < 1e-8, "T={period} ζ={damping}: rel err u {:.2e} v {:.2e}", worst_u / su, worst_v / sv);
+        assert!(
+            worst_u / su < 1e-8 && worst_v / sv < 1e-8,
+            "T={period} ζ={damping}: rel err u {:.2e} v {:.2e}",
+            worst_u / su,
+            worst_v / sv
+        );
     }
 }
 
@@ -92,7 +112,11 @@ fn spectrum_structure_and_limits() {
     }
     // A stiff oscillator (T = 0.01 s) follows a 1 Hz ground motion: PSA ≈ PGA
     // (quasi-static, amplification 1/(1 − (Ω/ω)²) − 1 ≈ 1e-4).
-    assert!((s.psa_m_per_s2[1] / 2.0 - 1.0).abs() < 2e-3, "{}", s.psa_m_per_s2[1]);
+    assert!(
+        (s.psa_m_per_s2[1] / 2.0 - 1.0).abs() < 2e-3,
+        "{}",
+        s.psa_m_per_s2[1]
+    );
     assert!(response_spectrum(&a, dt, &[0.5], 1.0).is_err());
     assert!(response_spectrum(&a, dt, &[0.0], 0.05).is_err());
 }
@@ -113,8 +137,14 @@ fn arias_cav_and_significant_duration_of_a_sine() {
     let half = PI * f * dt;
     let cav_exact = 2.0 * amp * dur / PI;
     let cav_trapezoid = cav_exact * half / half.tan();
-    assert!((cav / cav_trapezoid - 1.0).abs() < 1e-9, "CAV {cav} vs {cav_trapezoid}");
-    assert!((cav / cav_exact - 1.0).abs() < 2e-5, "CAV {cav} vs {cav_exact}");
+    assert!(
+        (cav / cav_trapezoid - 1.0).abs() < 1e-9,
+        "CAV {cav} vs {cav_trapezoid}"
+    );
+    assert!(
+        (cav / cav_exact - 1.0).abs() < 2e-5,
+        "CAV {cav} vs {cav_exact}"
+    );
     let husid = |t: f64| (t / 2.0 - (4.0 * PI * f * t).sin() / (8.0 * PI * f)) / (dur / 2.0);
     let solve = |level: f64| {
         let (mut lo, mut hi) = (0.0, dur);

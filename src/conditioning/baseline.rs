@@ -124,7 +124,9 @@ fn solve_dense(a: &mut [f64], b: &mut [f64], m: usize) -> Result<()> {
             .max_by(|&i, &j| a[i * m + col].abs().total_cmp(&a[j * m + col].abs()))
             .unwrap_or(col);
         if a[pivot * m + col].abs() < 1e-300 {
-            return Err(Error::numerical("polynomial baseline: singular normal equations"));
+            return Err(Error::numerical(
+                "polynomial baseline: singular normal equations",
+            ));
         }
         if pivot != col {
             for c in 0..m {
@@ -171,7 +173,9 @@ pub fn remove_linear_trend(data: &mut [f64]) -> Result<Vec<f64>> {
 /// untouched. `fraction` in [0, 0.5].
 pub fn cosine_taper(data: &mut [f64], fraction: f64) -> Result<usize> {
     if !(0.0..=0.5).contains(&fraction) {
-        return Err(Error::usage(format!("taper fraction must be within [0, 0.5] of the record at each end, got {fraction}")));
+        return Err(Error::usage(format!(
+            "taper fraction must be within [0, 0.5] of the record at each end, got {fraction}"
+        )));
     }
     let n = data.len();
     let m = ((fraction * n as f64).round() as usize).min(n / 2);
@@ -190,11 +194,17 @@ mod tests {
     #[test]
     fn cubic_is_removed_exactly() {
         let n = 1001;
-        let mut d: Vec<f64> = (0..n).map(|i| {
-            let t = i as f64 * 0.01;
-            3.0 - 2.0 * t + 0.5 * t * t - 0.01 * t * t * t
-        }).collect();
+        let mut d: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 * 0.01;
+                3.0 - 2.0 * t + 0.5 * t * t - 0.01 * t * t * t
+            })
+            .collect();
         remove_polynomial(&mut d, 3).unwrap();
-        assert!(d.iter().all(|v| v.abs() < 1e-9), "max residual {}", d.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+        assert!(
+            d.iter().all(|v| v.abs() < 1e-9),
+            "max residual {}",
+            d.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+        );
     }
 }

@@ -54,12 +54,21 @@ struct Zpk {
 ///
 /// `corners_hz` holds one corner for low/high-pass and two (low, high) for
 /// band-pass/stop; every corner must lie strictly between 0 and Nyquist.
-pub fn butter_sos(order: usize, band: BandType, corners_hz: &[f64], sampling_rate_hz: f64) -> Result<Vec<Section>> {
+pub fn butter_sos(
+    order: usize,
+    band: BandType,
+    corners_hz: &[f64],
+    sampling_rate_hz: f64,
+) -> Result<Vec<Section>> {
     if order == 0 || order > 64 {
-        return Err(Error::usage(format!("Butterworth order must be 1..=64, got {order}")));
+        return Err(Error::usage(format!(
+            "Butterworth order must be 1..=64, got {order}"
+        )));
     }
     if !(sampling_rate_hz.is_finite() && sampling_rate_hz > 0.0) {
-        return Err(Error::usage(format!("sampling rate must be positive, got {sampling_rate_hz}")));
+        return Err(Error::usage(format!(
+            "sampling rate must be positive, got {sampling_rate_hz}"
+        )));
     }
     let nyquist = sampling_rate_hz / 2.0;
     let expected = match band {
@@ -127,7 +136,11 @@ fn butterworth_prototype(order: usize) -> Zpk {
             -Complex64::new(0.0, theta).exp()
         })
         .collect();
-    Zpk { zeros: Vec::new(), poles, gain: 1.0 }
+    Zpk {
+        zeros: Vec::new(),
+        poles,
+        gain: 1.0,
+    }
 }
 
 /// Complex division as numpy computes it (Smith's algorithm with a
@@ -151,7 +164,11 @@ fn c_div(a: Complex64, b: Complex64) -> Complex64 {
 fn c_sqrt(z: Complex64) -> Complex64 {
     let (x, y) = (z.re, z.im);
     if y == 0.0 {
-        return if x < 0.0 { Complex64::new(0.0, (-x).sqrt().copysign(y)) } else { Complex64::new(x.sqrt().abs(), 0.0f64.copysign(y)) };
+        return if x < 0.0 {
+            Complex64::new(0.0, (-x).sqrt().copysign(y))
+        } else {
+            Complex64::new(x.sqrt().abs(), 0.0f64.copysign(y))
+        };
     }
     if x == 0.0 {
         let r = (0.5 * y.abs()).sqrt();
@@ -192,8 +209,15 @@ fn lowpass_to_highpass(zpk: Zpk, wo: f64) -> Zpk {
     let wo_c = Complex64::new(wo, 0.0);
     let mut zeros: Vec<Complex64> = zpk.zeros.iter().map(|z| c_div(wo_c, *z)).collect();
     zeros.extend(std::iter::repeat_n(Complex64::new(0.0, 0.0), degree));
-    let ratio = c_div(product(zpk.zeros.iter().map(|z| -z)), product(zpk.poles.iter().map(|p| -p)));
-    Zpk { zeros, poles: zpk.poles.iter().map(|p| c_div(wo_c, *p)).collect(), gain: zpk.gain * ratio.re }
+    let ratio = c_div(
+        product(zpk.zeros.iter().map(|z| -z)),
+        product(zpk.poles.iter().map(|p| -p)),
+    );
+    Zpk {
+        zeros,
+        poles: zpk.poles.iter().map(|p| c_div(wo_c, *p)).collect(),
+        gain: zpk.gain * ratio.re,
+    }
 }
 
 /// Roots of s² − 2·x·s + wo² for each x: x ± sqrt(x² − wo²), the "+" half
@@ -213,7 +237,11 @@ fn lowpass_to_bandpass(zpk: Zpk, wo: f64, bw: f64) -> Zpk {
     let p_lp: Vec<Complex64> = zpk.poles.iter().map(|p| p * (bw / 2.0)).collect();
     let mut zeros = split_band(&z_lp, wo);
     zeros.extend(std::iter::repeat_n(Complex64::new(0.0, 0.0), degree));
-    Zpk { zeros, poles: split_band(&p_lp, wo), gain: zpk.gain * bw.powi(degree as i32) }
+    Zpk {
+        zeros,
+        poles: split_band(&p_lp, wo),
+        gain: zpk.gain * bw.powi(degree as i32),
+    }
 }
 
 /// scipy `lp2bs_zpk`.
@@ -225,8 +253,15 @@ fn lowpass_to_bandstop(zpk: Zpk, wo: f64, bw: f64) -> Zpk {
     let mut zeros = split_band(&z_hp, wo);
     zeros.extend(std::iter::repeat_n(Complex64::new(0.0, wo), degree));
     zeros.extend(std::iter::repeat_n(Complex64::new(0.0, -wo), degree));
-    let ratio = c_div(product(zpk.zeros.iter().map(|z| -z)), product(zpk.poles.iter().map(|p| -p)));
-    Zpk { zeros, poles: split_band(&p_hp, wo), gain: zpk.gain * ratio.re }
+    let ratio = c_div(
+        product(zpk.zeros.iter().map(|z| -z)),
+        product(zpk.poles.iter().map(|p| -p)),
+    );
+    Zpk {
+        zeros,
+        poles: split_band(&p_hp, wo),
+        gain: zpk.gain * ratio.re,
+    }
 }
 
 /// scipy `bilinear_zpk`: z = (2fs + s)/(2fs − s); zeros at infinity go to z = −1.
@@ -235,8 +270,15 @@ fn bilinear(zpk: Zpk, fs: f64) -> Zpk {
     let fs2 = Complex64::new(2.0 * fs, 0.0);
     let mut zeros: Vec<Complex64> = zpk.zeros.iter().map(|z| c_div(fs2 + z, fs2 - z)).collect();
     zeros.extend(std::iter::repeat_n(Complex64::new(-1.0, 0.0), degree));
-    let ratio = c_div(product(zpk.zeros.iter().map(|z| fs2 - z)), product(zpk.poles.iter().map(|p| fs2 - p)));
-    Zpk { zeros, poles: zpk.poles.iter().map(|p| c_div(fs2 + p, fs2 - p)).collect(), gain: zpk.gain * ratio.re }
+    let ratio = c_div(
+        product(zpk.zeros.iter().map(|z| fs2 - z)),
+        product(zpk.poles.iter().map(|p| fs2 - p)),
+    );
+    Zpk {
+        zeros,
+        poles: zpk.poles.iter().map(|p| c_div(fs2 + p, fs2 - p)).collect(),
+        gain: zpk.gain * ratio.re,
+    }
 }
 
 /// scipy `_cplxreal`: one member (positive imaginary part) of each complex
@@ -245,20 +287,27 @@ fn complex_pairs_then_reals(values: &[Complex64]) -> Result<Vec<Complex64>> {
     let tol = 100.0 * f64::EPSILON;
     let mut sorted = values.to_vec();
     // lexsort((|imag|, real)): primary key real part, secondary |imag| (stable).
-    sorted.sort_by(|a, b| a.re.total_cmp(&b.re).then(a.im.abs().total_cmp(&b.im.abs())));
+    sorted.sort_by(|a, b| {
+        a.re.total_cmp(&b.re)
+            .then(a.im.abs().total_cmp(&b.im.abs()))
+    });
     let is_real = |z: &Complex64| z.im.abs() <= tol * z.norm();
     let reals: Vec<f64> = sorted.iter().filter(|z| is_real(z)).map(|z| z.re).collect();
     let complex: Vec<Complex64> = sorted.iter().filter(|z| !is_real(z)).copied().collect();
     let mut positive: Vec<Complex64> = complex.iter().filter(|z| z.im > 0.0).copied().collect();
     let mut negative: Vec<Complex64> = complex.iter().filter(|z| z.im < 0.0).copied().collect();
     if positive.len() != negative.len() {
-        return Err(Error::numerical("filter design: complex value without a matching conjugate"));
+        return Err(Error::numerical(
+            "filter design: complex value without a matching conjugate",
+        ));
     }
     // Runs of (approximately) equal real part are sorted by |imag|.
     let mut start = 0;
     while start < positive.len() {
         let mut stop = start;
-        while stop + 1 < positive.len() && positive[stop + 1].re - positive[stop].re <= tol * positive[stop].norm() {
+        while stop + 1 < positive.len()
+            && positive[stop + 1].re - positive[stop].re <= tol * positive[stop].norm()
+        {
             stop += 1;
         }
         if stop > start {
@@ -270,7 +319,9 @@ fn complex_pairs_then_reals(values: &[Complex64]) -> Result<Vec<Complex64>> {
     let mut out = Vec::with_capacity(positive.len() + reals.len());
     for (p, n) in positive.iter().zip(&negative) {
         if (p - n.conj()).norm() > tol * n.norm() {
-            return Err(Error::numerical("filter design: complex value without a matching conjugate"));
+            return Err(Error::numerical(
+                "filter design: complex value without a matching conjugate",
+            ));
         }
         out.push(c_div(p + n.conj(), Complex64::new(2.0, 0.0)));
     }
@@ -339,7 +390,11 @@ fn section_from(zeros: &[Complex64], poles: &[Complex64]) -> Section {
 /// closest to the unit circle go into the last section, each paired with
 /// the nearest zeros; the gain goes into the first section.
 fn zpk_to_sos_nearest(zpk: Zpk) -> Result<Vec<Section>> {
-    let Zpk { mut zeros, mut poles, gain } = zpk;
+    let Zpk {
+        mut zeros,
+        mut poles,
+        gain,
+    } = zpk;
     if zeros.is_empty() && poles.is_empty() {
         return Ok(vec![[gain, 0.0, 0.0, 1.0, 0.0, 0.0]]);
     }
@@ -380,7 +435,8 @@ fn zpk_to_sos_nearest(zpk: Zpk) -> Result<Vec<Section>> {
             sos[si] = section_from(&[z1, z1.conj()], &[p1, p1.conj()]);
         } else {
             let p2 = if is_exactly_real(&p1) {
-                let real_idx: Vec<usize> = (0..p.len()).filter(|&i| is_exactly_real(&p[i])).collect();
+                let real_idx: Vec<usize> =
+                    (0..p.len()).filter(|&i| is_exactly_real(&p[i])).collect();
                 let p2_idx = index_closest_to_unit_circle(&p, &real_idx);
                 p.remove(p2_idx)
             } else {

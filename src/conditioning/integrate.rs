@@ -29,14 +29,23 @@ pub enum DriftControl {
     None,
     /// Consistent polynomial baseline removal (orders of the polynomials
     /// fitted to velocity and to displacement).
-    Polynomial { velocity_order: usize, displacement_order: usize },
+    Polynomial {
+        velocity_order: usize,
+        displacement_order: usize,
+    },
     /// Zero-phase Butterworth high-pass after each integration.
-    Highpass { corner_hz: f64, order: usize },
+    Highpass {
+        corner_hz: f64,
+        order: usize,
+    },
 }
 
 impl Default for DriftControl {
     fn default() -> Self {
-        DriftControl::Polynomial { velocity_order: 1, displacement_order: 2 }
+        DriftControl::Polynomial {
+            velocity_order: 1,
+            displacement_order: 2,
+        }
     }
 }
 
@@ -71,12 +80,22 @@ pub fn cumulative_trapezoid(data: &[f64], dt: f64) -> Vec<f64> {
 
 /// Removes a least-squares polynomial of `order` from `target` and its
 /// time derivatives from `lower` (first derivative) and `lowest` (second).
-fn remove_consistent_polynomial(target: &mut [f64], lower: &mut [f64], lowest: Option<&mut [f64]>, order: usize, dt: f64) -> Result<()> {
+fn remove_consistent_polynomial(
+    target: &mut [f64],
+    lower: &mut [f64],
+    lowest: Option<&mut [f64]>,
+    order: usize,
+    dt: f64,
+) -> Result<()> {
     let n = target.len();
     let coefficients = fit_polynomial(target, order)?;
     let [value, d1, d2] = evaluate_polynomial_with_derivatives(&coefficients, n);
     // Scaled time s = 2 i/(n−1) − 1 ⇒ ds/dt = 2 / ((n−1) dt).
-    let ds_dt = if n > 1 { 2.0 / ((n - 1) as f64 * dt) } else { 0.0 };
+    let ds_dt = if n > 1 {
+        2.0 / ((n - 1) as f64 * dt)
+    } else {
+        0.0
+    };
     for i in 0..n {
         target[i] -= value[i];
         lower[i] -= d1[i] * ds_dt;
@@ -92,9 +111,16 @@ fn remove_consistent_polynomial(target: &mut [f64], lower: &mut [f64], lowest: O
 /// Integrates acceleration to velocity and displacement with the chosen
 /// drift control. Returns the (possibly baseline-corrected) acceleration
 /// with the velocity and displacement.
-pub fn integrate_motion(channel_id: &str, acceleration: &[f64], dt: f64, drift: &DriftControl) -> Result<Motion> {
+pub fn integrate_motion(
+    channel_id: &str,
+    acceleration: &[f64],
+    dt: f64,
+    drift: &DriftControl,
+) -> Result<Motion> {
     if !(dt.is_finite() && dt > 0.0) {
-        return Err(Error::usage(format!("sampling interval must be positive, got {dt}")));
+        return Err(Error::usage(format!(
+            "sampling interval must be positive, got {dt}"
+        )));
     }
     let mut acc = acceleration.to_vec();
     let mut vel = cumulative_trapezoid(&acc, dt);
@@ -103,10 +129,19 @@ pub fn integrate_motion(channel_id: &str, acceleration: &[f64], dt: f64, drift: 
         DriftControl::None => {
             disp = cumulative_trapezoid(&vel, dt);
         }
-        DriftControl::Polynomial { velocity_order, displacement_order } => {
+        DriftControl::Polynomial {
+            velocity_order,
+            displacement_order,
+        } => {
             remove_consistent_polynomial(&mut vel, &mut acc, None, *velocity_order, dt)?;
             let mut d = cumulative_trapezoid(&vel, dt);
-            remove_consistent_polynomial(&mut d, &mut vel, Some(&mut acc), *displacement_order, dt)?;
+            remove_consistent_polynomial(
+                &mut d,
+                &mut vel,
+                Some(&mut acc),
+                *displacement_order,
+                dt,
+            )?;
             disp = d;
         }
         DriftControl::Highpass { corner_hz, order } => {
@@ -116,5 +151,11 @@ pub fn integrate_motion(channel_id: &str, acceleration: &[f64], dt: f64, drift: 
             disp = sosfiltfilt(&sos, &d)?;
         }
     }
-    Ok(Motion { channel_id: channel_id.to_string(), dt, acceleration: acc, velocity: vel, displacement: disp })
+    Ok(Motion {
+        channel_id: channel_id.to_string(),
+        dt,
+        acceleration: acc,
+        velocity: vel,
+        displacement: disp,
+    })
 }

@@ -90,7 +90,12 @@ impl Default for ConditioningSettings {
             orientation: None,
             detrend: Detrend::Mean,
             taper_fraction: Some(0.05),
-            filter: Some(FilterSettings { order: 4, band: BandType::Bandpass, corners_hz: vec![0.5, 20.0], zero_phase: true }),
+            filter: Some(FilterSettings {
+                order: 4,
+                band: BandType::Bandpass,
+                corners_hz: vec![0.5, 20.0],
+                zero_phase: true,
+            }),
             integration: Some(IntegrationSettings::default()),
         }
     }
@@ -104,7 +109,12 @@ impl ConditioningSettings {
         ConditioningSettings {
             taper_fraction: None,
             filter: None,
-            integration: Some(IntegrationSettings { drift: DriftControl::Polynomial { velocity_order: 1, displacement_order: 2 } }),
+            integration: Some(IntegrationSettings {
+                drift: DriftControl::Polynomial {
+                    velocity_order: 1,
+                    displacement_order: 2,
+                },
+            }),
             ..ConditioningSettings::default()
         }
     }
@@ -112,7 +122,8 @@ impl ConditioningSettings {
 
 /// Location naming a record's file, member and channel for error messages.
 pub fn record_location(record: &Record) -> Location {
-    let mut loc = Location::file(record.channel.source.file.clone()).with_channel(record.channel.id.clone());
+    let mut loc =
+        Location::file(record.channel.source.file.clone()).with_channel(record.channel.id.clone());
     if let Some(m) = &record.channel.source.member {
         loc = loc.with_member(m.clone());
     }
@@ -155,7 +166,10 @@ pub fn condition_event(event: &mut Event, settings: &ConditioningSettings) -> Re
 /// displacement of every acceleration channel when integration is
 /// configured (empty otherwise). With polynomial drift control the
 /// acceleration records are updated with the consistent baseline correction.
-pub fn condition_event_with_motion(event: &mut Event, settings: &ConditioningSettings) -> Result<Vec<Motion>> {
+pub fn condition_event_with_motion(
+    event: &mut Event,
+    settings: &ConditioningSettings,
+) -> Result<Vec<Motion>> {
     // 1. Non-finite values: flag and refuse.
     for r in event.records.iter_mut() {
         let (count, first) = qa::count_non_finite(&r.samples);
@@ -166,11 +180,20 @@ pub fn condition_event_with_motion(event: &mut Event, settings: &ConditioningSet
             }
             return Err(Error::input(
                 record_location(r),
-                format!("{count} non-finite sample(s), first at index {}: refusing to condition", first.unwrap_or(0)),
+                format!(
+                    "{count} non-finite sample(s), first at index {}: refusing to condition",
+                    first.unwrap_or(0)
+                ),
             ));
         }
         if !(r.channel.sampling_rate_hz.is_finite() && r.channel.sampling_rate_hz > 0.0) {
-            return Err(Error::input(record_location(r), format!("sampling rate must be positive, got {}", r.channel.sampling_rate_hz)));
+            return Err(Error::input(
+                record_location(r),
+                format!(
+                    "sampling rate must be positive, got {}",
+                    r.channel.sampling_rate_hz
+                ),
+            ));
         }
     }
     // 2. Quality flags on the data as recorded (clipping is best seen in raw values).
@@ -187,15 +210,23 @@ pub fn condition_event_with_motion(event: &mut Event, settings: &ConditioningSet
             qa_summary.insert(r.channel.id.clone(), json!(codes));
         }
     }
-    event.history.push("qa", json!({ "settings": settings.qa, "flags": qa_summary }));
+    event.history.push(
+        "qa",
+        json!({ "settings": settings.qa, "flags": qa_summary }),
+    );
     // 3. Units.
     let mut factors = serde_json::Map::new();
     for r in event.records.iter_mut() {
         let from = r.channel.units.name();
         let factor = units_to_si(r)?;
-        factors.insert(r.channel.id.clone(), json!({ "from": from, "factor": factor }));
+        factors.insert(
+            r.channel.id.clone(),
+            json!({ "from": from, "factor": factor }),
+        );
     }
-    event.history.push("units_to_si", json!({ "channels": factors }));
+    event
+        .history
+        .push("units_to_si", json!({ "channels": factors }));
     let is_acc = |r: &Record| r.channel.units.is_acceleration();
     // 4. Resampling.
     if let Some(target) = settings.resample_hz {
@@ -203,9 +234,12 @@ pub fn condition_event_with_motion(event: &mut Event, settings: &ConditioningSet
         for r in event.records.iter_mut() {
             if r.channel.sampling_rate_hz != target {
                 let from = r.channel.sampling_rate_hz;
-                r.samples = resample_to_rate(&r.samples, from, target).map_err(|e| in_record(r, e))?;
+                r.samples =
+                    resample_to_rate(&r.samples, from, target).map_err(|e| in_record(r, e))?;
                 r.channel.sampling_rate_hz = target;
-                r.channel.qa.push(QaFlag::Resampled { from: format!("{from} Hz") });
+                r.channel.qa.push(QaFlag::Resampled {
+                    from: format!("{from} Hz"),
+                });
                 changed.push(r.channel.id.clone());
             }
         }
@@ -218,14 +252,23 @@ pub fn condition_event_with_motion(event: &mut Event, settings: &ConditioningSet
     // 5. Alignment.
     if settings.align {
         let a = align_records(&mut event.records)?;
-        event.history.push("align", serde_json::to_value(&a).unwrap_or_default());
+        event
+            .history
+            .push("align", serde_json::to_value(&a).unwrap_or_default());
     }
     // 6. Orientation.
     if let Some(o) = &settings.orientation {
         let actions = normalise_orientation(&mut event.records, o)?;
-        event.history.push("orientation", json!({ "settings": o, "actions": actions }));
+        event
+            .history
+            .push("orientation", json!({ "settings": o, "actions": actions }));
     }
-    let acc_ids: Vec<String> = event.records.iter().filter(|r| is_acc(r)).map(|r| r.channel.id.clone()).collect();
+    let acc_ids: Vec<String> = event
+        .records
+        .iter()
+        .filter(|r| is_acc(r))
+        .map(|r| r.channel.id.clone())
+        .collect();
     // 7. Detrend.
     if settings.detrend != Detrend::None {
         for r in event.records.iter_mut().filter(|r| is_acc(r)) {
@@ -236,18 +279,28 @@ pub fn condition_event_with_motion(event: &mut Event, settings: &ConditioningSet
                     Ok(())
                 }
                 Detrend::Linear => remove_linear_trend(&mut r.samples).map(|_| ()),
-                Detrend::Polynomial { order } => remove_polynomial(&mut r.samples, order).map(|_| ()),
+                Detrend::Polynomial { order } => {
+                    remove_polynomial(&mut r.samples, order).map(|_| ())
+                }
             };
             result.map_err(|e| in_record(r, e))?;
         }
-        event.history.push_for("detrend", acc_ids.clone(), serde_json::to_value(&settings.detrend).unwrap_or_default());
+        event.history.push_for(
+            "detrend",
+            acc_ids.clone(),
+            serde_json::to_value(&settings.detrend).unwrap_or_default(),
+        );
     }
     // 8. Taper.
     if let Some(fraction) = settings.taper_fraction {
         for r in event.records.iter_mut().filter(|r| is_acc(r)) {
             cosine_taper(&mut r.samples, fraction)?;
         }
-        event.history.push_for("taper", acc_ids.clone(), json!({ "window": "cosine (Tukey)", "fraction_each_end": fraction }));
+        event.history.push_for(
+            "taper",
+            acc_ids.clone(),
+            json!({ "window": "cosine (Tukey)", "fraction_each_end": fraction }),
+        );
     }
     // 9. Filter (channels in parallel).
     if let Some(f) = &settings.filter {
@@ -256,8 +309,14 @@ pub fn condition_event_with_motion(event: &mut Event, settings: &ConditioningSet
             .par_iter_mut()
             .filter(|r| is_acc(r))
             .map(|r| {
-                let sos = butter_sos(f.order, f.band, &f.corners_hz, r.channel.sampling_rate_hz).map_err(|e| in_record(r, e))?;
-                r.samples = if f.zero_phase { sosfiltfilt(&sos, &r.samples) } else { sosfilt(&sos, &r.samples) }.map_err(|e| in_record(r, e))?;
+                let sos = butter_sos(f.order, f.band, &f.corners_hz, r.channel.sampling_rate_hz)
+                    .map_err(|e| in_record(r, e))?;
+                r.samples = if f.zero_phase {
+                    sosfiltfilt(&sos, &r.samples)
+                } else {
+                    sosfilt(&sos, &r.samples)
+                }
+                .map_err(|e| in_record(r, e))?;
                 Ok(())
             })
             .collect();
@@ -283,7 +342,13 @@ pub fn condition_event_with_motion(event: &mut Event, settings: &ConditioningSet
             .par_iter_mut()
             .filter(|r| is_acc(r))
             .map(|r| {
-                let m = integrate_motion(&r.channel.id, &r.samples, r.channel.dt(), &integration.drift).map_err(|e| in_record(r, e))?;
+                let m = integrate_motion(
+                    &r.channel.id,
+                    &r.samples,
+                    r.channel.dt(),
+                    &integration.drift,
+                )
+                .map_err(|e| in_record(r, e))?;
                 r.samples.clone_from(&m.acceleration);
                 Ok(m)
             })

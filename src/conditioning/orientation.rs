@@ -77,24 +77,45 @@ fn match_axis(az: f64, x_az: f64, y_az: f64, tol: f64) -> Option<(Axis, f64)> {
 }
 
 /// Location key grouping channels of one sensor package.
-fn location_key(r: &Record) -> (Option<String>, Option<String>, Option<i32>, Option<String>, Option<String>) {
+fn location_key(
+    r: &Record,
+) -> (
+    Option<String>,
+    Option<String>,
+    Option<i32>,
+    Option<String>,
+    Option<String>,
+) {
     let c = &r.channel;
-    (c.station.clone(), c.location_code.clone(), c.level, c.node.clone(), c.location_text.clone())
+    (
+        c.station.clone(),
+        c.location_code.clone(),
+        c.level,
+        c.node.clone(),
+        c.location_text.clone(),
+    )
 }
 
 /// Normalises orientation in place (see module doc); returns what was done.
 /// Channels already on an axis, without a direction, or off-axis without an
 /// orthogonal partner at their location are left as they are (the last are
 /// reported `unresolved`). Paired channels must have equal lengths.
-pub fn normalise_orientation(records: &mut [Record], settings: &OrientationSettings) -> Result<Vec<OrientationAction>> {
+pub fn normalise_orientation(
+    records: &mut [Record],
+    settings: &OrientationSettings,
+) -> Result<Vec<OrientationAction>> {
     let x_az = settings.x_azimuth_deg;
     let y_az = settings.y_azimuth_deg.unwrap_or(x_az - 90.0);
     let tol = settings.tolerance_deg;
     if !(x_az.is_finite() && y_az.is_finite() && tol.is_finite() && (0.0..45.0).contains(&tol)) {
-        return Err(Error::usage("orientation: axis azimuths must be finite and tolerance within [0, 45) degrees"));
+        return Err(Error::usage(
+            "orientation: axis azimuths must be finite and tolerance within [0, 45) degrees",
+        ));
     }
     if (angle_diff(x_az, y_az).abs() - 90.0).abs() > 1e-9 {
-        return Err(Error::usage(format!("orientation: X ({x_az}°) and Y ({y_az}°) axes must be orthogonal")));
+        return Err(Error::usage(format!(
+            "orientation: X ({x_az}°) and Y ({y_az}°) axes must be orthogonal"
+        )));
     }
     let mut actions = Vec::new();
     let mut off_axis: Vec<usize> = Vec::new();
@@ -107,7 +128,11 @@ pub fn normalise_orientation(records: &mut [Record], settings: &OrientationSetti
                     }
                     actions.push(OrientationAction {
                         channel: r.channel.id.clone(),
-                        action: if sign < 0.0 { "flip".into() } else { "relabel".into() },
+                        action: if sign < 0.0 {
+                            "flip".into()
+                        } else {
+                            "relabel".into()
+                        },
                         from: format!("{az}deg"),
                         to: format!("{axis:?}"),
                         partner: None,
@@ -143,7 +168,9 @@ pub fn normalise_orientation(records: &mut [Record], settings: &OrientationSetti
                 && location_key(&records[ia]) == location_key(&records[ib])
                 && records[ia].samples.len() == records[ib].samples.len()
                 && match (records[ia].channel.direction, records[ib].channel.direction) {
-                    (Some(Direction::Azimuth(p)), Some(Direction::Azimuth(q))) => (angle_diff(p, q).abs() - 90.0).abs() <= tol,
+                    (Some(Direction::Azimuth(p)), Some(Direction::Azimuth(q))) => {
+                        (angle_diff(p, q).abs() - 90.0).abs() <= tol
+                    }
                     _ => false,
                 }
         });
@@ -152,7 +179,11 @@ pub fn normalise_orientation(records: &mut [Record], settings: &OrientationSetti
             actions.push(OrientationAction {
                 channel: r.channel.id.clone(),
                 action: "unresolved".into(),
-                from: r.channel.direction.map(|d| d.to_string()).unwrap_or_default(),
+                from: r
+                    .channel
+                    .direction
+                    .map(|d| d.to_string())
+                    .unwrap_or_default(),
                 to: String::new(),
                 partner: None,
             });
@@ -161,12 +192,18 @@ pub fn normalise_orientation(records: &mut [Record], settings: &OrientationSetti
         used[a] = true;
         used[b] = true;
         let ib = off_axis[b];
-        let (Some(Direction::Azimuth(az_a)), Some(Direction::Azimuth(az_b))) = (records[ia].channel.direction, records[ib].channel.direction) else {
+        let (Some(Direction::Azimuth(az_a)), Some(Direction::Azimuth(az_b))) =
+            (records[ia].channel.direction, records[ib].channel.direction)
+        else {
             continue;
         };
         // The channel closer to X becomes X, the other Y.
-        let (ix, iy) = if angle_diff(az_a, x_az).abs().min(180.0 - angle_diff(az_a, x_az).abs())
-            <= angle_diff(az_b, x_az).abs().min(180.0 - angle_diff(az_b, x_az).abs())
+        let (ix, iy) = if angle_diff(az_a, x_az)
+            .abs()
+            .min(180.0 - angle_diff(az_a, x_az).abs())
+            <= angle_diff(az_b, x_az)
+                .abs()
+                .min(180.0 - angle_diff(az_b, x_az).abs())
         {
             (ia, ib)
         } else {
@@ -175,12 +212,22 @@ pub fn normalise_orientation(records: &mut [Record], settings: &OrientationSetti
         let along_x = rotate_pair(&records[ia].samples, az_a, &records[ib].samples, az_b, x_az);
         let along_y = rotate_pair(&records[ia].samples, az_a, &records[ib].samples, az_b, y_az);
         for (idx, axis, data, other) in [(ix, Axis::X, along_x, iy), (iy, Axis::Y, along_y, ix)] {
-            let from = records[idx].channel.direction.map(|d| d.to_string()).unwrap_or_default();
+            let from = records[idx]
+                .channel
+                .direction
+                .map(|d| d.to_string())
+                .unwrap_or_default();
             let partner = records[other].channel.id.clone();
             let r = &mut records[idx];
             r.samples = data;
             r.channel.direction = Some(Direction::Axis(axis));
-            actions.push(OrientationAction { channel: r.channel.id.clone(), action: "rotate".into(), from, to: format!("{axis:?}"), partner: Some(partner) });
+            actions.push(OrientationAction {
+                channel: r.channel.id.clone(),
+                action: "rotate".into(),
+                from,
+                to: format!("{axis:?}"),
+                partner: Some(partner),
+            });
         }
     }
     Ok(actions)

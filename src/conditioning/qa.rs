@@ -70,7 +70,10 @@ pub fn detect_clipping(data: &[f64], min_run: usize, relative_tolerance: f64) ->
             run_sign = v.signum();
         }
     }
-    (total > 0).then_some(QaFlag::Clipping { samples: total, level: peak })
+    (total > 0).then_some(QaFlag::Clipping {
+        samples: total,
+        level: peak,
+    })
 }
 
 /// Flat segments: runs of identical consecutive samples lasting at least
@@ -83,7 +86,10 @@ pub fn detect_flat_segments(data: &[f64], dt: f64, min_duration_s: f64) -> Vec<Q
         if i == data.len() || data[i] != data[start] {
             let len = i - start;
             if len >= min_samples {
-                flags.push(QaFlag::FlatSegment { at_s: start as f64 * dt, duration_s: (len - 1) as f64 * dt });
+                flags.push(QaFlag::FlatSegment {
+                    at_s: start as f64 * dt,
+                    duration_s: (len - 1) as f64 * dt,
+                });
             }
             start = i;
         }
@@ -110,7 +116,9 @@ pub fn spike_indices(data: &[f64], threshold: f64) -> Vec<usize> {
     if n < 3 {
         return Vec::new();
     }
-    let e: Vec<f64> = (1..n - 1).map(|i| data[i] - 0.5 * (data[i - 1] + data[i + 1])).collect();
+    let e: Vec<f64> = (1..n - 1)
+        .map(|i| data[i] - 0.5 * (data[i - 1] + data[i + 1]))
+        .collect();
     let peak = data.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let floor = peak * 1e-9;
     let scales: Vec<f64> = e
@@ -127,7 +135,10 @@ pub fn spike_indices(data: &[f64], threshold: f64) -> Vec<usize> {
         let b = j / BLOCK;
         let lo = b.saturating_sub(1);
         let hi = (b + 1).min(scales.len() - 1);
-        let scale = scales[lo..=hi].iter().fold(0.0f64, |m, &s| m.max(s)).max(floor);
+        let scale = scales[lo..=hi]
+            .iter()
+            .fold(0.0f64, |m, &s| m.max(s))
+            .max(floor);
         // The neighbours of a spike of height h deviate by −h/2: only the
         // local maximum of |e| is the spike.
         let left = if j > 0 { e[j - 1].abs() } else { 0.0 };
@@ -169,8 +180,14 @@ pub fn snr_db(data: &[f64], dt: f64, noise_window_s: f64) -> Option<f64> {
         cumulative.push(acc);
     }
     let total = acc;
-    let start = cumulative.iter().position(|&c| c >= 0.05 * total).unwrap_or(0);
-    let end = cumulative.iter().position(|&c| c >= 0.95 * total).unwrap_or(data.len() - 1);
+    let start = cumulative
+        .iter()
+        .position(|&c| c >= 0.05 * total)
+        .unwrap_or(0);
+    let end = cumulative
+        .iter()
+        .position(|&c| c >= 0.95 * total)
+        .unwrap_or(data.len() - 1);
     let signal = rms_about_mean(&data[start..=end.max(start)]);
     Some(20.0 * (signal / noise).log10())
 }
@@ -178,13 +195,19 @@ pub fn snr_db(data: &[f64], dt: f64, noise_window_s: f64) -> Option<f64> {
 /// All flags for one finite record (the caller refuses non-finite data first).
 pub fn quality_flags(data: &[f64], dt: f64, settings: &QaSettings) -> Vec<QaFlag> {
     let mut flags = Vec::new();
-    if let Some(f) = detect_clipping(data, settings.clip_min_run, settings.clip_relative_tolerance) {
+    if let Some(f) = detect_clipping(
+        data,
+        settings.clip_min_run,
+        settings.clip_relative_tolerance,
+    ) {
         flags.push(f);
     }
     flags.extend(detect_flat_segments(data, dt, settings.flat_min_duration_s));
     let spikes = spike_indices(data, settings.spike_threshold);
     if !spikes.is_empty() {
-        flags.push(QaFlag::Spikes { count: spikes.len() });
+        flags.push(QaFlag::Spikes {
+            count: spikes.len(),
+        });
     }
     if let Some(snr) = snr_db(data, dt, settings.snr_noise_window_s) {
         if snr < settings.snr_min_db {

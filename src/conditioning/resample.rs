@@ -29,7 +29,9 @@ fn gcd(a: usize, b: usize) -> usize {
 /// matches to 1e-9 relative).
 pub fn rational_ratio(from_hz: f64, to_hz: f64) -> Result<(usize, usize)> {
     if !(from_hz.is_finite() && from_hz > 0.0 && to_hz.is_finite() && to_hz > 0.0) {
-        return Err(Error::usage(format!("resampling rates must be positive: {from_hz} → {to_hz} Hz")));
+        return Err(Error::usage(format!(
+            "resampling rates must be positive: {from_hz} → {to_hz} Hz"
+        )));
     }
     let ratio = to_hz / from_hz;
     // Continued-fraction convergents h/k of `ratio`.
@@ -114,7 +116,10 @@ pub fn resample_rational(data: &[f64], up: usize, down: usize) -> Result<Vec<f64
     let max_rate = up.max(down);
     let half_len = 10 * max_rate;
     let taps = 2 * half_len + 1;
-    let h: Vec<f64> = kaiser_lowpass(taps, 1.0 / max_rate as f64, 5.0).into_iter().map(|v| v * up as f64).collect();
+    let h: Vec<f64> = kaiser_lowpass(taps, 1.0 / max_rate as f64, 5.0)
+        .into_iter()
+        .map(|v| v * up as f64)
+        .collect();
     let n_out = (n * up).div_ceil(down);
     let mut out = Vec::with_capacity(n_out);
     for k in 0..n_out {
@@ -158,7 +163,12 @@ pub struct Alignment {
 /// cut to the shortest). Errors when records do not overlap.
 pub fn align_records(records: &mut [Record]) -> Result<Alignment> {
     let Some(first) = records.first() else {
-        return Ok(Alignment { common_start_ns: None, samples: 0, trimmed_start: Vec::new(), max_residual_offset_s: 0.0 });
+        return Ok(Alignment {
+            common_start_ns: None,
+            samples: 0,
+            trimmed_start: Vec::new(),
+            max_residual_offset_s: 0.0,
+        });
     };
     let rate = first.channel.sampling_rate_hz;
     for r in records.iter() {
@@ -169,13 +179,21 @@ pub fn align_records(records: &mut [Record]) -> Result<Alignment> {
             )));
         }
     }
-    let with_start = records.iter().filter(|r| r.channel.start_ns.is_some()).count();
+    let with_start = records
+        .iter()
+        .filter(|r| r.channel.start_ns.is_some())
+        .count();
     if with_start == 0 {
         let n = records.iter().map(|r| r.samples.len()).min().unwrap_or(0);
         for r in records.iter_mut() {
             r.samples.truncate(n);
         }
-        return Ok(Alignment { common_start_ns: None, samples: n, trimmed_start: vec![0; records.len()], max_residual_offset_s: 0.0 });
+        return Ok(Alignment {
+            common_start_ns: None,
+            samples: n,
+            trimmed_start: vec![0; records.len()],
+            max_residual_offset_s: 0.0,
+        });
     }
     if let Some(r) = records.iter().find(|r| r.channel.start_ns.is_none()) {
         return Err(Error::usage(format!(
@@ -190,7 +208,10 @@ pub fn align_records(records: &mut [Record]) -> Result<Alignment> {
     let common_end = records.iter().map(end_ns).fold(f64::INFINITY, f64::min);
     if common_end <= common_start as f64 {
         let names: Vec<&str> = records.iter().map(|r| r.channel.id.as_str()).collect();
-        return Err(Error::usage(format!("records do not overlap in time: {}", names.join(", "))));
+        return Err(Error::usage(format!(
+            "records do not overlap in time: {}",
+            names.join(", ")
+        )));
     }
     let mut trimmed = Vec::with_capacity(records.len());
     let mut max_residual: f64 = 0.0;
@@ -210,5 +231,10 @@ pub fn align_records(records: &mut [Record]) -> Result<Alignment> {
         r.samples.truncate(n_common);
         r.channel.start_ns = Some(start(r) + (offset as f64 * dt_ns).round() as i64);
     }
-    Ok(Alignment { common_start_ns: Some(common_start), samples: n_common, trimmed_start: trimmed, max_residual_offset_s: max_residual })
+    Ok(Alignment {
+        common_start_ns: Some(common_start),
+        samples: n_common,
+        trimmed_start: trimmed,
+        max_residual_offset_s: max_residual,
+    })
 }

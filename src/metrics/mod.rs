@@ -49,7 +49,11 @@ fn crossing_time(cumulative: &[f64], level: f64, dt: f64) -> f64 {
         Some(0) => 0.0,
         Some(i) => {
             let (c0, c1) = (cumulative[i - 1], cumulative[i]);
-            let frac = if c1 > c0 { (level - c0) / (c1 - c0) } else { 0.0 };
+            let frac = if c1 > c0 {
+                (level - c0) / (c1 - c0)
+            } else {
+                0.0
+            };
             (i as f64 - 1.0 + frac) * dt
         }
     }
@@ -57,9 +61,16 @@ fn crossing_time(cumulative: &[f64], level: f64, dt: f64) -> f64 {
 
 /// Significant duration between `from` and `to` fractions of the Arias
 /// intensity (D5–95: from = 0.05, to = 0.95), s, and the start time, s.
-pub fn significant_duration(acceleration: &[f64], dt: f64, from: f64, to: f64) -> Result<(f64, f64)> {
+pub fn significant_duration(
+    acceleration: &[f64],
+    dt: f64,
+    from: f64,
+    to: f64,
+) -> Result<(f64, f64)> {
     if !(0.0..1.0).contains(&from) || !(from..=1.0).contains(&to) {
-        return Err(Error::usage(format!("significant duration fractions must satisfy 0 ≤ from < to ≤ 1, got {from}, {to}")));
+        return Err(Error::usage(format!(
+            "significant duration fractions must satisfy 0 ≤ from < to ≤ 1, got {from}, {to}"
+        )));
     }
     let husid = arias_husid(acceleration, dt);
     let total = husid.last().copied().unwrap_or(0.0);
@@ -73,14 +84,19 @@ pub fn significant_duration(acceleration: &[f64], dt: f64, from: f64, to: f64) -
 
 /// Cumulative absolute velocity CAV = ∫ |a| dt, m/s (trapezoid rule on |a|).
 pub fn cumulative_absolute_velocity(acceleration: &[f64], dt: f64) -> f64 {
-    acceleration.windows(2).map(|w| 0.5 * dt * (w[0].abs() + w[1].abs())).sum()
+    acceleration
+        .windows(2)
+        .map(|w| 0.5 * dt * (w[0].abs() + w[1].abs()))
+        .sum()
 }
 
 /// Peak inter-storey drift ratio max_t |u_upper − u_lower| / h between the
 /// displacement histories of two consecutive levels (same time grid).
 pub fn interstorey_drift(lower: &[f64], upper: &[f64], height_m: f64) -> Result<f64> {
     if !(height_m.is_finite() && height_m > 0.0) {
-        return Err(Error::usage(format!("storey height must be positive, got {height_m} m")));
+        return Err(Error::usage(format!(
+            "storey height must be positive, got {height_m} m"
+        )));
     }
     if lower.len() != upper.len() {
         return Err(Error::usage(format!(
@@ -89,7 +105,11 @@ pub fn interstorey_drift(lower: &[f64], upper: &[f64], height_m: f64) -> Result<
             upper.len()
         )));
     }
-    Ok(lower.iter().zip(upper).fold(0.0f64, |m, (l, u)| m.max((u - l).abs())) / height_m)
+    Ok(lower
+        .iter()
+        .zip(upper)
+        .fold(0.0f64, |m, (l, u)| m.max((u - l).abs()))
+        / height_m)
 }
 
 /// Peak drift ratios of every storey from displacement histories of levels
@@ -103,7 +123,11 @@ pub fn interstorey_drifts(levels: &[&[f64]], storey_heights_m: &[f64]) -> Result
             storey_heights_m.len()
         )));
     }
-    levels.windows(2).zip(storey_heights_m).map(|(w, &h)| interstorey_drift(w[0], w[1], h)).collect()
+    levels
+        .windows(2)
+        .zip(storey_heights_m)
+        .map(|(w, &h)| interstorey_drift(w[0], w[1], h))
+        .collect()
 }
 
 /// Settings of `strong_motion_metrics`.
@@ -117,7 +141,10 @@ pub struct MetricsSettings {
 
 impl Default for MetricsSettings {
     fn default() -> Self {
-        MetricsSettings { damping: 0.05, periods_s: default_periods() }
+        MetricsSettings {
+            damping: 0.05,
+            periods_s: default_periods(),
+        }
     }
 }
 
@@ -135,7 +162,10 @@ pub struct StrongMotionMetrics {
 }
 
 /// All metrics of one channel from its conditioned motion.
-pub fn strong_motion_metrics(motion: &Motion, settings: &MetricsSettings) -> Result<StrongMotionMetrics> {
+pub fn strong_motion_metrics(
+    motion: &Motion,
+    settings: &MetricsSettings,
+) -> Result<StrongMotionMetrics> {
     let a = &motion.acceleration;
     let (d5_95, _) = significant_duration(a, motion.dt, 0.05, 0.95)?;
     Ok(StrongMotionMetrics {

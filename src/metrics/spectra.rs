@@ -12,7 +12,9 @@ use crate::error::{Error, Result};
 pub fn default_periods() -> Vec<f64> {
     let n = 100;
     let (lo, hi) = (0.01f64.ln(), 10.0f64.ln());
-    (0..n).map(|i| (lo + (hi - lo) * i as f64 / (n - 1) as f64).exp()).collect()
+    (0..n)
+        .map(|i| (lo + (hi - lo) * i as f64 / (n - 1) as f64).exp())
+        .collect()
 }
 
 /// Coefficients of the exact one-step recurrence
@@ -32,7 +34,10 @@ impl Recurrence {
         // Free vibration over one step (homogeneous solution).
         let a = [
             [e * (c + r * s), e * s / wd],
-            [-e * omega * s / (1.0 - damping * damping).sqrt(), e * (c - r * s)],
+            [
+                -e * omega * s / (1.0 - damping * damping).sqrt(),
+                e * (c - r * s),
+            ],
         ];
         // Forced part: for forcing p(τ) = c0 + c1 τ the particular solution is
         // u_p = c1 τ/ω² + c0/ω² − 2ζ c1/ω³, u̇_p = c1/ω²; the homogeneous part
@@ -47,30 +52,47 @@ impl Recurrence {
             let vp = c1 / w2;
             let up1 = up0 + c1 * dt / w2;
             let (h0, hv0) = (-up0, -vp);
-            [up1 + a[0][0] * h0 + a[0][1] * hv0, vp + a[1][0] * h0 + a[1][1] * hv0]
+            [
+                up1 + a[0][0] * h0 + a[0][1] * hv0,
+                vp + a[1][0] * h0 + a[1][1] * hv0,
+            ]
         };
         let bi = step(1.0, 0.0);
         let bj = step(0.0, 1.0);
-        Recurrence { a, b: [[bi[0], bj[0]], [bi[1], bj[1]]] }
+        Recurrence {
+            a,
+            b: [[bi[0], bj[0]], [bi[1], bj[1]]],
+        }
     }
 }
 
 fn check_inputs(dt: f64, period: f64, damping: f64) -> Result<()> {
     if !(dt.is_finite() && dt > 0.0) {
-        return Err(Error::usage(format!("sampling interval must be positive, got {dt}")));
+        return Err(Error::usage(format!(
+            "sampling interval must be positive, got {dt}"
+        )));
     }
     if !(period.is_finite() && period > 0.0) {
-        return Err(Error::usage(format!("oscillator period must be positive, got {period}")));
+        return Err(Error::usage(format!(
+            "oscillator period must be positive, got {period}"
+        )));
     }
     if !(0.0..1.0).contains(&damping) {
-        return Err(Error::usage(format!("damping ratio must be within [0, 1), got {damping}")));
+        return Err(Error::usage(format!(
+            "damping ratio must be within [0, 1), got {damping}"
+        )));
     }
     Ok(())
 }
 
 /// Relative displacement and velocity histories of a linear oscillator
 /// (period s, damping ratio) under ground acceleration, from rest.
-pub fn sdof_response(ground_acceleration: &[f64], dt: f64, period: f64, damping: f64) -> Result<(Vec<f64>, Vec<f64>)> {
+pub fn sdof_response(
+    ground_acceleration: &[f64],
+    dt: f64,
+    period: f64,
+    damping: f64,
+) -> Result<(Vec<f64>, Vec<f64>)> {
     check_inputs(dt, period, damping)?;
     let omega = 2.0 * std::f64::consts::PI / period;
     let rec = Recurrence::new(omega, damping, dt);
@@ -130,14 +152,28 @@ pub struct ResponseSpectrum {
 
 /// Response spectrum over `periods` (positive, s) for damping ratio
 /// `damping` (e.g. 0.05), periods computed in parallel.
-pub fn response_spectrum(ground_acceleration: &[f64], dt: f64, periods: &[f64], damping: f64) -> Result<ResponseSpectrum> {
+pub fn response_spectrum(
+    ground_acceleration: &[f64],
+    dt: f64,
+    periods: &[f64],
+    damping: f64,
+) -> Result<ResponseSpectrum> {
     for &t in periods {
         check_inputs(dt, t, damping)?;
     }
-    let pga = ground_acceleration.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let pga = ground_acceleration
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
     let peaks: Vec<(f64, f64, f64)> = periods
         .par_iter()
-        .map(|&t| sdof_peaks(ground_acceleration, dt, 2.0 * std::f64::consts::PI / t, damping))
+        .map(|&t| {
+            sdof_peaks(
+                ground_acceleration,
+                dt,
+                2.0 * std::f64::consts::PI / t,
+                damping,
+            )
+        })
         .collect();
     let mut s = ResponseSpectrum {
         damping,

@@ -151,12 +151,29 @@ pub fn sniff(name: &str, head: &[u8]) -> Option<Format> {
         "mcap" => return Some(Format::Mcap),
         _ => {}
     }
+    // Text strong-motion formats recognised by their first line (COSMOS
+    // "(Format v01.20 with 13 text lines)", GeoNet "… GNS Science", SMC
+    // "2 CORRECTED ACCELEROGRAM", CSMIP "CORRECTED ACCELEROGRAM …"); CSMIP V3
+    // spectra ("RESPONSE AND FOURIER …") stay unrecognised: they hold no records.
+    let first_line = text_head.lines().next().unwrap_or("").trim().to_ascii_lowercase();
+    if first_line.contains("(format v") {
+        return Some(Format::Cosmos);
+    }
+    if first_line.contains("gns science") && first_line.contains("accelerogram") {
+        return Some(Format::GeoNet);
+    }
+    if first_line == "1 uncorrected accelerogram" || first_line == "2 corrected accelerogram" {
+        return Some(Format::Smc);
+    }
     if ext == "v1" || ext == "v2" {
         return Some(if text_head.contains("COSMOS") {
             Format::Cosmos
         } else {
             Format::Dmg
         });
+    }
+    if first_line.starts_with("corrected accelerogram") || first_line.starts_with("uncorrected accelerogram") {
+        return Some(Format::Dmg);
     }
     if text_head.contains("NPTS=") && text_head.contains("DT=") {
         return Some(Format::At2);

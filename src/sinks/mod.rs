@@ -2,4 +2,5 @@
 //! I/O lives here, at the edge; stages hand over plain data.
 
 pub mod event_tables;
+pub mod mcap_writer;
 pub mod parquet;

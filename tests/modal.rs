@@ -1,0 +1,120 @@
+//! Issue 3 "Must show": subspace identification against synthetic truth and
+//! real records.  Accuracy figures are printed (run with `--nocapture`).
+
+use quaketwin::modal::{self, identify, Method, ModalInput, ModalSettings, Mode};
+use quaketwin::synth::{add_measurement_noise, synthetic_ground_motion, BuildingModes, GroundMotionParams, Rng, ShearBuilding};
+
+/// The 5-storey test building: f ≈ 1.4–9.7 Hz, damping 1.5–4 %.
+fn five_storey() -> ShearBuilding {
+    ShearBuilding {
+        masses_kg: vec![4.0e5, 3.8e5, 3.6e5, 3.4e5, 3.0e5],
+        storey_stiffness_n_per_m: vec![3.2e8, 3.0e8, 2.8e8, 2.4e8, 2.0e8],
+        damping_ratios: vec![0.015, 0.02, 0.025, 0.03, 0.04],
+    }
+}
+
+struct Accuracy {
+    max_rel_freq: f64,
+    max_abs_damping: f64,
+    min_mac: f64,
+}
+
+/// Matches every truth mode to the identified mode nearest in frequency
+/// (each identified mode used once) and returns the worst errors; panics
+/// when a truth mode has no identified mode within 10 %.
+fn compare_with_truth(truth: &BuildingModes, modes: &[Mode]) -> Accuracy {
+    let mut used = vec![false; modes.len()];
+    let mut acc = Accuracy { max_rel_freq: 0.0, max_abs_damping: 0.0, min_mac: 1.0 };
+    for (j, &f_true) in truth.frequencies_hz.iter().enumerate() {
+        let best = (0..modes.len())
+            .filter(|&i| !used[i])
+            .min_by(|&a, &b| (modes[a].frequency_hz - f_true).abs().total_cmp(&(modes[b].frequency_hz - f_true).abs()))
+            .unwrap_or_else(|| panic!("truth mode {j} ({f_true:.4} Hz) not found"));
+        let m = &modes[best];
+        assert!((m.frequency_hz / f_true - 1.0).abs() < 0.1, "truth mode {j} ({f_true:.4} Hz) not found; nearest {:.4} Hz", m.frequency_hz);
+        used[best] = true;
+        let truth_shape: Vec<faer::c64> = truth.shapes[j].iter().map(|&v| faer::c64::new(v, 0.0)).collect();
+        let mac = modal::mac(&truth_shape, &m.shape);
+        let df = (m.frequency_hz / f_true - 1.0).abs();
+        let dz = (m.damping_ratio - truth.damping_ratios[j]).abs();
+        eprintln!(
+            "mode {j}: f {:.5} Hz (truth {f_true:.5}, rel err {df:.2e}), zeta {:.4} ± {:.4} (truth {:.4}), MAC {mac:.5}, poles {}",
+            m.frequency_hz, m.damping_ratio, m.damping_std, truth.damping_ratios[j], m.pole_count
+        );
+        acc.max_rel_freq = acc.max_rel_freq.max(df);
+        acc.max_abs_damping = acc.max_abs_damping.max(dz);
+        acc.min_mac = acc.min_mac.min(mac);
+    }
+    acc
+}
+
+/// Ambient case: independent white-noise floor forces, 600 s at 100 Hz,
+/// floor accelerations with 20 dB noise.
+pub fn ambient_input() -> ModalInput {
+    let building = five_storey();
+    let mut rng = Rng::new(2024);
+    let response = building.simulate_ambient(60_000, 0.01, 1.0e4, &mut rng).unwrap();
+    let outputs = response.absolute_acceleration.iter().map(|a| add_measurement_noise(a, 20.0, &mut rng)).collect();
+    ModalInput {
+        dt: 0.01,
+        output_ids: (1..=5).map(|i| format!("L{i}")).collect(),
+        outputs,
+        ..Default::default()
+    }
+}
+
+fn ambient_settings(method: Method) -> ModalSettings {
+    let mut s = ModalSettings { method, ..Default::default() };
+    // The truth damping (1.5–4 %) lies inside the default 0.9–5.5 % window;
+    // set explicitly as the issue asks.
+    s.filters.damping_min = 0.005;
+    s.filters.damping_max = 0.06;
+    s
+}
+
+#[test]
+fn ambient_five_storey_ssi_cov_and_ssi_data_find_all_modes() {
+    let truth = five_storey().modes().unwrap();
+    let input = ambient_input();
+    for method in [Method::SsiCov, Method::SsiData] {
+        let result = identify(&input, &ambient_settings(method)).unwrap();
+        eprintln!("{}: {} modes, block rows {}", method.name(), result.modes.len(), result.block_rows);
+        assert_eq!(result.modes.len(), 5, "{}: found {:?}", method.name(), result.modes.iter().map(|m| m.frequency_hz).collect::<Vec<_>>());
+        let acc = compare_with_truth(&truth, &result.modes);
+        assert!(acc.max_rel_freq <= 3e-3, "{}: max |Δf/f| {}", method.name(), acc.max_rel_freq);
+        assert!(acc.max_abs_damping <= 0.005, "{}: max |Δζ| {}", method.name(), acc.max_abs_damping);
+        assert!(acc.min_mac >= 0.995, "{}: min MAC {}", method.name(), acc.min_mac);
+    }
+}
+
+/// Earthquake case: 40 s Kanai–Tajimi/Clough–Penzien base motion at 200 Hz,
+/// base + 5 floors with 30 dB noise.
+pub fn earthquake_input() -> ModalInput {
+    let building = five_storey();
+    let params = GroundMotionParams { seed: 7, ..Default::default() };
+    let ag = synthetic_ground_motion(&params).unwrap();
+    let response = building.simulate_base_motion(&ag, params.dt).unwrap();
+    let mut rng = Rng::new(99);
+    let outputs = response.absolute_acceleration.iter().map(|a| add_measurement_noise(a, 30.0, &mut rng)).collect();
+    let base = add_measurement_noise(&response.base_acceleration, 30.0, &mut rng);
+    ModalInput {
+        dt: params.dt,
+        output_ids: (1..=5).map(|i| format!("L{i}")).collect(),
+        outputs,
+        input_ids: vec!["L0".into()],
+        inputs: vec![base],
+        locations: Vec::new(),
+    }
+}
+
+#[test]
+fn earthquake_five_storey_input_output_finds_five_modes_and_nothing_else() {
+    let truth = five_storey().modes().unwrap();
+    let input = earthquake_input();
+    let settings = ModalSettings { method: Method::Io, ..Default::default() };
+    let result = identify(&input, &settings).unwrap();
+    eprintln!("io: {} modes, block rows {}", result.modes.len(), result.block_rows);
+    assert_eq!(result.modes.len(), 5, "found {:?}", result.modes.iter().map(|m| m.frequency_hz).collect::<Vec<_>>());
+    let acc = compare_with_truth(&truth, &result.modes);
+    assert!(acc.max_rel_freq <= 1e-3, "max |Δf/f| {}", acc.max_rel_freq);
+}
