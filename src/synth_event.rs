@@ -49,6 +49,8 @@ pub struct SynthSettings {
     pub quake_rate_hz: f64,
     pub quake_pga_m_s2: f64,
     pub quake_snr_db: f64,
+    /// Quiet pre-event segment before the motion starts, s.
+    pub quake_pre_event_s: f64,
     /// Ambient: duration (s), sampling rate (Hz), SNR (dB).
     pub ambient_duration_s: f64,
     pub ambient_rate_hz: f64,
@@ -63,6 +65,7 @@ impl Default for SynthSettings {
             quake_rate_hz: 200.0,
             quake_pga_m_s2: 2.5,
             quake_snr_db: 40.0,
+            quake_pre_event_s: 5.0,
             ambient_duration_s: 300.0,
             ambient_rate_hz: 50.0,
             ambient_snr_db: 30.0,
@@ -196,7 +199,11 @@ pub fn write_sample_events(
             seed: settings.seed.wrapping_add(101 + i as u64),
             ..GroundMotionParams::default()
         };
-        let ag = synthetic_ground_motion(&gm)?;
+        // Pre-event memory as real recorders keep it: the building at rest
+        // for `quake_pre_event_s` (noise only), so SNR checks have a window.
+        let pre = (settings.quake_pre_event_s * settings.quake_rate_hz).round() as usize;
+        let mut ag = vec![0.0; pre];
+        ag.extend(synthetic_ground_motion(&gm)?);
         let resp = b.simulate_base_motion(&ag, dt)?;
         let base_rec = add_measurement_noise(&ag, settings.quake_snr_db, &mut rng);
         let at2 = format!("base_{dir}.AT2");

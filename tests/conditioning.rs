@@ -424,7 +424,8 @@ fn alignment_trims_to_common_window_and_rejects_disjoint_records() {
 /// Drift control on a known displacement u(t) = A sin²(πt/T) sin(2πft),
 /// whose acceleration is computed analytically, with a constant baseline
 /// error of 2 mm/s² added: plain integration drifts by ½·0.002·T² = 0.4 m;
-/// both drift controls recover u to within 2 % of A.
+/// polynomial drift control recovers u to 0.1 % of A (measured 1.7e-4),
+/// the 0.1 Hz high-pass to 2 % (measured 6.7e-3).
 #[test]
 fn integration_drift_control_recovers_known_displacement() {
     let (amp, f, dur, dt) = (0.05f64, 1.0f64, 20.0f64, 0.005f64);
@@ -478,7 +479,7 @@ fn integration_drift_control_recovers_known_displacement() {
         err(&hp.displacement)
     );
     assert!(err(&plain.displacement) > 5.0);
-    assert!(err(&poly.displacement) < 0.02);
+    assert!(err(&poly.displacement) < 1e-3);
     assert!(err(&hp.displacement) < 0.02);
     // Polynomial drift control keeps a, v, u consistent: re-integrating the
     // corrected acceleration gives the corrected velocity (trapezoid-exact).

@@ -33,7 +33,9 @@
 
 use super::{FileContents, ReadOptions};
 use crate::error::{Error, Result};
-use crate::vocab::{epoch_ns_from_civil, parse_iso8601_ns, Channel, QaFlag, Record, SourceRef, Units};
+use crate::vocab::{
+    epoch_ns_from_civil, parse_iso8601_ns, Channel, QaFlag, Record, SourceRef, Units,
+};
 
 /// How fields are separated.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,7 +73,9 @@ struct Layout {
 }
 
 fn find_layout(lines: &[&str], first: usize, delim: Delim) -> Option<Layout> {
-    let nonblank: Vec<usize> = (first..lines.len()).filter(|&i| !lines[i].trim().is_empty()).collect();
+    let nonblank: Vec<usize> = (first..lines.len())
+        .filter(|&i| !lines[i].trim().is_empty())
+        .collect();
     for (k, &i) in nonblank.iter().enumerate() {
         let f = delim.split(lines[i]);
         if !mostly_numeric(&f) {
@@ -93,13 +97,18 @@ fn find_layout(lines: &[&str], first: usize, delim: Delim) -> Option<Layout> {
                 }
                 start -= 1;
             }
-            let header = (start > first)
-                .then(|| start - 1)
-                .filter(|&h| {
-                    let g = delim.split(lines[h]);
-                    !lines[h].trim().is_empty() && g.len() == n && 2 * g.iter().filter(|x| is_number(x)).count() < n.max(1)
-                });
-            return Some(Layout { delim, header, data_start: start, fields: n });
+            let header = (start > first).then(|| start - 1).filter(|&h| {
+                let g = delim.split(lines[h]);
+                !lines[h].trim().is_empty()
+                    && g.len() == n
+                    && 2 * g.iter().filter(|x| is_number(x)).count() < n.max(1)
+            });
+            return Some(Layout {
+                delim,
+                header,
+                data_start: start,
+                fields: n,
+            });
         }
     }
     None
@@ -199,7 +208,10 @@ fn time_kind(name: &str) -> Option<TimeKind> {
             _ => return None,
         })
     };
-    let named = matches!(b.as_str(), "time" | "t" | "times" | "timestamp" | "seconds" | "sec" | "time_s" | "elapsed");
+    let named = matches!(
+        b.as_str(),
+        "time" | "t" | "times" | "timestamp" | "seconds" | "sec" | "time_s" | "elapsed"
+    );
     let suffixed = ["time_ms", "time_us", "time_ns", "t_ms", "t_us", "t_s"].contains(&b.as_str());
     if !named && !suffixed {
         return None;
@@ -237,7 +249,12 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
     }
     let candidates = match forced {
         Some(d) => vec![d],
-        None => vec![Delim::Char(','), Delim::Char('\t'), Delim::Char(';'), Delim::Whitespace],
+        None => vec![
+            Delim::Char(','),
+            Delim::Char('\t'),
+            Delim::Char(';'),
+            Delim::Whitespace,
+        ],
     };
     let mut layout: Option<Layout> = None;
     for d in candidates {
@@ -247,9 +264,19 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
             }
         }
     }
-    let layout = layout.ok_or_else(|| Error::input(super::location(&src), "no table of numbers found in this CSV file"))?;
+    let layout = layout.ok_or_else(|| {
+        Error::input(
+            super::location(&src),
+            "no table of numbers found in this CSV file",
+        )
+    })?;
     let names: Vec<String> = match layout.header {
-        Some(h) => layout.delim.split(lines[h]).iter().map(|s| s.to_string()).collect(),
+        Some(h) => layout
+            .delim
+            .split(lines[h])
+            .iter()
+            .map(|s| s.to_string())
+            .collect(),
         None => (0..layout.fields).map(|i| i.to_string()).collect(),
     };
     let header_line = layout.header.unwrap_or(layout.data_start);
@@ -264,7 +291,9 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         if line.contains("Xsens") || line.contains("Movella") {
             is_xsens = true;
         }
-        let Some((key, value)) = line.split_once(':') else { continue };
+        let Some((key, value)) = line.split_once(':') else {
+            continue;
+        };
         let key = key.trim().to_ascii_lowercase();
         let value = value.trim().trim_start_matches([',', '\t', ';']).trim();
         match key.as_str() {
@@ -277,7 +306,10 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
             "starttime" | "start time" | "start_time" => match parse_start_time(value) {
                 Some((ns, zone)) => start = Some((ns, zone, i)),
                 None => {
-                    return Err(Error::input(loc(i), format!("StartTime {value:?} is not a date and time this reader knows")))
+                    return Err(Error::input(
+                        loc(i),
+                        format!("StartTime {value:?} is not a date and time this reader knows"),
+                    ))
                 }
             },
             "samplerate" | "sample rate" | "sampling rate" | "sampling_rate" | "fs" => {
@@ -293,24 +325,37 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         names
             .iter()
             .position(|n| n.eq_ignore_ascii_case(s))
-            .or_else(|| names.iter().position(|n| base_name(n) == s.to_ascii_lowercase()))
+            .or_else(|| {
+                names
+                    .iter()
+                    .position(|n| base_name(n) == s.to_ascii_lowercase())
+            })
             .or_else(|| s.parse::<usize>().ok().filter(|&i| i < names.len()))
     };
     let time_col: Option<(usize, TimeKind)> = match &opts.time_column {
         Some(t) => {
             let i = resolve(t).ok_or_else(|| {
-                Error::input(loc(header_line), format!("time column {t:?} not found; columns are {names:?}"))
+                Error::input(
+                    loc(header_line),
+                    format!("time column {t:?} not found; columns are {names:?}"),
+                )
             })?;
             Some((i, time_kind(&names[i]).unwrap_or(TimeKind::Seconds(1.0))))
         }
-        None => names.iter().enumerate().find_map(|(i, n)| time_kind(n).map(|k| (i, k))),
+        None => names
+            .iter()
+            .enumerate()
+            .find_map(|(i, n)| time_kind(n).map(|k| (i, k))),
     };
     let selected: Vec<usize> = match &opts.columns {
         Some(cols) => cols
             .iter()
             .map(|c| {
                 resolve(c).ok_or_else(|| {
-                    Error::input(loc(header_line), format!("column {c:?} not found; columns are {names:?}"))
+                    Error::input(
+                        loc(header_line),
+                        format!("column {c:?} not found; columns are {names:?}"),
+                    )
                 })
             })
             .collect::<Result<_>>()?,
@@ -338,20 +383,32 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         if fields.len() != layout.fields {
             return Err(Error::input(
                 loc(i),
-                format!("expected {} fields as in the header, found {}", layout.fields, fields.len()),
+                format!(
+                    "expected {} fields as in the header, found {}",
+                    layout.fields,
+                    fields.len()
+                ),
             ));
         }
         let cell = |c: usize| -> Result<f64> {
             fields[c].parse::<f64>().map_err(|_| {
                 Error::input(
                     loc(i).with_channel(names[c].clone()),
-                    format!("cell {:?} in column {} ({}) is not a number", fields[c], c, names[c]),
+                    format!(
+                        "cell {:?} in column {} ({}) is not a number",
+                        fields[c], c, names[c]
+                    ),
                 )
             })
         };
         if let Some((tc, _)) = time_col {
             times_raw.push(cell(tc)?);
-            time_decimals = time_decimals.max(fields[tc].split_once('.').map(|(_, d)| d.len()).unwrap_or(0));
+            time_decimals = time_decimals.max(
+                fields[tc]
+                    .split_once('.')
+                    .map(|(_, d)| d.len())
+                    .unwrap_or(0),
+            );
             time_lines.push(i);
         }
         for (k, &c) in selected.iter().enumerate() {
@@ -360,7 +417,10 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
     }
     let n = values[0].len();
     if n < 2 {
-        return Err(Error::input(loc(layout.data_start), "fewer than two data rows"));
+        return Err(Error::input(
+            loc(layout.data_start),
+            "fewer than two data rows",
+        ));
     }
 
     // Sampling rate and grid.
@@ -380,13 +440,21 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
                 }
                 (out, 1e-6)
             }
-            TimeKind::Seconds(f) => (times_raw.iter().map(|t| t * f).collect::<Vec<_>>(), 10f64.powi(-(time_decimals as i32)) * f),
+            TimeKind::Seconds(f) => (
+                times_raw.iter().map(|t| t * f).collect::<Vec<_>>(),
+                10f64.powi(-(time_decimals as i32)) * f,
+            ),
         };
         let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
         if let Some(k) = steps.iter().position(|s| *s <= 0.0 || !s.is_finite()) {
             return Err(Error::input(
                 loc(time_lines[k + 1]).with_channel(names[tc].clone()),
-                format!("time column {} does not increase ({} after {})", names[tc], times_raw[k + 1], times_raw[k]),
+                format!(
+                    "time column {} does not increase ({} after {})",
+                    names[tc],
+                    times_raw[k + 1],
+                    times_raw[k]
+                ),
             ));
         }
         let raw_steps = steps.clone();
@@ -407,7 +475,10 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         if uneven {
             for (k, s) in raw_steps.iter().enumerate() {
                 if *s > 1.5 * dt {
-                    qa_common.push(QaFlag::Gap { at_s: times[k] - times[0], duration_s: s - dt });
+                    qa_common.push(QaFlag::Gap {
+                        at_s: times[k] - times[0],
+                        duration_s: s - dt,
+                    });
                 }
             }
             let (lo, hi) = (steps[0], steps[steps.len() - 1]);
@@ -427,7 +498,9 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         }
     } else if let Some(r) = opts.sampling_rate_hz.or(preamble_rate) {
         if !(r.is_finite() && r > 0.0) {
-            return Err(Error::usage(format!("sampling rate {r} Hz is not positive")));
+            return Err(Error::usage(format!(
+                "sampling rate {r} Hz is not positive"
+            )));
         }
         rate_hz = r;
     } else {
@@ -438,7 +511,10 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
     }
 
     let prefix = station.clone().unwrap_or_else(|| {
-        std::path::Path::new(&src.file).file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default()
+        std::path::Path::new(&src.file)
+            .file_stem()
+            .map(|s| s.to_string_lossy().to_string())
+            .unwrap_or_default()
     });
     let mut records = Vec::new();
     for (k, &c) in selected.iter().enumerate() {
@@ -452,9 +528,13 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
             Some(u) => match u.parse::<Units>() {
                 Ok(units) => units,
                 Err(e) => {
-                    qa.push(QaFlag::Note { text: format!("column {name}: {e}") });
+                    qa.push(QaFlag::Note {
+                        text: format!("column {name}: {e}"),
+                    });
                     missing.push("units".to_string());
-                    inferred.push(format!("units=m/s2 assumed: unit {u:?} of column {name} is not understood"));
+                    inferred.push(format!(
+                        "units=m/s2 assumed: unit {u:?} of column {name} is not understood"
+                    ));
                     Units::MPerS2
                 }
             },
@@ -472,7 +552,10 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         ch.station = station.clone();
         if let Some((ns, zone, line)) = &start {
             ch.start_ns = Some(*ns);
-            inferred.push(format!("start time from the StartTime line {} ({zone})", line + 1));
+            inferred.push(format!(
+                "start time from the StartTime line {} ({zone})",
+                line + 1
+            ));
         }
         let nonfinite = values[k].iter().filter(|v| !v.is_finite()).count();
         if nonfinite > 0 {
@@ -483,13 +566,18 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         ch.qa = qa;
         records.push(Record::new(ch, std::mem::take(&mut values[k])));
     }
-    Ok(FileContents { records, ..Default::default() })
+    Ok(FileContents {
+        records,
+        ..Default::default()
+    })
 }
 
 /// Linear interpolation of (t, v) onto t0 + i·dt, i = 0..=floor((t_last − t0)/dt).
 /// `t` must increase strictly.
 fn resample_linear(t: &[f64], v: &[f64], dt: f64) -> Vec<f64> {
-    let (Some(&t0), Some(&t_last)) = (t.first(), t.last()) else { return Vec::new() };
+    let (Some(&t0), Some(&t_last)) = (t.first(), t.last()) else {
+        return Vec::new();
+    };
     let count = ((t_last - t0) / dt + 1e-9).floor() as usize + 1;
     let mut out = Vec::with_capacity(count);
     let mut j = 0;
@@ -499,7 +587,11 @@ fn resample_linear(t: &[f64], v: &[f64], dt: f64) -> Vec<f64> {
             j += 1;
         }
         let (ta, tb) = (t[j], t[(j + 1).min(t.len() - 1)]);
-        let w = if tb > ta { ((ti - ta) / (tb - ta)).clamp(0.0, 1.0) } else { 0.0 };
+        let w = if tb > ta {
+            ((ti - ta) / (tb - ta)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         out.push(v[j] + w * (v[(j + 1).min(v.len() - 1)] - v[j]));
     }
     out
@@ -510,7 +602,10 @@ mod tests {
     use super::*;
 
     fn src() -> SourceRef {
-        SourceRef { file: "x.csv".into(), ..Default::default() }
+        SourceRef {
+            file: "x.csv".into(),
+            ..Default::default()
+        }
     }
 
     #[test]
@@ -536,7 +631,11 @@ mod tests {
         let fc = read(text.as_bytes(), &src(), &ReadOptions::default()).unwrap();
         let r = &fc.records[0];
         assert_eq!(r.channel.sampling_rate_hz, 10.0);
-        assert!(r.channel.qa.iter().any(|q| matches!(q, QaFlag::Resampled { .. })));
+        assert!(r
+            .channel
+            .qa
+            .iter()
+            .any(|q| matches!(q, QaFlag::Resampled { .. })));
         assert_eq!(r.samples.len(), 7);
         for (i, v) in r.samples.iter().enumerate() {
             assert!((v - i as f64).abs() < 1e-9, "{i}: {v}");
@@ -546,10 +645,21 @@ mod tests {
     #[test]
     fn whitespace_no_header_needs_rate() {
         let text = "1 2\n3 4\n5 6\n";
-        let opts = ReadOptions { sampling_rate_hz: Some(50.0), columns: Some(vec!["1".into()]), time_column: None };
+        let opts = ReadOptions {
+            sampling_rate_hz: Some(50.0),
+            columns: Some(vec!["1".into()]),
+            time_column: None,
+        };
         let fc = read(text.as_bytes(), &src(), &opts).unwrap();
         assert_eq!(fc.records[0].samples, vec![2.0, 4.0, 6.0]);
-        let e = read(text.as_bytes(), &src(), &ReadOptions { columns: Some(vec!["0".into()]), ..Default::default() });
+        let e = read(
+            text.as_bytes(),
+            &src(),
+            &ReadOptions {
+                columns: Some(vec!["0".into()]),
+                ..Default::default()
+            },
+        );
         assert!(e.is_err());
     }
 

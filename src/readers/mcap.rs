@@ -109,7 +109,9 @@ pub fn decode_accel_block_protobuf(data: &[u8]) -> std::result::Result<AccelBloc
     fn varint(data: &[u8], pos: &mut usize) -> std::result::Result<u64, String> {
         let mut v: u64 = 0;
         for shift in (0..64).step_by(7) {
-            let b = *data.get(*pos).ok_or_else(|| format!("varint runs past the end at byte {}", *pos))?;
+            let b = *data
+                .get(*pos)
+                .ok_or_else(|| format!("varint runs past the end at byte {}", *pos))?;
             *pos += 1;
             v |= ((b & 0x7f) as u64) << shift;
             if b & 0x80 == 0 {
@@ -118,16 +120,33 @@ pub fn decode_accel_block_protobuf(data: &[u8]) -> std::result::Result<AccelBloc
         }
         Err(format!("varint longer than 10 bytes before byte {}", *pos))
     }
-    fn take<'a>(data: &'a [u8], pos: &mut usize, n: usize) -> std::result::Result<&'a [u8], String> {
-        let end = pos.checked_add(n).filter(|e| *e <= data.len()).ok_or_else(|| {
-            format!("field of {n} bytes at byte {} runs past the end ({} bytes)", *pos, data.len())
-        })?;
+    fn take<'a>(
+        data: &'a [u8],
+        pos: &mut usize,
+        n: usize,
+    ) -> std::result::Result<&'a [u8], String> {
+        let end = pos
+            .checked_add(n)
+            .filter(|e| *e <= data.len())
+            .ok_or_else(|| {
+                format!(
+                    "field of {n} bytes at byte {} runs past the end ({} bytes)",
+                    *pos,
+                    data.len()
+                )
+            })?;
         let s = &data[*pos..end];
         *pos = end;
         Ok(s)
     }
     let f64_of = |b: &[u8]| f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]);
-    let mut block = AccelBlock { channel: String::new(), t0_ns: 0, rate_hz: 0.0, units: None, samples: Vec::new() };
+    let mut block = AccelBlock {
+        channel: String::new(),
+        t0_ns: 0,
+        rate_hz: 0.0,
+        units: None,
+        samples: Vec::new(),
+    };
     let mut pos = 0usize;
     while pos < data.len() {
         let at = pos;
@@ -151,7 +170,9 @@ pub fn decode_accel_block_protobuf(data: &[u8]) -> std::result::Result<AccelBloc
                 let len = varint(data, &mut pos)? as usize;
                 let bytes = take(data, &mut pos, len)?;
                 if len % 8 != 0 {
-                    return Err(format!("packed samples at byte {at}: {len} bytes is not a multiple of 8"));
+                    return Err(format!(
+                        "packed samples at byte {at}: {len} bytes is not a multiple of 8"
+                    ));
                 }
                 block.samples.extend(bytes.chunks_exact(8).map(f64_of));
             }
@@ -159,7 +180,11 @@ pub fn decode_accel_block_protobuf(data: &[u8]) -> std::result::Result<AccelBloc
                 let b = take(data, &mut pos, 8)?;
                 block.samples.push(f64_of(b));
             }
-            (1..=5, w) => return Err(format!("field {field} at byte {at} has wire type {w}, not the schema's")),
+            (1..=5, w) => {
+                return Err(format!(
+                    "field {field} at byte {at} has wire type {w}, not the schema's"
+                ))
+            }
             // Unknown fields: skip by wire type.
             (_, 0) => {
                 varint(data, &mut pos)?;
@@ -180,11 +205,47 @@ pub fn decode_accel_block_protobuf(data: &[u8]) -> std::result::Result<AccelBloc
     Ok(block)
 }
 
+/// Walks the top-level records (opcode u8, length u64 LE, body) from the
+/// leading to the trailing magic, checking each length fits in the file.
+/// Returns the byte offset and a message for the first inconsistency.
+fn check_record_structure(bytes: &[u8]) -> std::result::Result<(), (u64, String)> {
+    const MAGIC: &[u8] = mcap::MAGIC;
+    const FOOTER: u8 = 0x02;
+    if !bytes.starts_with(MAGIC) {
+        return Err((0, "not an MCAP file (no leading magic bytes)".into()));
+    }
+    let mut pos = MAGIC.len();
+    loop {
+        let left = bytes.len() - pos;
+        if left < 9 {
+            return Err((pos as u64, format!("truncated MCAP file: {left} bytes left where a record or the end magic should be")));
+        }
+        let opcode = bytes[pos];
+        let mut len_bytes = [0u8; 8];
+        len_bytes.copy_from_slice(&bytes[pos + 1..pos + 9]);
+        let len = u64::from_le_bytes(len_bytes);
+        let end = (pos as u64 + 9).checked_add(len).filter(|e| *e <= bytes.len() as u64).ok_or_else(|| {
+            (pos as u64, format!("record (opcode {opcode:#04x}) claims {len} bytes, only {} remain: truncated or corrupt MCAP file", left - 9))
+        })? as usize;
+        pos = end;
+        if opcode == FOOTER {
+            return if &bytes[pos..] == MAGIC {
+                Ok(())
+            } else {
+                Err((
+                    pos as u64,
+                    "MCAP footer is not followed by exactly the end magic bytes".into(),
+                ))
+            };
+        }
+    }
+}
+
 /// What was collected for one channel.
 #[derive(Default)]
 struct ChannelAcc {
     segments: Vec<Segment>,
-    /// Per-sample messages (t_ns, value, message index).
+    /// Per-sample messages (t_ns, value).
     points: Vec<(i64, f64)>,
     units: Vec<String>,
     channel_json: Option<String>,
@@ -197,23 +258,53 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     let mut src = source.clone();
     src.format = "mcap".into();
     let loc = || super::location(&src);
-    let stream = mcap::MessageStream::new(bytes).map_err(|e| Error::input(loc().at_byte(0), format!("not a readable MCAP file: {e}")))?;
+    check_record_structure(bytes).map_err(|(at, m)| Error::input(loc().at_byte(at), m))?;
+    // The mcap 0.26 message stream sets no record-length limit and can panic on
+    // an arithmetic overflow when a record inside a chunk claims an absurd
+    // length; the structure check above covers top-level records, and this
+    // guard turns any remaining parser panic on malformed data into an input error.
+    let messages = std::panic::catch_unwind(
+        || -> std::result::Result<Vec<mcap::Message<'static>>, mcap::McapError> {
+            mcap::MessageStream::new(bytes)?.collect()
+        },
+    )
+    .map_err(|_| {
+        Error::input(
+            loc(),
+            "malformed MCAP file: the MCAP parser failed on its records",
+        )
+    })?
+    .map_err(|e| Error::input(loc(), format!("not a readable MCAP file: {e}")))?;
     let mut order: Vec<String> = Vec::new();
     let mut chans: BTreeMap<String, ChannelAcc> = BTreeMap::new();
     let mut topics_seen: Vec<String> = Vec::new();
-    for (index, msg) in stream.enumerate() {
-        let msg = msg.map_err(|e| Error::input(loc(), format!("MCAP message {index}: {e}")))?;
+    for (index, msg) in messages.into_iter().enumerate() {
         let topic = msg.channel.topic.clone();
         if !topics_seen.contains(&topic) {
             topics_seen.push(topic.clone());
         }
-        let schema_name = msg.channel.schema.as_ref().map(|s| s.name.as_str()).unwrap_or("");
+        let schema_name = msg
+            .channel
+            .schema
+            .as_ref()
+            .map(|s| s.name.as_str())
+            .unwrap_or("");
         let is_accel = topic.starts_with("/accel/") || schema_name == ACCEL_BLOCK_SCHEMA;
-        let here = |m: String| Error::input(loc().with_channel(topic.clone()), format!("message {index} (log_time {}): {m}", msg.log_time));
+        let here = |m: String| {
+            Error::input(
+                loc().with_channel(topic.clone()),
+                format!("message {index} (log_time {}): {m}", msg.log_time),
+            )
+        };
         let topic_channel = topic.strip_prefix("/accel/").unwrap_or(&topic).to_string();
         enum Payload {
             Block(AccelBlock),
-            Point { channel: String, t_ns: i64, value: f64, units: Option<String> },
+            Point {
+                channel: String,
+                t_ns: i64,
+                value: f64,
+                units: Option<String>,
+            },
         }
         let payload = match msg.channel.message_encoding.as_str() {
             "json" => {
@@ -225,8 +316,10 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
                 if v.get("samples").is_some() {
                     let mut obj = v.clone();
                     if let Some(o) = obj.as_object_mut() {
-                        o.entry("channel").or_insert_with(|| serde_json::Value::String(topic_channel.clone()));
-                        o.entry("t0_ns").or_insert_with(|| serde_json::Value::from(msg.log_time as i64));
+                        o.entry("channel")
+                            .or_insert_with(|| serde_json::Value::String(topic_channel.clone()));
+                        o.entry("t0_ns")
+                            .or_insert_with(|| serde_json::Value::from(msg.log_time as i64));
                     }
                     let block: AccelBlock = serde_json::from_value(obj)
                         .map_err(|e| here(format!("does not match {ACCEL_BLOCK_SCHEMA}: {e}")))?;
@@ -242,11 +335,18 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
                         }
                     };
                     let t_ns = match v.get("t_ns") {
-                        Some(t) => t.as_i64().ok_or_else(|| here(format!("\"t_ns\" is {t}, not an integer")))?,
+                        Some(t) => t
+                            .as_i64()
+                            .ok_or_else(|| here(format!("\"t_ns\" is {t}, not an integer")))?,
                         None => msg.log_time as i64,
                     };
                     let units = v.get("units").and_then(|u| u.as_str()).map(String::from);
-                    Payload::Point { channel: topic_channel.clone(), t_ns, value, units }
+                    Payload::Point {
+                        channel: topic_channel.clone(),
+                        t_ns,
+                        value,
+                        units,
+                    }
                 } else {
                     continue;
                 }
@@ -254,11 +354,14 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
             "protobuf" => {
                 if schema_name != ACCEL_BLOCK_SCHEMA {
                     if is_accel {
-                        return Err(here(format!("protobuf schema {schema_name:?} is not {ACCEL_BLOCK_SCHEMA}")));
+                        return Err(here(format!(
+                            "protobuf schema {schema_name:?} is not {ACCEL_BLOCK_SCHEMA}"
+                        )));
                     }
                     continue;
                 }
-                let mut b = decode_accel_block_protobuf(&msg.data).map_err(|m| here(format!("protobuf {ACCEL_BLOCK_SCHEMA}: {m}")))?;
+                let mut b = decode_accel_block_protobuf(&msg.data)
+                    .map_err(|m| here(format!("protobuf {ACCEL_BLOCK_SCHEMA}: {m}")))?;
                 if b.channel.is_empty() {
                     b.channel = topic_channel.clone();
                 }
@@ -284,7 +387,12 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
         if acc.topic.is_empty() {
             acc.topic = topic.clone();
             acc.channel_json = msg.channel.metadata.get(CHANNEL_METADATA_KEY).cloned();
-            acc.start_unknown = msg.channel.metadata.get("start_known").map(|s| s == "false").unwrap_or(false);
+            acc.start_unknown = msg
+                .channel
+                .metadata
+                .get("start_known")
+                .map(|s| s == "false")
+                .unwrap_or(false);
         }
         if let Some(u) = units.or_else(|| msg.channel.metadata.get("units").cloned()) {
             if !acc.units.contains(&u) {
@@ -309,52 +417,82 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
 
     let mut records = Vec::new();
     for id in order {
-        let Some(mut acc) = chans.remove(&id) else { continue };
+        let Some(mut acc) = chans.remove(&id) else {
+            continue;
+        };
         let cloc = || loc().with_channel(id.clone());
         if !acc.points.is_empty() {
             acc.points.sort_by_key(|p| p.0);
             let rate = if let Some(s) = acc.segments.first() {
                 s.rate_hz
             } else {
-                let mut steps: Vec<i64> = acc.points.windows(2).map(|w| w[1].0 - w[0].0).filter(|d| *d > 0).collect();
+                let mut steps: Vec<i64> = acc
+                    .points
+                    .windows(2)
+                    .map(|w| w[1].0 - w[0].0)
+                    .filter(|d| *d > 0)
+                    .collect();
                 steps.sort_unstable();
                 let Some(&dt) = steps.get(steps.len() / 2) else {
                     return Err(Error::input(cloc(), "per-sample messages need at least two distinct times to give a sampling rate"));
                 };
                 let whole = (1e9 / dt as f64).round();
-                if whole >= 1.0 && (1e9 / whole - dt as f64).abs() <= 1.0 { whole } else { 1e9 / dt as f64 }
+                if whole >= 1.0 && (1e9 / whole - dt as f64).abs() <= 1.0 {
+                    whole
+                } else {
+                    1e9 / dt as f64
+                }
             };
             for (t, v) in acc.points.drain(..) {
-                acc.segments.push(Segment { start_ns: t, rate_hz: rate, samples: vec![v], origin: format!("sample at {t} ns") });
+                acc.segments.push(Segment {
+                    start_ns: t,
+                    rate_hz: rate,
+                    samples: vec![v],
+                    origin: format!("sample at {t} ns"),
+                });
             }
         }
         let joined = join_segments(acc.segments).map_err(|m| Error::input(cloc(), m))?;
-        let mut ch = match acc.channel_json.as_deref().map(serde_json::from_str::<Channel>) {
-            Some(Ok(mut c)) => {
-                c.source = src.clone();
-                c.source.column = Some(acc.topic.clone());
-                c
-            }
-            Some(Err(e)) => {
-                return Err(Error::input(cloc(), format!("channel metadata {CHANNEL_METADATA_KEY} is not a quaketwin channel: {e}")))
-            }
-            None => {
-                let mut s = src.clone();
-                s.column = Some(acc.topic.clone());
-                let mut c = Channel::new(id.clone(), Units::MPerS2, joined.rate_hz, s);
-                match acc.units.as_slice() {
-                    [] => {
-                        c.missing.push("units".into());
-                        c.inferred.push("units=m/s2 assumed: the messages state none".into());
-                    }
-                    [u] => {
-                        c.units = u.parse::<Units>().map_err(|e| Error::input(cloc(), e))?;
-                    }
-                    many => return Err(Error::input(cloc(), format!("messages disagree on units: {many:?}"))),
+        let mut ch =
+            match acc
+                .channel_json
+                .as_deref()
+                .map(serde_json::from_str::<Channel>)
+            {
+                Some(Ok(mut c)) => {
+                    c.source = src.clone();
+                    c.source.column = Some(acc.topic.clone());
+                    c
                 }
-                c
-            }
-        };
+                Some(Err(e)) => return Err(Error::input(
+                    cloc(),
+                    format!(
+                        "channel metadata {CHANNEL_METADATA_KEY} is not a quaketwin channel: {e}"
+                    ),
+                )),
+                None => {
+                    let mut s = src.clone();
+                    s.column = Some(acc.topic.clone());
+                    let mut c = Channel::new(id.clone(), Units::MPerS2, joined.rate_hz, s);
+                    match acc.units.as_slice() {
+                        [] => {
+                            c.missing.push("units".into());
+                            c.inferred
+                                .push("units=m/s2 assumed: the messages state none".into());
+                        }
+                        [u] => {
+                            c.units = u.parse::<Units>().map_err(|e| Error::input(cloc(), e))?;
+                        }
+                        many => {
+                            return Err(Error::input(
+                                cloc(),
+                                format!("messages disagree on units: {many:?}"),
+                            ))
+                        }
+                    }
+                    c
+                }
+            };
         ch.sampling_rate_hz = joined.rate_hz;
         ch.start_ns = (!acc.start_unknown).then_some(joined.start_ns);
         ch.qa.extend(joined.qa);
@@ -370,7 +508,10 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
             format!("no acceleration messages (topics /accel/… or schema {ACCEL_BLOCK_SCHEMA}); topics seen: {topics_seen:?}"),
         ));
     }
-    Ok(FileContents { records, ..Default::default() })
+    Ok(FileContents {
+        records,
+        ..Default::default()
+    })
 }
 
 #[cfg(test)]

@@ -178,6 +178,12 @@ pub fn sniff(name: &str, head: &[u8]) -> Option<Format> {
     if text_head.contains("NPTS=") && text_head.contains("DT=") {
         return Some(Format::At2);
     }
+    if mseed::looks_like(head) {
+        return Some(Format::MiniSeed);
+    }
+    if sac::looks_like(head) {
+        return Some(Format::Sac);
+    }
     None
 }
 

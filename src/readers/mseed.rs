@@ -234,6 +234,26 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     })
 }
 
+/// Whether `head` starts like a MiniSEED 2 record (sequence number, quality
+/// indicator, plausible BTIME in either byte order), for format sniffing.
+pub fn looks_like(head: &[u8]) -> bool {
+    if head.len() < FIXED_HEADER_LEN {
+        return false;
+    }
+    let seq = head[..6].iter().all(|c| c.is_ascii_digit() || *c == b' ');
+    let quality = matches!(head[6], b'D' | b'R' | b'Q' | b'M') && matches!(head[7], b' ' | 0);
+    let btime = [ByteOrder::Big, ByteOrder::Little].into_iter().any(|o| {
+        let y = u16_at(head, 20, o).unwrap_or(0);
+        let d = u16_at(head, 22, o).unwrap_or(0);
+        (1900..=2500).contains(&y)
+            && (1..=366).contains(&d)
+            && head[24] < 24
+            && head[25] < 60
+            && head[26] <= 60
+    });
+    seq && quality && btime
+}
+
 fn non_empty(s: &str) -> Option<String> {
     (!s.is_empty()).then(|| s.to_string())
 }

@@ -54,10 +54,20 @@ impl SacHeader {
     /// Reference time + B, ns since the Unix epoch.
     pub fn start_ns(&self) -> Option<i64> {
         let [y, d, h, m, s, ms] = self.reference?;
-        if !(0..=24).contains(&h) || !(0..=59).contains(&m) || !(0..=60).contains(&s) || !(0..=999).contains(&ms) {
+        if !(0..=24).contains(&h)
+            || !(0..=59).contains(&m)
+            || !(0..=60).contains(&s)
+            || !(0..=999).contains(&ms)
+        {
             return None;
         }
-        let t0 = epoch_ns_from_ordinal(y as i64, u32::try_from(d).ok()?, h as u32, m as u32, s as f64)?;
+        let t0 = epoch_ns_from_ordinal(
+            y as i64,
+            u32::try_from(d).ok()?,
+            h as u32,
+            m as u32,
+            s as f64,
+        )?;
         Some(t0 + ms as i64 * 1_000_000 + (self.b.unwrap_or(0.0) * 1e9).round() as i64)
     }
 }
@@ -67,36 +77,66 @@ fn widen(v: f32) -> f64 {
     format!("{v}").parse::<f64>().unwrap_or(v as f64)
 }
 
+/// Whether `head` looks like a SAC binary header (NVHDR = 6 or 7 in either
+/// byte order, positive DELTA), for format sniffing.
+pub fn looks_like(head: &[u8]) -> bool {
+    if head.len() < HEADER_LEN {
+        return false;
+    }
+    let w = |i: usize| [head[i], head[i + 1], head[i + 2], head[i + 3]];
+    let (le, be) = (i32::from_le_bytes(w(304)), i32::from_be_bytes(w(304)));
+    let delta = if matches!(le, 6 | 7) {
+        f32::from_le_bytes(w(0))
+    } else if matches!(be, 6 | 7) {
+        f32::from_be_bytes(w(0))
+    } else {
+        return false;
+    };
+    delta.is_finite() && delta > 0.0
+}
+
 /// Parses and checks the 632-byte header.
 pub fn read_header(bytes: &[u8], source: &SourceRef) -> Result<SacHeader> {
     let loc = || super::location(source);
     if bytes.len() < HEADER_LEN {
         return Err(Error::input(
             loc().at_byte(bytes.len() as u64),
-            format!("file ends at byte {} inside the {HEADER_LEN}-byte SAC header", bytes.len()),
+            format!(
+                "file ends at byte {} inside the {HEADER_LEN}-byte SAC header",
+                bytes.len()
+            ),
         ));
     }
     let word = |i: usize| -> [u8; 4] { [bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]] };
     let nv_at = 280 + 4 * 6;
-    let little = match (i32::from_le_bytes(word(nv_at)), i32::from_be_bytes(word(nv_at))) {
+    let little = match (
+        i32::from_le_bytes(word(nv_at)),
+        i32::from_be_bytes(word(nv_at)),
+    ) {
         (6 | 7, _) => true,
         (_, 6 | 7) => false,
-        _ => {
-            return Err(Error::input(
-                loc().at_byte(nv_at as u64),
-                "not a SAC binary file: header version NVHDR is neither 6 nor 7 in either byte order",
-            ))
-        }
+        _ => return Err(Error::input(
+            loc().at_byte(nv_at as u64),
+            "not a SAC binary file: header version NVHDR is neither 6 nor 7 in either byte order",
+        )),
     };
     let f = |i: usize| -> Option<f64> {
         let w = word(4 * i);
-        let v = if little { f32::from_le_bytes(w) } else { f32::from_be_bytes(w) };
+        let v = if little {
+            f32::from_le_bytes(w)
+        } else {
+            f32::from_be_bytes(w)
+        };
         let v = widen(v);
         (v != UNDEFINED_F && v.is_finite()).then_some(v)
     };
     let n = |i: usize| -> Option<i32> {
         let w = word(280 + 4 * i);
-        let v = if little { i32::from_le_bytes(w) } else { i32::from_be_bytes(w) };
+        let v = if little {
+            i32::from_le_bytes(w)
+        } else {
+            i32::from_be_bytes(w)
+        };
         (v != UNDEFINED_I).then_some(v)
     };
     // Character fields: cut at the first NUL (writers leave garbage after it), trim spaces.
@@ -107,7 +147,10 @@ pub fn read_header(bytes: &[u8], source: &SourceRef) -> Result<SacHeader> {
         (!s.is_empty() && s != "-12345").then_some(s)
     };
     let delta = f(0).filter(|d| *d > 0.0).ok_or_else(|| {
-        Error::input(loc().at_byte(0), "DELTA (sampling interval) is undefined or not positive")
+        Error::input(
+            loc().at_byte(0),
+            "DELTA (sampling interval) is undefined or not positive",
+        )
     })?;
     let npts = n(9)
         .and_then(|v| usize::try_from(v).ok())
@@ -149,12 +192,17 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
         if t != 1 {
             return Err(Error::input(
                 loc().at_byte(280 + 60),
-                format!("IFTYPE={t}: only time series (ITIME = 1) are read, not spectra or x-y files"),
+                format!(
+                    "IFTYPE={t}: only time series (ITIME = 1) are read, not spectra or x-y files"
+                ),
             ));
         }
     }
     if h.leven == Some(0) {
-        return Err(Error::input(loc().at_byte(280 + 140), "unevenly sampled SAC file (LEVEN = false) is not supported"));
+        return Err(Error::input(
+            loc().at_byte(280 + 140),
+            "unevenly sampled SAC file (LEVEN = false) is not supported",
+        ));
     }
     let need = HEADER_LEN + 4 * h.npts;
     if bytes.len() < need {
@@ -172,7 +220,11 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
         .chunks_exact(4)
         .map(|c| {
             let w = [c[0], c[1], c[2], c[3]];
-            (if h.little_endian { f32::from_le_bytes(w) } else { f32::from_be_bytes(w) }) as f64
+            (if h.little_endian {
+                f32::from_le_bytes(w)
+            } else {
+                f32::from_be_bytes(w)
+            }) as f64
         })
         .collect();
 
@@ -232,13 +284,19 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     }
     if bytes.len() > need {
         ch.qa.push(QaFlag::Note {
-            text: format!("{} bytes after the NPTS={} samples were ignored", bytes.len() - need, h.npts),
+            text: format!(
+                "{} bytes after the NPTS={} samples were ignored",
+                bytes.len() - need,
+                h.npts
+            ),
         });
     }
     if let (Some(b), Some(e)) = (h.b, h.e) {
         let expect = b + (h.npts.saturating_sub(1)) as f64 * h.delta;
         if (e - expect).abs() > h.delta {
-            ch.qa.push(QaFlag::Note { text: format!("header E={e} s disagrees with B + (NPTS−1)·DELTA = {expect} s") });
+            ch.qa.push(QaFlag::Note {
+                text: format!("header E={e} s disagrees with B + (NPTS−1)·DELTA = {expect} s"),
+            });
         }
     }
     if h.idep == Some(8) && !samples.is_empty() {
@@ -252,7 +310,10 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
             });
         }
     }
-    Ok(FileContents { records: vec![Record::new(ch, samples)], ..Default::default() })
+    Ok(FileContents {
+        records: vec![Record::new(ch, samples)],
+        ..Default::default()
+    })
 }
 
 #[cfg(test)]
@@ -263,11 +324,19 @@ mod tests {
     fn make(little: bool, npts: i32, data: &[f32]) -> Vec<u8> {
         let mut b = vec![0u8; HEADER_LEN];
         let putf = |b: &mut Vec<u8>, i: usize, v: f32| {
-            let w = if little { v.to_le_bytes() } else { v.to_be_bytes() };
+            let w = if little {
+                v.to_le_bytes()
+            } else {
+                v.to_be_bytes()
+            };
             b[4 * i..4 * i + 4].copy_from_slice(&w);
         };
         let puti = |b: &mut Vec<u8>, i: usize, v: i32| {
-            let w = if little { v.to_le_bytes() } else { v.to_be_bytes() };
+            let w = if little {
+                v.to_le_bytes()
+            } else {
+                v.to_be_bytes()
+            };
             b[280 + 4 * i..284 + 4 * i].copy_from_slice(&w);
         };
         for i in 0..70 {
@@ -291,7 +360,11 @@ mod tests {
         b[440..448].copy_from_slice(b"ABC\0xyz ");
         b[600..608].copy_from_slice(b"HNZ     ");
         for v in data {
-            b.extend_from_slice(&if little { v.to_le_bytes() } else { v.to_be_bytes() });
+            b.extend_from_slice(&if little {
+                v.to_le_bytes()
+            } else {
+                v.to_be_bytes()
+            });
         }
         b
     }
@@ -300,7 +373,10 @@ mod tests {
     fn both_byte_orders() {
         for little in [true, false] {
             let bytes = make(little, 3, &[1.0, -2.5, 3.25]);
-            let src = SourceRef { file: "x.sac".into(), ..Default::default() };
+            let src = SourceRef {
+                file: "x.sac".into(),
+                ..Default::default()
+            };
             let fc = read(&bytes, &src, &ReadOptions::default()).unwrap();
             let r = &fc.records[0];
             assert_eq!(r.samples, vec![1.0, -2.5, 3.25]);
@@ -316,8 +392,15 @@ mod tests {
     #[test]
     fn short_file_is_an_error_with_offset() {
         let bytes = make(true, 5, &[1.0, 2.0]);
-        let e = read(&bytes, &SourceRef { file: "x.sac".into(), ..Default::default() }, &ReadOptions::default())
-            .unwrap_err();
+        let e = read(
+            &bytes,
+            &SourceRef {
+                file: "x.sac".into(),
+                ..Default::default()
+            },
+            &ReadOptions::default(),
+        )
+        .unwrap_err();
         match e {
             Error::Input { location, message } => {
                 assert_eq!(location.byte_offset, Some(640));

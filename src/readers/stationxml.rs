@@ -51,7 +51,10 @@ pub struct ChannelMetadata {
 impl ChannelMetadata {
     /// `NET.STA.LOC.CHA`, the MiniSEED channel id.
     pub fn id(&self) -> String {
-        format!("{}.{}.{}.{}", self.network, self.station, self.location, self.channel)
+        format!(
+            "{}.{}.{}.{}",
+            self.network, self.station, self.location, self.channel
+        )
     }
     /// Whether `t_ns` lies in this epoch ([start, end), open ends allowed).
     pub fn covers(&self, t_ns: i64) -> bool {
@@ -70,25 +73,38 @@ pub fn read(_bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fi
 
 /// First child element with local name `name`.
 fn child<'a, 'i>(n: roxmltree::Node<'a, 'i>, name: &str) -> Option<roxmltree::Node<'a, 'i>> {
-    n.children().find(|c| c.is_element() && c.tag_name().name() == name)
+    n.children()
+        .find(|c| c.is_element() && c.tag_name().name() == name)
 }
 
 /// Parses every `Network/Station/Channel` epoch of a StationXML document.
 pub fn parse(bytes: &[u8], source: &SourceRef) -> Result<Vec<ChannelMetadata>> {
-    let text = std::str::from_utf8(bytes)
-        .map_err(|e| Error::input(super::location(source).at_byte(e.valid_up_to() as u64), "StationXML is not UTF-8"))?;
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        Error::input(
+            super::location(source).at_byte(e.valid_up_to() as u64),
+            "StationXML is not UTF-8",
+        )
+    })?;
     let doc = roxmltree::Document::parse(text).map_err(|e| {
-        Error::input(super::location(source).at_line(e.pos().row as usize), format!("malformed XML: {e}"))
+        Error::input(
+            super::location(source).at_line(e.pos().row as usize),
+            format!("malformed XML: {e}"),
+        )
     })?;
     let root = doc.root_element();
     if root.tag_name().name() != "FDSNStationXML" {
         return Err(Error::input(
             super::location(source).at_line(1),
-            format!("root element is <{}>, not <FDSNStationXML>", root.tag_name().name()),
+            format!(
+                "root element is <{}>, not <FDSNStationXML>",
+                root.tag_name().name()
+            ),
         ));
     }
     let line_of = |n: roxmltree::Node| doc.text_pos_at(n.range().start).row as usize;
-    let err = |n: roxmltree::Node, msg: String| Error::input(super::location(source).at_line(line_of(n)), msg);
+    let err = |n: roxmltree::Node, msg: String| {
+        Error::input(super::location(source).at_line(line_of(n)), msg)
+    };
     let number = |n: roxmltree::Node, name: &str| -> Result<Option<f64>> {
         match child(n, name) {
             None => Ok(None),
@@ -115,31 +131,51 @@ pub fn parse(bytes: &[u8], source: &SourceRef) -> Result<Vec<ChannelMetadata>> {
     };
 
     let mut out = Vec::new();
-    for net in root.children().filter(|c| c.is_element() && c.tag_name().name() == "Network") {
+    for net in root
+        .children()
+        .filter(|c| c.is_element() && c.tag_name().name() == "Network")
+    {
         let network = code(net, "Network")?;
-        for sta in net.children().filter(|c| c.is_element() && c.tag_name().name() == "Station") {
+        for sta in net
+            .children()
+            .filter(|c| c.is_element() && c.tag_name().name() == "Station")
+        {
             let station = code(sta, "Station")?;
             let site_name = child(sta, "Site")
                 .and_then(|s| child(s, "Name"))
                 .and_then(|n| n.text())
                 .map(|t| t.trim().to_string());
-            for cha in sta.children().filter(|c| c.is_element() && c.tag_name().name() == "Channel") {
-                let sensitivity = match child(cha, "Response").and_then(|r| child(r, "InstrumentSensitivity")) {
-                    None => None,
-                    Some(s) => {
-                        let value = number(s, "Value")?.ok_or_else(|| err(s, "InstrumentSensitivity without <Value>".into()))?;
-                        let input_units = child(s, "InputUnits")
-                            .and_then(|u| child(u, "Name"))
-                            .and_then(|n| n.text())
-                            .map(|t| t.trim().to_string())
-                            .unwrap_or_default();
-                        Some(Sensitivity { value, frequency_hz: number(s, "Frequency")?, input_units })
-                    }
-                };
+            for cha in sta
+                .children()
+                .filter(|c| c.is_element() && c.tag_name().name() == "Channel")
+            {
+                let sensitivity =
+                    match child(cha, "Response").and_then(|r| child(r, "InstrumentSensitivity")) {
+                        None => None,
+                        Some(s) => {
+                            let value = number(s, "Value")?.ok_or_else(|| {
+                                err(s, "InstrumentSensitivity without <Value>".into())
+                            })?;
+                            let input_units = child(s, "InputUnits")
+                                .and_then(|u| child(u, "Name"))
+                                .and_then(|n| n.text())
+                                .map(|t| t.trim().to_string())
+                                .unwrap_or_default();
+                            Some(Sensitivity {
+                                value,
+                                frequency_hz: number(s, "Frequency")?,
+                                input_units,
+                            })
+                        }
+                    };
                 out.push(ChannelMetadata {
                     network: network.clone(),
                     station: station.clone(),
-                    location: cha.attribute("locationCode").unwrap_or("").trim().to_string(),
+                    location: cha
+                        .attribute("locationCode")
+                        .unwrap_or("")
+                        .trim()
+                        .to_string(),
                     channel: code(cha, "Channel")?,
                     start_ns: date(cha, "startDate")?,
                     end_ns: date(cha, "endDate")?,
@@ -167,7 +203,12 @@ pub fn parse(bytes: &[u8], source: &SourceRef) -> Result<Vec<ChannelMetadata>> {
 /// Counts per m/s² from a sensitivity whose input units are an acceleration;
 /// `None` for other input units (velocity sensors, volts…).
 fn counts_per_si(s: &Sensitivity) -> Option<f64> {
-    let u = s.input_units.trim().to_ascii_lowercase().replace("**", "").replace('^', "");
+    let u = s
+        .input_units
+        .trim()
+        .to_ascii_lowercase()
+        .replace("**", "")
+        .replace('^', "");
     let per_unit_to_si = match u.as_str() {
         "m/s2" | "m/s/s" | "m/sec2" => 1.0,
         // counts per cm/s² → counts per m/s²: ×100.
@@ -205,12 +246,23 @@ pub fn apply(records: &mut [Record], meta: &[ChannelMetadata]) {
         };
         let Some(m) = chosen else { continue };
         let from = format!("from StationXML {} ({id})", m.file);
-        if let (Units::Counts { counts_per_si: None }, Some(s)) = (ch.units, &m.sensitivity) {
+        if let (
+            Units::Counts {
+                counts_per_si: None,
+            },
+            Some(s),
+        ) = (ch.units, &m.sensitivity)
+        {
             match counts_per_si(s) {
                 Some(c) => {
-                    ch.units = Units::Counts { counts_per_si: Some(c) };
+                    ch.units = Units::Counts {
+                        counts_per_si: Some(c),
+                    };
                     ch.missing.retain(|x| x != "sensitivity");
-                    let f = s.frequency_hz.map(|f| format!(" at {f} Hz")).unwrap_or_default();
+                    let f = s
+                        .frequency_hz
+                        .map(|f| format!(" at {f} Hz"))
+                        .unwrap_or_default();
                     ch.inferred.push(format!(
                         "counts_per_si={c} {from}: InstrumentSensitivity {}{f}, input units {}",
                         s.value, s.input_units
@@ -229,7 +281,8 @@ pub fn apply(records: &mut [Record], meta: &[ChannelMetadata]) {
             } else if (dip - 90.0).abs() < 1e-6 {
                 Some(Direction::Down)
             } else if dip.abs() < 1e-6 {
-                m.azimuth_deg.map(|a| Direction::Azimuth(a.rem_euclid(360.0)))
+                m.azimuth_deg
+                    .map(|a| Direction::Azimuth(a.rem_euclid(360.0)))
             } else {
                 None // inclined sensor: neither horizontal nor vertical; keep the dip only
             };
@@ -237,23 +290,32 @@ pub fn apply(records: &mut [Record], meta: &[ChannelMetadata]) {
                 ch.direction = Some(d);
                 ch.inferred.push(format!(
                     "direction={d} {from}: azimuth {} dip {dip}",
-                    m.azimuth_deg.map(|a| a.to_string()).unwrap_or_else(|| "-".into())
+                    m.azimuth_deg
+                        .map(|a| a.to_string())
+                        .unwrap_or_else(|| "-".into())
                 ));
             }
         }
         if let Some(e) = m.elevation_m {
             ch.elevation_m = Some(e);
-            let depth = m.depth_m.map(|d| format!(", depth {d} m")).unwrap_or_default();
+            let depth = m
+                .depth_m
+                .map(|d| format!(", depth {d} m"))
+                .unwrap_or_default();
             ch.inferred.push(format!("elevation_m={e} {from}{depth}"));
         }
         if let Some(site) = &m.site_name {
             ch.location_text = Some(site.clone());
-            ch.inferred.push(format!("location_text={site:?} {from} (site name)"));
+            ch.inferred
+                .push(format!("location_text={site:?} {from} (site name)"));
         }
         if let Some(r) = m.sample_rate_hz {
             if (r - ch.sampling_rate_hz).abs() > 1e-6 * r.abs().max(1.0) {
                 ch.qa.push(crate::vocab::QaFlag::Note {
-                    text: format!("StationXML sample rate {r} Hz differs from the data's {} Hz", ch.sampling_rate_hz),
+                    text: format!(
+                        "StationXML sample rate {r} Hz differs from the data's {} Hz",
+                        ch.sampling_rate_hz
+                    ),
                 });
             }
         }
@@ -283,17 +345,28 @@ mod tests {
 </FDSNStationXML>"#;
 
     fn src() -> SourceRef {
-        SourceRef { file: "s.xml".into(), format: "stationxml".into(), ..Default::default() }
+        SourceRef {
+            file: "s.xml".into(),
+            format: "stationxml".into(),
+            ..Default::default()
+        }
     }
 
     #[test]
     fn epochs_select_by_time() {
         let meta = parse(XML.as_bytes(), &src()).unwrap();
         assert_eq!(meta.len(), 2);
-        let mut ch = Channel::new("XX.S1.00.HNZ", Units::Counts { counts_per_si: None }, 100.0, SourceRef {
-            format: "mseed".into(),
-            ..Default::default()
-        });
+        let mut ch = Channel::new(
+            "XX.S1.00.HNZ",
+            Units::Counts {
+                counts_per_si: None,
+            },
+            100.0,
+            SourceRef {
+                format: "mseed".into(),
+                ..Default::default()
+            },
+        );
         ch.network = Some("XX".into());
         ch.station = Some("S1".into());
         ch.location_code = Some("00".into());
@@ -302,14 +375,24 @@ mod tests {
         let mut recs = vec![Record::new(ch.clone(), vec![0.0])];
         apply(&mut recs, &meta);
         let c = &recs[0].channel;
-        assert_eq!(c.units, Units::Counts { counts_per_si: Some(2000.0) });
+        assert_eq!(
+            c.units,
+            Units::Counts {
+                counts_per_si: Some(2000.0)
+            }
+        );
         assert_eq!(c.direction, Some(Direction::Down));
         assert_eq!(c.elevation_m, Some(6.0));
         ch.start_ns = parse_iso8601_ns("2012-05-01T00:00:00Z");
         let mut recs = vec![Record::new(ch, vec![0.0])];
         apply(&mut recs, &meta);
         let c = &recs[0].channel;
-        assert_eq!(c.units, Units::Counts { counts_per_si: Some(1000.0) });
+        assert_eq!(
+            c.units,
+            Units::Counts {
+                counts_per_si: Some(1000.0)
+            }
+        );
         assert_eq!(c.direction, Some(Direction::Up));
         assert_eq!(c.location_text.as_deref(), Some("Test site"));
     }

@@ -57,15 +57,11 @@ pub fn write_channels(path: &Path, event: &Event, metrics: &[StrongMotionMetrics
     let m = |c: &Channel| metrics.iter().find(|m| m.channel_id == c.id);
     let metric =
         |f: fn(&StrongMotionMetrics) -> f64| ch.iter().map(|c| m(c).map(f)).collect::<Vec<_>>();
-    let snr: Vec<Option<f64>> = ch
-        .iter()
-        .map(|c| {
-            c.qa.iter().find_map(|q| match q {
-                crate::vocab::QaFlag::LowSnr { snr_db } => Some(*snr_db),
-                _ => None,
-            })
-        })
-        .collect();
+    // SNR of every channel against its pre-event window (the QA flag only
+    // says when it is low; the figure is useful for all).
+    let noise_window_s = crate::conditioning::QaSettings::default().snr_noise_window_s;
+    let snr: Vec<Option<f64>> =
+        recs.iter().map(|r| crate::conditioning::qa::snr_db(&r.samples, r.channel.dt(), noise_window_s)).collect();
     let batch = TableBuilder::new()
         .str(
             "channel_id",

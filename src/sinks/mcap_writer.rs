@@ -23,7 +23,9 @@ use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::readers::mcap::{AccelBlock, ACCEL_BLOCK_JSON_SCHEMA, ACCEL_BLOCK_SCHEMA, CHANNEL_METADATA_KEY};
+use crate::readers::mcap::{
+    AccelBlock, ACCEL_BLOCK_JSON_SCHEMA, ACCEL_BLOCK_SCHEMA, CHANNEL_METADATA_KEY,
+};
 use crate::vocab::Event;
 
 /// Settings of the MCAP writer.
@@ -39,7 +41,11 @@ pub struct McapWriteOptions {
 
 impl Default for McapWriteOptions {
     fn default() -> Self {
-        McapWriteOptions { block_s: 1.0, compression: Some(mcap::Compression::Zstd), chunk_size: 1 << 20 }
+        McapWriteOptions {
+            block_s: 1.0,
+            compression: Some(mcap::Compression::Zstd),
+            chunk_size: 1 << 20,
+        }
     }
 }
 
@@ -48,13 +54,21 @@ pub const HISTORY_METADATA_NAME: &str = "quaketwin.processing_history";
 
 /// Writes `event` to `path` atomically (temporary file in the same directory, then rename).
 pub fn write_event(event: &Event, path: &Path, opts: &McapWriteOptions) -> Result<()> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_else(|| "out.mcap".into());
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_else(|| "out.mcap".into());
     let tmp: PathBuf = dir.join(format!(".{name}.tmp-{}", std::process::id()));
     let result = (|| -> Result<()> {
         let file = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
         let w = write_event_to(event, BufWriter::new(file), opts, path)?;
-        let file = w.into_inner().map_err(|e| Error::io(&tmp, e.into_error()))?;
+        let file = w
+            .into_inner()
+            .map_err(|e| Error::io(&tmp, e.into_error()))?;
         file.sync_all().map_err(|e| Error::io(&tmp, e))?;
         std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
     })();
@@ -65,10 +79,18 @@ pub fn write_event(event: &Event, path: &Path, opts: &McapWriteOptions) -> Resul
 }
 
 /// Writes `event` as MCAP into `w` and returns it; `path` names the target in errors.
-pub fn write_event_to<W: Write + Seek>(event: &Event, w: W, opts: &McapWriteOptions, path: &Path) -> Result<W> {
+pub fn write_event_to<W: Write + Seek>(
+    event: &Event,
+    w: W,
+    opts: &McapWriteOptions,
+    path: &Path,
+) -> Result<W> {
     let fail = |m: String| Error::output(path, m);
     if !(opts.block_s.is_finite() && opts.block_s > 0.0) {
-        return Err(Error::usage(format!("MCAP block length {} s must be positive", opts.block_s)));
+        return Err(Error::usage(format!(
+            "MCAP block length {} s must be positive",
+            opts.block_s
+        )));
     }
     let mut writer = mcap::WriteOptions::new()
         .compression(opts.compression)
@@ -78,7 +100,11 @@ pub fn write_event_to<W: Write + Seek>(event: &Event, w: W, opts: &McapWriteOpti
         .create(w)
         .map_err(|e| fail(e.to_string()))?;
     let schema_id = writer
-        .add_schema(ACCEL_BLOCK_SCHEMA, "jsonschema", ACCEL_BLOCK_JSON_SCHEMA.as_bytes())
+        .add_schema(
+            ACCEL_BLOCK_SCHEMA,
+            "jsonschema",
+            ACCEL_BLOCK_JSON_SCHEMA.as_bytes(),
+        )
         .map_err(|e| fail(e.to_string()))?;
 
     // (log_time, record index, block index, channel id, payload)
@@ -87,10 +113,14 @@ pub fn write_event_to<W: Write + Seek>(event: &Event, w: W, opts: &McapWriteOpti
         let ch = &rec.channel;
         let rate = ch.sampling_rate_hz;
         if !(rate.is_finite() && rate > 0.0) {
-            return Err(fail(format!("channel {}: sampling rate {rate} Hz is not positive", ch.id)));
+            return Err(fail(format!(
+                "channel {}: sampling rate {rate} Hz is not positive",
+                ch.id
+            )));
         }
         let mut meta = BTreeMap::new();
-        let json = serde_json::to_string(ch).map_err(|e| fail(format!("channel {}: {e}", ch.id)))?;
+        let json =
+            serde_json::to_string(ch).map_err(|e| fail(format!("channel {}: {e}", ch.id)))?;
         meta.insert(CHANNEL_METADATA_KEY.to_string(), json);
         meta.insert("units".to_string(), ch.units.name().to_string());
         meta.insert("start_known".to_string(), ch.start_ns.is_some().to_string());
@@ -109,24 +139,38 @@ pub fn write_event_to<W: Write + Seek>(event: &Event, w: W, opts: &McapWriteOpti
                 units: Some(ch.units.name().to_string()),
                 samples: chunk.to_vec(),
             };
-            let payload = serde_json::to_vec(&block).map_err(|e| fail(format!("channel {}: {e}", ch.id)))?;
+            let payload =
+                serde_json::to_vec(&block).map_err(|e| fail(format!("channel {}: {e}", ch.id)))?;
             messages.push((t0.max(0) as u64, ri, bi as u32, channel_id, payload));
         }
     }
     messages.sort_by_key(|m| (m.0, m.1, m.2));
     for (log_time, _, seq, channel_id, payload) in &messages {
-        let header = mcap::records::MessageHeader { channel_id: *channel_id, sequence: *seq, log_time: *log_time, publish_time: *log_time };
-        writer.write_to_known_channel(&header, payload).map_err(|e| fail(e.to_string()))?;
+        let header = mcap::records::MessageHeader {
+            channel_id: *channel_id,
+            sequence: *seq,
+            log_time: *log_time,
+            publish_time: *log_time,
+        };
+        writer
+            .write_to_known_channel(&header, payload)
+            .map_err(|e| fail(e.to_string()))?;
     }
     let mut meta = BTreeMap::new();
     meta.insert("history".to_string(), event.history.to_json());
     meta.insert("event".to_string(), event.name.clone());
-    meta.insert("notes".to_string(), serde_json::to_string(&event.notes).unwrap_or_else(|_| "[]".into()));
+    meta.insert(
+        "notes".to_string(),
+        serde_json::to_string(&event.notes).unwrap_or_else(|_| "[]".into()),
+    );
     if let Some(o) = event.origin_ns {
         meta.insert("origin_ns".to_string(), o.to_string());
     }
     writer
-        .write_metadata(&mcap::records::Metadata { name: HISTORY_METADATA_NAME.to_string(), metadata: meta })
+        .write_metadata(&mcap::records::Metadata {
+            name: HISTORY_METADATA_NAME.to_string(),
+            metadata: meta,
+        })
         .map_err(|e| fail(e.to_string()))?;
     writer.finish().map_err(|e| fail(e.to_string()))?;
     Ok(writer.into_inner())
