@@ -10,6 +10,7 @@ pub mod commands;
 pub mod conditioning;
 pub mod error;
 pub mod event_folder;
+pub mod hysteresis;
 pub mod metrics;
 pub mod readers;
 pub mod pipeline;
@@ -17,6 +18,7 @@ pub mod sinks;
 pub mod stages;
 pub mod synth;
 pub mod synth_event;
+pub mod twin;
 pub mod vocab;
 
 pub use error::{Error, Location, Result};

@@ -12,12 +12,23 @@ use std::io::Read;
 const RECORDS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/records");
 
 fn source(file: &str, member: Option<&str>, format: Format) -> SourceRef {
-    SourceRef { file: file.into(), member: member.map(String::from), column: None, format: format.name().into() }
+    SourceRef {
+        file: file.into(),
+        member: member.map(String::from),
+        column: None,
+        format: format.name().into(),
+    }
 }
 
 fn read_file(rel: &str, format: Format) -> FileContents {
     let bytes = std::fs::read(format!("{RECORDS}/{rel}")).unwrap_or_else(|e| panic!("{rel}: {e}"));
-    readers::read(format, &bytes, &source(rel, None, format), &ReadOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+    readers::read(
+        format,
+        &bytes,
+        &source(rel, None, format),
+        &ReadOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Every member of a zip (nested zips opened, their members named `outer:inner`).
@@ -45,7 +56,10 @@ fn collect_members(bytes: Vec<u8>, prefix: &str, out: &mut Vec<(String, Vec<u8>)
 }
 
 /// Reads every V2 (records) and V3 (spectra) member of a CSMIP zip.
-fn read_csmip_zip(rel: &str, only_prefix: &str) -> (Vec<Record>, Vec<readers::FileSpectrum>, Vec<FileContents>) {
+fn read_csmip_zip(
+    rel: &str,
+    only_prefix: &str,
+) -> (Vec<Record>, Vec<readers::FileSpectrum>, Vec<FileContents>) {
     let mut records = Vec::new();
     let mut spectra = Vec::new();
     let mut all = Vec::new();
@@ -58,12 +72,25 @@ fn read_csmip_zip(rel: &str, only_prefix: &str) -> (Vec<Record>, Vec<readers::Fi
             continue;
         }
         if lower.ends_with(".v2") {
-            assert_eq!(readers::sniff(&member, &data), Some(Format::Dmg), "{member}");
+            assert_eq!(
+                readers::sniff(&member, &data),
+                Some(Format::Dmg),
+                "{member}"
+            );
         } else {
-            assert_eq!(readers::sniff(&member, &data), None, "{member}: V3 spectra are not record files");
+            assert_eq!(
+                readers::sniff(&member, &data),
+                None,
+                "{member}: V3 spectra are not record files"
+            );
         }
-        let c = readers::read(Format::Dmg, &data, &source(rel, Some(&member), Format::Dmg), &ReadOptions::default())
-            .unwrap_or_else(|e| panic!("{e}"));
+        let c = readers::read(
+            Format::Dmg,
+            &data,
+            &source(rel, Some(&member), Format::Dmg),
+            &ReadOptions::default(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
         if lower.ends_with(".v2") {
             assert!(c.spectra.is_empty(), "{member}");
             records.extend(c.records.iter().cloned());
@@ -79,13 +106,19 @@ fn read_csmip_zip(rel: &str, only_prefix: &str) -> (Vec<Record>, Vec<readers::Fi
 
 /// The sample of largest magnitude (sign kept).
 fn peak(samples: &[f64]) -> f64 {
-    samples.iter().copied().fold(0.0, |a: f64, v| if v.abs() > a.abs() { v } else { a })
+    samples
+        .iter()
+        .copied()
+        .fold(0.0, |a: f64, v| if v.abs() > a.abs() { v } else { a })
 }
 
 /// `got` equals a value printed with `decimals` decimals.
 fn assert_printed(got: f64, printed: f64, decimals: i32, what: &str) {
     let tol = 0.5 * 10f64.powi(-decimals) + 1e-9;
-    assert!((got - printed).abs() <= tol, "{what}: got {got}, printed {printed} (±{tol})");
+    assert!(
+        (got - printed).abs() <= tol,
+        "{what}: got {got}, printed {printed} (±{tol})"
+    );
 }
 
 fn azimuth(d: Option<Direction>) -> Option<f64> {
@@ -105,9 +138,33 @@ fn ns(y: i64, mo: u32, d: u32, h: u32, mi: u32, s: f64) -> i64 {
 fn at2_peer_records_match_provenance() {
     // (file, npts, dt, peak g (4 decimals), direction, first, last)
     let cases: [(&str, usize, f64, f64, Option<f64>, f64, f64); 4] = [
-        ("RSN763_LOMAP_GIL067.AT2", 7999, 0.005, -0.3585, Some(67.0), -0.8075668e-3, 0.3362115e-3),
-        ("RSN763_LOMAP_GIL337.AT2", 7999, 0.005, -0.3266, Some(337.0), -0.4518843e-3, 0.4250957e-4),
-        ("TAK000.AT2", 4096, 0.010, 0.6177, Some(0.0), -0.1259993e-2, 0.4044295e-3),
+        (
+            "RSN763_LOMAP_GIL067.AT2",
+            7999,
+            0.005,
+            -0.3585,
+            Some(67.0),
+            -0.8075668e-3,
+            0.3362115e-3,
+        ),
+        (
+            "RSN763_LOMAP_GIL337.AT2",
+            7999,
+            0.005,
+            -0.3266,
+            Some(337.0),
+            -0.4518843e-3,
+            0.4250957e-4,
+        ),
+        (
+            "TAK000.AT2",
+            4096,
+            0.010,
+            0.6177,
+            Some(0.0),
+            -0.1259993e-2,
+            0.4044295e-3,
+        ),
         ("elCentro.AT2", 1559, 0.02, -0.3188, None, 0.00630, 0.0),
     ];
     for (file, npts, dt, pk, dir, first, last) in cases {
@@ -117,18 +174,28 @@ fn at2_peer_records_match_provenance() {
         let c = read_file(&rel, Format::At2);
         assert_eq!(c.records.len(), 1);
         let r = &c.records[0];
-        assert_eq!(r.len(), npts, "{file}: every value incl. the partial last line");
+        assert_eq!(
+            r.len(),
+            npts,
+            "{file}: every value incl. the partial last line"
+        );
         assert!((r.channel.dt() - dt).abs() < 1e-12, "{file}");
         assert_eq!(r.channel.units, Units::G, "{file}");
         assert_printed(peak(&r.samples), pk, 4, file);
         assert_eq!(azimuth(r.channel.direction), dir, "{file}");
         assert_eq!(r.samples[0], first, "{file}");
         assert_eq!(*r.samples.last().unwrap(), last, "{file}");
-        assert!(r.channel.inferred.is_empty(), "{file}: units come from the header");
+        assert!(
+            r.channel.inferred.is_empty(),
+            "{file}: units come from the header"
+        );
     }
     let c = read_file("peer-at2-records/RSN763_LOMAP_GIL067.AT2", Format::At2);
     assert_eq!(c.event.name.as_deref(), Some("Loma Prieta"));
-    assert_eq!(c.records[0].channel.station.as_deref(), Some("Gilroy - Gavilan Coll."));
+    assert_eq!(
+        c.records[0].channel.station.as_deref(),
+        Some("Gilroy - Gavilan Coll.")
+    );
     assert_eq!(c.records[0].channel.id, "RSN763_LOMAP_GIL067");
 }
 
@@ -138,9 +205,23 @@ fn at2_peer_records_match_provenance() {
 fn smc_loma_prieta_matches_gmprocess_reference() {
     // (file, npts, first, last, header peak (1 decimal), direction)
     let cases = [
-        ("0111a", 6001, 1.5057, -0.28745, 104.4, Some(Direction::Azimuth(0.0))),
+        (
+            "0111a",
+            6001,
+            1.5057,
+            -0.28745,
+            104.4,
+            Some(Direction::Azimuth(0.0)),
+        ),
         ("0111b", 6002, -12.518, -1.6806, 48.3, Some(Direction::Up)),
-        ("0111c", 6004, -5.8486, -1.1594, 70.4, Some(Direction::Azimuth(270.0))),
+        (
+            "0111c",
+            6004,
+            -5.8486,
+            -1.1594,
+            70.4,
+            Some(Direction::Azimuth(270.0)),
+        ),
     ];
     for (name, npts, first, last, pk, dir) in cases {
         let rel = format!("usgs-gmprocess-format-samples/smc/{name}.smc");
@@ -150,15 +231,26 @@ fn smc_loma_prieta_matches_gmprocess_reference() {
         let r = &c.records[0];
         assert_eq!(r.len(), npts, "{name}");
         assert_eq!(r.channel.sampling_rate_hz, 200.0, "{name}");
-        assert!((r.samples[0] - first).abs() < 1e-9, "{name} first {}", r.samples[0]);
+        assert!(
+            (r.samples[0] - first).abs() < 1e-9,
+            "{name} first {}",
+            r.samples[0]
+        );
         assert!((r.samples[npts - 1] - last).abs() < 1e-9, "{name} last");
         assert_printed(peak(&r.samples).abs(), pk, 1, name);
         assert_eq!(r.channel.direction, dir, "{name}");
         assert_eq!(r.channel.units, Units::CmPerS2);
         assert_eq!(r.channel.station.as_deref(), Some("SAF0"));
         // 1989 day 291 = 18 October, 00:04.
-        assert_eq!(r.channel.start_ns, Some(ns(1989, 10, 18, 0, 4, 0.0)), "{name}");
-        assert!(r.channel.qa.is_empty(), "{name}: no extra values, evenly sampled");
+        assert_eq!(
+            r.channel.start_ns,
+            Some(ns(1989, 10, 18, 0, 4, 0.0)),
+            "{name}"
+        );
+        assert!(
+            r.channel.qa.is_empty(),
+            "{name}: no extra values, evenly sampled"
+        );
         assert_eq!(c.event.magnitude, Some(7.1));
         assert_eq!(c.event.name.as_deref(), Some("Loma Prieta, CA"));
     }
@@ -167,8 +259,12 @@ fn smc_loma_prieta_matches_gmprocess_reference() {
 /// SMC header for crafted files: `npts` samples, `rate` (None → missing).
 fn smc_text(label: &str, npts: usize, rate: Option<f64>, data_lines: &[String]) -> String {
     let mut s = String::new();
-    s.push_str(&format!("{label}\n*\nTST0A\n     2020   1   2    0304 Test quake\nMoment Mag=      5.0\n"));
-    s.push_str("station = Test site component=    360\nepicentral dist =  1.0\ninst type=X\n*\n*\n*\n");
+    s.push_str(&format!(
+        "{label}\n*\nTST0A\n     2020   1   2    0304 Test quake\nMoment Mag=      5.0\n"
+    ));
+    s.push_str(
+        "station = Test site component=    360\nepicentral dist =  1.0\ninst type=X\n*\n*\n*\n",
+    );
     let miss = -32768i64;
     let mut ints = vec![miss; 48];
     ints[1] = 2020;
@@ -200,22 +296,38 @@ fn smc_text(label: &str, npts: usize, rate: Option<f64>, data_lines: &[String]) 
 }
 
 fn fixed_e10(values: &[f64]) -> Vec<String> {
-    values.chunks(8).map(|c| c.iter().map(|v| format!("{v:10.4E}")).collect()).collect()
+    values
+        .chunks(8)
+        .map(|c| c.iter().map(|v| format!("{v:10.4E}")).collect())
+        .collect()
 }
 
 #[test]
 fn smc_uneven_pairs_are_resampled_and_flagged() {
     // Uneven times; the value is a known linear function of time, which
     // linear interpolation reproduces exactly on the uniform grid.
-    let times: Vec<f64> = (0..41).map(|k| 0.01 * k as f64 + if k % 3 == 1 { 0.003 } else { 0.0 }).collect();
+    let times: Vec<f64> = (0..41)
+        .map(|k| 0.01 * k as f64 + if k % 3 == 1 { 0.003 } else { 0.0 })
+        .collect();
     let f = |t: f64| 2.0 - 50.0 * t;
     let mut pairs = Vec::new();
     for &t in &times {
         pairs.push(t);
         pairs.push(f(t));
     }
-    let text = smc_text("1 UNCORRECTED ACCELEROGRAM", times.len(), None, &fixed_e10(&pairs));
-    let c = readers::read(Format::Smc, text.as_bytes(), &source("pairs.smc", None, Format::Smc), &ReadOptions::default()).unwrap();
+    let text = smc_text(
+        "1 UNCORRECTED ACCELEROGRAM",
+        times.len(),
+        None,
+        &fixed_e10(&pairs),
+    );
+    let c = readers::read(
+        Format::Smc,
+        text.as_bytes(),
+        &source("pairs.smc", None, Format::Smc),
+        &ReadOptions::default(),
+    )
+    .unwrap();
     let r = &c.records[0];
     // The median step of these times is 0.01 s → 41 uniform samples over 0..0.40 s.
     assert_eq!(r.channel.sampling_rate_hz.round(), 100.0);
@@ -223,22 +335,51 @@ fn smc_uneven_pairs_are_resampled_and_flagged() {
     for (k, v) in r.samples.iter().enumerate() {
         assert!((v - f(0.01 * k as f64)).abs() < 1e-3, "sample {k}: {v}"); // E10.4 print precision
     }
-    assert!(r.channel.qa.contains(&QaFlag::Resampled { from: "uneven (time,value) pairs".into() }));
-    assert!(r.channel.inferred.iter().any(|s| s.contains("resampled") && s.contains("linear interpolation")));
-    assert_eq!(r.channel.start_ns, epoch_ns_from_civil(2020, 1, 2, 3, 4, 5.0));
+    assert!(r.channel.qa.contains(&QaFlag::Resampled {
+        from: "uneven (time,value) pairs".into()
+    }));
+    assert!(r
+        .channel
+        .inferred
+        .iter()
+        .any(|s| s.contains("resampled") && s.contains("linear interpolation")));
+    assert_eq!(
+        r.channel.start_ns,
+        epoch_ns_from_civil(2020, 1, 2, 3, 4, 5.0)
+    );
 }
 
 #[test]
 fn smc_extra_values_keep_declared_count_with_note() {
-    let values: Vec<f64> = (0..20).map(|k| (k as f64 * 0.7).sin() * 100.0 - 50.0).collect();
-    let text = smc_text("2 CORRECTED ACCELEROGRAM", 16, Some(100.0), &fixed_e10(&values));
-    let c = readers::read(Format::Smc, text.as_bytes(), &source("extra.smc", None, Format::Smc), &ReadOptions::default()).unwrap();
+    let values: Vec<f64> = (0..20)
+        .map(|k| (k as f64 * 0.7).sin() * 100.0 - 50.0)
+        .collect();
+    let text = smc_text(
+        "2 CORRECTED ACCELEROGRAM",
+        16,
+        Some(100.0),
+        &fixed_e10(&values),
+    );
+    let c = readers::read(
+        Format::Smc,
+        text.as_bytes(),
+        &source("extra.smc", None, Format::Smc),
+        &ReadOptions::default(),
+    )
+    .unwrap();
     let r = &c.records[0];
     assert_eq!(r.len(), 16);
     for (k, v) in r.samples.iter().enumerate() {
-        assert!((v - values[k]).abs() <= 5e-4 * values[k].abs().max(1.0), "touching E10.4 fields, sample {k}");
+        assert!(
+            (v - values[k]).abs() <= 5e-4 * values[k].abs().max(1.0),
+            "touching E10.4 fields, sample {k}"
+        );
     }
-    assert!(r.channel.qa.iter().any(|q| matches!(q, QaFlag::Note { text } if text.contains("4 values after the 16"))));
+    assert!(r
+        .channel
+        .qa
+        .iter()
+        .any(|q| matches!(q, QaFlag::Note { text } if text.contains("4 values after the 16"))));
 }
 
 // ------------------------------------------------------------------ GeoNet
@@ -248,7 +389,11 @@ fn geonet_v2a_three_components() {
     let rel = "usgs-gmprocess-format-samples/geonet/20180212_211557_WPWS_20.V2A";
     let c = read_file(rel, Format::GeoNet);
     assert_eq!(c.records.len(), 3);
-    let expected = [("WPWS.S16W", Direction::Azimuth(196.0), -41.6), ("WPWS.S74E", Direction::Azimuth(106.0), -194.0), ("WPWS.UP", Direction::Up, -27.3)];
+    let expected = [
+        ("WPWS.S16W", Direction::Azimuth(196.0), -41.6),
+        ("WPWS.S74E", Direction::Azimuth(106.0), -194.0),
+        ("WPWS.UP", Direction::Up, -27.3),
+    ];
     for (r, (id, dir, pk)) in c.records.iter().zip(expected) {
         assert_eq!(r.channel.id, id);
         assert_eq!(r.channel.station.as_deref(), Some("WPWS"));
@@ -257,7 +402,10 @@ fn geonet_v2a_three_components() {
         assert!((r.channel.dt() - 0.02).abs() < 1e-12);
         assert_eq!(r.channel.units, Units::MmPerS2);
         assert_printed(peak(&r.samples), pk, 1, id);
-        assert_eq!(r.channel.location_text.as_deref(), Some("Waipawa District Council"));
+        assert_eq!(
+            r.channel.location_text.as_deref(),
+            Some("Waipawa District Council")
+        );
     }
     assert_eq!(c.event.magnitude, Some(4.17));
     assert_eq!(c.event.origin_ns, Some(ns(2018, 2, 12, 21, 15, 54.0)));
@@ -277,18 +425,30 @@ fn cosmos_v0_building_channel_counts() {
     assert_eq!(ch.channel_code.as_deref(), Some("HN2"));
     assert_eq!(ch.direction, Some(Direction::Azimuth(90.0)));
     assert_eq!(ch.id, "NP.8040.01.HN2");
-    assert_eq!((ch.network.as_deref(), ch.station.as_deref()), (Some("NP"), Some("8040")));
+    assert_eq!(
+        (ch.network.as_deref(), ch.station.as_deref()),
+        (Some("NP"), Some("8040"))
+    );
     assert_eq!(ch.location_text.as_deref(), Some("Basement NW corner"));
     assert_eq!(r.len(), 42000);
     assert_eq!(ch.sampling_rate_hz, 200.0);
     assert!(matches!(ch.units, Units::Counts { counts_per_si: Some(s) } if s > 0.0));
     // "Max = 1033406 counts, at 45.580 sec."
-    let (imax, vmax) = r.samples.iter().enumerate().fold((0, 0.0f64), |b, (i, v)| if v.abs() > b.1.abs() { (i, *v) } else { b });
+    let (imax, vmax) = r.samples.iter().enumerate().fold((0, 0.0f64), |b, (i, v)| {
+        if v.abs() > b.1.abs() {
+            (i, *v)
+        } else {
+            b
+        }
+    });
     assert_eq!(vmax.abs(), 1_033_406.0);
     assert_eq!(imax, (45.58 * 200.0_f64).round() as usize);
     // "Rcrd start time: 2018/11/30 17:29:06.332 UTC"
     let start = ch.start_ns.expect("start time");
-    assert!((start - ns(2018, 11, 30, 17, 29, 6.332)).abs() < 1_000_000, "start {start}");
+    assert!(
+        (start - ns(2018, 11, 30, 17, 29, 6.332)).abs() < 1_000_000,
+        "start {start}"
+    );
     assert_eq!(c.event.magnitude, Some(7.0));
     assert_eq!(c.event.hypocenter, Some((61.3464, -149.9552, 46.7)));
     assert_eq!(c.event.origin_ns, Some(ns(2018, 11, 30, 17, 29, 29.0)));
@@ -296,7 +456,8 @@ fn cosmos_v0_building_channel_counts() {
 
 #[test]
 fn cosmos_v2_free_field_acceleration() {
-    let rel = "usgs-gmprocess-format-samples/cosmos/us1000hyfh_akbmrp_AKBMR--n.1000hyfh.BNZ.--.acc.V2c";
+    let rel =
+        "usgs-gmprocess-format-samples/cosmos/us1000hyfh_akbmrp_AKBMR--n.1000hyfh.BNZ.--.acc.V2c";
     let c = read_file(rel, Format::Cosmos);
     let r = &c.records[0];
     assert_eq!(r.len(), 42000);
@@ -305,7 +466,11 @@ fn cosmos_v2_free_field_acceleration() {
     assert_eq!(r.channel.direction, Some(Direction::Up));
     // "Max = -6.852 cm/sec2 at 76.215 sec"
     assert_printed(peak(&r.samples), -6.852, 3, "AK.BMR peak");
-    let imax = r.samples.iter().enumerate().fold(0, |b, (i, v)| if v.abs() > r.samples[b].abs() { i } else { b });
+    let imax =
+        r.samples.iter().enumerate().fold(
+            0,
+            |b, (i, v)| if v.abs() > r.samples[b].abs() { i } else { b },
+        );
     assert!((imax as f64 / r.channel.sampling_rate_hz - 76.215).abs() < 0.006);
     assert_eq!(r.channel.elevation_m, Some(842.0));
 }
@@ -316,12 +481,22 @@ fn cosmos_v2_free_field_acceleration() {
 fn dmg_modern_multichannel_file() {
     let c = read_file("usgs-gmprocess-format-samples/dmg/CE58667.V2", Format::Dmg);
     assert_eq!(c.records.len(), 3);
-    let expected = [("58667.01", "H1", None, 27.114), ("58667.02", "Up", Some(Direction::Up), 11.244), ("58667.03", "H2", None, -26.411)];
+    let expected = [
+        ("58667.01", "H1", None, 27.114),
+        ("58667.02", "Up", Some(Direction::Up), 11.244),
+        ("58667.03", "H2", None, -26.411),
+    ];
     for (r, (id, label, dir, pk)) in c.records.iter().zip(expected) {
         assert_eq!(r.channel.id, id);
-        assert!(r.channel.channel_code.as_deref().unwrap().ends_with(label), "{id}");
+        assert!(
+            r.channel.channel_code.as_deref().unwrap().ends_with(label),
+            "{id}"
+        );
         assert_eq!(r.channel.direction, dir, "{id}");
-        assert_eq!(r.channel.missing.contains(&"direction".to_string()), dir.is_none());
+        assert_eq!(
+            r.channel.missing.contains(&"direction".to_string()),
+            dir.is_none()
+        );
         assert_eq!(r.len(), 7500);
         assert_eq!(r.channel.sampling_rate_hz, 100.0);
         assert_eq!(r.channel.units, Units::CmPerS2);
@@ -332,9 +507,16 @@ fn dmg_modern_multichannel_file() {
 
 #[test]
 fn dmg_1983_multichannel_file_with_unequal_lengths() {
-    let c = read_file("usgs-gmprocess-format-samples/dmg/ce36456p_CE36456.V2", Format::Dmg);
+    let c = read_file(
+        "usgs-gmprocess-format-samples/dmg/ce36456p_CE36456.V2",
+        Format::Dmg,
+    );
     assert_eq!(c.records.len(), 3);
-    let expected = [(3251, Direction::Azimuth(90.0), -267.957), (3250, Direction::Up, -94.805), (3250, Direction::Azimuth(0.0), -256.231)];
+    let expected = [
+        (3251, Direction::Azimuth(90.0), -267.957),
+        (3250, Direction::Up, -94.805),
+        (3250, Direction::Azimuth(0.0), -256.231),
+    ];
     for (r, (n, dir, pk)) in c.records.iter().zip(expected) {
         assert_eq!(r.len(), n, "{}", r.channel.id);
         assert_eq!(r.channel.direction, Some(dir));
@@ -352,40 +534,89 @@ fn dmg_1983_multichannel_file_with_unequal_lengths() {
 
 #[test]
 fn dmg_meloland_two_recorders() {
-    let (records, spectra, all) = read_csmip_zip("csmip-ce01336-meloland-overpass/imperialvalley79_ce01336p.zip", "");
+    let (records, spectra, all) = read_csmip_zip(
+        "csmip-ce01336-meloland-overpass/imperialvalley79_ce01336p.zip",
+        "",
+    );
     assert_eq!(records.len(), 26);
     // (station channel, direction, npts, peak cm/s², 1 decimal) from PROVENANCE.md.
     let up = Direction::Up;
     let az = Direction::Azimuth;
     let table: [(Direction, usize, f64); 26] = [
-        (up, 1138, 171.6), (az(270.0), 1138, -311.4), (az(270.0), 1138, -460.0), (az(0.0), 1138, 281.1),
-        (az(270.0), 1138, -488.6), (up, 1138, 176.3), (az(270.0), 1138, -483.6), (az(0.0), 1138, 386.0),
-        (az(270.0), 1138, -476.6), (up, 1138, 240.5), (az(270.0), 1138, -406.0), (az(0.0), 1138, 272.9),
-        (az(270.0), 1138, -462.1), (up, 5696, 225.1), (az(0.0), 5690, -305.0), (up, 5695, 472.0),
-        (up, 5695, 223.9), (up, 5694, -428.6), (up, 5695, 200.4), (up, 5694, 450.9), (up, 5694, 261.8),
-        (up, 5694, 392.4), (up, 5693, 227.1), (az(270.0), 5694, -292.7), (az(0.0), 5695, -332.9), (az(270.0), 5694, -375.8),
+        (up, 1138, 171.6),
+        (az(270.0), 1138, -311.4),
+        (az(270.0), 1138, -460.0),
+        (az(0.0), 1138, 281.1),
+        (az(270.0), 1138, -488.6),
+        (up, 1138, 176.3),
+        (az(270.0), 1138, -483.6),
+        (az(0.0), 1138, 386.0),
+        (az(270.0), 1138, -476.6),
+        (up, 1138, 240.5),
+        (az(270.0), 1138, -406.0),
+        (az(0.0), 1138, 272.9),
+        (az(270.0), 1138, -462.1),
+        (up, 5696, 225.1),
+        (az(0.0), 5690, -305.0),
+        (up, 5695, 472.0),
+        (up, 5695, 223.9),
+        (up, 5694, -428.6),
+        (up, 5695, 200.4),
+        (up, 5694, 450.9),
+        (up, 5694, 261.8),
+        (up, 5694, 392.4),
+        (up, 5693, 227.1),
+        (az(270.0), 5694, -292.7),
+        (az(0.0), 5695, -332.9),
+        (az(270.0), 5694, -375.8),
     ];
     for (k, (r, (dir, n, pk))) in records.iter().zip(table).enumerate() {
         let sta_chn = k + 1;
         let ch = &r.channel;
         assert_eq!(ch.id, format!("01336.{sta_chn:02}"));
-        assert_eq!(ch.location_code.as_deref(), Some(sta_chn.to_string().as_str()));
+        assert_eq!(
+            ch.location_code.as_deref(),
+            Some(sta_chn.to_string().as_str())
+        );
         assert_eq!(ch.direction, Some(dir), "{}", ch.id);
         assert_eq!(r.len(), n, "{}", ch.id);
         assert_printed(peak(&r.samples), pk, 1, &ch.id);
-        let (rate, recorder_chan) = if sta_chn <= 13 { (50.0, sta_chn) } else { (100.0, sta_chn - 13) };
+        let (rate, recorder_chan) = if sta_chn <= 13 {
+            (50.0, sta_chn)
+        } else {
+            (100.0, sta_chn - 13)
+        };
         assert_eq!(ch.sampling_rate_hz, rate, "{}", ch.id);
         // The recorder channel ("CHAN n" on line 1) differs from the station channel on recorder 2.
-        assert!(ch.channel_code.as_deref().unwrap().starts_with(&format!("CHAN {recorder_chan}:")), "{}", ch.id);
+        assert!(
+            ch.channel_code
+                .as_deref()
+                .unwrap()
+                .starts_with(&format!("CHAN {recorder_chan}:")),
+            "{}",
+            ch.id
+        );
         assert_eq!(ch.units, Units::CmPerS2);
         assert_eq!(ch.network.as_deref(), Some("CE"));
     }
-    assert_eq!(records[0].channel.location_text.as_deref(), Some("FOOTING OF CENTER COLUMN: W. EDGE"));
-    assert_eq!(records[13].channel.location_text.as_deref(), Some("FREEFIELD"));
+    assert_eq!(
+        records[0].channel.location_text.as_deref(),
+        Some("FOOTING OF CENTER COLUMN: W. EDGE")
+    );
+    assert_eq!(
+        records[13].channel.location_text.as_deref(),
+        Some("FREEFIELD")
+    );
     // Recorder-1 files state the hypocentre, recorder-2 files leave H and ML blank.
-    let with_hypo: Vec<&FileContents> = all.iter().filter(|c| c.event.hypocenter.is_some()).collect();
+    let with_hypo: Vec<&FileContents> = all
+        .iter()
+        .filter(|c| c.event.hypocenter.is_some())
+        .collect();
     assert_eq!(with_hypo.len(), 26, "13 V2 + 13 V3 files of recorder 1");
-    assert!(with_hypo.iter().all(|c| c.event.hypocenter == Some((32.64, -115.33, 12.0)) && c.event.magnitude == Some(6.6)));
+    assert!(with_hypo
+        .iter()
+        .all(|c| c.event.hypocenter == Some((32.64, -115.33, 12.0))
+            && c.event.magnitude == Some(6.6)));
 
     // V3: 26 files × 5 dampings; line 1 says "(79 PERIODS,  .04 -  6.5 SEC)"
     // for recorder 1 and "(83 PERIODS,  .04 -  8.5 SEC)" for recorder 2.
@@ -398,10 +629,17 @@ fn dmg_meloland_two_recorders() {
         assert_eq!(s.units, "g");
         assert!(s.psa.iter().all(|v| v.is_finite() && *v >= 0.0));
     }
-    let dampings: Vec<f64> = spectra.iter().filter(|s| s.channel_id == "01336.01").map(|s| s.damping).collect();
+    let dampings: Vec<f64> = spectra
+        .iter()
+        .filter(|s| s.channel_id == "01336.01")
+        .map(|s| s.damping)
+        .collect();
     assert_eq!(dampings, vec![0.0, 0.02, 0.05, 0.1, 0.2]);
     // CHAN01.V3, 5 %: SD(0.04 s) = .303E-02 in → PSA = (2π/T)² SD; the file's SA there is .194 g.
-    let s5 = spectra.iter().find(|s| s.channel_id == "01336.01" && s.damping == 0.05).unwrap();
+    let s5 = spectra
+        .iter()
+        .find(|s| s.channel_id == "01336.01" && s.damping == 0.05)
+        .unwrap();
     let expected = (2.0 * std::f64::consts::PI / 0.04f64).powi(2) * 0.303e-2 * 0.0254 / 9.80665;
     assert!((s5.psa[0] - expected).abs() < 1e-12);
     assert!((s5.psa[0] - 0.194).abs() < 0.002, "PSA ≈ SA at 5 % damping");
@@ -409,9 +647,26 @@ fn dmg_meloland_two_recorders() {
 
 const PETROLIA: [(f64, f64); 20] = [
     // (direction: azimuth or -1 for UP, peak accel cm/s², 1 decimal)
-    (270.0, -318.7), (-1.0, -156.6), (0.0, -438.6), (0.0, 1067.0), (-1.0, -174.1), (-1.0, -657.1), (0.0, 844.4),
-    (-1.0, 576.1), (0.0, -672.7), (-1.0, 305.7), (270.0, -443.3), (270.0, -372.3), (-1.0, -191.6), (0.0, 532.6),
-    (270.0, -429.5), (-1.0, 199.1), (0.0, 765.1), (270.0, -684.4), (-1.0, -411.7), (0.0, 1311.6),
+    (270.0, -318.7),
+    (-1.0, -156.6),
+    (0.0, -438.6),
+    (0.0, 1067.0),
+    (-1.0, -174.1),
+    (-1.0, -657.1),
+    (0.0, 844.4),
+    (-1.0, 576.1),
+    (0.0, -672.7),
+    (-1.0, 305.7),
+    (270.0, -443.3),
+    (270.0, -372.3),
+    (-1.0, -191.6),
+    (0.0, 532.6),
+    (270.0, -429.5),
+    (-1.0, 199.1),
+    (0.0, 765.1),
+    (270.0, -684.4),
+    (-1.0, -411.7),
+    (0.0, 1311.6),
 ];
 
 fn check_petrolia(records: &[Record]) {
@@ -421,23 +676,41 @@ fn check_petrolia(records: &[Record]) {
         assert_eq!(ch.id, format!("89324.{:02}", k + 1));
         assert_eq!(r.len(), 3000, "{}", ch.id);
         assert_eq!(ch.sampling_rate_hz, 50.0);
-        let want = if dir < 0.0 { Direction::Up } else { Direction::Azimuth(dir) };
+        let want = if dir < 0.0 {
+            Direction::Up
+        } else {
+            Direction::Azimuth(dir)
+        };
         assert_eq!(ch.direction, Some(want), "{}", ch.id);
         assert_printed(peak(&r.samples), pk, 1, &ch.id);
     }
     // Station channels 9–20 are on the second recorder (S/N 0138): CHAN9 is its "CHAN 1".
-    assert!(records[8].channel.channel_code.as_deref().unwrap().starts_with("CHAN 1:"));
+    assert!(records[8]
+        .channel
+        .channel_code
+        .as_deref()
+        .unwrap()
+        .starts_with("CHAN 1:"));
     assert_eq!(records[8].channel.location_code.as_deref(), Some("9"));
-    assert_eq!(records[19].channel.location_text.as_deref(), Some("ON GROUND NEAR WEST ABUTMENT"));
+    assert_eq!(
+        records[19].channel.location_text.as_deref(),
+        Some("ON GROUND NEAR WEST ABUTMENT")
+    );
 }
 
 #[test]
 fn dmg_petrolia_flat_zip() {
-    let (records, spectra, all) = read_csmip_zip("csmip-ce89324-painterst-overpass/petrolia_25apr1992_ce89324p.zip", "");
+    let (records, spectra, all) = read_csmip_zip(
+        "csmip-ce89324-painterst-overpass/petrolia_25apr1992_ce89324p.zip",
+        "",
+    );
     check_petrolia(&records);
     assert_eq!(spectra.len(), 20 * 5);
     let e = &all[0].event;
-    assert_eq!(e.name.as_deref(), Some("CAPE MENDOCINO/PETROLIA EARTHQUAKE"));
+    assert_eq!(
+        e.name.as_deref(),
+        Some("CAPE MENDOCINO/PETROLIA EARTHQUAKE")
+    );
     assert_eq!(e.origin_ns, Some(ns(1992, 4, 25, 18, 6, 4.2)));
     assert_eq!(e.magnitude, Some(7.0));
     assert_eq!(e.hypocenter, Some((40.368, -124.316, 15.0)));
@@ -448,32 +721,65 @@ fn dmg_petrolia_zip_in_zip() {
     let rel = "csmip-ce89324-painterst-overpass/nested_original/petrolia_25apr1992_ce89324p.zip";
     let (structure, _, _) = read_csmip_zip(rel, "Structure.zip:");
     check_petrolia(&structure);
-    assert!(structure[0].channel.source.member.as_deref().unwrap().starts_with("Structure.zip:CHAN"));
+    assert!(structure[0]
+        .channel
+        .source
+        .member
+        .as_deref()
+        .unwrap()
+        .starts_with("Structure.zip:CHAN"));
     // Same samples as the flat zip.
-    let (flat, _, _) = read_csmip_zip("csmip-ce89324-painterst-overpass/petrolia_25apr1992_ce89324p.zip", "");
+    let (flat, _, _) = read_csmip_zip(
+        "csmip-ce89324-painterst-overpass/petrolia_25apr1992_ce89324p.zip",
+        "",
+    );
     for (a, b) in structure.iter().zip(&flat) {
         assert_eq!(a.samples, b.samples, "{}", a.channel.id);
     }
     // Free Field.zip: station channels 12–14, a different processing; horizontal labelled 272 DEG.
     let (free, spectra, _) = read_csmip_zip(rel, "Free Field.zip:");
-    assert_eq!(free.iter().map(|r| r.channel.id.as_str()).collect::<Vec<_>>(), ["89324.12", "89324.13", "89324.14"]);
+    assert_eq!(
+        free.iter()
+            .map(|r| r.channel.id.as_str())
+            .collect::<Vec<_>>(),
+        ["89324.12", "89324.13", "89324.14"]
+    );
     assert_eq!(free[0].channel.direction, Some(Direction::Azimuth(272.0)));
     assert!(free.iter().all(|r| r.len() == 3000));
-    assert_ne!(free[0].samples, flat[11].samples, "prelim processing differs");
+    assert_ne!(
+        free[0].samples, flat[11].samples,
+        "prelim processing differs"
+    );
     assert_eq!(spectra.len(), 3 * 5);
 }
 
 #[test]
 fn dmg_ferndale_2023_lower_case() {
-    let (records, spectra, _) = read_csmip_zip("csmip-ce89324-painterst-overpass/nc73943821_ce89324p.zip", "");
+    let (records, spectra, _) = read_csmip_zip(
+        "csmip-ce89324-painterst-overpass/nc73943821_ce89324p.zip",
+        "",
+    );
     assert_eq!(records.len(), 17);
     // Peaks as printed in each file's header ("Peak acceleration =   140.895"),
     // which PROVENANCE.md rounds to 2 decimals.
     let table: [(usize, &str, f64); 17] = [
-        (1, "Long", 23.468), (2, "Up", 16.676), (3, "Tran", 41.332), (4, "Tran", -87.977), (5, "Up", -21.356),
-        (6, "Up", -91.068), (7, "Tran", 140.895), (8, "Up", -113.000), (9, "Tran", -98.437), (10, "Up", -33.918),
-        (11, "Long", 55.791), (15, "Long", 47.908), (16, "Up", -13.344), (17, "Tran", -68.798), (18, "Long", 47.708),
-        (19, "Up", -13.002), (20, "Tran", -70.737),
+        (1, "Long", 23.468),
+        (2, "Up", 16.676),
+        (3, "Tran", 41.332),
+        (4, "Tran", -87.977),
+        (5, "Up", -21.356),
+        (6, "Up", -91.068),
+        (7, "Tran", 140.895),
+        (8, "Up", -113.000),
+        (9, "Tran", -98.437),
+        (10, "Up", -33.918),
+        (11, "Long", 55.791),
+        (15, "Long", 47.908),
+        (16, "Up", -13.344),
+        (17, "Tran", -68.798),
+        (18, "Long", 47.708),
+        (19, "Up", -13.002),
+        (20, "Tran", -70.737),
     ];
     for (k, (r, (sta, label, pk))) in records.iter().zip(table).enumerate() {
         let ch = &r.channel;
@@ -484,7 +790,10 @@ fn dmg_ferndale_2023_lower_case() {
         assert_printed(peak(&r.samples), pk, 3, &ch.id);
         assert_eq!(ch.start_ns, Some(ns(2023, 9, 30, 15, 26, 1.0)));
         // Recorder channels run 1..17 while station channels skip 12–14.
-        assert_eq!(ch.channel_code.as_deref(), Some(format!("CHAN {}: {label}", k + 1).as_str()));
+        assert_eq!(
+            ch.channel_code.as_deref(),
+            Some(format!("CHAN {}: {label}", k + 1).as_str())
+        );
         if label == "Up" {
             assert_eq!(ch.direction, Some(Direction::Up));
         } else {
@@ -492,13 +801,23 @@ fn dmg_ferndale_2023_lower_case() {
             assert!(ch.missing.contains(&"direction".to_string()));
         }
     }
-    assert_eq!(records[11].channel.location_text.as_deref(), Some("On Ground: Near East Abutment"));
+    assert_eq!(
+        records[11].channel.location_text.as_deref(),
+        Some("On Ground: Near East Abutment")
+    );
     // V3: 17 × 5 dampings, 100 periods 0.04–32 s; chan001 5 %: SD(0.04) = 0.405E-03 in, SA = 0.259E-01 g.
     assert_eq!(spectra.len(), 17 * 5);
-    let s5 = spectra.iter().find(|s| s.channel_id == "89324.01" && s.damping == 0.05).unwrap();
+    let s5 = spectra
+        .iter()
+        .find(|s| s.channel_id == "89324.01" && s.damping == 0.05)
+        .unwrap();
     assert_eq!(s5.periods_s.len(), 100);
     assert_eq!((s5.periods_s[0], s5.periods_s[99]), (0.04, 32.0));
-    assert!((s5.psa[0] - (2.0 * std::f64::consts::PI / 0.04f64).powi(2) * 0.405e-3 * 0.0254 / 9.80665).abs() < 1e-12);
+    assert!(
+        (s5.psa[0] - (2.0 * std::f64::consts::PI / 0.04f64).powi(2) * 0.405e-3 * 0.0254 / 9.80665)
+            .abs()
+            < 1e-12
+    );
     assert!((s5.psa[0] - 0.0259).abs() < 0.0005);
 }
 
@@ -508,26 +827,55 @@ fn dmg_ferndale_2023_lower_case() {
 fn sniff_by_content_without_extension() {
     let dir = format!("{RECORDS}/usgs-gmprocess-format-samples");
     let head = |p: &str| std::fs::read(format!("{dir}/{p}")).unwrap();
-    assert_eq!(readers::sniff("x.dat", &head("cosmos/NP8040-n.1000hyfh.HNE.01.V0c")), Some(Format::Cosmos));
-    assert_eq!(readers::sniff("x.V2", &head("cosmos/us1000hyfh_akbmrp_AKBMR--n.1000hyfh.BNZ.--.acc.V2c")), Some(Format::Cosmos));
-    assert_eq!(readers::sniff("x.dat", &head("smc/0111a.smc")), Some(Format::Smc));
-    assert_eq!(readers::sniff("x.dat", &head("geonet/20180212_211557_WPWS_20.V2A")), Some(Format::GeoNet));
-    assert_eq!(readers::sniff("x.raw", &head("dmg/CE58667.V2")), Some(Format::Dmg));
-    assert_eq!(readers::sniff("CE58667.V2", &head("dmg/CE58667.V2")), Some(Format::Dmg));
+    assert_eq!(
+        readers::sniff("x.dat", &head("cosmos/NP8040-n.1000hyfh.HNE.01.V0c")),
+        Some(Format::Cosmos)
+    );
+    assert_eq!(
+        readers::sniff(
+            "x.V2",
+            &head("cosmos/us1000hyfh_akbmrp_AKBMR--n.1000hyfh.BNZ.--.acc.V2c")
+        ),
+        Some(Format::Cosmos)
+    );
+    assert_eq!(
+        readers::sniff("x.dat", &head("smc/0111a.smc")),
+        Some(Format::Smc)
+    );
+    assert_eq!(
+        readers::sniff("x.dat", &head("geonet/20180212_211557_WPWS_20.V2A")),
+        Some(Format::GeoNet)
+    );
+    assert_eq!(
+        readers::sniff("x.raw", &head("dmg/CE58667.V2")),
+        Some(Format::Dmg)
+    );
+    assert_eq!(
+        readers::sniff("CE58667.V2", &head("dmg/CE58667.V2")),
+        Some(Format::Dmg)
+    );
     assert_eq!(readers::sniff("notes.txt", b"hello"), None);
 }
 
 // -------------------------------------------------------------- bad input
 
 /// The error is an input error naming the file and the expected 1-based line.
-fn expect_input_error(result: quaketwin::Result<FileContents>, file: &str, line: Option<usize>, needle: &str) {
+fn expect_input_error(
+    result: quaketwin::Result<FileContents>,
+    file: &str,
+    line: Option<usize>,
+    needle: &str,
+) {
     match result {
         Err(Error::Input { location, message }) => {
             assert_eq!(location.file, file, "{message}");
             if line.is_some() {
                 assert_eq!(location.line, line, "{message}");
             }
-            assert!(message.contains(needle), "message {message:?} lacks {needle:?}");
+            assert!(
+                message.contains(needle),
+                "message {message:?} lacks {needle:?}"
+            );
         }
         Err(e) => panic!("expected Error::Input, got {e:?}"),
         Ok(_) => panic!("expected an error ({needle})"),
@@ -535,7 +883,12 @@ fn expect_input_error(result: quaketwin::Result<FileContents>, file: &str, line:
 }
 
 fn read_text(format: Format, file: &str, text: &str) -> quaketwin::Result<FileContents> {
-    readers::read(format, text.as_bytes(), &source(file, None, format), &ReadOptions::default())
+    readers::read(
+        format,
+        text.as_bytes(),
+        &source(file, None, format),
+        &ReadOptions::default(),
+    )
 }
 
 const AT2_OK: &str = "PEER NGA STRONG MOTION DATABASE RECORD\nTest, 01/01/2000, Site, 090\nACCELERATION TIME SERIES IN UNITS OF G\nNPTS=      7, DT=   .0100 SEC,\n  .1000000E-01  -.2000000E-01   .3000000E-01  -.4000000E-01   .5000000E-01\n  .6000000E-01  -.7000000E-01\n";
@@ -543,83 +896,254 @@ const AT2_OK: &str = "PEER NGA STRONG MOTION DATABASE RECORD\nTest, 01/01/2000, 
 #[test]
 fn at2_bad_inputs() {
     let ok = read_text(Format::At2, "t.AT2", AT2_OK).unwrap();
-    assert_eq!(ok.records[0].samples, vec![0.01, -0.02, 0.03, -0.04, 0.05, 0.06, -0.07]);
-    assert_eq!(ok.records[0].channel.direction, Some(Direction::Azimuth(90.0)));
+    assert_eq!(
+        ok.records[0].samples,
+        vec![0.01, -0.02, 0.03, -0.04, 0.05, 0.06, -0.07]
+    );
+    assert_eq!(
+        ok.records[0].channel.direction,
+        Some(Direction::Azimuth(90.0))
+    );
     // Touching values and D exponents.
     let glued = AT2_OK.replace("  .6000000E-01  -.7000000E-01", "0.6D-01-0.7D-01");
-    assert_eq!(read_text(Format::At2, "t.AT2", &glued).unwrap().records[0].samples[5..], [0.06, -0.07]);
+    assert_eq!(
+        read_text(Format::At2, "t.AT2", &glued).unwrap().records[0].samples[5..],
+        [0.06, -0.07]
+    );
     // Truncated: the last line is missing.
     let truncated = AT2_OK.replace("  .6000000E-01  -.7000000E-01\n", "");
-    expect_input_error(read_text(Format::At2, "t.AT2", &truncated), "t.AT2", Some(5), "truncated");
+    expect_input_error(
+        read_text(Format::At2, "t.AT2", &truncated),
+        "t.AT2",
+        Some(5),
+        "truncated",
+    );
     // Missing NPTS line.
-    expect_input_error(read_text(Format::At2, "t.AT2", &AT2_OK.replace("NPTS=", "NP=")), "t.AT2", Some(1), "NPTS");
+    expect_input_error(
+        read_text(Format::At2, "t.AT2", &AT2_OK.replace("NPTS=", "NP=")),
+        "t.AT2",
+        Some(1),
+        "NPTS",
+    );
     // Non-numeric value.
-    expect_input_error(read_text(Format::At2, "t.AT2", &AT2_OK.replace("-.7000000E-01", "-.70000x0E-01")), "t.AT2", Some(6), "non-numeric");
+    expect_input_error(
+        read_text(
+            Format::At2,
+            "t.AT2",
+            &AT2_OK.replace("-.7000000E-01", "-.70000x0E-01"),
+        ),
+        "t.AT2",
+        Some(6),
+        "non-numeric",
+    );
     // NaN in the data.
-    expect_input_error(read_text(Format::At2, "t.AT2", &AT2_OK.replace("-.7000000E-01", "NaN")), "t.AT2", Some(6), "non-finite");
+    expect_input_error(
+        read_text(
+            Format::At2,
+            "t.AT2",
+            &AT2_OK.replace("-.7000000E-01", "NaN"),
+        ),
+        "t.AT2",
+        Some(6),
+        "non-finite",
+    );
     // Count disagreeing with NPTS, both ways.
-    expect_input_error(read_text(Format::At2, "t.AT2", &AT2_OK.replace("NPTS=      7", "NPTS=      6")), "t.AT2", Some(6), "NPTS=6");
-    expect_input_error(read_text(Format::At2, "t.AT2", &format!("{AT2_OK}  .1\n")), "t.AT2", Some(7), "after the NPTS=7");
+    expect_input_error(
+        read_text(
+            Format::At2,
+            "t.AT2",
+            &AT2_OK.replace("NPTS=      7", "NPTS=      6"),
+        ),
+        "t.AT2",
+        Some(6),
+        "NPTS=6",
+    );
+    expect_input_error(
+        read_text(Format::At2, "t.AT2", &format!("{AT2_OK}  .1\n")),
+        "t.AT2",
+        Some(7),
+        "after the NPTS=7",
+    );
     // Unknown units.
-    expect_input_error(read_text(Format::At2, "t.AT2", &AT2_OK.replace("UNITS OF G", "UNITS OF FURLONGS")), "t.AT2", Some(3), "unknown units");
+    expect_input_error(
+        read_text(
+            Format::At2,
+            "t.AT2",
+            &AT2_OK.replace("UNITS OF G", "UNITS OF FURLONGS"),
+        ),
+        "t.AT2",
+        Some(3),
+        "unknown units",
+    );
     // Empty and binary garbage: errors, not panics.
     expect_input_error(read_text(Format::At2, "t.AT2", ""), "t.AT2", None, "empty");
-    assert!(readers::read(Format::At2, &[0xff, 0x00, 0x1a, 0x80], &source("b.AT2", None, Format::At2), &ReadOptions::default()).is_err());
+    assert!(readers::read(
+        Format::At2,
+        &[0xff, 0x00, 0x1a, 0x80],
+        &source("b.AT2", None, Format::At2),
+        &ReadOptions::default()
+    )
+    .is_err());
 }
 
 #[test]
 fn smc_bad_inputs() {
     let values: Vec<f64> = (0..16).map(|k| k as f64 - 7.5).collect();
-    let good = smc_text("2 CORRECTED ACCELEROGRAM", 16, Some(100.0), &fixed_e10(&values));
-    assert_eq!(read_text(Format::Smc, "t.smc", &good).unwrap().records[0].len(), 16);
+    let good = smc_text(
+        "2 CORRECTED ACCELEROGRAM",
+        16,
+        Some(100.0),
+        &fixed_e10(&values),
+    );
+    assert_eq!(
+        read_text(Format::Smc, "t.smc", &good).unwrap().records[0].len(),
+        16
+    );
     let lines: Vec<&str> = good.lines().collect();
     // Data on lines 29–30 (11 text + 6 int + 10 real + 1 comment = 28 header lines).
     let truncated = lines[..29].join("\n");
-    expect_input_error(read_text(Format::Smc, "t.smc", &truncated), "t.smc", Some(29), "declares 16");
-    expect_input_error(read_text(Format::Smc, "t.smc", &lines[..20].join("\n")), "t.smc", Some(20), "header");
-    expect_input_error(read_text(Format::Smc, "t.smc", &good.replacen("2 CORRECTED ACCELEROGRAM", "9 BOGUS RECORD", 1)), "t.smc", Some(1), "label");
+    expect_input_error(
+        read_text(Format::Smc, "t.smc", &truncated),
+        "t.smc",
+        Some(29),
+        "declares 16",
+    );
+    expect_input_error(
+        read_text(Format::Smc, "t.smc", &lines[..20].join("\n")),
+        "t.smc",
+        Some(20),
+        "header",
+    );
+    expect_input_error(
+        read_text(
+            Format::Smc,
+            "t.smc",
+            &good.replacen("2 CORRECTED ACCELEROGRAM", "9 BOGUS RECORD", 1),
+        ),
+        "t.smc",
+        Some(1),
+        "label",
+    );
     let mut bad = lines.clone();
     let replaced = format!("{}    abcdef{}", &lines[29][..10], &lines[29][20..]);
     bad[29] = &replaced;
-    expect_input_error(read_text(Format::Smc, "t.smc", &bad.join("\n")), "t.smc", Some(30), "non-numeric");
+    expect_input_error(
+        read_text(Format::Smc, "t.smc", &bad.join("\n")),
+        "t.smc",
+        Some(30),
+        "non-numeric",
+    );
     let nan = format!("{}       NaN{}", &lines[29][..10], &lines[29][20..]);
     bad[29] = &nan;
-    expect_input_error(read_text(Format::Smc, "t.smc", &bad.join("\n")), "t.smc", Some(30), "non-finite");
+    expect_input_error(
+        read_text(Format::Smc, "t.smc", &bad.join("\n")),
+        "t.smc",
+        Some(30),
+        "non-finite",
+    );
     let mut bad_int = lines.clone();
     let int_line = lines[13].replacen("      ", "  x   ", 1);
     bad_int[13] = &int_line;
-    expect_input_error(read_text(Format::Smc, "t.smc", &bad_int.join("\n")), "t.smc", Some(14), "integer");
+    expect_input_error(
+        read_text(Format::Smc, "t.smc", &bad_int.join("\n")),
+        "t.smc",
+        Some(14),
+        "integer",
+    );
 }
 
 #[test]
 fn cosmos_bad_inputs() {
-    let full = std::fs::read_to_string(format!("{RECORDS}/usgs-gmprocess-format-samples/cosmos/NP8040-n.1000hyfh.HNE.01.V0c")).unwrap();
+    let full = std::fs::read_to_string(format!(
+        "{RECORDS}/usgs-gmprocess-format-samples/cosmos/NP8040-n.1000hyfh.HNE.01.V0c"
+    ))
+    .unwrap();
     // Keep the header (49 lines) and 10 samples, and declare 10 points.
     let lines: Vec<&str> = full.lines().collect();
-    let head = lines[..49].join("\n").replace("   42000 raw accel.", "      10 raw accel.");
+    let head = lines[..49]
+        .join("\n")
+        .replace("   42000 raw accel.", "      10 raw accel.");
     let data = lines[49..59].join("\n");
     let good = format!("{head}\n{data}\nEnd-of-data for ChanHNE\n");
     let c = read_text(Format::Cosmos, "t.V0c", &good).unwrap();
     assert_eq!(c.records[0].samples[..2], [-160876.0, -160942.0]);
     // Truncated.
     let short = format!("{head}\n{}\n", lines[49..54].join("\n"));
-    expect_input_error(read_text(Format::Cosmos, "t.V0c", &short), "t.V0c", Some(54), "truncated");
+    expect_input_error(
+        read_text(Format::Cosmos, "t.V0c", &short),
+        "t.V0c",
+        Some(54),
+        "truncated",
+    );
     // Too many values.
     let long = format!("{head}\n{}\nEnd-of-data\n", lines[49..61].join("\n"));
-    expect_input_error(read_text(Format::Cosmos, "t.V0c", &long), "t.V0c", Some(60), "more values");
+    expect_input_error(
+        read_text(Format::Cosmos, "t.V0c", &long),
+        "t.V0c",
+        Some(60),
+        "more values",
+    );
     // Non-numeric and NaN values.
-    expect_input_error(read_text(Format::Cosmos, "t.V0c", &good.replacen(" -160879", " -16o879", 1)), "t.V0c", Some(52), "non-numeric");
-    expect_input_error(read_text(Format::Cosmos, "t.V0c", &good.replacen(" -160879", "     NaN", 1)), "t.V0c", Some(52), "non-finite");
+    expect_input_error(
+        read_text(
+            Format::Cosmos,
+            "t.V0c",
+            &good.replacen(" -160879", " -16o879", 1),
+        ),
+        "t.V0c",
+        Some(52),
+        "non-numeric",
+    );
+    expect_input_error(
+        read_text(
+            Format::Cosmos,
+            "t.V0c",
+            &good.replacen(" -160879", "     NaN", 1),
+        ),
+        "t.V0c",
+        Some(52),
+        "non-finite",
+    );
     // Wrong header lines.
-    expect_input_error(read_text(Format::Cosmos, "t.V0c", &good.replacen("(Format v01.20", "(Fmt", 1)), "t.V0c", Some(1), "COSMOS header");
-    expect_input_error(read_text(Format::Cosmos, "t.V0c", &good.replacen("Integer-header", "Integer-hdr", 1)), "t.V0c", Some(14), "Integer-header");
+    expect_input_error(
+        read_text(
+            Format::Cosmos,
+            "t.V0c",
+            &good.replacen("(Format v01.20", "(Fmt", 1),
+        ),
+        "t.V0c",
+        Some(1),
+        "COSMOS header",
+    );
+    expect_input_error(
+        read_text(
+            Format::Cosmos,
+            "t.V0c",
+            &good.replacen("Integer-header", "Integer-hdr", 1),
+        ),
+        "t.V0c",
+        Some(14),
+        "Integer-header",
+    );
     // Unknown units code (99) in the integer header.
-    let bad_units = good.replacen("       0       1      50     120", "       0       1      99     120", 1);
-    expect_input_error(read_text(Format::Cosmos, "t.V0c", &bad_units), "t.V0c", Some(15), "units");
+    let bad_units = good.replacen(
+        "       0       1      50     120",
+        "       0       1      99     120",
+        1,
+    );
+    expect_input_error(
+        read_text(Format::Cosmos, "t.V0c", &bad_units),
+        "t.V0c",
+        Some(15),
+        "units",
+    );
 }
 
 fn dmg_sample() -> String {
-    let full = std::fs::read_to_string(format!("{RECORDS}/usgs-gmprocess-format-samples/dmg/ce36456p_CE36456.V2")).unwrap();
+    let full = std::fs::read_to_string(format!(
+        "{RECORDS}/usgs-gmprocess-format-samples/dmg/ce36456p_CE36456.V2"
+    ))
+    .unwrap();
     full.lines().take(1270).collect::<Vec<_>>().join("\n") + "\n"
 }
 
@@ -631,43 +1155,127 @@ fn dmg_bad_inputs() {
     assert_eq!(c.records[0].len(), 3251);
     let lines: Vec<&str> = good.lines().collect();
     // Truncated inside the acceleration block (data starts on line 47).
-    expect_input_error(read_text(Format::Dmg, "t.V2", &lines[..300].join("\n")), "t.V2", Some(300), "truncated");
+    expect_input_error(
+        read_text(Format::Dmg, "t.V2", &lines[..300].join("\n")),
+        "t.V2",
+        Some(300),
+        "truncated",
+    );
     // Wrong first line.
-    expect_input_error(read_text(Format::Dmg, "t.V2", &good.replacen("CORRECTED ACCELEROGRAM", "SOMETHING ELSE", 1)), "t.V2", Some(1), "CSMIP header");
+    expect_input_error(
+        read_text(
+            Format::Dmg,
+            "t.V2",
+            &good.replacen("CORRECTED ACCELEROGRAM", "SOMETHING ELSE", 1),
+        ),
+        "t.V2",
+        Some(1),
+        "CSMIP header",
+    );
     // Non-numeric and NaN samples on line 47.
     let mut bad = lines.clone();
     let l47 = lines[46].replacen("-3.038", "-3.0x8", 1);
     bad[46] = &l47;
-    expect_input_error(read_text(Format::Dmg, "t.V2", &bad.join("\n")), "t.V2", Some(47), "non-numeric");
+    expect_input_error(
+        read_text(Format::Dmg, "t.V2", &bad.join("\n")),
+        "t.V2",
+        Some(47),
+        "non-numeric",
+    );
     let l47n = lines[46].replacen("    -3.038", "       NaN", 1);
     bad[46] = &l47n;
-    expect_input_error(read_text(Format::Dmg, "t.V2", &bad.join("\n")), "t.V2", Some(47), "non-finite");
+    expect_input_error(
+        read_text(Format::Dmg, "t.V2", &bad.join("\n")),
+        "t.V2",
+        Some(47),
+        "non-finite",
+    );
     // Sample count disagreeing with the section header: 3252 declared.
     let more = good.replacen(" 3251 POINTS OF ACCEL", " 3252 POINTS OF ACCEL", 1);
-    expect_input_error(read_text(Format::Dmg, "t.V2", &more), "t.V2", Some(454), "3252");
+    expect_input_error(
+        read_text(Format::Dmg, "t.V2", &more),
+        "t.V2",
+        Some(454),
+        "3252",
+    );
     let fewer = good.replacen(" 3251 POINTS OF ACCEL", " 3249 POINTS OF ACCEL", 1);
-    expect_input_error(read_text(Format::Dmg, "t.V2", &fewer), "t.V2", Some(453), "more values");
+    expect_input_error(
+        read_text(Format::Dmg, "t.V2", &fewer),
+        "t.V2",
+        Some(453),
+        "more values",
+    );
     // Unknown units.
     let units = good.replacen("(UNITS: CM/SEC/SEC)", "(UNITS: FURLONGS)", 1);
-    expect_input_error(read_text(Format::Dmg, "t.V2", &units), "t.V2", Some(46), "unknown units");
+    expect_input_error(
+        read_text(Format::Dmg, "t.V2", &units),
+        "t.V2",
+        Some(46),
+        "unknown units",
+    );
 }
 
 #[test]
 fn geonet_bad_inputs() {
-    let full = std::fs::read_to_string(format!("{RECORDS}/usgs-gmprocess-format-samples/geonet/20180212_211557_WPWS_20.V2A")).unwrap();
+    let full = std::fs::read_to_string(format!(
+        "{RECORDS}/usgs-gmprocess-format-samples/geonet/20180212_211557_WPWS_20.V2A"
+    ))
+    .unwrap();
     let lines: Vec<&str> = full.lines().collect();
     // Truncated in the middle of the first component's acceleration block.
-    expect_input_error(read_text(Format::GeoNet, "t.V2A", &lines[..100].join("\n")), "t.V2A", Some(100), "truncated");
-    expect_input_error(read_text(Format::GeoNet, "t.V2A", &full.replacen("Site WPWS", "Stie WPWS", 1)), "t.V2A", Some(2), "Site");
-    expect_input_error(read_text(Format::GeoNet, "t.V2A", &full.replacen("-41.6 mm/s/s", "-41.6 furlong/s", 1)), "t.V2A", Some(14), "unknown units");
-    expect_input_error(read_text(Format::GeoNet, "t.V2A", &full.replacen("Number of points  5800", "Number of points  5801", 1)), "t.V2A", Some(10), "5801");
+    expect_input_error(
+        read_text(Format::GeoNet, "t.V2A", &lines[..100].join("\n")),
+        "t.V2A",
+        Some(100),
+        "truncated",
+    );
+    expect_input_error(
+        read_text(
+            Format::GeoNet,
+            "t.V2A",
+            &full.replacen("Site WPWS", "Stie WPWS", 1),
+        ),
+        "t.V2A",
+        Some(2),
+        "Site",
+    );
+    expect_input_error(
+        read_text(
+            Format::GeoNet,
+            "t.V2A",
+            &full.replacen("-41.6 mm/s/s", "-41.6 furlong/s", 1),
+        ),
+        "t.V2A",
+        Some(14),
+        "unknown units",
+    );
+    expect_input_error(
+        read_text(
+            Format::GeoNet,
+            "t.V2A",
+            &full.replacen("Number of points  5800", "Number of points  5801", 1),
+        ),
+        "t.V2A",
+        Some(10),
+        "5801",
+    );
     let mut bad = lines.clone();
     let l = lines[30].replacen("     0.0", "    abcd", 1);
     bad[30] = &l;
-    expect_input_error(read_text(Format::GeoNet, "t.V2A", &bad.join("\n")), "t.V2A", Some(31), "non-numeric");
+    expect_input_error(
+        read_text(Format::GeoNet, "t.V2A", &bad.join("\n")),
+        "t.V2A",
+        Some(31),
+        "non-numeric",
+    );
     let n = lines[30].replacen("     0.0", "     NaN", 1);
     bad[30] = &n;
-    expect_input_error(read_text(Format::GeoNet, "t.V2A", &bad.join("\n")), "t.V2A", Some(31), "non-finite");
+    expect_input_error(
+        read_text(Format::GeoNet, "t.V2A", &bad.join("\n")),
+        "t.V2A",
+        Some(31),
+        "non-finite",
+    );
 }
 
 #[test]
@@ -675,8 +1283,12 @@ fn dmg_v1_time_value_pairs_in_g_over_10() {
     // An old-style uncorrected file: digitised (time, value) pairs in g/10,
     // unevenly spaced; the value is linear in time, so the resampled series
     // is exact at the grid points.
-    let mut text = String::from("UNCORRECTED ACCELEROGRAM DATA              PROCESSED: 02/28/94\nTEST EARTHQUAKE\n");
-    text.push_str("STATION NO. 99999   34.000N, 118.000W   SMA-1  S/N 0001\nTEST SITE\nCHAN  1:  90 DEG\n");
+    let mut text = String::from(
+        "UNCORRECTED ACCELEROGRAM DATA              PROCESSED: 02/28/94\nTEST EARTHQUAKE\n",
+    );
+    text.push_str(
+        "STATION NO. 99999   34.000N, 118.000W   SMA-1  S/N 0001\nTEST SITE\nCHAN  1:  90 DEG\n",
+    );
     text.push_str("UNITS OF UNCOR ACCEL ARE SEC AND G/10.     MAX  =  9.999 G.\n");
     let ints = [1i64, 1, 1, 3, 3, 0, 1, 1, 1, 2048, 0, 0, 0, 0, 0, 0];
     text.push_str(&ints.iter().map(|v| format!("{v:5}")).collect::<String>());
@@ -692,7 +1304,9 @@ fn dmg_v1_time_value_pairs_in_g_over_10() {
         text.push_str(&"      .000".repeat(n));
         text.push('\n');
     }
-    let times: Vec<f64> = (0..31).map(|k| 0.02 * k as f64 + if k % 4 == 2 { 0.006 } else { 0.0 }).collect();
+    let times: Vec<f64> = (0..31)
+        .map(|k| 0.02 * k as f64 + if k % 4 == 2 { 0.006 } else { 0.0 })
+        .collect();
     let g10 = |t: f64| 1.0 + 10.0 * t;
     let mut fields = Vec::new();
     for &t in &times {
@@ -710,9 +1324,14 @@ fn dmg_v1_time_value_pairs_in_g_over_10() {
     assert_eq!(r.len(), 31);
     assert!((r.channel.dt() - 0.02).abs() < 1e-12, "median step");
     for (k, v) in r.samples.iter().enumerate() {
-        assert!((v - 0.1 * g10(0.02 * k as f64)).abs() < 1e-9, "sample {k}: {v}");
+        assert!(
+            (v - 0.1 * g10(0.02 * k as f64)).abs() < 1e-9,
+            "sample {k}: {v}"
+        );
     }
-    assert!(r.channel.qa.contains(&QaFlag::Resampled { from: "uneven (time,value) pairs".into() }));
+    assert!(r.channel.qa.contains(&QaFlag::Resampled {
+        from: "uneven (time,value) pairs".into()
+    }));
     assert_eq!(r.channel.direction, Some(Direction::Azimuth(90.0)));
     assert_eq!(r.channel.id, "99999.01");
 }
@@ -723,8 +1342,14 @@ fn truncated_real_files_never_panic() {
     let files = [
         ("peer-at2-records/TAK000.AT2", Format::At2),
         ("usgs-gmprocess-format-samples/smc/0111b.smc", Format::Smc),
-        ("usgs-gmprocess-format-samples/geonet/20180212_211557_WPWS_20.V2A", Format::GeoNet),
-        ("usgs-gmprocess-format-samples/cosmos/NP8040-n.1000hyfh.HNE.01.V0c", Format::Cosmos),
+        (
+            "usgs-gmprocess-format-samples/geonet/20180212_211557_WPWS_20.V2A",
+            Format::GeoNet,
+        ),
+        (
+            "usgs-gmprocess-format-samples/cosmos/NP8040-n.1000hyfh.HNE.01.V0c",
+            Format::Cosmos,
+        ),
         ("usgs-gmprocess-format-samples/dmg/CE58667.V2", Format::Dmg),
     ];
     for (rel, format) in files {
@@ -733,7 +1358,12 @@ fn truncated_real_files_never_panic() {
         let mut cuts: Vec<usize> = (0..head_len).step_by(97).collect();
         cuts.extend((0..40).map(|k| bytes.len() * k / 40));
         for cut in cuts {
-            let r = readers::read(format, &bytes[..cut], &source(rel, None, format), &ReadOptions::default());
+            let r = readers::read(
+                format,
+                &bytes[..cut],
+                &source(rel, None, format),
+                &ReadOptions::default(),
+            );
             if let Err(e) = r {
                 assert!(matches!(e, Error::Input { .. }), "{rel} cut {cut}: {e:?}");
             }

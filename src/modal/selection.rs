@@ -9,8 +9,10 @@
 //! Average linkage is used rather than single linkage because single linkage
 //! chains neighbouring physical and spurious poles into one cluster.
 //! A cluster is a mode only if it holds poles from at least
-//! `min_cluster_fraction` of the model orders swept (a physical mode shows up
-//! at almost every order above its own; noise poles do not).  Within a
+//! `min_cluster_fraction` (default 40 %) of the model orders swept (a
+//! physical mode shows up at almost every order above its own; noise poles
+//! do not: in the 5-storey synthetic tests physical clusters held 15–20 poles
+//! of 21 orders, noise clusters at most 8).  Within a
 //! cluster only one pole per order is kept (the one nearest the cluster's
 //! median frequency).
 
@@ -67,13 +69,17 @@ pub struct ClusterSettings {
     pub threshold: f64,
     /// A cluster must hold poles of at least this fraction of the orders swept.
     pub min_cluster_fraction: f64,
-    /// Candidates must be stable in damping too (not only frequency and shape).
+    /// Candidates must be stable in damping too, not only in frequency and
+    /// shape.  Off by default: with noisy data damping estimates wander by
+    /// more than 5 % between consecutive orders, and requiring it lost a true
+    /// mode of the 5-storey synthetic test for 1 seed in 20; damping still
+    /// enters the clustering distance.
     pub require_damping_stability: bool,
 }
 
 impl Default for ClusterSettings {
     fn default() -> Self {
-        ClusterSettings { damping_weight: 0.05, threshold: 0.04, min_cluster_fraction: 0.3, require_damping_stability: true }
+        ClusterSettings { damping_weight: 0.1, threshold: 0.04, min_cluster_fraction: 0.4, require_damping_stability: false }
     }
 }
 
@@ -155,26 +161,18 @@ fn average_linkage(poles: &[Pole], items: &[usize], settings: &ClusterSettings) 
     (0..n).filter(|&i| alive[i]).map(|i| members[i].iter().map(|&m| items[m]).collect()).collect()
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n == 0 {
-        return f64::NAN;
-    }
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Keeps one pole per order: the one nearest `centre_hz`.
 fn one_per_order(poles: &[Pole], cluster: &[usize], centre_hz: f64) -> Vec<usize> {
+    one_per_order_by(poles, cluster, |i| (poles[i].frequency_hz - centre_hz).abs())
+}
+
+/// Keeps one pole per order: the one with the smallest `closeness`.
+fn one_per_order_by(poles: &[Pole], cluster: &[usize], closeness: impl Fn(usize) -> f64) -> Vec<usize> {
     let mut kept: Vec<usize> = Vec::new();
     for &i in cluster {
         match kept.iter().position(|&k| poles[k].order == poles[i].order) {
             Some(pos) => {
-                if (poles[i].frequency_hz - centre_hz).abs() < (poles[kept[pos]].frequency_hz - centre_hz).abs() {
+                if closeness(i) < closeness(kept[pos]) {
                     kept[pos] = i;
                 }
             }
@@ -183,6 +181,12 @@ fn one_per_order(poles: &[Pole], cluster: &[usize], centre_hz: f64) -> Vec<usize
     }
     kept.sort_by_key(|&i| (poles[i].order, i));
     kept
+}
+
+/// Medoid of a cluster: the member with the smallest summed distance to the others.
+fn medoid(poles: &[Pole], cluster: &[usize], damping_weight: f64) -> usize {
+    let total = |i: usize| cluster.iter().map(|&j| distance(&poles[i], &poles[j], damping_weight)).sum::<f64>();
+    cluster.iter().copied().min_by(|&a, &b| total(a).total_cmp(&total(b)).then(a.cmp(&b))).unwrap_or(0)
 }
 
 /// Mode statistics over the given poles (non-empty).
@@ -271,8 +275,10 @@ pub fn select_automatic(poles: &mut [Pole], orders_swept: usize, settings: &Clus
     let mut kept: Vec<Vec<usize>> = clusters
         .into_iter()
         .map(|c| {
-            let centre = median(c.iter().map(|&i| poles[i].frequency_hz).collect());
-            one_per_order(poles, &c, centre)
+            // Noise poles sometimes sit beside a physical pole of the same
+            // order; keep the one nearest the cluster's medoid (f, ζ and shape).
+            let centre = medoid(poles, &c, settings.damping_weight);
+            one_per_order_by(poles, &c, |i| distance(&poles[i], &poles[centre], settings.damping_weight))
         })
         .filter(|c| c.len() >= min_size)
         .collect();

@@ -57,8 +57,28 @@ pub fn run(
     let mut ctx = RunContext::new(event_path, out, quiet);
     let mut fingerprints: std::collections::BTreeMap<String, String> = Default::default();
     let mut outcomes = Vec::new();
+    // One bar over the stages; indicatif hides it when stderr is not a terminal.
+    let bar = if quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        let b = indicatif::ProgressBar::new(pipeline.stages.len() as u64);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} stages: {msg}",
+        ) {
+            b.set_style(style);
+        }
+        b.enable_steady_tick(std::time::Duration::from_millis(200));
+        b
+    };
+    let log = |line: String| {
+        if !quiet {
+            bar.suspend(|| eprintln!("{line}"));
+        }
+    };
     for stage in &pipeline.stages {
+        bar.set_message(stage.name.clone());
         if !stage.enabled {
+            bar.inc(1);
             outcomes.push((stage.name.clone(), StageOutcome::Disabled));
             continue;
         }
@@ -92,9 +112,13 @@ pub fn run(
                 pipeline.pipeline.name, stage.name, stage.kind
             );
         }
-        registry::run_stage(stage, &mut ctx).map_err(|e| match e {
-            Error::Usage(m) => Error::Usage(format!("stage {:?}: {m}", stage.name)),
-            other => other,
+        registry::run_stage(stage, &mut ctx).map_err(|e| {
+            bar.finish_and_clear();
+            match e {
+                Error::Usage(m) => Error::Usage(format!("stage {:?}: {m}", stage.name)),
+                Error::Numerical(m) => Error::Numerical(format!("stage {:?}: {m}", stage.name)),
+                other => other,
+            }
         })?;
         for o in &outputs {
             if !out.join(o).exists() {
@@ -127,6 +151,7 @@ pub fn run(
         }
         outcomes.push((stage.name.clone(), StageOutcome::Ran { seconds: secs }));
     }
+    bar.finish_and_clear();
     Ok(outcomes)
 }
 

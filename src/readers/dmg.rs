@@ -35,7 +35,10 @@ use crate::vocab::{Channel, Direction, QaFlag, Record, SourceRef, Units, STANDAR
 
 const INT_COUNT: usize = 100;
 const REAL_COUNT: usize = 100;
-const DEFAULT_DATA_LAYOUT: Layout = Layout::Fixed { per_line: 8, width: 10 };
+const DEFAULT_DATA_LAYOUT: Layout = Layout::Fixed {
+    per_line: 8,
+    width: 10,
+};
 /// Longest text header searched for the integer block.
 const MAX_TEXT_LINES: usize = 40;
 /// Metres per inch (V3 spectra are in inches).
@@ -119,7 +122,10 @@ fn parse_text_header(lines: &Lines, from: usize, to: usize) -> TextHeader {
             let rest = &line.trim_start()[4..];
             if let Some((num, after)) = rest.split_once(':') {
                 h.recorder_chan = textfmt::parse_int(num);
-                let cut = [after.find('('), after.to_ascii_uppercase().find("LOCATION")].into_iter().flatten().min();
+                let cut = [after.find('('), after.to_ascii_uppercase().find("LOCATION")]
+                    .into_iter()
+                    .flatten()
+                    .min();
                 let label = match cut {
                     Some(c) => &after[..c],
                     None => after,
@@ -138,7 +144,10 @@ fn parse_text_header(lines: &Lines, from: usize, to: usize) -> TextHeader {
         if h.station.is_none() {
             if let Some(p) = upper.find("STATION NO.") {
                 let mut it = line[p + 11..].split_whitespace();
-                h.station = it.next().and_then(textfmt::parse_int).map(|n| format!("{n:05}"));
+                h.station = it
+                    .next()
+                    .and_then(textfmt::parse_int)
+                    .map(|n| format!("{n:05}"));
                 h.latitude = it.next().and_then(textfmt::signed_degrees);
                 h.longitude = it.next().and_then(textfmt::signed_degrees);
             }
@@ -167,7 +176,9 @@ fn parse_text_header(lines: &Lines, from: usize, to: usize) -> TextHeader {
                     h.hypocenter = Some((lat, lon, depth));
                 }
             }
-            h.magnitude = ["MW=", "ML=", "MS=", "M="].iter().find_map(|k| textfmt::number_after(&upper, k));
+            h.magnitude = ["MW=", "ML=", "MS=", "M="]
+                .iter()
+                .find_map(|k| textfmt::number_after(&upper, k));
         }
         if trimmed.starts_with("UNCORRECTED ACCELEROGRAM") && v1_marker_line.is_none() {
             v1_marker_line = Some(i);
@@ -178,7 +189,10 @@ fn parse_text_header(lines: &Lines, from: usize, to: usize) -> TextHeader {
     if let Some(i) = v1_marker_line {
         let name = lines.get(i + 1).trim();
         let upper = name.to_ascii_uppercase();
-        if !name.is_empty() && !upper.starts_with("RCRD OF") && (upper.contains("EARTHQUAKE") || upper.contains("EQ")) {
+        if !name.is_empty()
+            && !upper.starts_with("RCRD OF")
+            && (upper.contains("EARTHQUAKE") || upper.contains("EQ"))
+        {
             h.event_name = Some(name.to_string());
         }
     }
@@ -190,11 +204,19 @@ fn zoned_time(s: &str) -> Option<i64> {
     let (date, rest) = s.trim().split_once(',')?;
     let zones = ["UTC", "GMT", "PDT", "PST", "UT"];
     let upper = rest.to_ascii_uppercase();
-    let (zpos, zone) = zones.iter().filter_map(|z| upper.find(z).map(|p| (p, *z))).min_by_key(|(p, _)| *p)?;
+    let (zpos, zone) = zones
+        .iter()
+        .filter_map(|z| upper.find(z).map(|p| (p, *z)))
+        .min_by_key(|(p, _)| *p)?;
     textfmt::us_datetime_ns(date, &rest[..zpos], zone)
 }
 
-fn read_channel(lines: &Lines, b: usize, source: &SourceRef, contents: &mut FileContents) -> Result<usize> {
+fn read_channel(
+    lines: &Lines,
+    b: usize,
+    source: &SourceRef,
+    contents: &mut FileContents,
+) -> Result<usize> {
     let volume = volume_of(lines.get(b)).ok_or_else(|| {
         lines.err(
             b,
@@ -219,18 +241,31 @@ fn read_channel(lines: &Lines, b: usize, source: &SourceRef, contents: &mut File
     let mut i = int_start;
     while ints.len() < INT_COUNT {
         if !lines.exists(i) {
-            return Err(lines.err(i.saturating_sub(1), "file ends inside the integer header (truncated file?)"));
+            return Err(lines.err(
+                i.saturating_sub(1),
+                "file ends inside the integer header (truncated file?)",
+            ));
         }
         for f in textfmt::fixed_fields(lines.get(i), 5, 16) {
-            ints.push(textfmt::parse_int(&f).ok_or_else(|| lines.err(i, format!("integer header field {:?} is not an integer", f.trim())))?);
+            ints.push(textfmt::parse_int(&f).ok_or_else(|| {
+                lines.err(
+                    i,
+                    format!("integer header field {:?} is not an integer", f.trim()),
+                )
+            })?);
         }
         i += 1;
     }
     let reals = textfmt::read_block(lines, i, REAL_COUNT, DEFAULT_DATA_LAYOUT, "real header")?;
     let mut next = reals.next_line;
 
-    let station = th.station.clone().ok_or_else(|| lines.err(b, "no \"STATION NO.\" line in the text header"))?;
-    let station_chan = th.station_chan.or_else(|| ints.get(2).copied().filter(|&c| c > 0));
+    let station = th
+        .station
+        .clone()
+        .ok_or_else(|| lines.err(b, "no \"STATION NO.\" line in the text header"))?;
+    let station_chan = th
+        .station_chan
+        .or_else(|| ints.get(2).copied().filter(|&c| c > 0));
     let recorder_chan = th.recorder_chan.or_else(|| ints.first().copied());
     let id = match station_chan {
         Some(c) => format!("{station}.{c:02}"),
@@ -250,7 +285,10 @@ fn read_channel(lines: &Lines, b: usize, source: &SourceRef, contents: &mut File
         }
         Volume::V1 | Volume::V2 => {
             let (record, after) = read_series(lines, next, volume, &id, source)?;
-            contents.records.push(Record::new(fill_channel(record.0, &th, &ints, station, station_chan, recorder_chan), record.1));
+            contents.records.push(Record::new(
+                fill_channel(record.0, &th, &ints, station, station_chan, recorder_chan),
+                record.1,
+            ));
             next = after;
         }
     }
@@ -262,8 +300,19 @@ fn read_channel(lines: &Lines, b: usize, source: &SourceRef, contents: &mut File
         if lines.get(next).trim_start().starts_with("/&") {
             next += 1;
         } else if volume_of(lines.get(next)).is_none() {
-            let what = if textfmt::is_numeric_line(lines.get(next)) { "more values than the header declares" } else { "unexpected text" };
-            return Err(lines.err_ch(next, &id, format!("{what}: expected the end-of-channel line \"/& … END OF DATA …\", found {:?}", lines.get(next).trim())));
+            let what = if textfmt::is_numeric_line(lines.get(next)) {
+                "more values than the header declares"
+            } else {
+                "unexpected text"
+            };
+            return Err(lines.err_ch(
+                next,
+                &id,
+                format!(
+                    "{what}: expected the end-of-channel line \"/& … END OF DATA …\", found {:?}",
+                    lines.get(next).trim()
+                ),
+            ));
         }
     }
     Ok(next)
@@ -284,16 +333,36 @@ fn parse_section(line: &str) -> Option<Section> {
     if !upper.contains("POINTS OF") {
         return None;
     }
-    let npts = textfmt::split_free(line).first().and_then(|t| textfmt::parse_int(t)).filter(|&n| n > 0)? as usize;
-    let kind = upper.split("POINTS OF").nth(1)?.split_whitespace().next()?.to_string();
+    let npts = textfmt::split_free(line)
+        .first()
+        .and_then(|t| textfmt::parse_int(t))
+        .filter(|&n| n > 0)? as usize;
+    let kind = upper
+        .split("POINTS OF")
+        .nth(1)?
+        .split_whitespace()
+        .next()?
+        .to_string();
     let dt = textfmt::number_after(&upper, "SPACED AT");
     let units = if let Some(p) = upper.find("UNITS:") {
-        Some(line[p + 6..].trim().trim_end_matches(')').trim().to_string())
+        Some(
+            line[p + 6..]
+                .trim()
+                .trim_end_matches(')')
+                .trim()
+                .to_string(),
+        )
     } else if let Some(p) = upper.find(", IN ") {
         // "… at 0.010 sec, in cm/sec2. (8f10.6)"
-        line[p + 5..].split_whitespace().next().map(|w| w.trim_end_matches('.').to_string())
+        line[p + 5..]
+            .split_whitespace()
+            .next()
+            .map(|w| w.trim_end_matches('.').to_string())
     } else if let Some(p) = upper.find("UNITS OF") {
-        line[p + 8..].split_whitespace().next().map(|w| w.trim_end_matches('.').to_string())
+        line[p + 8..]
+            .split_whitespace()
+            .next()
+            .map(|w| w.trim_end_matches('.').to_string())
     } else {
         None
     };
@@ -302,10 +371,19 @@ fn parse_section(line: &str) -> Option<Section> {
         .and_then(|p| {
             let inner = &line[p..];
             let lower = inner.to_ascii_lowercase();
-            (!lower.contains("units")).then(|| Layout::from_fortran(inner)).flatten()
+            (!lower.contains("units"))
+                .then(|| Layout::from_fortran(inner))
+                .flatten()
         })
         .unwrap_or(DEFAULT_DATA_LAYOUT);
-    Some(Section { npts, kind, dt, units, layout, evenly: upper.contains("EQUALLY") })
+    Some(Section {
+        npts,
+        kind,
+        dt,
+        units,
+        layout,
+        evenly: upper.contains("EQUALLY"),
+    })
 }
 
 /// Units word of a CSMIP data section; `G/10` (old film digitisations) is
@@ -334,7 +412,11 @@ fn read_series(
         i += 1;
     }
     if !lines.exists(i) {
-        return Err(lines.err_ch(i.saturating_sub(1), id, "file ends before the data (truncated file?)"));
+        return Err(lines.err_ch(
+            i.saturating_sub(1),
+            id,
+            "file ends before the data (truncated file?)",
+        ));
     }
     let mut inferred = Vec::new();
     let mut qa = Vec::new();
@@ -347,19 +429,37 @@ fn read_series(
         while let Some((head, sec)) = cur.take() {
             let block = textfmt::read_block(lines, head + 1, sec.npts, sec.layout, id)?;
             if block.extra_on_last_line > 0 {
-                return Err(lines.err_ch(block.next_line - 1, id, format!("more values than the {} points the section header declares", sec.npts)));
+                return Err(lines.err_ch(
+                    block.next_line - 1,
+                    id,
+                    format!(
+                        "more values than the {} points the section header declares",
+                        sec.npts
+                    ),
+                ));
             }
             after = block.next_line;
             if sec.kind.starts_with("ACCEL") && accel.is_none() {
-                let word = sec.units.clone().ok_or_else(|| lines.err_ch(head, id, "no units on the acceleration data line"))?;
-                let (units, scale) = section_units(&word).map_err(|e| lines.err_ch(head, id, format!("unknown units {word:?}: {e}")))?;
+                let word = sec.units.clone().ok_or_else(|| {
+                    lines.err_ch(head, id, "no units on the acceleration data line")
+                })?;
+                let (units, scale) = section_units(&word)
+                    .map_err(|e| lines.err_ch(head, id, format!("unknown units {word:?}: {e}")))?;
                 if scale != 1.0 {
-                    inferred.push(format!("values scaled by {scale} (file stores {word}) to {units}"));
+                    inferred.push(format!(
+                        "values scaled by {scale} (file stores {word}) to {units}"
+                    ));
                 }
                 if !sec.evenly {
-                    return Err(lines.err_ch(head, id, "acceleration section is not equally spaced and carries no times"));
+                    return Err(lines.err_ch(
+                        head,
+                        id,
+                        "acceleration section is not equally spaced and carries no times",
+                    ));
                 }
-                let dt = sec.dt.filter(|d| *d > 0.0).ok_or_else(|| lines.err_ch(head, id, "no positive sampling interval on the data line"))?;
+                let dt = sec.dt.filter(|d| *d > 0.0).ok_or_else(|| {
+                    lines.err_ch(head, id, "no positive sampling interval on the data line")
+                })?;
                 let values: Vec<f64> = block.values.iter().map(|v| v * scale).collect();
                 accel = Some((units, 1.0 / dt, values));
             }
@@ -380,25 +480,52 @@ fn read_series(
         }
         let mut values = Vec::new();
         for k in i..end {
-            values.extend(textfmt::line_values(lines.get(k), Layout::Free).map_err(|(f, _)| lines.err_ch(k, id, format!("bad value {f:?}")))?);
+            values.extend(
+                textfmt::line_values(lines.get(k), Layout::Free)
+                    .map_err(|(f, _)| lines.err_ch(k, id, format!("bad value {f:?}")))?,
+            );
         }
         if values.len() % 2 != 0 || values.len() < 4 {
-            return Err(lines.err_ch(end.saturating_sub(1), id, format!("{} numbers do not form (time, value) pairs", values.len())));
+            return Err(lines.err_ch(
+                end.saturating_sub(1),
+                id,
+                format!("{} numbers do not form (time, value) pairs", values.len()),
+            ));
         }
         let times: Vec<f64> = values.iter().step_by(2).copied().collect();
         let accel_raw: Vec<f64> = values.iter().skip(1).step_by(2).copied().collect();
         if let Some(k) = times.windows(2).position(|w| w[1] <= w[0]) {
-            return Err(lines.err_ch(i + (2 * k + 2) / 10, id, format!("times are not increasing at pair {} ({} then {})", k + 2, times[k], times[k + 1])));
+            return Err(lines.err_ch(
+                i + (2 * k + 2) / 10,
+                id,
+                format!(
+                    "times are not increasing at pair {} ({} then {})",
+                    k + 2,
+                    times[k],
+                    times[k + 1]
+                ),
+            ));
         }
         // Units from the text header ("UNITS OF UNCOR ACCEL ARE SEC AND G/10").
-        let word = th_units_word(lines, at)
-            .ok_or_else(|| lines.err_ch(i, id, "no units statement (\"UNITS OF … ARE SEC AND …\") for the (time, value) pairs"))?;
-        let (units, scale) = section_units(&word).map_err(|e| lines.err_ch(i, id, format!("unknown units {word:?}: {e}")))?;
+        let word = th_units_word(lines, at).ok_or_else(|| {
+            lines.err_ch(
+                i,
+                id,
+                "no units statement (\"UNITS OF … ARE SEC AND …\") for the (time, value) pairs",
+            )
+        })?;
+        let (units, scale) = section_units(&word)
+            .map_err(|e| lines.err_ch(i, id, format!("unknown units {word:?}: {e}")))?;
         let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
         steps.sort_by(f64::total_cmp);
         let dt = steps[steps.len() / 2];
-        let uniform: Vec<f64> = super::smc::resample_linear(&times, &accel_raw, dt).into_iter().map(|v| v * scale).collect();
-        qa.push(QaFlag::Resampled { from: "uneven (time,value) pairs".into() });
+        let uniform: Vec<f64> = super::smc::resample_linear(&times, &accel_raw, dt)
+            .into_iter()
+            .map(|v| v * scale)
+            .collect();
+        qa.push(QaFlag::Resampled {
+            from: "uneven (time,value) pairs".into(),
+        });
         inferred.push(format!(
             "samples resampled from {} uneven (time,value) pairs onto a uniform grid dt={dt} s (median step) by linear interpolation{}",
             times.len(),
@@ -407,9 +534,17 @@ fn read_series(
         accel = Some((units, 1.0 / dt, uniform));
         i = end;
     } else {
-        return Err(lines.err_ch(i, id, format!("expected the data line \"N POINTS OF ACCEL DATA …\", found {:?}", first.trim())));
+        return Err(lines.err_ch(
+            i,
+            id,
+            format!(
+                "expected the data line \"N POINTS OF ACCEL DATA …\", found {:?}",
+                first.trim()
+            ),
+        ));
     }
-    let (units, rate, values) = accel.ok_or_else(|| lines.err_ch(at, id, "the channel has no acceleration section"))?;
+    let (units, rate, values) =
+        accel.ok_or_else(|| lines.err_ch(at, id, "the channel has no acceleration section"))?;
     let mut channel = Channel::new(id, units, rate, source.clone());
     channel.inferred = inferred;
     channel.qa = qa;
@@ -422,7 +557,10 @@ fn th_units_word(lines: &Lines, before: usize) -> Option<String> {
     (before.saturating_sub(60)..before).rev().find_map(|k| {
         let u = lines.get(k).to_ascii_uppercase();
         let p = u.find("ARE SEC AND")?;
-        u[p + 11..].split_whitespace().next().map(|w| w.trim_end_matches(['.', ',']).to_string())
+        u[p + 11..]
+            .split_whitespace()
+            .next()
+            .map(|w| w.trim_end_matches(['.', ',']).to_string())
     })
 }
 
@@ -449,7 +587,9 @@ fn fill_channel(
         // Old layouts state the azimuth in integer [26] (500 = up).
         match ints.get(26).copied() {
             Some(500) if label.is_none() => Some(Direction::Up),
-            Some(a) if label.is_none() && (0..=360).contains(&a) => Some(Direction::Azimuth((a as f64).rem_euclid(360.0))),
+            Some(a) if label.is_none() && (0..=360).contains(&a) => {
+                Some(Direction::Azimuth((a as f64).rem_euclid(360.0)))
+            }
             _ => None,
         }
     });
@@ -473,30 +613,59 @@ fn label_direction(label: &str) -> Option<Direction> {
 }
 
 /// Reads a V3 spectra block starting after the real header.
-fn read_spectra(lines: &Lines, at: usize, ints: &[i64], id: &str, contents: &mut FileContents) -> Result<usize> {
+fn read_spectra(
+    lines: &Lines,
+    at: usize,
+    ints: &[i64],
+    id: &str,
+    contents: &mut FileContents,
+) -> Result<usize> {
     // Units statement in the text header.
     let units_ok = (at.saturating_sub(130)..at).any(|k| {
         let u = lines.get(k).to_ascii_uppercase();
         u.contains("UNITS FOR SPECTRA ARE INCHES AND SEC") && u.contains("SA IS IN FRACTION OF G")
     });
     if !units_ok {
-        return Err(lines.err_ch(at, id, "no \"Units for spectra are inches and sec, except Sa is in fraction of g\" statement"));
+        return Err(lines.err_ch(
+            at,
+            id,
+            "no \"Units for spectra are inches and sec, except Sa is in fraction of g\" statement",
+        ));
     }
-    let n_damp = ints.get(68).copied().filter(|&n| (1..=20).contains(&n)).unwrap_or(5) as usize;
+    let n_damp = ints
+        .get(68)
+        .copied()
+        .filter(|&n| (1..=20).contains(&n))
+        .unwrap_or(5) as usize;
     let damp_block = textfmt::read_block(lines, at, n_damp, DEFAULT_DATA_LAYOUT, id)?;
     // Periods: every number up to the "Fourier amplitude spectra" line.
     let mut i = damp_block.next_line;
     let mut periods_all = Vec::new();
     while lines.exists(i) && textfmt::is_numeric_line(lines.get(i)) {
-        periods_all.extend(textfmt::line_values(lines.get(i), DEFAULT_DATA_LAYOUT).map_err(|(f, _)| lines.err_ch(i, id, format!("bad period {f:?}")))?);
+        periods_all.extend(
+            textfmt::line_values(lines.get(i), DEFAULT_DATA_LAYOUT)
+                .map_err(|(f, _)| lines.err_ch(i, id, format!("bad period {f:?}")))?,
+        );
         i += 1;
     }
     if !lines.get(i).to_ascii_uppercase().starts_with("FOURIER") {
-        return Err(lines.err_ch(i, id, format!("expected \"FOURIER AMPLITUDE SPECTRA …\" after the periods, found {:?}", lines.get(i).trim())));
+        return Err(lines.err_ch(
+            i,
+            id,
+            format!(
+                "expected \"FOURIER AMPLITUDE SPECTRA …\" after the periods, found {:?}",
+                lines.get(i).trim()
+            ),
+        ));
     }
     let block_len = periods_all.len();
     let leading = periods_all.iter().take_while(|&&p| p > 0.0).count();
-    let n_periods = ints.get(67).copied().filter(|&n| n > 0 && (n as usize) <= leading).map(|n| n as usize).unwrap_or(leading);
+    let n_periods = ints
+        .get(67)
+        .copied()
+        .filter(|&n| n > 0 && (n as usize) <= leading)
+        .map(|n| n as usize)
+        .unwrap_or(leading);
     if n_periods == 0 {
         return Err(lines.err_ch(i, id, "no positive periods in the spectra"));
     }
@@ -508,11 +677,26 @@ fn read_spectra(lines: &Lines, at: usize, ints: &[i64], id: &str, contents: &mut
         let head = lines.get(i);
         let upper = head.to_ascii_uppercase();
         if !upper.starts_with("DAMPING") {
-            return Err(lines.err_ch(i, id, format!("expected \"DAMPING = … DATA OF SD,SV,SA,PSSV,…\", found {:?}", head.trim())));
+            return Err(lines.err_ch(
+                i,
+                id,
+                format!(
+                    "expected \"DAMPING = … DATA OF SD,SV,SA,PSSV,…\", found {:?}",
+                    head.trim()
+                ),
+            ));
         }
-        let stated = textfmt::number_after(&upper, "DAMPING =").or_else(|| textfmt::number_after(&upper, "DAMPING="));
+        let stated = textfmt::number_after(&upper, "DAMPING =")
+            .or_else(|| textfmt::number_after(&upper, "DAMPING="));
         if stated.is_some_and(|d| (d - damping).abs() > 0.006) {
-            return Err(lines.err_ch(i, id, format!("damping {} differs from the header's list value {damping}", stated.unwrap_or(f64::NAN))));
+            return Err(lines.err_ch(
+                i,
+                id,
+                format!(
+                    "damping {} differs from the header's list value {damping}",
+                    stated.unwrap_or(f64::NAN)
+                ),
+            ));
         }
         let data = textfmt::read_block(lines, i + 1, 7 * block_len, DEFAULT_DATA_LAYOUT, id)?;
         // Arrays in order SD, SV, SA, PSSV, TTSD, TTSV, TTSA; SD in inches.
@@ -520,9 +704,17 @@ fn read_spectra(lines: &Lines, at: usize, ints: &[i64], id: &str, contents: &mut
         let psa: Vec<f64> = sd
             .iter()
             .zip(&periods)
-            .map(|(d, t)| (2.0 * std::f64::consts::PI / t).powi(2) * d * METRES_PER_INCH / STANDARD_GRAVITY)
+            .map(|(d, t)| {
+                (2.0 * std::f64::consts::PI / t).powi(2) * d * METRES_PER_INCH / STANDARD_GRAVITY
+            })
             .collect();
-        contents.spectra.push(FileSpectrum { channel_id: id.to_string(), damping, periods_s: periods.clone(), psa, units: "g".into() });
+        contents.spectra.push(FileSpectrum {
+            channel_id: id.to_string(),
+            damping,
+            periods_s: periods.clone(),
+            psa,
+            units: "g".into(),
+        });
         i = data.next_line;
     }
     Ok(i)

@@ -60,8 +60,10 @@ pub fn write_channels(path: &Path, event: &Event, metrics: &[StrongMotionMetrics
     // SNR of every channel against its pre-event window (the QA flag only
     // says when it is low; the figure is useful for all).
     let noise_window_s = crate::conditioning::QaSettings::default().snr_noise_window_s;
-    let snr: Vec<Option<f64>> =
-        recs.iter().map(|r| crate::conditioning::qa::snr_db(&r.samples, r.channel.dt(), noise_window_s)).collect();
+    let snr: Vec<Option<f64>> = recs
+        .iter()
+        .map(|r| crate::conditioning::qa::snr_db(&r.samples, r.channel.dt(), noise_window_s))
+        .collect();
     let batch = TableBuilder::new()
         .str(
             "channel_id",

@@ -1,0 +1,66 @@
+//! Instantaneous Bouc-Wen identification in the time–frequency domain and the
+//! seismic damage index (METHODS.md §4, thesis Ch. 4). I/O free.
+//!
+//! - [`forward`]: the in-series degrading Bouc-Wen shear chain (Eq. 21–23), RK4.
+//! - [`ground_motion`]: seeded synthetic accelerograms for test events.
+//! - [`stft`]: Hamming STFT layout and the integrated products of Eq. 15/20
+//!   (Parseval time-domain form and explicit FFT form).
+//! - [`solve`]: bounded least squares under Eq. 47.
+//! - [`basis`]: records → relative kinematics, forces (Eq. 46), energies,
+//!   basis functions (integral form Eq. 27–30, jerk form A7–A10).
+//! - [`identify`]: DoF-by-DoF identification from the top (Table 15), N search,
+//!   scalar and instantaneous estimates, stability, non-identifiability checks.
+//! - [`damage`]: ι(t), ω_s(t), c_s(t) (Eq. 32–34).
+//! - [`reduced_mass`]: reduced lumped masses (Eq. 35–36).
+//!
+//! Processing is explicit: the stage takes minimally processed absolute
+//! accelerations (by default it integrates them itself with no filtering) and
+//! echoes the caller's declared processing plus its own steps in
+//! `DirectionIdentification::processing`.
+//!
+//! Suggested Parquet columns (written by the lead's sinks):
+//! - `bouc_wen.parquet` (one row per direction, DoF and parameter):
+//!   direction, dof, parameter (`K0` | `K0_delta` | `delta` | `beta` | `gamma` | `N`),
+//!   coupled_dof (r for K0_dr-type rows, null otherwise), value, unit,
+//!   rel_std (stability over informative frames; N: absolute std), stable,
+//!   cost_j, cost_relative, hysteretic_share, cost_contrast, form, window_len,
+//!   hop, frames, evaluations; file metadata: `processing` (JSON history).
+//! - `bouc_wen_instantaneous.parquet`: direction, dof, t_s, informative,
+//!   exponent, cost_j, parameter, coupled_dof, value (at N(t)),
+//!   value_at_scalar_exponent.
+//! - `damage.parquet`: direction, t_s, iota, mode, omega_rad_s, omega_ratio,
+//!   participation (one row per time and mode; iota repeated), plus
+//!   `indefinite_steps` in the metadata.
+//! - `hysteresis_fit.parquet`: direction, dof, t_s, target_ne, model_nn,
+//!   force_record_n, force_model_n, storey_drift_m; plus the coarse J(N) curve
+//!   (direction, dof, exponent, cost_j) if a plot is wanted.
+
+// Numerical kernels index several arrays in lock-step, and the
+// `!(x > 0.0)` checks deliberately reject NaN as well.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod basis;
+pub mod damage;
+pub mod forward;
+pub mod ground_motion;
+pub mod identify;
+pub mod reduced_mass;
+pub mod solve;
+pub mod stft;
+
+pub use basis::{
+    BaseRecord, BasisForm, DirectionKinematics, DirectionRecords, DofParameters, FloorRecord,
+    StiffnessPattern, VelocityDrift,
+};
+pub use damage::{damage_index, damage_index_of_chain, DamageSeries};
+pub use forward::{BoucWenChain, ChainResponse};
+pub use ground_motion::{synthetic_ground_motion, GroundMotionSpec, SplitMix64};
+pub use identify::{
+    identify_direction, identify_directions, identify_kinematics, DirectionIdentification,
+    DofIdentification, FitSeries, IdentifySettings, InstantaneousEstimate, ParameterStability,
+};
+pub use reduced_mass::{
+    first_pulsation_2dof, reduced_lumped_masses, ReducedMassTarget, ReducedMasses,
+};
+pub use solve::{bounded_lsq_columns, bounded_lsq_gram, BoundedSolution};
+pub use stft::{hamming_symmetric, FrequencyBand, StftLayout, Transform};
