@@ -2,7 +2,10 @@
 //! real records.  Accuracy figures are printed (run with `--nocapture`).
 
 use quaketwin::modal::{self, identify, Method, ModalInput, ModalSettings, Mode};
-use quaketwin::synth::{add_measurement_noise, synthetic_ground_motion, BuildingModes, GroundMotionParams, Rng, ShearBuilding};
+use quaketwin::synth::{
+    add_measurement_noise, synthetic_ground_motion, BuildingModes, GroundMotionParams, Rng,
+    ShearBuilding,
+};
 
 /// The 5-storey test building: f ≈ 2.0–12.4 Hz (T₁ ≈ 0.5 s, typical of five
 /// storeys), damping 1.5–4 %.
@@ -30,16 +33,31 @@ struct Accuracy {
 /// when a truth mode has no identified mode within 10 %.
 fn compare_with_truth(truth: &BuildingModes, modes: &[Mode]) -> Accuracy {
     let mut used = vec![false; modes.len()];
-    let mut acc = Accuracy { max_rel_freq: 0.0, max_abs_damping: 0.0, min_mac: 1.0 };
+    let mut acc = Accuracy {
+        max_rel_freq: 0.0,
+        max_abs_damping: 0.0,
+        min_mac: 1.0,
+    };
     for (j, &f_true) in truth.frequencies_hz.iter().enumerate() {
         let best = (0..modes.len())
             .filter(|&i| !used[i])
-            .min_by(|&a, &b| (modes[a].frequency_hz - f_true).abs().total_cmp(&(modes[b].frequency_hz - f_true).abs()))
+            .min_by(|&a, &b| {
+                (modes[a].frequency_hz - f_true)
+                    .abs()
+                    .total_cmp(&(modes[b].frequency_hz - f_true).abs())
+            })
             .unwrap_or_else(|| panic!("truth mode {j} ({f_true:.4} Hz) not found"));
         let m = &modes[best];
-        assert!((m.frequency_hz / f_true - 1.0).abs() < 0.1, "truth mode {j} ({f_true:.4} Hz) not found; nearest {:.4} Hz", m.frequency_hz);
+        assert!(
+            (m.frequency_hz / f_true - 1.0).abs() < 0.1,
+            "truth mode {j} ({f_true:.4} Hz) not found; nearest {:.4} Hz",
+            m.frequency_hz
+        );
         used[best] = true;
-        let truth_shape: Vec<faer::c64> = truth.shapes[j].iter().map(|&v| faer::c64::new(v, 0.0)).collect();
+        let truth_shape: Vec<faer::c64> = truth.shapes[j]
+            .iter()
+            .map(|&v| faer::c64::new(v, 0.0))
+            .collect();
         let mac = modal::mac(&truth_shape, &m.shape);
         let df = (m.frequency_hz / f_true - 1.0).abs();
         let dz = (m.damping_ratio - truth.damping_ratios[j]).abs();
@@ -68,8 +86,14 @@ pub fn ambient_input() -> ModalInput {
 pub fn ambient_input_seeded(seed: u64) -> ModalInput {
     let building = five_storey();
     let mut rng = Rng::new(seed);
-    let response = building.simulate_ambient(60_000, 0.01, 1.0e4, &mut rng).unwrap();
-    let outputs = response.absolute_acceleration.iter().map(|a| add_measurement_noise(a, 20.0, &mut rng)).collect();
+    let response = building
+        .simulate_ambient(60_000, 0.01, 1.0e4, &mut rng)
+        .unwrap();
+    let outputs = response
+        .absolute_acceleration
+        .iter()
+        .map(|a| add_measurement_noise(a, 20.0, &mut rng))
+        .collect();
     ModalInput {
         dt: 0.01,
         output_ids: (1..=5).map(|i| format!("L{i}")).collect(),
@@ -79,7 +103,10 @@ pub fn ambient_input_seeded(seed: u64) -> ModalInput {
 }
 
 fn ambient_settings(method: Method) -> ModalSettings {
-    let mut s = ModalSettings { method, ..Default::default() };
+    let mut s = ModalSettings {
+        method,
+        ..Default::default()
+    };
     // The truth damping (1.5–4 %) lies inside the default 0.9–5.5 % window;
     // set explicitly as the issue asks.
     s.filters.damping_min = 0.005;
@@ -93,12 +120,42 @@ fn ambient_five_storey_ssi_cov_and_ssi_data_find_all_modes() {
     let input = ambient_input();
     for method in [Method::SsiCov, Method::SsiData] {
         let result = identify(&input, &ambient_settings(method)).unwrap();
-        eprintln!("{}: {} modes, block rows {}", method.name(), result.modes.len(), result.block_rows);
-        assert_eq!(result.modes.len(), 5, "{}: found {:?}", method.name(), result.modes.iter().map(|m| m.frequency_hz).collect::<Vec<_>>());
+        eprintln!(
+            "{}: {} modes, block rows {}",
+            method.name(),
+            result.modes.len(),
+            result.block_rows
+        );
+        assert_eq!(
+            result.modes.len(),
+            5,
+            "{}: found {:?}",
+            method.name(),
+            result
+                .modes
+                .iter()
+                .map(|m| m.frequency_hz)
+                .collect::<Vec<_>>()
+        );
         let acc = compare_with_truth(&truth, &result.modes);
-        assert!(acc.max_rel_freq <= 3e-3, "{}: max |Δf/f| {}", method.name(), acc.max_rel_freq);
-        assert!(acc.max_abs_damping <= 0.005, "{}: max |Δζ| {}", method.name(), acc.max_abs_damping);
-        assert!(acc.min_mac >= 0.995, "{}: min MAC {}", method.name(), acc.min_mac);
+        assert!(
+            acc.max_rel_freq <= 3e-3,
+            "{}: max |Δf/f| {}",
+            method.name(),
+            acc.max_rel_freq
+        );
+        assert!(
+            acc.max_abs_damping <= 0.005,
+            "{}: max |Δζ| {}",
+            method.name(),
+            acc.max_abs_damping
+        );
+        assert!(
+            acc.min_mac >= 0.995,
+            "{}: min MAC {}",
+            method.name(),
+            acc.min_mac
+        );
     }
 }
 
@@ -112,11 +169,19 @@ pub fn earthquake_input_seeded(seed: u64) -> ModalInput {
     let building = five_storey();
     // Kanai–Tajimi soil frequency of a rock site (4 Hz), so that the base
     // motion carries energy up to the fifth mode (12.4 Hz).
-    let params = GroundMotionParams { seed, ground_frequency_hz: 4.0, ..Default::default() };
+    let params = GroundMotionParams {
+        seed,
+        ground_frequency_hz: 4.0,
+        ..Default::default()
+    };
     let ag = synthetic_ground_motion(&params).unwrap();
     let response = building.simulate_base_motion(&ag, params.dt).unwrap();
     let mut rng = Rng::new(seed + 92);
-    let outputs = response.absolute_acceleration.iter().map(|a| add_measurement_noise(a, 30.0, &mut rng)).collect();
+    let outputs = response
+        .absolute_acceleration
+        .iter()
+        .map(|a| add_measurement_noise(a, 30.0, &mut rng))
+        .collect();
     let base = add_measurement_noise(&response.base_acceleration, 30.0, &mut rng);
     ModalInput {
         dt: params.dt,
@@ -132,10 +197,26 @@ pub fn earthquake_input_seeded(seed: u64) -> ModalInput {
 fn earthquake_five_storey_input_output_finds_five_modes_and_nothing_else() {
     let truth = five_storey().modes().unwrap();
     let input = earthquake_input();
-    let settings = ModalSettings { method: Method::Io, ..Default::default() };
+    let settings = ModalSettings {
+        method: Method::Io,
+        ..Default::default()
+    };
     let result = identify(&input, &settings).unwrap();
-    eprintln!("io: {} modes, block rows {}", result.modes.len(), result.block_rows);
-    assert_eq!(result.modes.len(), 5, "found {:?}", result.modes.iter().map(|m| m.frequency_hz).collect::<Vec<_>>());
+    eprintln!(
+        "io: {} modes, block rows {}",
+        result.modes.len(),
+        result.block_rows
+    );
+    assert_eq!(
+        result.modes.len(),
+        5,
+        "found {:?}",
+        result
+            .modes
+            .iter()
+            .map(|m| m.frequency_hz)
+            .collect::<Vec<_>>()
+    );
     let acc = compare_with_truth(&truth, &result.modes);
     assert!(acc.max_rel_freq <= 1e-3, "max |Δf/f| {}", acc.max_rel_freq);
 }
@@ -150,8 +231,21 @@ fn ambient_identification_is_unbiased_over_seeds() {
     let mut sum_df = [0.0; 5];
     let mut sum_dz = [0.0; 5];
     for seed in seeds.clone() {
-        let result = identify(&ambient_input_seeded(seed), &ambient_settings(Method::SsiCov)).unwrap();
-        assert_eq!(result.modes.len(), 5, "seed {seed}: {:?}", result.modes.iter().map(|m| m.frequency_hz).collect::<Vec<_>>());
+        let result = identify(
+            &ambient_input_seeded(seed),
+            &ambient_settings(Method::SsiCov),
+        )
+        .unwrap();
+        assert_eq!(
+            result.modes.len(),
+            5,
+            "seed {seed}: {:?}",
+            result
+                .modes
+                .iter()
+                .map(|m| m.frequency_hz)
+                .collect::<Vec<_>>()
+        );
         for j in 0..5 {
             sum_df[j] += result.modes[j].frequency_hz / truth.frequencies_hz[j] - 1.0;
             sum_dz[j] += result.modes[j].damping_ratio - truth.damping_ratios[j];
@@ -164,4 +258,168 @@ fn ambient_identification_is_unbiased_over_seeds() {
         assert!(bias_f.abs() <= 1e-3, "mode {j}: frequency bias {bias_f}");
         assert!(bias_z.abs() <= 0.0015, "mode {j}: damping bias {bias_z}");
     }
+}
+
+// ---------------------------------------------------------------- real data
+
+use quaketwin::readers::{self, ReadOptions};
+use quaketwin::vocab::SourceRef;
+
+fn records_dir() -> std::path::PathBuf {
+    std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/records"))
+}
+
+/// Reads one column of an Xsens DOT CSV export with the project's CSV reader.
+fn xsens_column(path: &std::path::Path, column: &str) -> (Vec<f64>, f64) {
+    let bytes = std::fs::read(path).unwrap();
+    let source = SourceRef {
+        file: path.display().to_string(),
+        member: None,
+        column: None,
+        format: "csv".into(),
+    };
+    let opts = ReadOptions {
+        columns: Some(vec![column.into()]),
+        ..Default::default()
+    };
+    let contents = readers::csv::read(&bytes, &source, &opts).unwrap();
+    let record = contents.records.into_iter().next().unwrap();
+    (record.samples, record.channel.sampling_rate_hz)
+}
+
+fn rms_about_mean(v: &[f64]) -> f64 {
+    let m = v.iter().sum::<f64>() / v.len() as f64;
+    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+/// Lab 3-storey flexible model on the mini shake table (Northridge run):
+/// ground-floor Acc_X as input, top-floor Acc_X as output.  The data's
+/// source states a fundamental period of 0.274 s (3.65 Hz); assert within 5 %.
+#[test]
+fn lab_three_storey_fundamental_near_3_65_hz() {
+    let dir = records_dir().join("mdof-mini-shake-table-flexible-3story");
+    let ground_file = dir.join("Ground Floor/(Northridge)Xsens DOT_20250306_122607.csv");
+    let top_file = dir.join("3rd Floor (Top floor)/(Northridge)Xsens DOT_20250306_122607.csv");
+    let (ground_x, rate) = xsens_column(&ground_file, "Acc_X");
+    let (ground_y, _) = xsens_column(&ground_file, "Acc_Y");
+    let (top, top_rate) = xsens_column(&top_file, "Acc_X");
+    assert!(
+        (rate - 120.0).abs() < 0.01 && (top_rate - 120.0).abs() < 0.01,
+        "{rate} {top_rate}"
+    );
+    // Shaking axis check: the table moves along X (its rms dominates Y's).
+    eprintln!(
+        "ground rms: Acc_X {:.3}, Acc_Y {:.3} m/s2",
+        rms_about_mean(&ground_x),
+        rms_about_mean(&ground_y)
+    );
+    assert!(rms_about_mean(&ground_x) > 2.0 * rms_about_mean(&ground_y));
+    let n = ground_x.len().min(top.len());
+    let input = ModalInput {
+        dt: 1.0 / rate,
+        output_ids: vec!["top_x".into()],
+        // The first sample of the ground file is an exact 0 (device start-up): skip it.
+        outputs: vec![top[1..n].to_vec()],
+        input_ids: vec!["ground_x".into()],
+        inputs: vec![ground_x[1..n].to_vec()],
+        locations: Vec::new(),
+    };
+    let mut settings = ModalSettings {
+        method: Method::Io,
+        ..Default::default()
+    };
+    // Small steel model: damping unknown, widen the window; one output channel,
+    // so MPC/MPD are trivially perfect.
+    settings.filters.damping_min = 0.001;
+    settings.filters.damping_max = 0.10;
+    let result = identify(&input, &settings).unwrap();
+    for m in &result.modes {
+        eprintln!(
+            "lab mode: f {:.4} Hz (T {:.4} s), zeta {:.4}, poles {}",
+            m.frequency_hz,
+            1.0 / m.frequency_hz,
+            m.damping_ratio,
+            m.pole_count
+        );
+    }
+    let fundamental = result.modes.first().expect("no mode identified");
+    assert!(
+        (fundamental.frequency_hz / 3.65 - 1.0).abs() <= 0.05,
+        "fundamental {} Hz",
+        fundamental.frequency_hz
+    );
+}
+
+/// Painter St. overpass, 2023-09-30 Ferndale M4.7 (weak motion), transverse
+/// direction: station channels 3, 17, 20 (ground) → 7, 9, 4 (bent top and
+/// deck), as in the data source's channel configuration.  Reported transverse
+/// mode 0.24–0.25 s; assert the fundamental's period lies within 5 % of that
+/// range (0.228–0.2625 s).
+#[test]
+fn painter_street_overpass_transverse_mode() {
+    let zip_path = records_dir().join("csmip-ce89324-painterst-overpass/nc73943821_ce89324p.zip");
+    let file = std::fs::File::open(&zip_path).unwrap();
+    let mut archive = zip::ZipArchive::new(file).unwrap();
+    let mut read_channel = |chan: u32| -> (Vec<f64>, f64) {
+        let name = format!("chan{chan:03}.v2");
+        let mut entry = archive.by_name(&name).unwrap();
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut entry, &mut bytes).unwrap();
+        let source = SourceRef {
+            file: zip_path.display().to_string(),
+            member: Some(name.clone()),
+            column: None,
+            format: "dmg".into(),
+        };
+        let contents = readers::dmg::read(&bytes, &source, &ReadOptions::default()).unwrap();
+        let record = contents.records.into_iter().next().unwrap();
+        let to_si = record.channel.units.to_si_factor().unwrap();
+        (
+            record.samples.iter().map(|v| v * to_si).collect(),
+            record.channel.sampling_rate_hz,
+        )
+    };
+    let inputs: Vec<(Vec<f64>, f64)> = [3, 17, 20].into_iter().map(&mut read_channel).collect();
+    let outputs: Vec<(Vec<f64>, f64)> = [7, 9, 4].into_iter().map(&mut read_channel).collect();
+    let rate = inputs[0].1;
+    assert!((rate - 100.0).abs() < 1e-6);
+    let n = inputs
+        .iter()
+        .chain(&outputs)
+        .map(|(s, _)| s.len())
+        .min()
+        .unwrap();
+    let input = ModalInput {
+        dt: 1.0 / rate,
+        output_ids: vec!["07".into(), "09".into(), "04".into()],
+        outputs: outputs.iter().map(|(s, _)| s[..n].to_vec()).collect(),
+        input_ids: vec!["03".into(), "17".into(), "20".into()],
+        inputs: inputs.iter().map(|(s, _)| s[..n].to_vec()).collect(),
+        locations: Vec::new(),
+    };
+    let mut settings = ModalSettings {
+        method: Method::Io,
+        ..Default::default()
+    };
+    // The data source's period band 0.1–0.6 s; bridge damping can exceed 5.5 %.
+    settings.filters.frequency_min_hz = Some(1.0 / 0.6);
+    settings.filters.frequency_max_hz = Some(1.0 / 0.1);
+    settings.filters.damping_max = 0.10;
+    let result = identify(&input, &settings).unwrap();
+    for m in &result.modes {
+        eprintln!(
+            "painter st mode: T {:.4} s (f {:.3} Hz), zeta {:.4}, poles {}, MPC {:.3}",
+            1.0 / m.frequency_hz,
+            m.frequency_hz,
+            m.damping_ratio,
+            m.pole_count,
+            m.mpc
+        );
+    }
+    let fundamental = result.modes.first().expect("no mode identified");
+    let period = 1.0 / fundamental.frequency_hz;
+    assert!(
+        (0.24 * 0.95..=0.25 * 1.05).contains(&period),
+        "fundamental period {period} s"
+    );
 }

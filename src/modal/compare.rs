@@ -9,7 +9,9 @@ use faer::c64;
 /// MAC matrix: `result[i][j]` = MAC(a_i, b_j).  Shapes must refer to the
 /// same channels in the same order (shorter vectors are compared on the common prefix).
 pub fn mac_matrix(a: &[Vec<c64>], b: &[Vec<c64>]) -> Vec<Vec<f64>> {
-    a.iter().map(|x| b.iter().map(|y| mac(x, y)).collect()).collect()
+    a.iter()
+        .map(|x| b.iter().map(|y| mac(x, y)).collect())
+        .collect()
 }
 
 /// A pair of matched modes.
@@ -29,8 +31,11 @@ pub struct ModePair {
 /// almost never worth sacrificing for the global sum.
 pub fn pair_modes(a: &[Vec<c64>], b: &[Vec<c64>], min_mac: f64) -> Vec<ModePair> {
     let m = mac_matrix(a, b);
-    let mut candidates: Vec<(usize, usize, f64)> =
-        m.iter().enumerate().flat_map(|(i, row)| row.iter().enumerate().map(move |(j, &v)| (i, j, v))).collect();
+    let mut candidates: Vec<(usize, usize, f64)> = m
+        .iter()
+        .enumerate()
+        .flat_map(|(i, row)| row.iter().enumerate().map(move |(j, &v)| (i, j, v)))
+        .collect();
     candidates.sort_by(|x, y| y.2.total_cmp(&x.2).then(x.0.cmp(&y.0)).then(x.1.cmp(&y.1)));
     let (mut used_a, mut used_b) = (vec![false; a.len()], vec![false; b.len()]);
     let mut pairs = Vec::new();
@@ -41,7 +46,11 @@ pub fn pair_modes(a: &[Vec<c64>], b: &[Vec<c64>], min_mac: f64) -> Vec<ModePair>
         if !used_a[i] && !used_b[j] {
             used_a[i] = true;
             used_b[j] = true;
-            pairs.push(ModePair { reference: i, other: j, mac: v });
+            pairs.push(ModePair {
+                reference: i,
+                other: j,
+                mac: v,
+            });
         }
     }
     pairs.sort_by_key(|p| p.reference);
@@ -81,7 +90,11 @@ pub fn frequency_shifts(reference: &[Mode], other: &[Mode], min_mac: f64) -> Vec
                 frequency_reference_hz: r.frequency_hz,
                 frequency_other_hz: o.frequency_hz,
                 relative_shift: diff / r.frequency_hz,
-                shift_in_std: if combined_std > 0.0 { diff / combined_std } else { 0.0 },
+                shift_in_std: if combined_std > 0.0 {
+                    diff / combined_std
+                } else {
+                    0.0
+                },
                 damping_reference: r.damping_ratio,
                 damping_other: o.damping_ratio,
                 mac: p.mac,
@@ -101,7 +114,11 @@ mod tests {
     #[test]
     fn pairing_follows_mac_not_order() {
         let a = vec![real(&[1.0, 1.0, 1.0]), real(&[1.0, 0.0, -1.0])];
-        let b = vec![real(&[1.0, 0.1, -0.9]), real(&[0.9, 1.0, 1.1]), real(&[0.0, 1.0, 0.0])];
+        let b = vec![
+            real(&[1.0, 0.1, -0.9]),
+            real(&[0.9, 1.0, 1.1]),
+            real(&[0.0, 1.0, 0.0]),
+        ];
         let m = mac_matrix(&a, &b);
         assert_eq!(m.len(), 2);
         assert_eq!(m[0].len(), 3);

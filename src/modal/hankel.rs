@@ -66,7 +66,11 @@ pub fn hankel_gram(signals: &[&[f64]], rows: &[HankelRow], columns: usize) -> Ve
                     continue;
                 }
                 let lag = d as isize - max_shift as isize;
-                let (sa, sb) = if lag >= 0 { (0, lag as usize) } else { ((-lag) as usize, 0) };
+                let (sa, sb) = if lag >= 0 {
+                    (0, lag as usize)
+                } else {
+                    ((-lag) as usize, 0)
+                };
                 base[idx] = dot(&signals[a][sa..sa + columns], &signals[b][sb..sb + columns]);
             }
         }
@@ -97,14 +101,23 @@ pub fn hankel_gram(signals: &[&[f64]], rows: &[HankelRow], columns: usize) -> Ve
 /// Output cross-covariances R_k = (1/(N−k)) Σ_t y[t+k] y_ref[t]ᵀ for lags
 /// k = 0..=max_lag; `result[k][o * refs.len() + r]`.
 pub fn cross_covariances(outputs: &[&[f64]], refs: &[&[f64]], max_lag: usize) -> Vec<Vec<f64>> {
-    let n = outputs.iter().chain(refs).map(|s| s.len()).min().unwrap_or(0);
+    let n = outputs
+        .iter()
+        .chain(refs)
+        .map(|s| s.len())
+        .min()
+        .unwrap_or(0);
     (0..=max_lag)
         .map(|k| {
             let count = n.saturating_sub(k);
             let mut r = vec![0.0; outputs.len() * refs.len()];
             for (o, y) in outputs.iter().enumerate() {
                 for (j, x) in refs.iter().enumerate() {
-                    r[o * refs.len() + j] = if count == 0 { 0.0 } else { dot(&y[k..k + count], &x[..count]) / count as f64 };
+                    r[o * refs.len() + j] = if count == 0 {
+                        0.0
+                    } else {
+                        dot(&y[k..k + count], &x[..count]) / count as f64
+                    };
                 }
             }
             r
@@ -118,23 +131,45 @@ mod tests {
 
     #[test]
     fn gram_matches_explicit_hankel_product() {
-        let x: Vec<f64> = (0..57).map(|i| ((i * 37 % 11) as f64 - 5.0) * 0.3 + (i as f64 * 0.1).sin()).collect();
+        let x: Vec<f64> = (0..57)
+            .map(|i| ((i * 37 % 11) as f64 - 5.0) * 0.3 + (i as f64 * 0.1).sin())
+            .collect();
         let y: Vec<f64> = (0..57).map(|i| ((i * 13 % 7) as f64 - 3.0) * 0.5).collect();
         let signals: Vec<&[f64]> = vec![&x, &y];
         let rows = vec![
-            HankelRow { signal: 1, shift: 0 },
-            HankelRow { signal: 0, shift: 0 },
-            HankelRow { signal: 1, shift: 1 },
-            HankelRow { signal: 0, shift: 3 },
-            HankelRow { signal: 0, shift: 5 },
-            HankelRow { signal: 1, shift: 4 },
+            HankelRow {
+                signal: 1,
+                shift: 0,
+            },
+            HankelRow {
+                signal: 0,
+                shift: 0,
+            },
+            HankelRow {
+                signal: 1,
+                shift: 1,
+            },
+            HankelRow {
+                signal: 0,
+                shift: 3,
+            },
+            HankelRow {
+                signal: 0,
+                shift: 5,
+            },
+            HankelRow {
+                signal: 1,
+                shift: 4,
+            },
         ];
         let cols = 50;
         let g = hankel_gram(&signals, &rows, cols);
         for (i, ra) in rows.iter().enumerate() {
             for (k, rb) in rows.iter().enumerate() {
-                let explicit: f64 =
-                    (0..cols).map(|c| signals[ra.signal][c + ra.shift] * signals[rb.signal][c + rb.shift]).sum::<f64>() / cols as f64;
+                let explicit: f64 = (0..cols)
+                    .map(|c| signals[ra.signal][c + ra.shift] * signals[rb.signal][c + rb.shift])
+                    .sum::<f64>()
+                    / cols as f64;
                 assert!((g[i * rows.len() + k] - explicit).abs() < 1e-12, "{i} {k}");
             }
         }

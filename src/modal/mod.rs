@@ -154,16 +154,27 @@ pub struct ModalResult {
 }
 
 fn channel_location(input: &ModalInput, index: usize, id: &str) -> Location {
-    input.locations.get(index).cloned().unwrap_or_else(|| Location::file("modal input")).with_channel(id)
+    input
+        .locations
+        .get(index)
+        .cloned()
+        .unwrap_or_else(|| Location::file("modal input"))
+        .with_channel(id)
 }
 
 /// Checks the signals: enough channels, equal lengths, finite and non-constant.
 fn validate(input: &ModalInput, method: Method) -> Result<()> {
     if !(input.dt.is_finite() && input.dt > 0.0) {
-        return Err(Error::usage(format!("modal: sampling interval must be positive, got {}", input.dt)));
+        return Err(Error::usage(format!(
+            "modal: sampling interval must be positive, got {}",
+            input.dt
+        )));
     }
-    if input.output_ids.len() != input.outputs.len() || input.input_ids.len() != input.inputs.len() {
-        return Err(Error::usage("modal: channel ids and signals differ in number"));
+    if input.output_ids.len() != input.outputs.len() || input.input_ids.len() != input.inputs.len()
+    {
+        return Err(Error::usage(
+            "modal: channel ids and signals differ in number",
+        ));
     }
     match method {
         Method::Io => {
@@ -185,15 +196,28 @@ fn validate(input: &ModalInput, method: Method) -> Result<()> {
             }
         }
     }
-    let all = input.outputs.iter().zip(&input.output_ids).chain(input.inputs.iter().zip(&input.input_ids));
+    let all = input
+        .outputs
+        .iter()
+        .zip(&input.output_ids)
+        .chain(input.inputs.iter().zip(&input.input_ids));
     let n0 = input.outputs.first().map(|s| s.len()).unwrap_or(0);
     for (index, (signal, id)) in all.enumerate() {
         let loc = || channel_location(input, index, id);
         if signal.len() != n0 {
-            return Err(Error::input(loc(), format!("has {} samples, other channels {n0}: trim or align first", signal.len())));
+            return Err(Error::input(
+                loc(),
+                format!(
+                    "has {} samples, other channels {n0}: trim or align first",
+                    signal.len()
+                ),
+            ));
         }
         if let Some(pos) = signal.iter().position(|v| !v.is_finite()) {
-            return Err(Error::input(loc(), format!("non-finite sample at index {pos}")));
+            return Err(Error::input(
+                loc(),
+                format!("non-finite sample at index {pos}"),
+            ));
         }
         let first = signal.first().copied().unwrap_or(0.0);
         if signal.iter().all(|&v| v == first) {
@@ -221,7 +245,9 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
     let refs: Vec<usize> = match &settings.reference_channels {
         Some(r) => {
             if r.is_empty() || r.iter().any(|&i| i >= l) {
-                return Err(Error::usage(format!("modal: reference channels {r:?} must be indices below {l}")));
+                return Err(Error::usage(format!(
+                    "modal: reference channels {r:?} must be indices below {l}"
+                )));
             }
             r.clone()
         }
@@ -230,12 +256,16 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
     let mut orders: Vec<usize> = settings.orders.iter().copied().filter(|&n| n > 0).collect();
     orders.sort_unstable();
     orders.dedup();
-    let max_order = *orders.last().ok_or_else(|| Error::usage("modal: no model order to sweep"))?;
+    let max_order = *orders
+        .last()
+        .ok_or_else(|| Error::usage("modal: no model order to sweep"))?;
     let columns_per_block = match settings.method {
         Method::Io => l,
         _ => l.min(refs.len()),
     };
-    let block_rows = settings.block_rows.unwrap_or_else(|| 30.max(max_order.div_ceil(columns_per_block) + 2));
+    let block_rows = settings
+        .block_rows
+        .unwrap_or_else(|| 30.max(max_order.div_ceil(columns_per_block) + 2));
     if block_rows < 2 {
         return Err(Error::usage("modal: block rows must be at least 2"));
     }
@@ -266,7 +296,10 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
     let mut previous_range: Option<(usize, usize)> = None;
     for &n in &orders {
         if n > subspace.max_order() {
-            notes.push(format!("order {n} skipped: above the subspace dimension {}", subspace.max_order()));
+            notes.push(format!(
+                "order {n} skipped: above the subspace dimension {}",
+                subspace.max_order()
+            ));
             continue;
         }
         let (a, c) = subspace.realise(n)?;
@@ -302,7 +335,11 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
         block_rows,
         dt,
         output_ids: input.output_ids.clone(),
-        input_ids: if use_inputs { input.input_ids.clone() } else { Vec::new() },
+        input_ids: if use_inputs {
+            input.input_ids.clone()
+        } else {
+            Vec::new()
+        },
         orders: realised,
         singular_values: subspace.singular_values.clone(),
         poles,
@@ -326,24 +363,47 @@ fn location_of(record: &Record) -> Location {
 /// orientation beforehand (METHODS §0).
 pub fn input_from_event(event: &Event) -> Result<(ModalInput, Vec<String>)> {
     let mut notes = Vec::new();
-    let outputs: Vec<&Record> = event.records.iter().filter(|r| r.channel.role == Role::Output).collect();
-    let inputs: Vec<&Record> = event.records.iter().filter(|r| r.channel.role == Role::Input).collect();
-    for r in event.records.iter().filter(|r| r.channel.role == Role::Unknown) {
+    let outputs: Vec<&Record> = event
+        .records
+        .iter()
+        .filter(|r| r.channel.role == Role::Output)
+        .collect();
+    let inputs: Vec<&Record> = event
+        .records
+        .iter()
+        .filter(|r| r.channel.role == Role::Input)
+        .collect();
+    for r in event
+        .records
+        .iter()
+        .filter(|r| r.channel.role == Role::Unknown)
+    {
         notes.push(format!("channel {} left out: role unknown", r.channel.id));
     }
     let first = outputs.first().or(inputs.first()).ok_or_else(|| {
-        Error::usage(format!("modal: event {} has no channel with role input or output", event.name))
+        Error::usage(format!(
+            "modal: event {} has no channel with role input or output",
+            event.name
+        ))
     })?;
     let rate = first.channel.sampling_rate_hz;
     for r in outputs.iter().chain(&inputs) {
         if (r.channel.sampling_rate_hz - rate).abs() > 1e-9 * rate {
             return Err(Error::input(
                 location_of(r).with_channel(&r.channel.id),
-                format!("sampled at {} Hz, channel {} at {rate} Hz: resample first", r.channel.sampling_rate_hz, first.channel.id),
+                format!(
+                    "sampled at {} Hz, channel {} at {rate} Hz: resample first",
+                    r.channel.sampling_rate_hz, first.channel.id
+                ),
             ));
         }
     }
-    let n = outputs.iter().chain(&inputs).map(|r| r.samples.len()).min().unwrap_or(0);
+    let n = outputs
+        .iter()
+        .chain(&inputs)
+        .map(|r| r.samples.len())
+        .min()
+        .unwrap_or(0);
     if outputs.iter().chain(&inputs).any(|r| r.samples.len() != n) {
         notes.push(format!("channels cut to the shortest length, {n} samples"));
     }

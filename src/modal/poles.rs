@@ -86,7 +86,14 @@ pub fn mpc_mpd(shape: &[c64]) -> (f64, f64) {
         weighted += modulus * dev;
         weights += modulus;
     }
-    (mpc, if weights > 0.0 { (weighted / weights).to_degrees() } else { 90.0 })
+    (
+        mpc,
+        if weights > 0.0 {
+            (weighted / weights).to_degrees()
+        } else {
+            90.0
+        },
+    )
 }
 
 /// Scales a shape so that its largest-modulus component is 1 + 0i.
@@ -150,7 +157,11 @@ pub struct StabilityTolerances {
 
 impl Default for StabilityTolerances {
     fn default() -> Self {
-        StabilityTolerances { frequency: 0.01, damping: 0.05, mac: 0.02 }
+        StabilityTolerances {
+            frequency: 0.01,
+            damping: 0.05,
+            mac: 0.02,
+        }
     }
 }
 
@@ -174,7 +185,8 @@ pub fn flag_stability(current: &mut [Pole], previous: &[Pole], tol: &StabilityTo
         if let Some((prev, df, one_minus_mac)) = best {
             pole.stable_frequency = df <= tol.frequency;
             pole.stable_shape = one_minus_mac <= tol.mac;
-            let dz = (pole.damping_ratio - prev.damping_ratio).abs() / prev.damping_ratio.abs().max(1e-12);
+            let dz = (pole.damping_ratio - prev.damping_ratio).abs()
+                / prev.damping_ratio.abs().max(1e-12);
             pole.stable_damping = dz <= tol.damping;
         }
     }
@@ -196,7 +208,10 @@ mod tests {
         assert!((mac(&real, &rot) - 1.0).abs() < 1e-12);
         // Two components 90° apart with equal modulus: MPC = 0, MPD = 45°.
         let (mpc, mpd) = mpc_mpd(&[c64::new(1.0, 0.0), c64::new(0.0, 1.0)]);
-        assert!(mpc.abs() < 1e-12 && (mpd - 45.0).abs() < 1e-9, "{mpc} {mpd}");
+        assert!(
+            mpc.abs() < 1e-12 && (mpd - 45.0).abs() < 1e-9,
+            "{mpc} {mpd}"
+        );
         let orth = vec![c64::new(1.0, 0.0), c64::new(2.0, 0.0), c64::new(0.0, 0.0)];
         let other = vec![c64::new(2.0, 0.0), c64::new(-1.0, 0.0), c64::new(0.0, 0.0)];
         assert!(mac(&orth, &other).abs() < 1e-15);
@@ -208,7 +223,14 @@ mod tests {
         let w = std::f64::consts::TAU * f;
         let lambda = c64::new(-zeta * w, w * (1.0 - zeta * zeta).sqrt());
         let mu = (lambda * dt).exp();
-        let poles = poles_of_order(2, vec![(mu, vec![c64::new(2.0, 0.0)]), (mu.conj(), vec![c64::new(2.0, 0.0)])], dt);
+        let poles = poles_of_order(
+            2,
+            vec![
+                (mu, vec![c64::new(2.0, 0.0)]),
+                (mu.conj(), vec![c64::new(2.0, 0.0)]),
+            ],
+            dt,
+        );
         assert_eq!(poles.len(), 1);
         assert!((poles[0].frequency_hz - f).abs() < 1e-12);
         assert!((poles[0].damping_ratio - zeta).abs() < 1e-12);

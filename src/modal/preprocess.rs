@@ -21,7 +21,10 @@ pub struct Preprocessing {
 
 impl Default for Preprocessing {
     fn default() -> Self {
-        Preprocessing { remove_mean: true, decimation: 1 }
+        Preprocessing {
+            remove_mean: true,
+            decimation: 1,
+        }
     }
 }
 
@@ -34,7 +37,11 @@ pub fn antialias_taps(d: usize) -> Vec<f64> {
     let mut taps: Vec<f64> = (0..len)
         .map(|i| {
             let k = i as f64 - half as f64;
-            let sinc = if k == 0.0 { 2.0 * fc } else { (std::f64::consts::TAU * fc * k).sin() / (std::f64::consts::PI * k) };
+            let sinc = if k == 0.0 {
+                2.0 * fc
+            } else {
+                (std::f64::consts::TAU * fc * k).sin() / (std::f64::consts::PI * k)
+            };
             let x = std::f64::consts::TAU * i as f64 / (len - 1) as f64;
             let blackman = 0.42 - 0.5 * x.cos() + 0.08 * (2.0 * x).cos();
             sinc * blackman
@@ -71,7 +78,11 @@ pub fn decimate(signal: &[f64], d: usize, taps: &[f64]) -> Vec<f64> {
 
 /// Applies the pre-processing to every channel (inputs are not modified) and
 /// returns the new signals, the new sampling interval and the recorded steps.
-pub fn apply(signals: &[Vec<f64>], dt: f64, settings: &Preprocessing) -> (Vec<Vec<f64>>, f64, Vec<ProcessingStep>) {
+pub fn apply(
+    signals: &[Vec<f64>],
+    dt: f64,
+    settings: &Preprocessing,
+) -> (Vec<Vec<f64>>, f64, Vec<ProcessingStep>) {
     let mut steps = Vec::new();
     let mut out: Vec<Vec<f64>> = signals.to_vec();
     if settings.remove_mean {
@@ -79,7 +90,11 @@ pub fn apply(signals: &[Vec<f64>], dt: f64, settings: &Preprocessing) -> (Vec<Ve
             let mean = s.iter().sum::<f64>() / s.len().max(1) as f64;
             s.iter_mut().for_each(|v| *v -= mean);
         }
-        steps.push(ProcessingStep { step: "remove_mean".into(), channels: Vec::new(), params: serde_json::json!({}) });
+        steps.push(ProcessingStep {
+            step: "remove_mean".into(),
+            channels: Vec::new(),
+            params: serde_json::json!({}),
+        });
     }
     let mut dt_out = dt;
     if settings.decimation > 1 {
@@ -111,7 +126,11 @@ mod tests {
     fn decimation_passes_low_and_rejects_aliasing_frequencies() {
         let dt = 0.005; // 200 Hz, decimate by 4 → 50 Hz, new Nyquist 25 Hz
         let n = 8000;
-        let tone = |f: f64| (0..n).map(|i| (std::f64::consts::TAU * f * i as f64 * dt).sin()).collect::<Vec<f64>>();
+        let tone = |f: f64| {
+            (0..n)
+                .map(|i| (std::f64::consts::TAU * f * i as f64 * dt).sin())
+                .collect::<Vec<f64>>()
+        };
         let taps = antialias_taps(4);
         let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
         // Pass band (5 Hz): amplitude kept within 0.1 % away from the edges.
@@ -121,7 +140,14 @@ mod tests {
         // 40 Hz would alias to 10 Hz: must be attenuated below −60 dB.
         let high = decimate(&tone(40.0), 4, &taps);
         assert!(rms(&high[100..1900]) < 1e-3 * std::f64::consts::FRAC_1_SQRT_2);
-        let (out, dt2, steps) = apply(&[tone(5.0)], dt, &Preprocessing { remove_mean: true, decimation: 4 });
+        let (out, dt2, steps) = apply(
+            &[tone(5.0)],
+            dt,
+            &Preprocessing {
+                remove_mean: true,
+                decimation: 4,
+            },
+        );
         assert_eq!(out[0].len(), 2000);
         assert!((dt2 - 0.02).abs() < 1e-15);
         assert_eq!(steps.len(), 2);

@@ -79,7 +79,12 @@ pub struct ClusterSettings {
 
 impl Default for ClusterSettings {
     fn default() -> Self {
-        ClusterSettings { damping_weight: 0.1, threshold: 0.04, min_cluster_fraction: 0.4, require_damping_stability: false }
+        ClusterSettings {
+            damping_weight: 0.1,
+            threshold: 0.04,
+            min_cluster_fraction: 0.4,
+            require_damping_stability: false,
+        }
     }
 }
 
@@ -110,7 +115,8 @@ pub struct Mode {
 
 fn distance(a: &Pole, b: &Pole, damping_weight: f64) -> f64 {
     let df = (a.frequency_hz - b.frequency_hz).abs() / a.frequency_hz.max(b.frequency_hz);
-    let dz = (a.damping_ratio - b.damping_ratio).abs() / a.damping_ratio.abs().max(b.damping_ratio.abs()).max(1e-12);
+    let dz = (a.damping_ratio - b.damping_ratio).abs()
+        / a.damping_ratio.abs().max(b.damping_ratio.abs()).max(1e-12);
     df + damping_weight * dz + (1.0 - mac(&a.shape, &b.shape))
 }
 
@@ -158,16 +164,25 @@ fn average_linkage(poles: &[Pole], items: &[usize], settings: &ClusterSettings) 
         members[i].extend(moved);
         alive[j] = false;
     }
-    (0..n).filter(|&i| alive[i]).map(|i| members[i].iter().map(|&m| items[m]).collect()).collect()
+    (0..n)
+        .filter(|&i| alive[i])
+        .map(|i| members[i].iter().map(|&m| items[m]).collect())
+        .collect()
 }
 
 /// Keeps one pole per order: the one nearest `centre_hz`.
 fn one_per_order(poles: &[Pole], cluster: &[usize], centre_hz: f64) -> Vec<usize> {
-    one_per_order_by(poles, cluster, |i| (poles[i].frequency_hz - centre_hz).abs())
+    one_per_order_by(poles, cluster, |i| {
+        (poles[i].frequency_hz - centre_hz).abs()
+    })
 }
 
 /// Keeps one pole per order: the one with the smallest `closeness`.
-fn one_per_order_by(poles: &[Pole], cluster: &[usize], closeness: impl Fn(usize) -> f64) -> Vec<usize> {
+fn one_per_order_by(
+    poles: &[Pole],
+    cluster: &[usize],
+    closeness: impl Fn(usize) -> f64,
+) -> Vec<usize> {
     let mut kept: Vec<usize> = Vec::new();
     for &i in cluster {
         match kept.iter().position(|&k| poles[k].order == poles[i].order) {
@@ -185,19 +200,34 @@ fn one_per_order_by(poles: &[Pole], cluster: &[usize], closeness: impl Fn(usize)
 
 /// Medoid of a cluster: the member with the smallest summed distance to the others.
 fn medoid(poles: &[Pole], cluster: &[usize], damping_weight: f64) -> usize {
-    let total = |i: usize| cluster.iter().map(|&j| distance(&poles[i], &poles[j], damping_weight)).sum::<f64>();
-    cluster.iter().copied().min_by(|&a, &b| total(a).total_cmp(&total(b)).then(a.cmp(&b))).unwrap_or(0)
+    let total = |i: usize| {
+        cluster
+            .iter()
+            .map(|&j| distance(&poles[i], &poles[j], damping_weight))
+            .sum::<f64>()
+    };
+    cluster
+        .iter()
+        .copied()
+        .min_by(|&a, &b| total(a).total_cmp(&total(b)).then(a.cmp(&b)))
+        .unwrap_or(0)
 }
 
 /// Mode statistics over the given poles (non-empty).
 fn summarise(poles: &[Pole], members: &[usize], manual: bool) -> Mode {
     let count = members.len() as f64;
-    let mean = |f: &dyn Fn(&Pole) -> f64| members.iter().map(|&i| f(&poles[i])).sum::<f64>() / count;
+    let mean =
+        |f: &dyn Fn(&Pole) -> f64| members.iter().map(|&i| f(&poles[i])).sum::<f64>() / count;
     let std = |f: &dyn Fn(&Pole) -> f64, m: f64| {
         if members.len() < 2 {
             0.0
         } else {
-            (members.iter().map(|&i| (f(&poles[i]) - m).powi(2)).sum::<f64>() / (count - 1.0)).sqrt()
+            (members
+                .iter()
+                .map(|&i| (f(&poles[i]) - m).powi(2))
+                .sum::<f64>()
+                / (count - 1.0))
+                .sqrt()
         }
     };
     let f_mean = mean(&|p| p.frequency_hz);
@@ -207,7 +237,11 @@ fn summarise(poles: &[Pole], members: &[usize], manual: bool) -> Mode {
     let reference = members
         .iter()
         .copied()
-        .min_by(|&a, &b| (poles[a].frequency_hz - f_mean).abs().total_cmp(&(poles[b].frequency_hz - f_mean).abs()))
+        .min_by(|&a, &b| {
+            (poles[a].frequency_hz - f_mean)
+                .abs()
+                .total_cmp(&(poles[b].frequency_hz - f_mean).abs())
+        })
         .unwrap_or(members[0]);
     let phi_ref = &poles[reference].shape;
     let l = phi_ref.len();
@@ -221,7 +255,11 @@ fn summarise(poles: &[Pole], members: &[usize], manual: bool) -> Mode {
                 num += x.conj() * y;
                 den += x.norm_sqr();
             }
-            let alpha = if den > 0.0 { num / den } else { c64::new(1.0, 0.0) };
+            let alpha = if den > 0.0 {
+                num / den
+            } else {
+                c64::new(1.0, 0.0)
+            };
             phi.iter().map(|z| z * alpha).collect()
         })
         .collect();
@@ -238,11 +276,20 @@ fn summarise(poles: &[Pole], members: &[usize], manual: bool) -> Mode {
                 return 0.0;
             }
             let m = aligned.iter().map(|a| a[k].norm()).sum::<f64>() / count;
-            (aligned.iter().map(|a| (a[k].norm() - m).powi(2)).sum::<f64>() / (count - 1.0)).sqrt()
+            (aligned
+                .iter()
+                .map(|a| (a[k].norm() - m).powi(2))
+                .sum::<f64>()
+                / (count - 1.0))
+                .sqrt()
         })
         .collect();
     let (mpc, mpd_deg) = mpc_mpd(&shape);
-    let mean_mac = members.iter().map(|&i| mac(&poles[i].shape, &shape)).sum::<f64>() / count;
+    let mean_mac = members
+        .iter()
+        .map(|&i| mac(&poles[i].shape, &shape))
+        .sum::<f64>()
+        / count;
     Mode {
         frequency_hz: f_mean,
         frequency_std_hz: std(&|p| p.frequency_hz, f_mean),
@@ -263,11 +310,18 @@ fn summarise(poles: &[Pole], members: &[usize], manual: bool) -> Mode {
 /// Automatic selection: clusters the stable physical poles, keeps clusters
 /// spanning enough orders, returns modes in ascending frequency and sets
 /// `Pole::mode` of the poles used.
-pub fn select_automatic(poles: &mut [Pole], orders_swept: usize, settings: &ClusterSettings) -> Vec<Mode> {
+pub fn select_automatic(
+    poles: &mut [Pole],
+    orders_swept: usize,
+    settings: &ClusterSettings,
+) -> Vec<Mode> {
     let candidates: Vec<usize> = (0..poles.len())
         .filter(|&i| {
             let p = &poles[i];
-            p.physical && p.stable_frequency && p.stable_shape && (!settings.require_damping_stability || p.stable_damping)
+            p.physical
+                && p.stable_frequency
+                && p.stable_shape
+                && (!settings.require_damping_stability || p.stable_damping)
         })
         .collect();
     let clusters = average_linkage(poles, &candidates, settings);
@@ -278,7 +332,9 @@ pub fn select_automatic(poles: &mut [Pole], orders_swept: usize, settings: &Clus
             // Noise poles sometimes sit beside a physical pole of the same
             // order; keep the one nearest the cluster's medoid (f, ζ and shape).
             let centre = medoid(poles, &c, settings.damping_weight);
-            one_per_order_by(poles, &c, |i| distance(&poles[i], &poles[centre], settings.damping_weight))
+            one_per_order_by(poles, &c, |i| {
+                distance(&poles[i], &poles[centre], settings.damping_weight)
+            })
         })
         .filter(|c| c.len() >= min_size)
         .collect();
@@ -300,17 +356,25 @@ pub fn select_automatic(poles: &mut [Pole], orders_swept: usize, settings: &Clus
 /// stable in frequency and lie within ±`relative_band` of it (one per order,
 /// nearest the request) form the mode.  Fails naming the frequency when no
 /// such pole exists.  Sets `Pole::mode` (index in the returned list).
-pub fn select_manual(poles: &mut [Pole], frequencies_hz: &[f64], relative_band: f64) -> Result<Vec<Mode>> {
+pub fn select_manual(
+    poles: &mut [Pole],
+    frequencies_hz: &[f64],
+    relative_band: f64,
+) -> Result<Vec<Mode>> {
     let mut modes = Vec::with_capacity(frequencies_hz.len());
     let mut assigned: Vec<Vec<usize>> = Vec::new();
     for &target in frequencies_hz {
         if !(target.is_finite() && target > 0.0) {
-            return Err(Error::usage(format!("manual mode pick: frequency {target} is not a positive number")));
+            return Err(Error::usage(format!(
+                "manual mode pick: frequency {target} is not a positive number"
+            )));
         }
         let near: Vec<usize> = (0..poles.len())
             .filter(|&i| {
                 let p = &poles[i];
-                p.physical && p.stable_frequency && (p.frequency_hz - target).abs() <= relative_band * target
+                p.physical
+                    && p.stable_frequency
+                    && (p.frequency_hz - target).abs() <= relative_band * target
             })
             .collect();
         let members = one_per_order(poles, &near, target);

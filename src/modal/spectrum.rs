@@ -19,14 +19,22 @@ pub struct SpectralOverlay {
 
 /// Welch PSD-matrix singular values of `outputs` (equal lengths) with
 /// segments of `segment_length` samples (rounded down to even, at least 16).
-pub fn spectral_overlay(outputs: &[Vec<f64>], dt: f64, segment_length: usize) -> Result<SpectralOverlay> {
+pub fn spectral_overlay(
+    outputs: &[Vec<f64>],
+    dt: f64,
+    segment_length: usize,
+) -> Result<SpectralOverlay> {
     let l = outputs.len();
     let n = outputs.iter().map(|s| s.len()).min().unwrap_or(0);
     let seg = (segment_length / 2 * 2).max(16);
     if l == 0 || n < seg {
-        return Err(Error::usage(format!("spectral overlay: need channels of at least {seg} samples")));
+        return Err(Error::usage(format!(
+            "spectral overlay: need channels of at least {seg} samples"
+        )));
     }
-    let window: Vec<f64> = (0..seg).map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / seg as f64).cos()).collect();
+    let window: Vec<f64> = (0..seg)
+        .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / seg as f64).cos())
+        .collect();
     let window_power: f64 = window.iter().map(|w| w * w).sum();
     let mut planner = RealFftPlanner::<f64>::new();
     let fft = planner.plan_fft_forward(seg);
@@ -45,7 +53,8 @@ pub fn spectral_overlay(outputs: &[Vec<f64>], dt: f64, segment_length: usize) ->
                 buffer[i] = (part[i] - mean) * window[i];
             }
             let mut out = fft.make_output_vec();
-            fft.process(&mut buffer, &mut out).map_err(|e| Error::numerical(format!("FFT: {e}")))?;
+            fft.process(&mut buffer, &mut out)
+                .map_err(|e| Error::numerical(format!("FFT: {e}")))?;
             for (k, z) in out.iter().enumerate() {
                 spectra[c][k] = c64::new(z.re, z.im);
             }
@@ -61,7 +70,8 @@ pub fn spectral_overlay(outputs: &[Vec<f64>], dt: f64, segment_length: usize) ->
     // One-sided density scaling: 2 Δt / (Σw² · segments), except DC and Nyquist.
     let mut singular_values = Vec::with_capacity(bins);
     for k in 0..bins {
-        let factor = if k == 0 || k == bins - 1 { 1.0 } else { 2.0 } * dt / (window_power * segments as f64);
+        let factor =
+            if k == 0 || k == bins - 1 { 1.0 } else { 2.0 } * dt / (window_power * segments as f64);
         let m = Mat::<c64>::from_fn(l, l, |a, b| psd[(k * l + a) * l + b] * factor);
         let mut ev = m
             .self_adjoint_eigenvalues(Side::Lower)
@@ -70,7 +80,11 @@ pub fn spectral_overlay(outputs: &[Vec<f64>], dt: f64, segment_length: usize) ->
         singular_values.push(ev.into_iter().map(|v| v.max(0.0)).collect());
     }
     let frequencies_hz = (0..bins).map(|k| k as f64 / (seg as f64 * dt)).collect();
-    Ok(SpectralOverlay { frequencies_hz, singular_values, segment_length: seg })
+    Ok(SpectralOverlay {
+        frequencies_hz,
+        singular_values,
+        segment_length: seg,
+    })
 }
 
 #[cfg(test)]
@@ -82,14 +96,23 @@ mod tests {
         let dt = 0.01;
         let n = 20_000;
         let mut rng = crate::synth::Rng::new(11);
-        let a: Vec<f64> = (0..n).map(|i| (std::f64::consts::TAU * 7.0 * i as f64 * dt).sin() + 0.1 * rng.normal()).collect();
-        let b: Vec<f64> = (0..n).map(|i| 0.5 * (std::f64::consts::TAU * 7.0 * i as f64 * dt).sin() + 0.1 * rng.normal()).collect();
+        let a: Vec<f64> = (0..n)
+            .map(|i| (std::f64::consts::TAU * 7.0 * i as f64 * dt).sin() + 0.1 * rng.normal())
+            .collect();
+        let b: Vec<f64> = (0..n)
+            .map(|i| 0.5 * (std::f64::consts::TAU * 7.0 * i as f64 * dt).sin() + 0.1 * rng.normal())
+            .collect();
         let o = spectral_overlay(&[a, b], dt, 1000).unwrap();
-        let peak = (0..o.frequencies_hz.len()).max_by(|&x, &y| o.singular_values[x][0].total_cmp(&o.singular_values[y][0])).unwrap();
+        let peak = (0..o.frequencies_hz.len())
+            .max_by(|&x, &y| o.singular_values[x][0].total_cmp(&o.singular_values[y][0]))
+            .unwrap();
         assert!((o.frequencies_hz[peak] - 7.0).abs() < 0.11);
         // Away from the sine, the mean of the two singular values (half the trace)
         // equals the one-sided white-noise density 2σ²Δt = 2e-4; averaged over 200 bins.
-        let mean_level: f64 = (200..400).map(|k| 0.5 * (o.singular_values[k][0] + o.singular_values[k][1])).sum::<f64>() / 200.0;
+        let mean_level: f64 = (200..400)
+            .map(|k| 0.5 * (o.singular_values[k][0] + o.singular_values[k][1]))
+            .sum::<f64>()
+            / 200.0;
         assert!((mean_level / 2e-4 - 1.0).abs() < 0.05, "{mean_level}");
         assert!(o.singular_values[peak][0] > 1e3 * o.singular_values[peak][1]);
     }

@@ -39,14 +39,19 @@ pub struct Subspace {
 /// (p−1)·l ≥ n rows).
 impl Subspace {
     pub fn max_order(&self) -> usize {
-        self.singular_values.len().min((self.block_rows - 1) * self.outputs)
+        self.singular_values
+            .len()
+            .min((self.block_rows - 1) * self.outputs)
     }
 
     /// Realisation (A, C) of order `n`: Γ_n = U_n S_n^{1/2}, C = first block
     /// row of Γ_n, A = Γ_n↑⁺ Γ_n↓ (shift invariance, least squares).
     pub fn realise(&self, n: usize) -> Result<(Mat<f64>, Mat<f64>)> {
         if n == 0 || n > self.max_order() {
-            return Err(Error::numerical(format!("model order {n} exceeds the subspace dimension {}", self.max_order())));
+            return Err(Error::numerical(format!(
+                "model order {n} exceeds the subspace dimension {}",
+                self.max_order()
+            )));
         }
         let l = self.outputs;
         let p = self.block_rows;
@@ -57,7 +62,9 @@ impl Subspace {
         let a = upper.qr().solve_lstsq(lower);
         let c = gamma.as_ref().subrows(0, l).to_owned();
         if a.as_ref().has_nan() || c.as_ref().has_nan() {
-            return Err(Error::numerical(format!("order {n}: realisation produced non-finite values")));
+            return Err(Error::numerical(format!(
+                "order {n}: realisation produced non-finite values"
+            )));
         }
         Ok((a, c))
     }
@@ -65,7 +72,9 @@ impl Subspace {
 
 /// Discrete eigenvalues μ and output-space eigenvectors C ψ of a realisation.
 pub fn eigen_structure(a: MatRef<'_, f64>, c: MatRef<'_, f64>) -> Result<Vec<(c64, Vec<c64>)>> {
-    let eig = a.eigen().map_err(|e| Error::numerical(format!("eigenvalues of the state matrix: {e:?}")))?;
+    let eig = a
+        .eigen()
+        .map_err(|e| Error::numerical(format!("eigenvalues of the state matrix: {e:?}")))?;
     let values = eig.S().column_vector();
     let vectors = eig.U();
     let n = a.nrows();
@@ -88,9 +97,16 @@ pub fn eigen_structure(a: MatRef<'_, f64>, c: MatRef<'_, f64>) -> Result<Vec<(c6
 }
 
 fn thin_svd_subspace(m: MatRef<'_, f64>, outputs: usize, block_rows: usize) -> Result<Subspace> {
-    let svd = m.thin_svd().map_err(|e| Error::numerical(format!("SVD of the subspace matrix: {e:?}")))?;
+    let svd = m
+        .thin_svd()
+        .map_err(|e| Error::numerical(format!("SVD of the subspace matrix: {e:?}")))?;
     let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
-    Ok(Subspace { u: svd.U().to_owned(), singular_values: s, outputs, block_rows })
+    Ok(Subspace {
+        u: svd.U().to_owned(),
+        singular_values: s,
+        outputs,
+        block_rows,
+    })
 }
 
 /// Lower Cholesky factor of a symmetric positive (semi-)definite row-major
@@ -98,12 +114,16 @@ fn thin_svd_subspace(m: MatRef<'_, f64>, outputs: usize, block_rows: usize) -> R
 fn cholesky_lower(gram: &[f64], n: usize) -> Result<Mat<f64>> {
     let mean_diag = (0..n).map(|i| gram[i * n + i]).sum::<f64>() / n.max(1) as f64;
     for ridge in [0.0, 1e-12, 1e-9] {
-        let g = Mat::<f64>::from_fn(n, n, |i, j| gram[i * n + j] + if i == j { ridge * mean_diag } else { 0.0 });
+        let g = Mat::<f64>::from_fn(n, n, |i, j| {
+            gram[i * n + j] + if i == j { ridge * mean_diag } else { 0.0 }
+        });
         if let Ok(llt) = g.llt(Side::Lower) {
             return Ok(llt.L().to_owned());
         }
     }
-    Err(Error::numerical("Hankel Gram matrix is not positive definite: channels are linearly dependent or constant"))
+    Err(Error::numerical(
+        "Hankel Gram matrix is not positive definite: channels are linearly dependent or constant",
+    ))
 }
 
 /// SSI-COV: one SVD of the p·l × p·r block Toeplitz covariance matrix.
@@ -153,7 +173,12 @@ pub fn po_moesp(outputs: &[&[f64]], inputs: &[&[f64]], block_rows: usize) -> Res
     let l = outputs.len();
     let m = inputs.len();
     let p = block_rows;
-    let n = outputs.iter().chain(inputs).map(|s| s.len()).min().unwrap_or(0);
+    let n = outputs
+        .iter()
+        .chain(inputs)
+        .map(|s| s.len())
+        .min()
+        .unwrap_or(0);
     let columns = n + 1 - 2 * p;
     // Signals: inputs first (0..m), then outputs (m..m+l).
     let signals: Vec<&[f64]> = inputs.iter().chain(outputs).copied().collect();
@@ -170,16 +195,24 @@ pub fn po_moesp(outputs: &[&[f64]], inputs: &[&[f64]], block_rows: usize) -> Res
     }
     for shift in 0..p {
         for c in 0..l {
-            rows.push(HankelRow { signal: m + c, shift });
+            rows.push(HankelRow {
+                signal: m + c,
+                shift,
+            });
         }
     }
     for shift in p..2 * p {
         for c in 0..l {
-            rows.push(HankelRow { signal: m + c, shift });
+            rows.push(HankelRow {
+                signal: m + c,
+                shift,
+            });
         }
     }
     let g = hankel_gram(&signals, &rows, columns);
     let big_l = cholesky_lower(&g, rows.len())?;
-    let l32 = big_l.as_ref().submatrix(p * m + p * (m + l), p * m, p * l, p * (m + l));
+    let l32 = big_l
+        .as_ref()
+        .submatrix(p * m + p * (m + l), p * m, p * l, p * (m + l));
     thin_svd_subspace(l32, l, p)
 }
