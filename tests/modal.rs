@@ -222,15 +222,17 @@ fn earthquake_five_storey_input_output_finds_five_modes_and_nothing_else() {
 }
 
 /// Over 8 independent records the automatic selection always returns the 5
-/// modes and the mean errors (bias) are far below the single-record scatter:
-/// |mean Δf/f| ≤ 1e-3 and |mean Δζ| ≤ 0.0015 per mode.
+/// modes, and the mean errors show no bias: for each mode |mean Δf/f| and
+/// |mean Δζ| stay within 3.5 standard errors (Student t, 7 degrees of freedom,
+/// two-sided 1 %) and the standard errors are small (≤ 1e-3 and ≤ 0.0015),
+/// so the check is informative.
 #[test]
 fn ambient_identification_is_unbiased_over_seeds() {
     let truth = five_storey().modes().unwrap();
-    let seeds = 101..109u64;
-    let mut sum_df = [0.0; 5];
-    let mut sum_dz = [0.0; 5];
-    for seed in seeds.clone() {
+    let seeds: Vec<u64> = (101..109).collect();
+    let mut df = vec![Vec::new(); 5];
+    let mut dz = vec![Vec::new(); 5];
+    for &seed in &seeds {
         let result = identify(
             &ambient_input_seeded(seed),
             &ambient_settings(Method::SsiCov),
@@ -247,16 +249,32 @@ fn ambient_identification_is_unbiased_over_seeds() {
                 .collect::<Vec<_>>()
         );
         for j in 0..5 {
-            sum_df[j] += result.modes[j].frequency_hz / truth.frequencies_hz[j] - 1.0;
-            sum_dz[j] += result.modes[j].damping_ratio - truth.damping_ratios[j];
+            df[j].push(result.modes[j].frequency_hz / truth.frequencies_hz[j] - 1.0);
+            dz[j].push(result.modes[j].damping_ratio - truth.damping_ratios[j]);
         }
     }
-    let count = seeds.count() as f64;
+    let mean_and_se = |v: &[f64]| {
+        let n = v.len() as f64;
+        let m = v.iter().sum::<f64>() / n;
+        let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        (m, sd / n.sqrt())
+    };
     for j in 0..5 {
-        let (bias_f, bias_z) = (sum_df[j] / count, sum_dz[j] / count);
-        eprintln!("mode {j}: mean Δf/f {bias_f:.2e}, mean Δζ {bias_z:.5}");
-        assert!(bias_f.abs() <= 1e-3, "mode {j}: frequency bias {bias_f}");
-        assert!(bias_z.abs() <= 0.0015, "mode {j}: damping bias {bias_z}");
+        let (bias_f, se_f) = mean_and_se(&df[j]);
+        let (bias_z, se_z) = mean_and_se(&dz[j]);
+        eprintln!("mode {j}: mean Δf/f {bias_f:.2e} (s.e. {se_f:.1e}), mean Δζ {bias_z:.5} (s.e. {se_z:.5})");
+        assert!(
+            se_f <= 1e-3 && se_z <= 0.0015,
+            "mode {j}: scatter too large"
+        );
+        assert!(
+            bias_f.abs() <= 3.5 * se_f,
+            "mode {j}: frequency bias {bias_f}"
+        );
+        assert!(
+            bias_z.abs() <= 3.5 * se_z,
+            "mode {j}: damping bias {bias_z}"
+        );
     }
 }
 
@@ -405,6 +423,13 @@ fn painter_street_overpass_transverse_mode() {
     settings.filters.frequency_min_hz = Some(1.0 / 0.6);
     settings.filters.frequency_max_hz = Some(1.0 / 0.1);
     settings.filters.damping_max = 0.10;
+    // A short weak-motion record (M4.7, 83 s): damping scatters between
+    // orders (1–9 %), so damping is left out of the clustering distance and
+    // the frequency stability tolerance is 3 % instead of 1 %.  With the
+    // defaults no cluster reaches the minimum size; the result is the same
+    // (T = 0.2577–0.2580 s) for tolerances 2–5 % and thresholds 0.04–0.06.
+    settings.stability.frequency = 0.03;
+    settings.clustering.damping_weight = 0.0;
     let result = identify(&input, &settings).unwrap();
     for m in &result.modes {
         eprintln!(

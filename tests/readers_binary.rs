@@ -968,3 +968,62 @@ fn sniff_binary_formats_by_content() {
     );
     assert_eq!(readers::sniff("notes.bin", &[b'x'; 1000]), None);
 }
+
+/// SplitMix64: small seeded generator for the corruption test (deterministic).
+struct SplitMix64(u64);
+impl SplitMix64 {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+/// Corrupted and truncated inputs give `Ok` or `Err`, never a panic.
+#[test]
+fn readers_never_panic_on_corrupted_bytes() {
+    let mseed = bytes_of(&format!("{MSEED_DIR}/NP.8040.D0.HNE.mseed"))[..2048].to_vec();
+    let sac = bytes_of("usgs-gmprocess-format-samples/sac/20190706031952.CJ.T001230.HNE.sac");
+    let csv_full = bytes_of(&format!(
+        "{MDOF}/Ground Floor/(Northridge)Xsens DOT_20250306_122607.csv"
+    ));
+    let csv = csv_full[..6000].to_vec();
+    let mut small = anchorage_event();
+    for r in &mut small.records {
+        r.samples.truncate(400);
+    }
+    let mcap_bytes = mcap_writer::write_event_to(
+        &small,
+        Cursor::new(Vec::new()),
+        &McapWriteOptions::default(),
+        Path::new("m"),
+    )
+    .unwrap()
+    .into_inner();
+    let cases: [(readers::Format, &[u8]); 4] = [
+        (readers::Format::MiniSeed, &mseed),
+        (readers::Format::Sac, &sac),
+        (readers::Format::Csv, &csv),
+        (readers::Format::Mcap, &mcap_bytes),
+    ];
+    let mut rng = SplitMix64(20240601);
+    for (format, original) in cases {
+        for trial in 0..600 {
+            let mut b = original.to_vec();
+            if trial % 3 == 0 {
+                b.truncate(rng.below(b.len()));
+            } else {
+                for _ in 0..1 + rng.below(8) {
+                    let i = rng.below(b.len());
+                    b[i] = rng.next() as u8;
+                }
+            }
+            let _ = readers::read(format, &b, &src("corrupt"), &ReadOptions::default());
+        }
+    }
+}

@@ -876,3 +876,86 @@ fn ensemble_is_deterministic_and_records_every_round() {
     );
     assert!(matches!(out_of_bounds, Err(Error::Usage(_))));
 }
+
+#[test]
+fn update_twin_returns_outputs_and_an_updated_file() {
+    use quaketwin::twin::update::update_twin;
+    let t = twin(&thesis_cantilever_toml([5.05e9; 3]));
+    let out = update_twin(
+        &t,
+        benchmark_measured(&t),
+        ObjectiveOptions::default(),
+        &EnsembleOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(out.parameter_names, vec!["E1", "E2", "E3"]);
+    assert!(
+        out.modes.frequency_error < 1e-4 && out.modes_before.frequency_error > 0.1,
+        "{:?} {:?}",
+        out.modes,
+        out.modes_before
+    );
+    let again = twin(&out.updated_twin_toml);
+    let e = again.system.start_values();
+    assert!(
+        (e[0] - 1e9).abs() / 1e9 < 0.05 && (e[1] - 2e9).abs() / 2e9 < 0.10,
+        "{e:?}"
+    );
+}
+
+/// Matrix Market import: the mesh twin's K0, M and unit-E group matrices written out and read
+/// back as a [matrices] twin give the same frequencies for any θ.
+#[test]
+fn matrix_market_twin_reproduces_the_mesh_twin() {
+    use quaketwin::twin::matrix_market::{parse_matrix_market, write_matrix_market_symmetric};
+    use quaketwin::twin::sparse::CscMatrix;
+    let mesh = twin(&thesis_cantilever_toml([5.05e9; 3]));
+    let sys = &mesh.system;
+    let dir = tempfile::tempdir().unwrap();
+    let at = |base: &[f64]| CscMatrix {
+        n: sys.n,
+        col_ptr: sys.stiffness.col_ptr.clone(),
+        row_idx: sys.stiffness.row_idx.clone(),
+        values: base.to_vec(),
+    };
+    write_matrix_market_symmetric(&at(&sys.stiffness.base), &dir.path().join("kbase.mtx")).unwrap();
+    for g in 0..3 {
+        write_matrix_market_symmetric(
+            &at(&sys.stiffness.terms[g]),
+            &dir.path().join(format!("k{g}.mtx")),
+        )
+        .unwrap();
+    }
+    write_matrix_market_symmetric(&sys.mass_at(&[0.0; 3]), &dir.path().join("m.mtx")).unwrap();
+    let mut text = String::from("[twin]\nname = \"mm\"\ndimension = 2\n[matrices]\nstiffness = \"kbase.mtx\"\nmass = \"m.mtx\"\n");
+    for g in 0..3 {
+        text.push_str(&format!(
+            "[[matrices.terms]]\nparameter = \"E{}\"\nstiffness = \"k{g}.mtx\"\n",
+            g + 1
+        ));
+    }
+    for g in 0..3 {
+        text.push_str(&format!("[[parameters]]\nname = \"E{}\"\nkind = \"youngs_modulus\"\nlower = 1.0e8\nupper = 1.0e10\nstart = 5.05e9\n", g + 1));
+    }
+    text.push_str("[[sensors]]\nchannel = \"top\"\nindex = 89\n");
+    let path = dir.path().join("mm.toml");
+    std::fs::write(&path, &text).unwrap();
+    let mm = quaketwin::twin::load_twin(&path).unwrap();
+    for theta in [TRUE_MODULI, [3e9, 4e8, 9e9]] {
+        let a = sys.modes(&theta, 3).unwrap().frequencies_hz();
+        let b = mm.system.modes(&theta, 3).unwrap().frequencies_hz();
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() / x < 1e-12, "{x} vs {y}");
+        }
+    }
+    // Malformed files name the file and line.
+    let e = parse_matrix_market(
+        "%%MatrixMarket matrix coordinate real symmetric\n2 2 1\n3 1 1.0\n",
+        "bad.mtx",
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, Error::Input { ref location, .. } if location.file == "bad.mtx" && location.line == Some(3)),
+        "{e}"
+    );
+}

@@ -55,6 +55,7 @@ pub fn run(
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let event_fp = fingerprint::path_fingerprint(event_path)?;
     let mut ctx = RunContext::new(event_path, out, quiet);
+    ctx.stage_decls = pipeline.stages.clone();
     let mut fingerprints: std::collections::BTreeMap<String, String> = Default::default();
     let mut outcomes = Vec::new();
     // One bar over the stages; indicatif hides it when stderr is not a terminal.

@@ -9,10 +9,12 @@ use crate::conditioning::Motion;
 use crate::error::{Error, Result};
 use crate::event_folder::LoadedEvent;
 use crate::stages;
+use crate::sinks::hysteresis_tables::DirectionOutcome;
+use crate::stages::hysteresis::HysteresisParams;
 use crate::vocab::Event;
 
 /// Stage kinds available in this build, in pipeline order.
-pub const KINDS: &[&str] = &["ingest", "condition", "metrics"];
+pub const KINDS: &[&str] = &["ingest", "condition", "metrics", "hysteresis", "damage"];
 
 /// Output files (relative to the output directory) a stage declares.
 pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
@@ -24,6 +26,12 @@ pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
             "spectra.parquet".into(),
             "drift.parquet".into(),
         ],
+        "hysteresis" => vec![
+            "bouc_wen.parquet".into(),
+            "bouc_wen_instantaneous.parquet".into(),
+            "hysteresis_fit.parquet".into(),
+        ],
+        "damage" => vec!["damage.parquet".into()],
         other => return Err(Error::usage(format!("unknown stage kind {other:?}"))),
     })
 }
@@ -34,6 +42,8 @@ pub fn run_stage(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
         "ingest" => stages::ingest::run(stage, ctx),
         "condition" => stages::condition::run(stage, ctx),
         "metrics" => stages::metrics::run(stage, ctx),
+        "hysteresis" => stages::hysteresis::run(stage, ctx),
+        "damage" => stages::hysteresis::run_damage(stage, ctx),
         other => Err(Error::usage(format!("unknown stage kind {other:?}"))),
     }
 }
@@ -49,6 +59,10 @@ pub struct RunContext {
     pub loaded: Option<LoadedEvent>,
     /// Conditioned event and its acceleration/velocity/displacement.
     pub conditioned: Option<(Event, Vec<Motion>)>,
+    /// Bouc-Wen identification per direction, with the params it used.
+    pub hysteresis: Option<(Vec<DirectionOutcome>, HysteresisParams)>,
+    /// The declarations of the pipeline's stages (a stage may need another's params).
+    pub stage_decls: Vec<StageDecl>,
 }
 
 impl RunContext {
@@ -60,7 +74,13 @@ impl RunContext {
             skipped: BTreeSet::new(),
             loaded: None,
             conditioned: None,
+            hysteresis: None,
+            stage_decls: Vec::new(),
         }
+    }
+    /// The first stage of `kind` in the pipeline.
+    pub fn stage_decl_of_kind(&self, kind: &str) -> Option<StageDecl> {
+        self.stage_decls.iter().find(|s| s.kind == kind).cloned()
     }
     pub fn mark_skipped(&mut self, stage: &str) {
         self.skipped.insert(stage.to_string());

@@ -648,7 +648,7 @@ mod tests {
         let opts = ReadOptions {
             sampling_rate_hz: Some(50.0),
             columns: Some(vec!["1".into()]),
-            time_column: None,
+            ..Default::default()
         };
         let fc = read(text.as_bytes(), &src(), &opts).unwrap();
         assert_eq!(fc.records[0].samples, vec![2.0, 4.0, 6.0]);

@@ -169,7 +169,7 @@ pub fn decode_accel_block_protobuf(data: &[u8]) -> std::result::Result<AccelBloc
             (5, 2) => {
                 let len = varint(data, &mut pos)? as usize;
                 let bytes = take(data, &mut pos, len)?;
-                if len % 8 != 0 {
+                if !len.is_multiple_of(8) {
                     return Err(format!(
                         "packed samples at byte {at}: {len} bytes is not a multiple of 8"
                     ));
@@ -211,6 +211,8 @@ pub fn decode_accel_block_protobuf(data: &[u8]) -> std::result::Result<AccelBloc
 fn check_record_structure(bytes: &[u8]) -> std::result::Result<(), (u64, String)> {
     const MAGIC: &[u8] = mcap::MAGIC;
     const FOOTER: u8 = 0x02;
+    const CHUNK: u8 = 0x06;
+    const MAX_CHUNK_BYTES: u64 = 1 << 30; // = the largest record_length_limit
     if !bytes.starts_with(MAGIC) {
         return Err((0, "not an MCAP file (no leading magic bytes)".into()));
     }
@@ -227,6 +229,19 @@ fn check_record_structure(bytes: &[u8]) -> std::result::Result<(), (u64, String)
         let end = (pos as u64 + 9).checked_add(len).filter(|e| *e <= bytes.len() as u64).ok_or_else(|| {
             (pos as u64, format!("record (opcode {opcode:#04x}) claims {len} bytes, only {} remain: truncated or corrupt MCAP file", left - 9))
         })? as usize;
+        // Chunk body: start u64, end u64, uncompressed_size u64, crc u32, ... The
+        // parser allocates the claimed size up front: refuse absurd claims.
+        if opcode == CHUNK && len >= 24 {
+            let mut size = [0u8; 8];
+            size.copy_from_slice(&bytes[pos + 9 + 16..pos + 9 + 24]);
+            let size = u64::from_le_bytes(size);
+            if size > MAX_CHUNK_BYTES {
+                return Err((
+                    pos as u64,
+                    format!("chunk claims {size} uncompressed bytes (limit {MAX_CHUNK_BYTES}): corrupt MCAP file"),
+                ));
+            }
+        }
         pos = end;
         if opcode == FOOTER {
             return if &bytes[pos..] == MAGIC {
@@ -239,6 +254,40 @@ fn check_record_structure(bytes: &[u8]) -> std::result::Result<(), (u64, String)
             };
         }
     }
+}
+
+/// Largest record (or decompressed chunk) accepted: generous for acceleration
+/// blocks, small enough that a corrupt length cannot exhaust memory.
+fn record_length_limit(file_len: usize) -> usize {
+    (64usize << 20)
+        .max(file_len.saturating_mul(16))
+        .min(1 << 30)
+}
+
+/// All messages of an in-memory MCAP file, in file order.
+fn read_messages(
+    bytes: &[u8],
+) -> std::result::Result<Vec<mcap::Message<'static>>, mcap::McapError> {
+    use mcap::sans_io::{LinearReaderOptions, MessageReadEvent, MessageReader};
+    let options = LinearReaderOptions::default()
+        .with_record_length_limit(record_length_limit(bytes.len()))
+        .with_validate_chunk_crcs(true)
+        .with_prevalidate_chunk_crcs(true);
+    let mut reader = MessageReader::new_with_options(options);
+    let mut rest = bytes;
+    let mut out = Vec::new();
+    while let Some(event) = reader.next_event() {
+        match event? {
+            MessageReadEvent::ReadRequest(need) => {
+                let n = need.min(rest.len());
+                reader.insert(n).copy_from_slice(&rest[..n]);
+                reader.notify_read(n);
+                rest = &rest[n..];
+            }
+            MessageReadEvent::Message(m) => out.push(m),
+        }
+    }
+    Ok(out)
 }
 
 /// What was collected for one channel.
@@ -259,22 +308,19 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     src.format = "mcap".into();
     let loc = || super::location(&src);
     check_record_structure(bytes).map_err(|(at, m)| Error::input(loc().at_byte(at), m))?;
-    // The mcap 0.26 message stream sets no record-length limit and can panic on
-    // an arithmetic overflow when a record inside a chunk claims an absurd
-    // length; the structure check above covers top-level records, and this
-    // guard turns any remaining parser panic on malformed data into an input error.
-    let messages = std::panic::catch_unwind(
-        || -> std::result::Result<Vec<mcap::Message<'static>>, mcap::McapError> {
-            mcap::MessageStream::new(bytes)?.collect()
-        },
-    )
-    .map_err(|_| {
-        Error::input(
-            loc(),
-            "malformed MCAP file: the MCAP parser failed on its records",
-        )
-    })?
-    .map_err(|e| Error::input(loc(), format!("not a readable MCAP file: {e}")))?;
+    // The mcap 0.26 `MessageStream` sets no record-length limit: a corrupt
+    // length inside a chunk makes it overflow or allocate exabytes (found by
+    // the corruption test).  So the sans-io reader is driven here with a
+    // record-length limit and chunk CRCs checked before any chunk record is
+    // parsed; the panic guard is a last line of defence for parser bugs.
+    let messages = std::panic::catch_unwind(|| read_messages(bytes))
+        .map_err(|_| {
+            Error::input(
+                loc(),
+                "malformed MCAP file: the MCAP parser failed on its records",
+            )
+        })?
+        .map_err(|e| Error::input(loc(), format!("not a readable MCAP file: {e}")))?;
     let mut order: Vec<String> = Vec::new();
     let mut chans: BTreeMap<String, ChannelAcc> = BTreeMap::new();
     let mut topics_seen: Vec<String> = Vec::new();
@@ -429,7 +475,7 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
                 let mut steps: Vec<i64> = acc
                     .points
                     .windows(2)
-                    .map(|w| w[1].0 - w[0].0)
+                    .map(|w| w[1].0.saturating_sub(w[0].0))
                     .filter(|d| *d > 0)
                     .collect();
                 steps.sort_unstable();
@@ -453,46 +499,47 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
             }
         }
         let joined = join_segments(acc.segments).map_err(|m| Error::input(cloc(), m))?;
-        let mut ch =
-            match acc
-                .channel_json
-                .as_deref()
-                .map(serde_json::from_str::<Channel>)
-            {
-                Some(Ok(mut c)) => {
-                    c.source = src.clone();
-                    c.source.column = Some(acc.topic.clone());
-                    c
-                }
-                Some(Err(e)) => return Err(Error::input(
+        let mut ch = match acc
+            .channel_json
+            .as_deref()
+            .map(serde_json::from_str::<Channel>)
+        {
+            Some(Ok(mut c)) => {
+                c.source = src.clone();
+                c.source.column = Some(acc.topic.clone());
+                c
+            }
+            Some(Err(e)) => {
+                return Err(Error::input(
                     cloc(),
                     format!(
                         "channel metadata {CHANNEL_METADATA_KEY} is not a quaketwin channel: {e}"
                     ),
-                )),
-                None => {
-                    let mut s = src.clone();
-                    s.column = Some(acc.topic.clone());
-                    let mut c = Channel::new(id.clone(), Units::MPerS2, joined.rate_hz, s);
-                    match acc.units.as_slice() {
-                        [] => {
-                            c.missing.push("units".into());
-                            c.inferred
-                                .push("units=m/s2 assumed: the messages state none".into());
-                        }
-                        [u] => {
-                            c.units = u.parse::<Units>().map_err(|e| Error::input(cloc(), e))?;
-                        }
-                        many => {
-                            return Err(Error::input(
-                                cloc(),
-                                format!("messages disagree on units: {many:?}"),
-                            ))
-                        }
+                ))
+            }
+            None => {
+                let mut s = src.clone();
+                s.column = Some(acc.topic.clone());
+                let mut c = Channel::new(id.clone(), Units::MPerS2, joined.rate_hz, s);
+                match acc.units.as_slice() {
+                    [] => {
+                        c.missing.push("units".into());
+                        c.inferred
+                            .push("units=m/s2 assumed: the messages state none".into());
                     }
-                    c
+                    [u] => {
+                        c.units = u.parse::<Units>().map_err(|e| Error::input(cloc(), e))?;
+                    }
+                    many => {
+                        return Err(Error::input(
+                            cloc(),
+                            format!("messages disagree on units: {many:?}"),
+                        ))
+                    }
                 }
-            };
+                c
+            }
+        };
         ch.sampling_rate_hz = joined.rate_hz;
         ch.start_ns = (!acc.start_unknown).then_some(joined.start_ns);
         ch.qa.extend(joined.qa);

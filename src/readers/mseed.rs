@@ -39,6 +39,8 @@ use crate::vocab::{epoch_ns_from_ordinal, Channel, QaFlag, Record, SourceRef, Un
 
 const FIXED_HEADER_LEN: usize = 48;
 const NS_PER_S: f64 = 1e9;
+/// Largest gap (in samples) filled by interpolation; beyond it the join fails.
+const MAX_GAP_FILL: usize = 10_000_000;
 
 /// One decoded data record.
 #[derive(Debug, Clone)]
@@ -105,13 +107,22 @@ pub(crate) fn join_segments(mut segments: Vec<Segment>) -> std::result::Result<J
             ));
         }
         // Position of this segment's first sample on the grid of the first segment.
-        let offset_samples = (seg.start_ns - start_ns) as f64 / dt_ns;
+        let offset_samples = (seg.start_ns as i128 - start_ns as i128) as f64 / dt_ns;
         let expected = samples.len() as f64;
         let shift = offset_samples - expected;
         if samples.is_empty() || shift.abs() <= 0.5 {
             samples.extend_from_slice(&seg.samples);
         } else if shift > 0.5 {
             // Gap: fill with a straight line between the bordering samples.
+            // A corrupt time stamp must not make us allocate years of samples.
+            if shift > MAX_GAP_FILL as f64 {
+                return Err(format!(
+                    "gap of {:.0} samples ({:.1} s) before {} is implausible for one record (limit {MAX_GAP_FILL} samples)",
+                    shift,
+                    shift / rate,
+                    seg.origin
+                ));
+            }
             let missing = shift.round() as usize;
             let left = samples.last().copied().unwrap_or(0.0);
             let right = seg.samples[0];
@@ -804,5 +815,53 @@ mod tests {
         assert_eq!(rate_from_factor(1, -10), 0.1);
         assert_eq!(rate_from_factor(-10, -10), 0.01);
         assert_eq!(rate_from_factor(20, -2), 10.0);
+    }
+}
+
+#[cfg(test)]
+mod join_tests {
+    use super::*;
+
+    fn seg(start_ns: i64, samples: Vec<f64>) -> Segment {
+        Segment {
+            start_ns,
+            rate_hz: 10.0,
+            samples,
+            origin: "test".into(),
+        }
+    }
+
+    #[test]
+    fn overlap_identical_is_silent_and_different_is_flagged() {
+        // 10 Hz: second segment starts 0.2 s (2 samples) before the first ends.
+        let j = join_segments(vec![
+            seg(0, vec![1.0, 2.0, 3.0, 4.0]),
+            seg(200_000_000, vec![3.0, 4.0, 5.0]),
+        ])
+        .unwrap();
+        assert_eq!(j.samples, vec![1.0, 2.0, 3.0, 4.0, 5.0]);
+        assert!(j.qa.is_empty());
+        let j = join_segments(vec![
+            seg(200_000_000, vec![9.0, 4.0, 5.0]),
+            seg(0, vec![1.0, 2.0, 3.0, 4.0]),
+        ])
+        .unwrap();
+        assert_eq!(
+            j.samples,
+            vec![1.0, 2.0, 3.0, 4.0, 5.0],
+            "sorted by start, earlier samples kept"
+        );
+        assert!(j.qa.iter().any(
+            |q| matches!(q, QaFlag::Gap { duration_s, .. } if (duration_s + 0.2).abs() < 1e-9)
+        ));
+    }
+
+    #[test]
+    fn absurd_gap_and_rate_change_are_errors() {
+        assert!(join_segments(vec![seg(0, vec![1.0]), seg(i64::MAX / 2, vec![2.0])]).is_err());
+        let mut other = seg(100_000_000, vec![2.0]);
+        other.rate_hz = 20.0;
+        let e = join_segments(vec![seg(0, vec![1.0]), other]).unwrap_err();
+        assert!(e.contains("sampling rate changes"), "{e}");
     }
 }

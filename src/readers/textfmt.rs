@@ -189,7 +189,7 @@ impl Layout {
             .trim_end_matches(')')
             .trim()
             .to_ascii_uppercase();
-        let letter = s.find(|c: char| matches!(c, 'F' | 'E' | 'I' | 'G' | 'D'))?;
+        let letter = s.find(['F', 'E', 'I', 'G', 'D'])?;
         let count: usize = if letter == 0 {
             1
         } else {
@@ -300,6 +300,9 @@ pub(crate) fn read_block(
     })
 }
 
+/// `(0-based line index, number of values read up to and including it)`.
+pub(crate) type LineMark = (usize, usize);
+
 /// Every number from 0-based line `start` to the end of the file (blank
 /// lines skipped), with, for each line read, `(line index, values so far)`
 /// so callers can name the line where a count went wrong.
@@ -308,7 +311,7 @@ pub(crate) fn read_to_end(
     start: usize,
     layout: Layout,
     channel: &str,
-) -> Result<(Vec<f64>, Vec<(usize, usize)>)> {
+) -> Result<(Vec<f64>, Vec<LineMark>)> {
     let mut values = Vec::new();
     let mut marks = Vec::new();
     for i in start..lines.len() {
@@ -335,7 +338,7 @@ pub(crate) fn read_to_end(
 }
 
 /// The 0-based line holding value number `k` (0-based), from `read_to_end` marks.
-pub(crate) fn line_of_value(marks: &[(usize, usize)], k: usize) -> Option<usize> {
+pub(crate) fn line_of_value(marks: &[LineMark], k: usize) -> Option<usize> {
     marks.iter().find(|&&(_, upto)| upto > k).map(|&(i, _)| i)
 }
 

@@ -131,7 +131,7 @@ pub fn write_event_to<W: Write + Seek>(
         let block_len = ((opts.block_s * rate).round() as usize).max(1);
         for (bi, chunk) in rec.samples.chunks(block_len).enumerate() {
             let first = bi * block_len;
-            let t0 = start + (first as f64 * 1e9 / rate).round() as i64;
+            let t0 = start.saturating_add((first as f64 * 1e9 / rate).round() as i64);
             let block = AccelBlock {
                 channel: ch.id.clone(),
                 t0_ns: t0,

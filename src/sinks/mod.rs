@@ -2,5 +2,6 @@
 //! I/O lives here, at the edge; stages hand over plain data.
 
 pub mod event_tables;
+pub mod hysteresis_tables;
 pub mod mcap_writer;
 pub mod parquet;

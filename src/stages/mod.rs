@@ -3,5 +3,6 @@
 //! nothing here does mathematics.
 
 pub mod condition;
+pub mod hysteresis;
 pub mod ingest;
 pub mod metrics;

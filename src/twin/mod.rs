@@ -24,6 +24,7 @@ pub mod rng;
 pub mod sparse;
 pub mod statics;
 pub mod tridiagonal;
+pub mod update;
 
 pub use assembly::{assemble, DofMap, ParameterInfo, SensorDof, TwinSystem};
 pub use eigen::{dense_modes, lanczos_modes, LanczosOptions, Modes};

@@ -1,0 +1,248 @@
+//! Small HTML building blocks: escaping, number formatting, tables, notes.
+
+use super::table::{Column, Table};
+
+/// Escapes text for HTML element content and attribute values.
+pub fn escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// Human-readable number: 4 significant digits, scientific notation outside
+/// [1e-3, 1e5).  The exact value goes into the cell's `data-value`.
+pub fn format_number(x: f64) -> String {
+    if !x.is_finite() {
+        return if x.is_nan() {
+            "NaN".into()
+        } else if x > 0.0 {
+            "∞".into()
+        } else {
+            "−∞".into()
+        };
+    }
+    if x == 0.0 {
+        return "0".into();
+    }
+    let a = x.abs();
+    if (1e-3..1e5).contains(&a) {
+        let digits = (3 - a.log10().floor() as i32).clamp(0, 6) as usize;
+        format!("{x:.digits$}")
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
+/// One table cell.
+#[derive(Debug, Clone, Default)]
+pub struct Cell {
+    /// Already-escaped HTML content.
+    pub html: String,
+    /// Exact value (shortest round-trip decimal) for numeric cells.
+    pub value: Option<f64>,
+    pub class: Option<&'static str>,
+}
+
+impl Cell {
+    pub fn text(s: &str) -> Cell {
+        Cell {
+            html: escape(s),
+            ..Default::default()
+        }
+    }
+    pub fn raw(html: String) -> Cell {
+        Cell {
+            html,
+            ..Default::default()
+        }
+    }
+    pub fn number(x: Option<f64>) -> Cell {
+        match x {
+            Some(v) => Cell {
+                html: format_number(v),
+                value: Some(v),
+                class: Some("num"),
+            },
+            None => Cell {
+                html: "—".into(),
+                value: None,
+                class: Some("null"),
+            },
+        }
+    }
+    pub fn integer(x: Option<f64>) -> Cell {
+        match x {
+            Some(v) if v.fract() == 0.0 && v.abs() < 9.0e15 => Cell {
+                html: format!("{}", v as i64),
+                value: Some(v),
+                class: Some("num"),
+            },
+            other => Cell::number(other),
+        }
+    }
+    /// Any cell of a loaded table column.
+    pub fn of(table: &Table, column: &str, row: usize) -> Cell {
+        match table.columns.get(column) {
+            Some(Column::Number { values, integer }) => {
+                let v = values.get(row).copied().flatten();
+                if *integer {
+                    Cell::integer(v)
+                } else {
+                    Cell::number(v)
+                }
+            }
+            Some(Column::Bool(v)) => match v.get(row).copied().flatten() {
+                Some(b) => Cell::text(if b { "yes" } else { "no" }),
+                None => Cell::number(None),
+            },
+            Some(Column::Text(v)) => match v.get(row).cloned().flatten() {
+                Some(s) => Cell::text(&s),
+                None => Cell::number(None),
+            },
+            Some(Column::TextList(v)) => match v.get(row).cloned().flatten() {
+                Some(l) if l.is_empty() => Cell::text(""),
+                Some(l) => Cell::raw(
+                    l.iter()
+                        .map(|s| format!("<span class=\"tag\">{}</span>", escape(s)))
+                        .collect::<Vec<_>>()
+                        .join(" "),
+                ),
+                None => Cell::number(None),
+            },
+            Some(Column::NumberList(v)) => match v.get(row).cloned().flatten() {
+                Some(l) => Cell::text(&format!(
+                    "[{}]",
+                    l.iter()
+                        .map(|x| format_number(*x))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )),
+                None => Cell::number(None),
+            },
+            Some(Column::Unsupported(t)) => Cell::text(&format!("({t})")),
+            None => Cell::number(None),
+        }
+    }
+}
+
+/// An HTML table with a header row; `id` optional.
+pub fn table(id: Option<&str>, headers: &[String], rows: &[Vec<Cell>]) -> String {
+    let mut s = String::new();
+    match id {
+        Some(id) => s.push_str(&format!("<table id=\"{}\">", escape(id))),
+        None => s.push_str("<table>"),
+    }
+    s.push_str("<thead><tr>");
+    for h in headers {
+        s.push_str(&format!("<th>{}</th>", escape(h)));
+    }
+    s.push_str("</tr></thead><tbody>");
+    for row in rows {
+        s.push_str("<tr>");
+        for c in row {
+            s.push_str("<td");
+            if let Some(class) = c.class {
+                s.push_str(&format!(" class=\"{class}\""));
+            }
+            if let Some(v) = c.value {
+                s.push_str(&format!(" data-value=\"{v}\""));
+            }
+            s.push('>');
+            s.push_str(&c.html);
+            s.push_str("</td>");
+        }
+        s.push_str("</tr>");
+    }
+    s.push_str("</tbody></table>");
+    s
+}
+
+/// Every column of a table (in file order), at most `max_rows` rows.
+pub fn whole_table(t: &Table, max_rows: usize) -> String {
+    let headers: Vec<String> = t.names.clone();
+    let rows: Vec<Vec<Cell>> = (0..t.rows.min(max_rows))
+        .map(|r| t.names.iter().map(|c| Cell::of(t, c, r)).collect())
+        .collect();
+    let mut s = format!("<div class=\"scroll\">{}</div>", table(None, &headers, &rows));
+    if t.rows > max_rows {
+        s.push_str(&note(&format!(
+            "Showing {max_rows} of {} rows of {}.",
+            t.rows,
+            t.file_name()
+        )));
+    }
+    s
+}
+
+pub fn note(text: &str) -> String {
+    format!("<p class=\"note\">{}</p>", escape(text))
+}
+
+/// The message a section shows when its stage's output is absent.
+pub fn absent(file: &str, stage: &str) -> String {
+    format!(
+        "<p class=\"absent\">Stage not run / output absent: <code>{}</code> (stage <code>{}</code>).</p>",
+        escape(file),
+        escape(stage)
+    )
+}
+
+/// The message a section shows when a file exists but cannot be read.
+pub fn unreadable(file: &str, error: &str) -> String {
+    format!(
+        "<p class=\"absent\">Output unreadable: <code>{}</code> — {}</p>",
+        escape(file),
+        escape(error)
+    )
+}
+
+/// Lists expected-but-missing and unknown columns of a table, if any.
+pub fn column_notes(t: &Table, expected: &[&str]) -> String {
+    let missing = t.missing(expected);
+    let unknown = t.unknown(expected);
+    let mut s = String::new();
+    if !missing.is_empty() {
+        s.push_str(&note(&format!(
+            "{}: expected column(s) not present: {}.",
+            t.file_name(),
+            missing.join(", ")
+        )));
+    }
+    if !unknown.is_empty() {
+        s.push_str(&note(&format!(
+            "{}: further column(s): {}.",
+            t.file_name(),
+            unknown.join(", ")
+        )));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_have_four_significant_digits() {
+        assert_eq!(format_number(0.012346), "0.01235");
+        assert_eq!(format_number(1.5), "1.500");
+        assert_eq!(format_number(1234.5678), "1235");
+        assert_eq!(format_number(2.5e-5), "2.500e-5");
+        assert_eq!(format_number(0.0), "0");
+        assert_eq!(format_number(-3.0), "-3.000");
+    }
+
+    #[test]
+    fn escaping_covers_markup() {
+        assert_eq!(escape("<a href=\"x\">&'"), "&lt;a href=&quot;x&quot;&gt;&amp;&#39;");
+    }
+}

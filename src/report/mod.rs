@@ -1,0 +1,235 @@
+//! Post-earthquake report: turns a pipeline output directory into one
+//! self-contained HTML page (`report.html`) — inline CSS, inline SVG charts,
+//! no scripts, no network.
+//!
+//! Every number shown comes from the Parquet/JSON outputs in the directory
+//! (read back with the Arrow reader); nothing is recomputed from records.
+//! The only derived quantities are display choices: ratings (threshold
+//! comparisons of tabled values), maxima/final values of tabled series, and
+//! min–max decimation of traces for drawing.  Each section is always shown;
+//! when its stage did not run the section says which file is absent.
+//! Rating thresholds and their rationale: docs/report.md.
+
+mod html;
+mod plot;
+mod sections;
+pub mod table;
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+pub use html::format_number;
+
+/// Green/yellow/red limits of one criterion: value < `yellow` is green,
+/// `yellow` ≤ value < `red` is yellow, value ≥ `red` is red.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Thresholds {
+    pub yellow: f64,
+    pub red: f64,
+}
+
+impl Thresholds {
+    /// Rating of `value`; `None` for a non-finite value (not rated).
+    pub fn rate(&self, value: f64) -> Option<Rating> {
+        if !value.is_finite() {
+            None
+        } else if value >= self.red {
+            Some(Rating::Red)
+        } else if value >= self.yellow {
+            Some(Rating::Yellow)
+        } else {
+            Some(Rating::Green)
+        }
+    }
+}
+
+/// Which value of ι(t) is rated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum IotaStatistic {
+    /// ι at the end of the record (the residual, post-event state).
+    #[default]
+    Final,
+    /// max over time of ι(t) (conservative: includes recoverable excursions).
+    Peak,
+}
+
+/// Settings of the report (TOML/JSON with defaults for every field).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ReportSettings {
+    /// Page title; default: "quaketwin report — <event name>".
+    pub title: Option<String>,
+    /// Damage index ι: green < 0.02 ≤ yellow < 0.05 ≤ red.
+    pub iota: Thresholds,
+    /// Which value of ι(t) is rated (default: final).
+    pub iota_statistic: IotaStatistic,
+    /// Peak inter-storey drift ratio: green < 0.005 ≤ yellow < 0.015 ≤ red.
+    pub drift: Thresholds,
+    /// Most points drawn per trace (min–max decimation beyond).
+    pub max_points_per_trace: usize,
+    /// Most rows shown of a generic table.
+    pub max_table_rows: usize,
+}
+
+impl Default for ReportSettings {
+    fn default() -> Self {
+        ReportSettings {
+            title: None,
+            iota: Thresholds {
+                yellow: 0.02,
+                red: 0.05,
+            },
+            iota_statistic: IotaStatistic::Final,
+            drift: Thresholds {
+                yellow: 0.005,
+                red: 0.015,
+            },
+            max_points_per_trace: 2000,
+            max_table_rows: 200,
+        }
+    }
+}
+
+impl ReportSettings {
+    /// Rejects thresholds that are not 0 ≤ yellow ≤ red (finite) and
+    /// absurd plot sizes.
+    pub fn validate(&self) -> Result<()> {
+        for (name, t) in [("iota", &self.iota), ("drift", &self.drift)] {
+            if !(t.yellow.is_finite() && t.red.is_finite() && 0.0 <= t.yellow && t.yellow <= t.red)
+            {
+                return Err(Error::usage(format!(
+                    "report settings: {name} thresholds must satisfy 0 ≤ yellow ≤ red (got yellow = {}, red = {})",
+                    t.yellow, t.red
+                )));
+            }
+        }
+        if self.max_points_per_trace < 10 {
+            return Err(Error::usage(
+                "report settings: max_points_per_trace must be at least 10",
+            ));
+        }
+        if self.max_table_rows == 0 {
+            return Err(Error::usage(
+                "report settings: max_table_rows must be at least 1",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Traffic-light rating, ordered from best to worst.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Rating {
+    Green,
+    Yellow,
+    Red,
+}
+
+impl Rating {
+    pub fn label(&self) -> &'static str {
+        match self {
+            Rating::Green => "GREEN",
+            Rating::Yellow => "YELLOW",
+            Rating::Red => "RED",
+        }
+    }
+    /// What the rating means for the user (stated on the page).
+    pub fn meaning(&self) -> &'static str {
+        match self {
+            Rating::Green => "below the yellow threshold: no indication of damage",
+            Rating::Yellow => "between thresholds: inspect",
+            Rating::Red => "at or above the red threshold: inspect urgently, restrict use until assessed",
+        }
+    }
+    fn class(&self) -> &'static str {
+        match self {
+            Rating::Green => "r-green",
+            Rating::Yellow => "r-yellow",
+            Rating::Red => "r-red",
+        }
+    }
+    fn symbol(&self) -> &'static str {
+        match self {
+            Rating::Green => "✓",
+            Rating::Yellow => "!",
+            Rating::Red => "✕",
+        }
+    }
+    /// Badge: colour, symbol and text label (never colour alone).
+    pub(crate) fn badge(&self) -> String {
+        format!(
+            "<span class=\"badge {}\">{} {}</span>",
+            self.class(),
+            self.symbol(),
+            self.label()
+        )
+    }
+}
+
+/// One rated value: criterion, where, the tabled value and its rating.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Assessment {
+    pub criterion: String,
+    pub subject: String,
+    pub value: f64,
+    pub rating: Rating,
+    /// The file the value comes from.
+    pub source: String,
+}
+
+/// Renders `dir/report.html`'s content.  Errors only for bad settings or a
+/// missing/unreadable directory; unreadable or absent outputs are reported
+/// on the page.
+pub fn render_report(dir: &Path, settings: &ReportSettings) -> Result<String> {
+    settings.validate()?;
+    let meta = std::fs::metadata(dir).map_err(|e| Error::io(dir, e))?;
+    if !meta.is_dir() {
+        return Err(Error::usage(format!(
+            "report: {} is not a directory (give a pipeline output directory)",
+            dir.display()
+        )));
+    }
+    Ok(sections::page(dir, settings))
+}
+
+/// Writes `dir/report.html` atomically and returns its path.
+pub fn write_report(dir: &Path, settings: &ReportSettings) -> Result<PathBuf> {
+    let page = render_report(dir, settings)?;
+    let path = dir.join("report.html");
+    crate::sinks::parquet::write_bytes_atomically(&path, page.as_bytes())?;
+    Ok(path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thresholds_are_half_open_intervals() {
+        let s = ReportSettings::default();
+        assert_eq!(s.drift.rate(0.004_999), Some(Rating::Green));
+        assert_eq!(s.drift.rate(0.005), Some(Rating::Yellow));
+        assert_eq!(s.drift.rate(0.014_999), Some(Rating::Yellow));
+        assert_eq!(s.drift.rate(0.015), Some(Rating::Red));
+        assert_eq!(s.iota.rate(0.019), Some(Rating::Green));
+        assert_eq!(s.iota.rate(0.02), Some(Rating::Yellow));
+        assert_eq!(s.iota.rate(0.05), Some(Rating::Red));
+        assert_eq!(s.iota.rate(f64::NAN), None);
+    }
+
+    #[test]
+    fn settings_deserialise_with_defaults_and_validate() {
+        let s: ReportSettings = toml::from_str("drift = { yellow = 0.004, red = 0.01 }").unwrap();
+        assert_eq!(s.drift.yellow, 0.004);
+        assert_eq!(s.iota, ReportSettings::default().iota);
+        assert!(s.validate().is_ok());
+        let bad: ReportSettings = toml::from_str("iota = { yellow = 0.1, red = 0.05 }").unwrap();
+        assert!(matches!(bad.validate(), Err(Error::Usage(_))));
+        assert!(toml::from_str::<ReportSettings>("colour = 1").is_err());
+    }
+}

@@ -1,0 +1,396 @@
+//! Inline SVG charts drawn with plotters' SVG backend.
+//!
+//! plotters is built without its font features: its SVG backend writes text
+//! as plain `<text>` elements (font-family `sans-serif`) that the browser
+//! renders, and only estimates text extents for layout — no system fonts are
+//! read at build or run time.  Legends are written in HTML beside the chart
+//! (see `legend`) so long channel lists wrap instead of overlapping the data.
+
+use std::ops::Range;
+
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::prelude::*;
+
+use super::html::escape;
+
+/// Okabe–Ito colour-blind-safe palette (yellow left out: too pale on white).
+/// A series' index picks the colour; past the palette the series is dashed.
+pub const PALETTE: [(u8, u8, u8); 7] = [
+    (0, 114, 178),   // blue
+    (213, 94, 0),    // vermillion
+    (0, 158, 115),   // bluish green
+    (204, 121, 167), // reddish purple
+    (230, 159, 0),   // orange
+    (86, 180, 233),  // sky blue
+    (0, 0, 0),       // black
+];
+
+pub fn colour(index: usize) -> RGBColor {
+    let (r, g, b) = PALETTE[index % PALETTE.len()];
+    RGBColor(r, g, b)
+}
+
+pub fn css_colour(index: usize) -> String {
+    let (r, g, b) = PALETTE[index % PALETTE.len()];
+    format!("#{r:02x}{g:02x}{b:02x}")
+}
+
+/// How a series is drawn.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Mark {
+    Line,
+    Dashed,
+    FilledCircle,
+    HollowCircle,
+    Cross,
+    Triangle,
+    /// Line with a filled circle at each point (short profiles).
+    LinePoints,
+}
+
+#[derive(Debug, Clone)]
+pub struct Series {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+    pub colour: usize,
+    pub mark: Mark,
+}
+
+impl Series {
+    pub fn new(label: impl Into<String>, points: Vec<(f64, f64)>, colour: usize, mark: Mark) -> Self {
+        // Past the palette, lines become dashed so no two series look alike.
+        let mark = if mark == Mark::Line && colour >= PALETTE.len() {
+            Mark::Dashed
+        } else {
+            mark
+        };
+        Series {
+            label: label.into(),
+            points,
+            colour,
+            mark,
+        }
+    }
+}
+
+/// A reference line across the chart (thresholds, identified frequencies).
+#[derive(Debug, Clone)]
+pub struct RefLine {
+    pub at: f64,
+    pub horizontal: bool,
+    pub colour: usize,
+}
+
+#[derive(Debug, Clone)]
+pub struct Chart {
+    pub width: u32,
+    pub height: u32,
+    pub x_label: String,
+    pub y_label: String,
+    pub log_x: bool,
+    pub series: Vec<Series>,
+    pub ref_lines: Vec<RefLine>,
+    pub x_range: Option<(f64, f64)>,
+    pub y_range: Option<(f64, f64)>,
+}
+
+impl Chart {
+    pub fn new(width: u32, height: u32, x_label: &str, y_label: &str) -> Self {
+        Chart {
+            width,
+            height,
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            log_x: false,
+            series: Vec::new(),
+            ref_lines: Vec::new(),
+            x_range: None,
+            y_range: None,
+        }
+    }
+}
+
+/// Range of finite values (positive only when `positive`), padded when
+/// degenerate so the axis has a width.
+fn data_range(values: impl Iterator<Item = f64>, positive: bool) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite() && (!positive || *v > 0.0)) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if lo > hi {
+        return None;
+    }
+    if hi - lo <= f64::EPSILON * hi.abs().max(lo.abs()).max(1e-300) {
+        if positive {
+            return Some((lo / 2.0, hi * 2.0));
+        }
+        let pad = if lo == 0.0 { 1.0 } else { lo.abs() * 0.1 };
+        return Some((lo - pad, hi + pad));
+    }
+    Some((lo, hi))
+}
+
+/// Renders the chart as an inline `<svg>` element (no XML declaration, no
+/// namespace URL — inline SVG in HTML needs neither).
+pub fn render(chart: &Chart) -> Result<String, String> {
+    let x_range = match chart.x_range {
+        Some(r) => Some(r),
+        None => data_range(
+            chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
+            chart.log_x,
+        ),
+    }
+    .ok_or("no finite data to plot")?;
+    let y_range = match chart.y_range {
+        Some(r) => Some(r),
+        None => data_range(
+            chart
+                .series
+                .iter()
+                .flat_map(|s| s.points.iter().map(|p| p.1))
+                .chain(
+                    chart
+                        .ref_lines
+                        .iter()
+                        .filter(|l| l.horizontal)
+                        .map(|l| l.at),
+                ),
+            false,
+        )
+        .map(|(lo, hi)| {
+            let pad = 0.05 * (hi - lo);
+            (lo - pad, hi + pad)
+        }),
+    }
+    .ok_or("no finite data to plot")?;
+    let y = y_range.0..y_range.1;
+    let svg = if chart.log_x {
+        draw(chart, (x_range.0..x_range.1).log_scale(), y)?
+    } else {
+        draw(chart, x_range.0..x_range.1, y)?
+    };
+    Ok(clean_svg(&svg))
+}
+
+fn draw<XS>(chart: &Chart, x_spec: XS, y_spec: Range<f64>) -> Result<String, String>
+where
+    XS: AsRangedCoord<Value = f64>,
+    XS::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let mut buf = String::new();
+    {
+        let root = SVGBackend::with_string(&mut buf, (chart.width, chart.height)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let mut ctx = ChartBuilder::on(&root)
+            .margin(8)
+            .x_label_area_size(34)
+            .y_label_area_size(62)
+            .build_cartesian_2d(x_spec, y_spec)
+            .map_err(|e| e.to_string())?;
+        ctx.configure_mesh()
+            .x_desc(chart.x_label.as_str())
+            .y_desc(chart.y_label.as_str())
+            .x_labels(8)
+            .y_labels(6)
+            .light_line_style(RGBColor(235, 235, 235))
+            .bold_line_style(RGBColor(215, 215, 215))
+            .axis_desc_style(("sans-serif", 13))
+            .label_style(("sans-serif", 12))
+            .y_label_formatter(&|v| tick(*v))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let x_lim = ctx.x_range();
+        let y_lim = ctx.y_range();
+        for l in &chart.ref_lines {
+            let style = ShapeStyle::from(&colour(l.colour)).stroke_width(1);
+            let pts = if l.horizontal {
+                if l.at < y_lim.start || l.at > y_lim.end {
+                    continue;
+                }
+                vec![(x_lim.start, l.at), (x_lim.end, l.at)]
+            } else {
+                if l.at < x_lim.start || l.at > x_lim.end {
+                    continue;
+                }
+                vec![(l.at, y_lim.start), (l.at, y_lim.end)]
+            };
+            ctx.draw_series(DashedLineSeries::new(pts, 6, 4, style))
+                .map_err(|e| e.to_string())?;
+        }
+        for s in &chart.series {
+            let c = colour(s.colour);
+            let pts: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|(x, y)| {
+                    x.is_finite()
+                        && y.is_finite()
+                        && *x >= x_lim.start
+                        && *x <= x_lim.end
+                        && *y >= y_lim.start
+                        && *y <= y_lim.end
+                })
+                .collect();
+            let drawn = match s.mark {
+                Mark::Line => ctx
+                    .draw_series(LineSeries::new(pts, ShapeStyle::from(&c).stroke_width(1)))
+                    .map(|_| ()),
+                Mark::Dashed => ctx
+                    .draw_series(DashedLineSeries::new(
+                        pts,
+                        5,
+                        3,
+                        ShapeStyle::from(&c).stroke_width(1),
+                    ))
+                    .map(|_| ()),
+                Mark::LinePoints => {
+                    match ctx.draw_series(LineSeries::new(
+                        pts.clone(),
+                        ShapeStyle::from(&c).stroke_width(2),
+                    )) {
+                        Ok(_) => ctx
+                            .draw_series(pts.iter().map(|p| Circle::new(*p, 3, c.filled())))
+                            .map(|_| ()),
+                        Err(e) => Err(e),
+                    }
+                }
+                Mark::FilledCircle => ctx
+                    .draw_series(pts.iter().map(|p| Circle::new(*p, 3, c.filled())))
+                    .map(|_| ()),
+                Mark::HollowCircle => ctx
+                    .draw_series(pts.iter().map(|p| Circle::new(*p, 3, c.stroke_width(1))))
+                    .map(|_| ()),
+                Mark::Cross => ctx
+                    .draw_series(pts.iter().map(|p| Cross::new(*p, 2, c.stroke_width(1))))
+                    .map(|_| ()),
+                Mark::Triangle => ctx
+                    .draw_series(
+                        pts.iter()
+                            .map(|p| TriangleMarker::new(*p, 3, c.stroke_width(1))),
+                    )
+                    .map(|_| ()),
+            };
+            drawn.map_err(|e| e.to_string())?;
+        }
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(buf)
+}
+
+/// Tick label: short, scientific for very small or large magnitudes.
+fn tick(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if !(1e-3..1e5).contains(&a) {
+        format!("{v:.1e}")
+    } else {
+        let s = format!("{v:.4}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        s.to_string()
+    }
+}
+
+/// Drops the XML prolog and namespace URL and makes the chart scale with
+/// its container.
+fn clean_svg(svg: &str) -> String {
+    let start = svg.find("<svg").unwrap_or(0);
+    svg[start..]
+        .replacen(" xmlns=\"http://www.w3.org/2000/svg\"", "", 1)
+        .replacen("<svg ", "<svg class=\"plot\" role=\"img\" ", 1)
+}
+
+/// HTML legend: a swatch (colour and mark) and the label of every series.
+pub fn legend(series: &[Series]) -> String {
+    let mut s = String::from("<ul class=\"legend\">");
+    for x in series {
+        let glyph = match x.mark {
+            Mark::Line | Mark::LinePoints => "━",
+            Mark::Dashed => "╍",
+            Mark::FilledCircle => "●",
+            Mark::HollowCircle => "○",
+            Mark::Cross => "✕",
+            Mark::Triangle => "△",
+        };
+        s.push_str(&format!(
+            "<li><span class=\"swatch\" style=\"color:{}\">{glyph}</span> {}</li>",
+            css_colour(x.colour),
+            escape(&x.label)
+        ));
+    }
+    s.push_str("</ul>");
+    s
+}
+
+/// Min–max decimation for display: splits the trace into `max_points / 2`
+/// buckets and keeps each bucket's minimum and maximum in time order, so
+/// peaks survive.  Plot-only: every reported number comes from the tables.
+pub fn decimate_min_max(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f64)> {
+    let max_points = max_points.max(2);
+    if points.len() <= max_points {
+        return points.to_vec();
+    }
+    let buckets = max_points / 2;
+    let mut out = Vec::with_capacity(buckets * 2);
+    for b in 0..buckets {
+        let lo = b * points.len() / buckets;
+        let hi = ((b + 1) * points.len() / buckets).min(points.len());
+        let Some(chunk) = points.get(lo..hi) else {
+            continue;
+        };
+        let (mut imin, mut imax) = (0usize, 0usize);
+        for (i, p) in chunk.iter().enumerate() {
+            if p.1 < chunk[imin].1 {
+                imin = i;
+            }
+            if p.1 > chunk[imax].1 {
+                imax = i;
+            }
+        }
+        if chunk.is_empty() {
+            continue;
+        }
+        let (first, second) = if imin <= imax { (imin, imax) } else { (imax, imin) };
+        out.push(chunk[first]);
+        if second != first {
+            out.push(chunk[second]);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decimation_keeps_extremes_and_bounds_size() {
+        let pts: Vec<(f64, f64)> = (0..10_000)
+            .map(|i| (i as f64, ((i as f64) * 0.01).sin()))
+            .chain(std::iter::once((10_000.0, 5.0)))
+            .collect();
+        let d = decimate_min_max(&pts, 2000);
+        assert!(d.len() <= 2000, "{}", d.len());
+        assert!(d.iter().any(|p| p.1 == 5.0));
+        assert!(d.windows(2).all(|w| w[0].0 < w[1].0));
+    }
+
+    #[test]
+    fn chart_is_inline_svg_without_urls() {
+        let mut c = Chart::new(300, 200, "period (s)", "PSA (m/s²)");
+        c.log_x = true;
+        c.series.push(Series::new(
+            "a",
+            vec![(0.05, 1.0), (0.5, 3.0), (2.0, 0.5)],
+            0,
+            Mark::Line,
+        ));
+        let svg = render(&c).unwrap();
+        assert!(svg.starts_with("<svg class=\"plot\""), "{}", &svg[..60]);
+        assert!(!svg.contains("http"));
+        assert!(svg.contains("period (s)"));
+        assert!(svg.contains("<polyline"));
+    }
+}

@@ -1,0 +1,236 @@
+//! Parquet tables of the Bouc-Wen identification and the damage index
+//! (schemas in docs/formats.md): `bouc_wen.parquet`,
+//! `bouc_wen_instantaneous.parquet`, `hysteresis_fit.parquet`,
+//! `damage.parquet`.
+
+use std::path::Path;
+
+use super::parquet::{write_parquet, TableBuilder};
+use crate::error::Result;
+use crate::hysteresis::DirectionIdentification;
+
+/// Outcome of one direction: identified, or why not.
+pub enum DirectionOutcome {
+    Identified(Box<DirectionIdentification>),
+    NotIdentifiable { direction: String, reason: String },
+}
+
+impl DirectionOutcome {
+    pub fn direction(&self) -> &str {
+        match self {
+            DirectionOutcome::Identified(d) => &d.direction,
+            DirectionOutcome::NotIdentifiable { direction, .. } => direction,
+        }
+    }
+}
+
+fn meta(schema: &str, extra: &[(String, String)]) -> Vec<(String, String)> {
+    let mut m = vec![("quaketwin.schema".to_string(), schema.to_string())];
+    m.extend_from_slice(extra);
+    m
+}
+
+/// `bouc_wen.parquet`: one row per direction, DoF and parameter (a direction
+/// that could not be identified has one row with `status` saying why).
+pub fn write_bouc_wen(path: &Path, outcomes: &[DirectionOutcome], extra_meta: &[(String, String)]) -> Result<()> {
+    let mut c = Cols::default();
+    for o in outcomes {
+        match o {
+            DirectionOutcome::NotIdentifiable { direction, reason } => {
+                c.push_row(direction, -1, "none", None, f64::NAN, "", None, false, f64::NAN, f64::NAN, f64::NAN, "not_identifiable", reason);
+            }
+            DirectionOutcome::Identified(d) => {
+                for dof in &d.dofs {
+                    let st = dof.stability.as_ref();
+                    let stable = st.map(|s| s.stable).unwrap_or(false);
+                    let level = dof.dof as i32; // 1-based already
+                    let status = if stable { "identified" } else { "identified_unstable" };
+                    for (i, r) in dof.coupled.iter().enumerate() {
+                        let rs = st.and_then(|s| s.k0_rel_std.get(i).copied());
+                        let rds = st.and_then(|s| s.k0_delta_rel_std.get(i).copied());
+                        let r1 = *r as i32; // 1-based already
+                        c.push_row(&d.direction, level, "K0", Some(r1), dof.k0[i], "N/m", rs, stable, dof.cost, dof.cost_relative, dof.hysteretic_share, status, "");
+                        c.push_row(&d.direction, level, "K0_delta", Some(r1), dof.k0_delta[i], "N/m", rds, stable, dof.cost, dof.cost_relative, dof.hysteretic_share, status, "");
+                        c.push_row(&d.direction, level, "delta", Some(r1), dof.delta[i], "1/J", None, stable, dof.cost, dof.cost_relative, dof.hysteretic_share, status, "");
+                    }
+                    c.push_row(&d.direction, level, "beta", None, dof.beta, "N^(1-N)/m", st.map(|s| s.beta_rel_std), stable, dof.cost, dof.cost_relative, dof.hysteretic_share, status, "");
+                    c.push_row(&d.direction, level, "gamma", None, dof.gamma, "N^(1-N)/m", st.map(|s| s.gamma_rel_std), stable, dof.cost, dof.cost_relative, dof.hysteretic_share, status, "");
+                    c.push_row(&d.direction, level, "N", None, dof.exponent, "-", st.map(|s| s.exponent_std), stable, dof.cost, dof.cost_relative, dof.hysteretic_share, status, "");
+                }
+            }
+        }
+    }
+    let batch = TableBuilder::new()
+        .str("direction", &c.direction)
+        .i32("dof", c.dof)
+        .str("parameter", &c.parameter)
+        .opt_i32("coupled_dof", c.coupled)
+        .f64("value", c.value)
+        .str("unit", &c.unit)
+        .opt_f64("stability_std", c.stability)
+        .bool("stable", c.stable)
+        .f64("cost_j", c.cost)
+        .f64("cost_relative", c.cost_rel)
+        .f64("hysteretic_share", c.share)
+        .str("status", &c.status)
+        .str("reason", &c.reason)
+        .build()?;
+    write_parquet(path, &[batch], &meta("bouc_wen", extra_meta))
+}
+
+#[derive(Default)]
+struct Cols {
+    direction: Vec<String>,
+    dof: Vec<i32>,
+    parameter: Vec<String>,
+    coupled: Vec<Option<i32>>,
+    value: Vec<f64>,
+    unit: Vec<String>,
+    stability: Vec<Option<f64>>,
+    stable: Vec<bool>,
+    cost: Vec<f64>,
+    cost_rel: Vec<f64>,
+    share: Vec<f64>,
+    status: Vec<String>,
+    reason: Vec<String>,
+}
+
+impl Cols {
+    #[allow(clippy::too_many_arguments)]
+    fn push_row(
+        &mut self,
+        direction: &str,
+        dof: i32,
+        parameter: &str,
+        coupled: Option<i32>,
+        value: f64,
+        unit: &str,
+        stability: Option<f64>,
+        stable: bool,
+        cost: f64,
+        cost_rel: f64,
+        share: f64,
+        status: &str,
+        reason: &str,
+    ) {
+        self.direction.push(direction.into());
+        self.dof.push(dof);
+        self.parameter.push(parameter.into());
+        self.coupled.push(coupled);
+        self.value.push(value);
+        self.unit.push(unit.into());
+        self.stability.push(stability);
+        self.stable.push(stable);
+        self.cost.push(cost);
+        self.cost_rel.push(cost_rel);
+        self.share.push(share);
+        self.status.push(status.into());
+        self.reason.push(reason.into());
+    }
+}
+
+/// `bouc_wen_instantaneous.parquet`: cumulative (t_e → t) estimates per frame.
+pub fn write_instantaneous(path: &Path, outcomes: &[DirectionOutcome]) -> Result<()> {
+    let (mut dir, mut dof, mut t, mut inf, mut n, mut cost, mut k0, mut beta, mut gamma) =
+        (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    for o in outcomes {
+        let DirectionOutcome::Identified(d) = o else { continue };
+        for f in &d.dofs {
+            for e in &f.instantaneous {
+                dir.push(d.direction.clone());
+                dof.push(f.dof as i32);
+                t.push(e.time_s);
+                inf.push(e.informative);
+                n.push(e.exponent);
+                cost.push(e.cost);
+                // K0_dd (own storey) is the last coupled entry (r = d).
+                k0.push(e.k0.last().copied().unwrap_or(f64::NAN));
+                beta.push(e.beta);
+                gamma.push(e.gamma);
+            }
+        }
+    }
+    let batch = TableBuilder::new()
+        .str("direction", &dir)
+        .i32("dof", dof)
+        .f64("t_s", t)
+        .bool("informative", inf)
+        .f64("n_exponent", n)
+        .f64("cost_j", cost)
+        .f64("k0_own_n_m", k0)
+        .f64("beta", beta)
+        .f64("gamma", gamma)
+        .build()?;
+    write_parquet(path, &[batch], &meta("bouc_wen_instantaneous", &[]))
+}
+
+/// `hysteresis_fit.parquet`: recorded vs model restoring force per storey.
+pub fn write_fit(path: &Path, outcomes: &[DirectionOutcome], decimate: usize) -> Result<()> {
+    let step = decimate.max(1);
+    let (mut dir, mut dof, mut t, mut drift, mut fr, mut fm) = (vec![], vec![], vec![], vec![], vec![], vec![]);
+    for o in outcomes {
+        let DirectionOutcome::Identified(d) = o else { continue };
+        let dt = 1.0 / d.sampling_rate_hz;
+        for f in &d.dofs {
+            let s = &f.fit;
+            let len = s.force_record.len().min(s.force_model.len()).min(s.storey_drift.len());
+            for i in (0..len).step_by(step) {
+                dir.push(d.direction.clone());
+                dof.push(f.dof as i32);
+                t.push(i as f64 * dt);
+                drift.push(s.storey_drift[i]);
+                fr.push(s.force_record[i]);
+                fm.push(s.force_model[i]);
+            }
+        }
+    }
+    let batch = TableBuilder::new()
+        .str("direction", &dir)
+        .i32("dof", dof)
+        .f64("t_s", t)
+        .f64("drift_m", drift)
+        .f64("force_record_n", fr)
+        .f64("force_model_n", fm)
+        .build()?;
+    write_parquet(path, &[batch], &meta("hysteresis_fit", &[]))
+}
+
+/// `damage.parquet`: ι(t) and, per mode, ω_s(t)/ω_s(0) and c_s(t) — one row
+/// per direction, time and mode (ι repeated on the mode rows of one time).
+pub fn write_damage(path: &Path, outcomes: &[DirectionOutcome], decimate: usize) -> Result<()> {
+    let step = decimate.max(1);
+    let (mut dir, mut t, mut iota, mut mode, mut omega, mut ratio, mut part) =
+        (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let mut indefinite = serde_json::Map::new();
+    for o in outcomes {
+        let DirectionOutcome::Identified(d) = o else { continue };
+        let s = &d.damage;
+        indefinite.insert(d.direction.clone(), serde_json::json!(s.indefinite_steps));
+        let last = s.time_s.len().saturating_sub(1);
+        for k in (0..s.time_s.len()).filter(|k| k % step == 0 || *k == last) {
+            for m in 0..s.omega.len() {
+                dir.push(d.direction.clone());
+                t.push(s.time_s[k]);
+                iota.push(s.iota[k]);
+                mode.push(m as i32 + 1);
+                omega.push(s.omega[m].get(k).copied().unwrap_or(f64::NAN));
+                ratio.push(s.omega_ratio[m].get(k).copied().unwrap_or(f64::NAN));
+                part.push(s.participation[m].get(k).copied().unwrap_or(f64::NAN));
+            }
+        }
+    }
+    let batch = TableBuilder::new()
+        .str("direction", &dir)
+        .f64("t_s", t)
+        .f64("iota", iota)
+        .i32("mode", mode)
+        .f64("omega_rad_s", omega)
+        .f64("omega_ratio", ratio)
+        .f64("participation", part)
+        .build()?;
+    write_parquet(
+        path,
+        &[batch],
+        &meta("damage", &[("quaketwin.indefinite_steps".into(), serde_json::Value::Object(indefinite).to_string())]),
+    )
+}

@@ -1,0 +1,628 @@
+//! The post-earthquake report: rendered from a real pipeline run of the
+//! sample event, parse-checked, its numbers compared with the Parquet
+//! outputs they come from; later-stage sections from fixture tables; and the
+//! page loaded in headless Chromium (screenshot saved as a test artefact).
+
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use arrow_array::cast::AsArray;
+use arrow_array::types::{Float64Type, Int64Type};
+use arrow_array::Array;
+use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+use quaketwin::report::{self, IotaStatistic, ReportSettings};
+use quaketwin::sinks::parquet::{write_parquet, TableBuilder};
+
+const SECTION_IDS: [&str; 11] = [
+    "summary",
+    "rating",
+    "channels",
+    "spectra",
+    "time-histories",
+    "drift",
+    "modal",
+    "hysteresis",
+    "damage",
+    "twin",
+    "test-design",
+];
+
+fn manifest() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Runs the post-earthquake pipeline on the bundled sample event.
+fn run_sample(out: &Path) {
+    quaketwin::commands::run_pipeline(
+        &manifest().join("pipelines/post-earthquake.toml"),
+        &manifest().join("sample-records/synthetic-4storey-quake"),
+        out,
+        true,
+    )
+    .expect("pipeline on the sample event");
+}
+
+/// Parquet column → Vec<Option<f64>> (Float64 or Int64), read independently
+/// of the report's own loader.
+fn parquet_numbers(path: &Path, column: &str) -> Vec<Option<f64>> {
+    let reader = ParquetRecordBatchReaderBuilder::try_new(File::open(path).unwrap())
+        .unwrap()
+        .build()
+        .unwrap();
+    let mut out = Vec::new();
+    for batch in reader {
+        let batch = batch.unwrap();
+        let a = batch.column_by_name(column).unwrap_or_else(|| panic!("{column}"));
+        if let Some(f) = a.as_primitive_opt::<Float64Type>() {
+            out.extend((0..f.len()).map(|i| (!f.is_null(i)).then(|| f.value(i))));
+        } else {
+            let n = a.as_primitive::<Int64Type>();
+            out.extend((0..n.len()).map(|i| (!n.is_null(i)).then(|| n.value(i) as f64)));
+        }
+    }
+    out
+}
+
+fn parquet_strings(path: &Path, column: &str) -> Vec<String> {
+    let reader = ParquetRecordBatchReaderBuilder::try_new(File::open(path).unwrap())
+        .unwrap()
+        .build()
+        .unwrap();
+    let mut out = Vec::new();
+    for batch in reader {
+        let batch = batch.unwrap();
+        let a = batch.column_by_name(column).unwrap();
+        let s = a.as_string::<i32>();
+        out.extend((0..s.len()).map(|i| s.value(i).to_string()));
+    }
+    out
+}
+
+fn parse(html: &str) -> roxmltree::Document<'_> {
+    let opts = roxmltree::ParsingOptions {
+        allow_dtd: true,
+        ..Default::default()
+    };
+    roxmltree::Document::parse_with_options(html, opts).expect("report parses as polyglot HTML")
+}
+
+fn node_text(n: roxmltree::Node) -> String {
+    n.descendants()
+        .filter(|d| d.is_text())
+        .filter_map(|d| d.text())
+        .collect()
+}
+
+fn by_id<'a, 'i>(doc: &'a roxmltree::Document<'i>, id: &str) -> Option<roxmltree::Node<'a, 'i>> {
+    doc.descendants().find(|n| n.attribute("id") == Some(id))
+}
+
+/// Header names and rows (cells) of the table with `id`.
+fn table_cells<'a, 'i>(
+    doc: &'a roxmltree::Document<'i>,
+    id: &str,
+) -> (Vec<String>, Vec<Vec<roxmltree::Node<'a, 'i>>>) {
+    let t = by_id(doc, id).unwrap_or_else(|| panic!("table {id} missing"));
+    let headers = t
+        .descendants()
+        .filter(|n| n.has_tag_name("th"))
+        .map(node_text)
+        .collect();
+    let rows = t
+        .descendants()
+        .filter(|n| n.has_tag_name("tbody"))
+        .flat_map(|b| b.children().filter(|r| r.has_tag_name("tr")))
+        .map(|r| r.children().filter(|c| c.has_tag_name("td")).collect())
+        .collect();
+    (headers, rows)
+}
+
+fn section_text(doc: &roxmltree::Document, id: &str) -> String {
+    node_text(by_id(doc, id).unwrap_or_else(|| panic!("section {id} missing")))
+}
+
+fn svg_count(node: roxmltree::Node) -> usize {
+    node.descendants().filter(|n| n.has_tag_name("svg")).count()
+}
+
+#[test]
+fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
+    let out = tempfile::tempdir().unwrap();
+    run_sample(out.path());
+    let path = report::write_report(out.path(), &ReportSettings::default()).unwrap();
+    assert_eq!(path, out.path().join("report.html"));
+    let html = std::fs::read_to_string(&path).unwrap();
+    // Deterministic: rendering again gives the same page.
+    assert!(
+        report::render_report(out.path(), &ReportSettings::default()).unwrap() == html,
+        "a second rendering differs from the first"
+    );
+    let artefacts = manifest().join("target/test-artifacts");
+    std::fs::create_dir_all(&artefacts).unwrap();
+    std::fs::copy(&path, artefacts.join("sample-report.html")).unwrap();
+
+    // Self-contained: no URLs, scripts, external resources.
+    for bad in ["http://", "https://", "<script", "<link", " src=", "url(", "@import", "@font-face"] {
+        assert!(!html.contains(bad), "report contains {bad:?}");
+    }
+    // The page is well-formed markup (polyglot HTML that parses as XML).
+    let doc = parse(&html);
+    for id in SECTION_IDS {
+        let s = by_id(&doc, id).unwrap_or_else(|| panic!("section {id} missing"));
+        assert!(s.has_tag_name("section"), "{id}");
+    }
+
+    let channels_path = out.path().join("channels.parquet");
+    let ids = parquet_strings(&channels_path, "channel_id");
+    assert_eq!(ids.len(), 10);
+
+    // Plots: one acceleration multiple per channel, a spectra chart per
+    // horizontal direction (X, Y), the drift profile.
+    let histories = by_id(&doc, "time-histories").unwrap();
+    assert_eq!(svg_count(histories), ids.len());
+    assert_eq!(svg_count(by_id(&doc, "spectra").unwrap()), 2);
+    assert_eq!(svg_count(by_id(&doc, "drift").unwrap()), 1);
+    assert!(svg_count(doc.root()) >= ids.len() + 3);
+    // Every trace is decimated to at most 2000 points.
+    for poly in histories.descendants().filter(|n| n.has_tag_name("polyline")) {
+        let n = poly.attribute("points").unwrap_or("").split_whitespace().count();
+        assert!(n <= 2000, "polyline with {n} points");
+    }
+
+    // Channel table: every number equals channels.parquet's value exactly
+    // (data-value) and its 4-significant-digit display agrees.
+    let (headers, rows) = table_cells(&doc, "channel-table");
+    assert_eq!(rows.len(), ids.len());
+    for col in ["channel_id", "pga_m_s2", "pgv_m_s", "arias_m_s", "d5_95_s", "qa_flags"] {
+        assert!(headers.iter().any(|h| h == col), "header {col} missing: {headers:?}");
+    }
+    let col_of = |name: &str| headers.iter().position(|h| h == name).unwrap();
+    for (r, row) in rows.iter().enumerate() {
+        assert_eq!(node_text(row[col_of("channel_id")]), ids[r]);
+    }
+    let mut compared = 0;
+    for name in [
+        "sampling_rate_hz",
+        "npts",
+        "pga_m_s2",
+        "pgv_m_s",
+        "pgd_m",
+        "arias_m_s",
+        "d5_95_s",
+        "cav_m_s",
+        "snr_db",
+    ] {
+        let truth = parquet_numbers(&channels_path, name);
+        let c = col_of(name);
+        for (r, row) in rows.iter().enumerate() {
+            let cell = row[c];
+            match truth[r] {
+                Some(v) => {
+                    let exact: f64 = cell.attribute("data-value").unwrap().parse().unwrap();
+                    assert_eq!(exact, v, "{name} of {}", ids[r]);
+                    let shown: f64 = node_text(cell).parse().unwrap();
+                    assert!(
+                        (shown - v).abs() <= 5e-4 * v.abs(),
+                        "{name} of {}: shown {shown}, value {v}",
+                        ids[r]
+                    );
+                    compared += 1;
+                }
+                None => assert_eq!(node_text(cell), "—", "{name} of {}", ids[r]),
+            }
+        }
+    }
+    assert!(compared >= 80, "{compared} numbers compared");
+
+    // Drift table and the overall rating follow drift.parquet.
+    let drift_path = out.path().join("drift.parquet");
+    let drift = parquet_numbers(&drift_path, "peak_drift_ratio");
+    assert!(!drift.is_empty());
+    let (dh, drows) = table_cells(&doc, "drift-table");
+    let dc = dh.iter().position(|h| h == "peak_drift_ratio").unwrap();
+    for (row, v) in drows.iter().zip(&drift) {
+        let exact: f64 = row[dc].attribute("data-value").unwrap().parse().unwrap();
+        assert_eq!(Some(exact), *v);
+    }
+    let worst = drift.iter().flatten().fold(0.0f64, |a, b| a.max(*b));
+    let drift_rating = if worst >= 0.015 {
+        2
+    } else if worst >= 0.005 {
+        1
+    } else {
+        0
+    };
+    let labels = ["GREEN", "YELLOW", "RED"];
+    let rating = section_text(&doc, "overall-rating");
+    if out.path().join("damage.parquet").exists() {
+        // The overall rating is the worst criterion: never better than drift's.
+        let shown = labels.iter().position(|l| rating.contains(l)).unwrap();
+        assert!(shown >= drift_rating, "{rating} (worst drift {worst})");
+    } else {
+        assert!(rating.contains(labels[drift_rating]), "{rating} (worst drift {worst})");
+        assert!(rating.contains("peak inter-storey drift ratio"), "{rating}");
+        assert!(rating.contains(&report::format_number(worst)), "{rating}");
+    }
+
+    // Summary from event.json.
+    let summary = section_text(&doc, "summary");
+    assert!(summary.contains("Synthetic earthquake, 4-storey shear building"));
+    assert!(summary.contains("2026-01-15T10:20:30"));
+    assert!(summary.contains("floors.csv"));
+
+    // Stages that did not run say so; those that ran show no such message.
+    for (id, file) in [
+        ("modal", "stabilization.parquet"),
+        ("modal", "modes.parquet"),
+        ("hysteresis", "hysteresis_fit.parquet"),
+        ("hysteresis", "bouc_wen.parquet"),
+        ("damage", "damage.parquet"),
+        ("twin", "twin_update.parquet"),
+        ("test-design", "pod.parquet"),
+        ("test-design", "actuator_layout.parquet"),
+    ] {
+        let text = section_text(&doc, id);
+        let message = format!("Stage not run / output absent: {file}");
+        if out.path().join(file).exists() {
+            assert!(!text.contains(&message), "section {id}: {file} exists: {text}");
+        } else {
+            assert!(
+                text.contains(&message),
+                "section {id} lacks the absent message for {file}: {text}"
+            );
+        }
+    }
+    if out.path().join("hysteresis_fit.parquet").exists() {
+        assert!(svg_count(by_id(&doc, "hysteresis").unwrap()) >= 1);
+    }
+    if out.path().join("damage.parquet").exists() {
+        assert!(svg_count(by_id(&doc, "damage").unwrap()) >= 1);
+    } else {
+        assert!(section_text(&doc, "rating").contains("damage.parquet: absent"));
+    }
+}
+
+fn meta() -> Vec<(String, String)> {
+    Vec::new()
+}
+
+/// Fixture tables of the later stages with stated values; with
+/// `keep_existing`, files a real run wrote are left alone.
+fn write_fixtures(dir: &Path, keep_existing: bool) {
+    let write_parquet = |path: &Path, b: &[arrow_array::RecordBatch], m: &[(String, String)]| {
+        if keep_existing && path.exists() {
+            return Ok(());
+        }
+        write_parquet(path, b, m)
+    };
+    // Stabilisation: 3 orders × 2 poles; one non-physical pole.
+    write_parquet(
+        &dir.join("stabilization.parquet"),
+        &[TableBuilder::new()
+            .u32("order", vec![4, 4, 6, 6, 8, 8])
+            .f64("frequency_hz", vec![1.5, 4.4, 1.51, 4.41, 1.505, 7.9])
+            .f64("damping_ratio", vec![0.02, 0.03, 0.021, 0.03, 0.02, -0.1])
+            .bool("stable_frequency", vec![false, false, true, true, true, false])
+            .bool("stable_damping", vec![false, false, true, false, true, false])
+            .bool("stable_shape", vec![false, false, true, false, true, false])
+            .bool("physical", vec![true, true, true, true, true, false])
+            .i32("mode", vec![-1, -1, 0, 1, 0, -1])
+            .build()
+            .unwrap()],
+        &meta(),
+    )
+    .unwrap();
+    write_parquet(
+        &dir.join("modes.parquet"),
+        &[TableBuilder::new()
+            .i32("mode", vec![0, 1])
+            .f64("frequency_hz", vec![1.507, 4.405])
+            .f64("frequency_std_hz", vec![0.004, 0.01])
+            .f64("damping_ratio", vec![0.0205, 0.03])
+            .f64("damping_std", vec![0.001, 0.002])
+            .f64("mpc", vec![0.99, 0.97])
+            .f64("mpd_deg", vec![2.0, 4.5])
+            .u32("pole_count", vec![2, 1])
+            .list_f64("shape_re", &[vec![0.25, 0.5, 0.75, 1.0], vec![1.0, 0.5, -0.5, -1.0]])
+            .build()
+            .unwrap()],
+        &meta(),
+    )
+    .unwrap();
+    // Hysteresis: one loop per direction/dof; a column the report does not
+    // know and no cost column (schemas are still moving).
+    let n = 400;
+    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+    let d: Vec<f64> = t.iter().map(|t| 0.01 * (2.0 * t).sin()).collect();
+    let f: Vec<f64> = t.iter().map(|t| 2.0e6 * (2.0 * t - 0.3).sin()).collect();
+    let fm: Vec<f64> = f.iter().map(|x| 0.97 * x).collect();
+    let mut dir_col = vec!["X"; n];
+    dir_col.extend(vec!["Y"; n]);
+    let cat = |a: &Vec<f64>| [a.clone(), a.clone()].concat();
+    write_parquet(
+        &dir.join("hysteresis_fit.parquet"),
+        &[TableBuilder::new()
+            .str("direction", &dir_col)
+            .i32("dof", vec![1; 2 * n])
+            .f64("t_s", cat(&t))
+            .f64("drift_m", cat(&d))
+            .f64("force_record_n", cat(&f))
+            .f64("force_model_n", cat(&fm))
+            .build()
+            .unwrap()],
+        &meta(),
+    )
+    .unwrap();
+    // Long layout, one row per parameter, without cost_j and with a column
+    // the report does not know.
+    write_parquet(
+        &dir.join("bouc_wen.parquet"),
+        &[TableBuilder::new()
+            .str("direction", &["X", "X", "Y", "Y"])
+            .i32("dof", vec![1, 1, 1, 1])
+            .str("parameter", &["K0", "N", "K0", "N"])
+            .f64("value", vec![2.5e8, 1.8, 2.25e8, 2.2])
+            .str("unit", &["N/m", "-", "N/m", "-"])
+            .str("status", &["identified"; 4])
+            .f64("extra_figure", vec![1.0, 2.0, 3.0, 4.0])
+            .build()
+            .unwrap()],
+        &meta(),
+    )
+    .unwrap();
+    // Damage: X ends at 0.03 (peak 0.045), Y ends at 0.06 (peak 0.07).
+    let m = 101;
+    let ts: Vec<f64> = (0..m).map(|i| i as f64 * 0.1).collect();
+    let ramp = |end: f64, peak: f64| -> Vec<f64> {
+        (0..m)
+            .map(|i| {
+                if i == 50 {
+                    peak
+                } else {
+                    end * i as f64 / (m - 1) as f64
+                }
+            })
+            .collect()
+    };
+    // Long layout: one row per direction, time and mode (ι repeated).
+    let (mut dcol, mut tcol, mut icol, mut mcol, mut rcol) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for (d, iota) in [("X", ramp(0.03, 0.045)), ("Y", ramp(0.06, 0.07))] {
+        for i in 0..m {
+            for mode in 0..2 {
+                dcol.push(d);
+                tcol.push(ts[i]);
+                icol.push(iota[i]);
+                mcol.push(mode);
+                rcol.push(1.0 - 0.01 * (mode + 1) as f64 * i as f64 / m as f64);
+            }
+        }
+    }
+    write_parquet(
+        &dir.join("damage.parquet"),
+        &[TableBuilder::new()
+            .str("direction", &dcol)
+            .f64("t_s", tcol)
+            .f64("iota", icol)
+            .i32("mode", mcol)
+            .f64("omega_ratio", rcol)
+            .build()
+            .unwrap()],
+        &meta(),
+    )
+    .unwrap();
+    write_parquet(
+        &dir.join("pod.parquet"),
+        &[TableBuilder::new()
+            .i32("pod_mode", vec![1, 2, 3])
+            .f64("energy_fraction", vec![0.9, 0.08, 0.02])
+            .build()
+            .unwrap()],
+        &meta(),
+    )
+    .unwrap();
+}
+
+#[test]
+fn later_stage_sections_render_fixture_tables_and_rate_damage() {
+    let out = tempfile::tempdir().unwrap();
+    write_fixtures(out.path(), false);
+    let html = report::render_report(out.path(), &ReportSettings::default()).unwrap();
+    let doc = parse(&html);
+
+    // Modal: stabilisation diagram, modes table with the shape column.
+    let modal = by_id(&doc, "modal").unwrap();
+    assert_eq!(svg_count(modal), 1);
+    let modal_text = node_text(modal);
+    assert!(modal_text.contains("stable in frequency, damping and shape (2)"), "{modal_text}");
+    assert!(modal_text.contains("non-physical (filtered out) (1)"), "{modal_text}");
+    let (mh, mrows) = table_cells(&doc, "modes-table");
+    assert_eq!(mrows.len(), 2);
+    assert!(mh.iter().any(|h| h == "shape_re"), "{mh:?}");
+    let fc = mh.iter().position(|h| h == "frequency_hz").unwrap();
+    assert_eq!(mrows[1][fc].attribute("data-value"), Some("4.405"));
+    assert!(modal_text.contains("frequency_shifts.parquet"));
+
+    // Hysteresis: a loop per (direction, dof); unknown and missing columns named.
+    let hyst = by_id(&doc, "hysteresis").unwrap();
+    assert_eq!(svg_count(hyst), 2);
+    let hyst_text = node_text(hyst);
+    assert!(
+        hyst_text.contains("expected column(s) not present: coupled_dof, stability_std, stable, cost_j"),
+        "{hyst_text}"
+    );
+    let (bh, brows) = table_cells(&doc, "bouc-wen-table");
+    assert!(bh.iter().any(|h| h == "extra_figure"));
+    let kc = bh.iter().position(|h| h == "value").unwrap();
+    assert_eq!(brows[2][kc].attribute("data-value"), Some("225000000"));
+    assert!(hyst_text.contains("Stage not run / output absent: bouc_wen_instantaneous.parquet"));
+
+    // Damage: final ι rated by default (X 0.03 → YELLOW, Y 0.06 → RED).
+    let (_, drows) = table_cells(&doc, "damage-table");
+    let texts: Vec<Vec<String>> = drows
+        .iter()
+        .map(|r| r.iter().map(|c| node_text(*c)).collect())
+        .collect();
+    assert_eq!(texts[0][0], "X");
+    assert!(texts[0][3].contains("YELLOW"), "{texts:?}");
+    assert_eq!(drows[0][2].attribute("data-value"), Some("0.045"));
+    assert!(texts[1][3].contains("RED"), "{texts:?}");
+    assert_eq!(svg_count(by_id(&doc, "damage").unwrap()), 4);
+    let overall = section_text(&doc, "overall-rating");
+    assert!(overall.contains("RED"), "{overall}");
+    assert!(overall.contains("damage index ι (final) = 0.06000 at direction Y"), "{overall}");
+    assert!(section_text(&doc, "rating").contains("drift.parquet: absent"));
+    // Absent base outputs are still announced.
+    assert!(section_text(&doc, "channels").contains("Stage not run / output absent: channels.parquet"));
+
+    // Peak statistic and custom thresholds: X peak 0.045 < 0.05 → GREEN.
+    let settings = ReportSettings {
+        iota_statistic: IotaStatistic::Peak,
+        iota: report::Thresholds {
+            yellow: 0.05,
+            red: 0.08,
+        },
+        ..Default::default()
+    };
+    let html = report::render_report(out.path(), &settings).unwrap();
+    let doc = parse(&html);
+    let (_, drows) = table_cells(&doc, "damage-table");
+    assert!(node_text(drows[0][3]).contains("GREEN"));
+    assert!(node_text(drows[1][3]).contains("YELLOW"));
+    assert!(section_text(&doc, "overall-rating").contains("YELLOW"));
+
+    // Test design: POD energy plotted.
+    assert_eq!(svg_count(by_id(&doc, "test-design").unwrap()), 1);
+}
+
+#[test]
+fn unreadable_outputs_and_bad_arguments_are_reported() {
+    let out = tempfile::tempdir().unwrap();
+    std::fs::write(out.path().join("drift.parquet"), b"not parquet").unwrap();
+    std::fs::write(out.path().join("event.json"), b"{ broken").unwrap();
+    let html = report::render_report(out.path(), &ReportSettings::default()).unwrap();
+    let doc = parse(&html);
+    assert!(section_text(&doc, "drift").contains("Output unreadable: drift.parquet"));
+    assert!(section_text(&doc, "summary").contains("Output unreadable: event.json"));
+    assert!(section_text(&doc, "overall-rating").contains("NOT RATED"));
+
+    let missing = out.path().join("no-such-dir");
+    assert!(report::write_report(&missing, &ReportSettings::default()).is_err());
+    let bad = ReportSettings {
+        drift: report::Thresholds {
+            yellow: 0.02,
+            red: 0.01,
+        },
+        ..Default::default()
+    };
+    let err = report::write_report(out.path(), &bad).unwrap_err();
+    assert_eq!(err.exit_code(), 2, "{err}");
+    assert!(!out.path().join("report.html").exists());
+}
+
+/// Runs `cmd`, killing it after `limit`; returns (success, stdout, stderr).
+fn run_with_timeout(mut cmd: Command, limit: Duration) -> (bool, String, String) {
+    let mut child = cmd
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start chromium");
+    let stdout = child.stdout.take().unwrap();
+    let stderr = child.stderr.take().unwrap();
+    let out_t = std::thread::spawn(move || std::io::read_to_string(stdout).unwrap_or_default());
+    let err_t = std::thread::spawn(move || std::io::read_to_string(stderr).unwrap_or_default());
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break Some(s);
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let out = out_t.join().unwrap_or_default();
+    let err = err_t.join().unwrap_or_default();
+    (status.is_some_and(|s| s.success()), out, err)
+}
+
+fn chromium(profile: &Path, extra: &[String], page: &Path) -> Command {
+    let mut c = Command::new("/usr/bin/chromium");
+    c.args([
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--enable-logging=stderr",
+        "--v=0",
+    ])
+    .arg(format!("--user-data-dir={}", profile.display()))
+    .args(extra)
+    .arg(format!("file://{}", page.display()));
+    c
+}
+
+#[test]
+fn sample_report_renders_in_headless_chromium() {
+    if !Path::new("/usr/bin/chromium").exists() {
+        println!("SKIPPED: chromium not installed (apt-get install -y chromium; .ci/run installs it)");
+        return;
+    }
+    let out = tempfile::tempdir().unwrap();
+    run_sample(out.path());
+    write_fixtures(out.path(), true); // sections of stages not yet run get content too
+    let page = report::write_report(out.path(), &ReportSettings::default()).unwrap();
+    let artefacts: PathBuf = manifest().join("target/test-artifacts");
+    std::fs::create_dir_all(&artefacts).unwrap();
+    std::fs::copy(&page, artefacts.join("report.html")).unwrap();
+    let shot = artefacts.join("report-screenshot.png");
+    let _ = std::fs::remove_file(&shot);
+
+    let profile = tempfile::tempdir().unwrap();
+    let (ok, _, err) = run_with_timeout(
+        chromium(
+            profile.path(),
+            &[
+                format!("--screenshot={}", shot.display()),
+                "--window-size=1280,4000".to_string(),
+                "--hide-scrollbars".to_string(),
+            ],
+            &page,
+        ),
+        Duration::from_secs(180),
+    );
+    assert!(ok, "chromium --screenshot failed: {err}");
+    let size = std::fs::metadata(&shot).map(|m| m.len()).unwrap_or(0);
+    assert!(size > 50_000, "screenshot only {size} bytes");
+    let png = std::fs::read(&shot).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+
+    let profile = tempfile::tempdir().unwrap();
+    let (ok, dom, err) = run_with_timeout(
+        chromium(profile.path(), &["--dump-dom".to_string()], &page),
+        Duration::from_secs(180),
+    );
+    assert!(ok, "chromium --dump-dom failed: {err}");
+    for id in SECTION_IDS {
+        assert!(dom.contains(&format!("<section id=\"{id}\">")), "DOM lacks section {id}");
+    }
+    assert!(dom.matches("<svg").count() >= 20, "DOM has {} svg", dom.matches("<svg").count());
+    assert!(dom.contains("id=\"channel-table\""));
+    // The page loads without console errors or blocked requests.
+    for bad in ["Refused to", "Uncaught", "ERR_", "Failed to load"] {
+        let offending: Vec<&str> = err
+            .lines()
+            .filter(|l| l.contains("CONSOLE") && l.contains(bad))
+            .collect();
+        assert!(offending.is_empty(), "console: {offending:?}");
+    }
+    println!("screenshot: {} ({size} bytes)", shot.display());
+}
