@@ -8,6 +8,7 @@
 
 pub mod commands;
 pub mod conditioning;
+pub mod design;
 pub mod error;
 pub mod event_folder;
 pub mod hysteresis;

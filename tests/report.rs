@@ -54,7 +54,9 @@ fn parquet_numbers(path: &Path, column: &str) -> Vec<Option<f64>> {
     let mut out = Vec::new();
     for batch in reader {
         let batch = batch.unwrap();
-        let a = batch.column_by_name(column).unwrap_or_else(|| panic!("{column}"));
+        let a = batch
+            .column_by_name(column)
+            .unwrap_or_else(|| panic!("{column}"));
         if let Some(f) = a.as_primitive_opt::<Float64Type>() {
             out.extend((0..f.len()).map(|i| (!f.is_null(i)).then(|| f.value(i))));
         } else {
@@ -144,7 +146,16 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
     std::fs::copy(&path, artefacts.join("sample-report.html")).unwrap();
 
     // Self-contained: no URLs, scripts, external resources.
-    for bad in ["http://", "https://", "<script", "<link", " src=", "url(", "@import", "@font-face"] {
+    for bad in [
+        "http://",
+        "https://",
+        "<script",
+        "<link",
+        " src=",
+        "url(",
+        "@import",
+        "@font-face",
+    ] {
         assert!(!html.contains(bad), "report contains {bad:?}");
     }
     // The page is well-formed markup (polyglot HTML that parses as XML).
@@ -166,8 +177,15 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
     assert_eq!(svg_count(by_id(&doc, "drift").unwrap()), 1);
     assert!(svg_count(doc.root()) >= ids.len() + 3);
     // Every trace is decimated to at most 2000 points.
-    for poly in histories.descendants().filter(|n| n.has_tag_name("polyline")) {
-        let n = poly.attribute("points").unwrap_or("").split_whitespace().count();
+    for poly in histories
+        .descendants()
+        .filter(|n| n.has_tag_name("polyline"))
+    {
+        let n = poly
+            .attribute("points")
+            .unwrap_or("")
+            .split_whitespace()
+            .count();
         assert!(n <= 2000, "polyline with {n} points");
     }
 
@@ -175,8 +193,18 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
     // (data-value) and its 4-significant-digit display agrees.
     let (headers, rows) = table_cells(&doc, "channel-table");
     assert_eq!(rows.len(), ids.len());
-    for col in ["channel_id", "pga_m_s2", "pgv_m_s", "arias_m_s", "d5_95_s", "qa_flags"] {
-        assert!(headers.iter().any(|h| h == col), "header {col} missing: {headers:?}");
+    for col in [
+        "channel_id",
+        "pga_m_s2",
+        "pgv_m_s",
+        "arias_m_s",
+        "d5_95_s",
+        "qa_flags",
+    ] {
+        assert!(
+            headers.iter().any(|h| h == col),
+            "header {col} missing: {headers:?}"
+        );
     }
     let col_of = |name: &str| headers.iter().position(|h| h == name).unwrap();
     for (r, row) in rows.iter().enumerate() {
@@ -241,7 +269,10 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
         let shown = labels.iter().position(|l| rating.contains(l)).unwrap();
         assert!(shown >= drift_rating, "{rating} (worst drift {worst})");
     } else {
-        assert!(rating.contains(labels[drift_rating]), "{rating} (worst drift {worst})");
+        assert!(
+            rating.contains(labels[drift_rating]),
+            "{rating} (worst drift {worst})"
+        );
         assert!(rating.contains("peak inter-storey drift ratio"), "{rating}");
         assert!(rating.contains(&report::format_number(worst)), "{rating}");
     }
@@ -266,7 +297,10 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
         let text = section_text(&doc, id);
         let message = format!("Stage not run / output absent: {file}");
         if out.path().join(file).exists() {
-            assert!(!text.contains(&message), "section {id}: {file} exists: {text}");
+            assert!(
+                !text.contains(&message),
+                "section {id}: {file} exists: {text}"
+            );
         } else {
             assert!(
                 text.contains(&message),
@@ -304,8 +338,14 @@ fn write_fixtures(dir: &Path, keep_existing: bool) {
             .u32("order", vec![4, 4, 6, 6, 8, 8])
             .f64("frequency_hz", vec![1.5, 4.4, 1.51, 4.41, 1.505, 7.9])
             .f64("damping_ratio", vec![0.02, 0.03, 0.021, 0.03, 0.02, -0.1])
-            .bool("stable_frequency", vec![false, false, true, true, true, false])
-            .bool("stable_damping", vec![false, false, true, false, true, false])
+            .bool(
+                "stable_frequency",
+                vec![false, false, true, true, true, false],
+            )
+            .bool(
+                "stable_damping",
+                vec![false, false, true, false, true, false],
+            )
             .bool("stable_shape", vec![false, false, true, false, true, false])
             .bool("physical", vec![true, true, true, true, true, false])
             .i32("mode", vec![-1, -1, 0, 1, 0, -1])
@@ -325,7 +365,10 @@ fn write_fixtures(dir: &Path, keep_existing: bool) {
             .f64("mpc", vec![0.99, 0.97])
             .f64("mpd_deg", vec![2.0, 4.5])
             .u32("pole_count", vec![2, 1])
-            .list_f64("shape_re", &[vec![0.25, 0.5, 0.75, 1.0], vec![1.0, 0.5, -0.5, -1.0]])
+            .list_f64(
+                "shape_re",
+                &[vec![0.25, 0.5, 0.75, 1.0], vec![1.0, 0.5, -0.5, -1.0]],
+            )
             .build()
             .unwrap()],
         &meta(),
@@ -436,8 +479,14 @@ fn later_stage_sections_render_fixture_tables_and_rate_damage() {
     let modal = by_id(&doc, "modal").unwrap();
     assert_eq!(svg_count(modal), 1);
     let modal_text = node_text(modal);
-    assert!(modal_text.contains("stable in frequency, damping and shape (2)"), "{modal_text}");
-    assert!(modal_text.contains("non-physical (filtered out) (1)"), "{modal_text}");
+    assert!(
+        modal_text.contains("stable in frequency, damping and shape (2)"),
+        "{modal_text}"
+    );
+    assert!(
+        modal_text.contains("non-physical (filtered out) (1)"),
+        "{modal_text}"
+    );
     let (mh, mrows) = table_cells(&doc, "modes-table");
     assert_eq!(mrows.len(), 2);
     assert!(mh.iter().any(|h| h == "shape_re"), "{mh:?}");
@@ -450,7 +499,8 @@ fn later_stage_sections_render_fixture_tables_and_rate_damage() {
     assert_eq!(svg_count(hyst), 2);
     let hyst_text = node_text(hyst);
     assert!(
-        hyst_text.contains("expected column(s) not present: coupled_dof, stability_std, stable, cost_j"),
+        hyst_text
+            .contains("expected column(s) not present: coupled_dof, stability_std, stable, cost_j"),
         "{hyst_text}"
     );
     let (bh, brows) = table_cells(&doc, "bouc-wen-table");
@@ -472,10 +522,15 @@ fn later_stage_sections_render_fixture_tables_and_rate_damage() {
     assert_eq!(svg_count(by_id(&doc, "damage").unwrap()), 4);
     let overall = section_text(&doc, "overall-rating");
     assert!(overall.contains("RED"), "{overall}");
-    assert!(overall.contains("damage index ι (final) = 0.06000 at direction Y"), "{overall}");
+    assert!(
+        overall.contains("damage index ι (final) = 0.06000 at direction Y"),
+        "{overall}"
+    );
     assert!(section_text(&doc, "rating").contains("drift.parquet: absent"));
     // Absent base outputs are still announced.
-    assert!(section_text(&doc, "channels").contains("Stage not run / output absent: channels.parquet"));
+    assert!(
+        section_text(&doc, "channels").contains("Stage not run / output absent: channels.parquet")
+    );
 
     // Peak statistic and custom thresholds: X peak 0.045 < 0.05 → GREEN.
     let settings = ReportSettings {
@@ -573,7 +628,9 @@ fn chromium(profile: &Path, extra: &[String], page: &Path) -> Command {
 #[test]
 fn sample_report_renders_in_headless_chromium() {
     if !Path::new("/usr/bin/chromium").exists() {
-        println!("SKIPPED: chromium not installed (apt-get install -y chromium; .ci/run installs it)");
+        println!(
+            "SKIPPED: chromium not installed (apt-get install -y chromium; .ci/run installs it)"
+        );
         return;
     }
     let out = tempfile::tempdir().unwrap();
@@ -612,9 +669,16 @@ fn sample_report_renders_in_headless_chromium() {
     );
     assert!(ok, "chromium --dump-dom failed: {err}");
     for id in SECTION_IDS {
-        assert!(dom.contains(&format!("<section id=\"{id}\">")), "DOM lacks section {id}");
+        assert!(
+            dom.contains(&format!("<section id=\"{id}\">")),
+            "DOM lacks section {id}"
+        );
     }
-    assert!(dom.matches("<svg").count() >= 20, "DOM has {} svg", dom.matches("<svg").count());
+    assert!(
+        dom.matches("<svg").count() >= 20,
+        "DOM has {} svg",
+        dom.matches("<svg").count()
+    );
     assert!(dom.contains("id=\"channel-table\""));
     // The page loads without console errors or blocked requests.
     for bad in ["Refused to", "Uncaught", "ERR_", "Failed to load"] {

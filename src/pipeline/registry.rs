@@ -14,7 +14,7 @@ use crate::stages::hysteresis::HysteresisParams;
 use crate::vocab::Event;
 
 /// Stage kinds available in this build, in pipeline order.
-pub const KINDS: &[&str] = &["ingest", "condition", "metrics", "hysteresis", "damage"];
+pub const KINDS: &[&str] = &["ingest", "condition", "metrics", "modal", "hysteresis", "damage"];
 
 /// Output files (relative to the output directory) a stage declares.
 pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
@@ -26,6 +26,7 @@ pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
             "spectra.parquet".into(),
             "drift.parquet".into(),
         ],
+        "modal" => stages::modal::outputs(&super::params(stage)?),
         "hysteresis" => vec![
             "bouc_wen.parquet".into(),
             "bouc_wen_instantaneous.parquet".into(),
@@ -42,6 +43,7 @@ pub fn run_stage(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
         "ingest" => stages::ingest::run(stage, ctx),
         "condition" => stages::condition::run(stage, ctx),
         "metrics" => stages::metrics::run(stage, ctx),
+        "modal" => stages::modal::run(stage, ctx),
         "hysteresis" => stages::hysteresis::run(stage, ctx),
         "damage" => stages::hysteresis::run_damage(stage, ctx),
         other => Err(Error::usage(format!("unknown stage kind {other:?}"))),

@@ -172,7 +172,10 @@ pub fn whole_table(t: &Table, max_rows: usize) -> String {
     let rows: Vec<Vec<Cell>> = (0..t.rows.min(max_rows))
         .map(|r| t.names.iter().map(|c| Cell::of(t, c, r)).collect())
         .collect();
-    let mut s = format!("<div class=\"scroll\">{}</div>", table(None, &headers, &rows));
+    let mut s = format!(
+        "<div class=\"scroll\">{}</div>",
+        table(None, &headers, &rows)
+    );
     if t.rows > max_rows {
         s.push_str(&note(&format!(
             "Showing {max_rows} of {} rows of {}.",
@@ -243,6 +246,9 @@ mod tests {
 
     #[test]
     fn escaping_covers_markup() {
-        assert_eq!(escape("<a href=\"x\">&'"), "&lt;a href=&quot;x&quot;&gt;&amp;&#39;");
+        assert_eq!(
+            escape("<a href=\"x\">&'"),
+            "&lt;a href=&quot;x&quot;&gt;&amp;&#39;"
+        );
     }
 }

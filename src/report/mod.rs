@@ -143,7 +143,9 @@ impl Rating {
         match self {
             Rating::Green => "below the yellow threshold: no indication of damage",
             Rating::Yellow => "between thresholds: inspect",
-            Rating::Red => "at or above the red threshold: inspect urgently, restrict use until assessed",
+            Rating::Red => {
+                "at or above the red threshold: inspect urgently, restrict use until assessed"
+            }
         }
     }
     fn class(&self) -> &'static str {

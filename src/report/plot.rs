@@ -57,7 +57,12 @@ pub struct Series {
 }
 
 impl Series {
-    pub fn new(label: impl Into<String>, points: Vec<(f64, f64)>, colour: usize, mark: Mark) -> Self {
+    pub fn new(
+        label: impl Into<String>,
+        points: Vec<(f64, f64)>,
+        colour: usize,
+        mark: Mark,
+    ) -> Self {
         // Past the palette, lines become dashed so no two series look alike.
         let mark = if mark == Mark::Line && colour >= PALETTE.len() {
             Mark::Dashed
@@ -137,11 +142,35 @@ pub fn render(chart: &Chart) -> Result<String, String> {
     let x_range = match chart.x_range {
         Some(r) => Some(r),
         None => data_range(
-            chart.series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
+            chart
+                .series
+                .iter()
+                .flat_map(|s| s.points.iter().map(|p| p.0)),
             chart.log_x,
         ),
     }
     .ok_or("no finite data to plot")?;
+    // Markers at the data extremes would sit on the frame: pad linear x axes
+    // of scatter charts.
+    let scatter = chart.series.iter().any(|s| {
+        matches!(
+            s.mark,
+            Mark::FilledCircle | Mark::HollowCircle | Mark::Cross | Mark::Triangle
+        )
+    });
+    let x_range = if scatter && !chart.log_x && chart.x_range.is_none() {
+        let pad = 0.03 * (x_range.1 - x_range.0);
+        (x_range.0 - pad, x_range.1 + pad)
+    } else {
+        x_range
+    };
+    if !chart
+        .series
+        .iter()
+        .any(|s| s.points.iter().any(|p| p.0.is_finite() && p.1.is_finite()))
+    {
+        return Err("no finite data to plot".into());
+    }
     let y_range = match chart.y_range {
         Some(r) => Some(r),
         None => data_range(
@@ -180,7 +209,8 @@ where
 {
     let mut buf = String::new();
     {
-        let root = SVGBackend::with_string(&mut buf, (chart.width, chart.height)).into_drawing_area();
+        let root =
+            SVGBackend::with_string(&mut buf, (chart.width, chart.height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let mut ctx = ChartBuilder::on(&root)
             .margin(8)
@@ -352,7 +382,11 @@ pub fn decimate_min_max(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f
         if chunk.is_empty() {
             continue;
         }
-        let (first, second) = if imin <= imax { (imin, imax) } else { (imax, imin) };
+        let (first, second) = if imin <= imax {
+            (imin, imax)
+        } else {
+            (imax, imin)
+        };
         out.push(chunk[first]);
         if second != first {
             out.push(chunk[second]);

@@ -99,10 +99,12 @@ fn rows_points(t: &Table, rows: &[usize], x: &str, y: &str) -> Vec<(f64, f64)> {
         return Vec::new();
     };
     rows.iter()
-        .filter_map(|&r| match (xs.get(r).copied().flatten(), ys.get(r).copied().flatten()) {
-            (Some(a), Some(b)) => Some((a, b)),
-            _ => None,
-        })
+        .filter_map(
+            |&r| match (xs.get(r).copied().flatten(), ys.get(r).copied().flatten()) {
+                (Some(a), Some(b)) => Some((a, b)),
+                _ => None,
+            },
+        )
         .collect()
 }
 
@@ -178,12 +180,20 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
     for (i, (id, title, body)) in [
         ("summary", "Event and structure", summary),
         ("rating", "Overall rating", rating),
-        ("channels", "Channels: QA and strong-motion metrics", channel_table),
+        (
+            "channels",
+            "Channels: QA and strong-motion metrics",
+            channel_table,
+        ),
         ("spectra", "Response spectra", spectra),
         ("time-histories", "Acceleration time histories", histories),
         ("drift", "Inter-storey drift ratios", drift_html),
         ("modal", "Modal identification", modal),
-        ("hysteresis", "Bouc-Wen fit and hysteresis loops", hysteresis),
+        (
+            "hysteresis",
+            "Bouc-Wen fit and hysteresis loops",
+            hysteresis,
+        ),
         ("damage", "Damage index ι(t)", damage_html),
         ("twin", "Digital-twin update", twin),
         ("test-design", "Hybrid-test design", design),
@@ -312,7 +322,11 @@ fn summary_section(dir: &Path, event: &Result<Value, String>, channels: &Loaded)
                 .map(|s| {
                     let name = json_text(s.get("step"));
                     let params = s.get("params").map(|p| p.to_string()).unwrap_or_default();
-                    format!("<li><b>{}</b> <code>{}</code></li>", escape(&name), escape(&params))
+                    format!(
+                        "<li><b>{}</b> <code>{}</code></li>",
+                        escape(&name),
+                        escape(&params)
+                    )
                 })
                 .collect()
         })
@@ -427,7 +441,15 @@ fn spectra_section(dir: &Path, channels: &Loaded) -> String {
     };
     body.push_str(&column_notes(
         t,
-        &["channel_id", "damping", "period_s", "sd_m", "psv_m_s", "psa_m_s2", "sa_abs_m_s2"],
+        &[
+            "channel_id",
+            "damping",
+            "period_s",
+            "sd_m",
+            "psv_m_s",
+            "psa_m_s2",
+            "sa_abs_m_s2",
+        ],
     ));
     if !t.has("period_s") || !t.has("psa_m_s2") {
         return body;
@@ -458,7 +480,9 @@ fn spectra_section(dir: &Path, channels: &Loaded) -> String {
                 .into_iter()
                 .filter(|p| p.0 > 0.0)
                 .collect();
-            chart.series.push(Series::new(id.clone(), pts, i, Mark::Line));
+            chart
+                .series
+                .push(Series::new(id.clone(), pts, i, Mark::Line));
         }
         let legend = plot::legend(&chart.series);
         body.push_str(&figure(
@@ -476,7 +500,11 @@ fn spectra_section(dir: &Path, channels: &Loaded) -> String {
 
 fn time_history_section(dir: &Path, channels: &Loaded, settings: &ReportSettings) -> String {
     let mut body = String::new();
-    let loaded = load(dir, "samples.parquet", Some(&["channel_id", "t_s", "acc_m_s2"]));
+    let loaded = load(
+        dir,
+        "samples.parquet",
+        Some(&["channel_id", "t_s", "acc_m_s2"]),
+    );
     let Some(t) = require(&loaded, "samples.parquet", &mut body) else {
         return body;
     };
@@ -526,7 +554,9 @@ fn time_history_section(dir: &Path, channels: &Loaded, settings: &ReportSettings
     for (i, (id, pts)) in traces.into_iter().enumerate() {
         let mut chart = Chart::new(440, 170, "t (s)", "a (m/s²)");
         chart.y_range = Some((-y, y));
-        chart.series.push(Series::new(id.clone(), pts, i % 7, Mark::Line));
+        chart
+            .series
+            .push(Series::new(id.clone(), pts, i % 7, Mark::Line));
         let (dir, level) = info.get(&id).cloned().unwrap_or((None, None));
         let caption = format!(
             "{id} — level {}, direction {}{}",
@@ -783,7 +813,11 @@ fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
                 cats[idx].push((f, o));
             }
             let labels = [
-                ("stable in frequency, damping and shape", Mark::FilledCircle, 0),
+                (
+                    "stable in frequency, damping and shape",
+                    Mark::FilledCircle,
+                    0,
+                ),
                 ("stable in frequency only", Mark::HollowCircle, 2),
                 ("new or unstable", Mark::Cross, 4),
                 ("non-physical (filtered out)", Mark::Triangle, 6),
@@ -1107,11 +1141,12 @@ fn damage_section(damage: &Loaded, settings: &ReportSettings, out: &mut Vec<Asse
         let iota_rows: &[usize] = mode_groups.first().map(|g| g.1.as_slice()).unwrap_or(rows);
         let pts = rows_points(t, iota_rows, "t_s", "iota");
         // Final = value at the latest time; peak = maximum over time.
-        let final_v = pts
+        let final_v = pts.iter().max_by(|a, b| a.0.total_cmp(&b.0)).map(|p| p.1);
+        let peak_v = pts
             .iter()
-            .max_by(|a, b| a.0.total_cmp(&b.0))
-            .map(|p| p.1);
-        let peak_v = pts.iter().map(|p| p.1).filter(|v| v.is_finite()).reduce(f64::max);
+            .map(|p| p.1)
+            .filter(|v| v.is_finite())
+            .reduce(f64::max);
         let rated = match stat {
             IotaStatistic::Final => final_v,
             IotaStatistic::Peak => peak_v,
@@ -1137,6 +1172,11 @@ fn damage_section(damage: &Loaded, settings: &ReportSettings, out: &mut Vec<Asse
                 rating,
                 source: "damage.parquet".into(),
             });
+        }
+        if !pts.iter().any(|p| p.1.is_finite()) {
+            figures.push_str(&note(&format!(
+                "ι(t), direction {dir}: no finite value in damage.parquet — not rated."
+            )));
         }
         let mut chart = Chart::new(560, 280, "t (s)", "ι");
         chart.series.push(Series::new(
@@ -1188,6 +1228,11 @@ fn damage_section(damage: &Loaded, settings: &ReportSettings, out: &mut Vec<Asse
                 &legend,
             ));
         }
+    }
+    if let Some(steps) = t.metadata.get("quaketwin.indefinite_steps") {
+        body.push_str(&note(&format!(
+            "Time steps where K(t) lost positive definiteness (damage.parquet metadata): {steps}."
+        )));
     }
     body.push_str(&table(
         Some("damage-table"),

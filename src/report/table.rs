@@ -291,11 +291,7 @@ impl Table {
     /// Expected columns absent from the file (or present with a kind the
     /// caller cannot use — `kinds_ok` decides).
     pub fn missing<'a>(&self, expected: &[&'a str]) -> Vec<&'a str> {
-        expected
-            .iter()
-            .filter(|n| !self.has(n))
-            .copied()
-            .collect()
+        expected.iter().filter(|n| !self.has(n)).copied().collect()
     }
     /// Columns of the file the section does not know.
     pub fn unknown(&self, known: &[&str]) -> Vec<String> {

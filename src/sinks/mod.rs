@@ -4,4 +4,6 @@
 pub mod event_tables;
 pub mod hysteresis_tables;
 pub mod mcap_writer;
+pub mod modal_tables;
 pub mod parquet;
+pub mod twin_tables;

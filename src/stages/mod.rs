@@ -6,3 +6,4 @@ pub mod condition;
 pub mod hysteresis;
 pub mod ingest;
 pub mod metrics;
+pub mod modal;

@@ -1,0 +1,362 @@
+//! Twin-updating tables: `twin_update.parquet` (one row per round and candidate of the
+//! ensemble, thesis Table 1), `twin_modes.parquet` (paired modes before and after updating)
+//! and the reader of the measured modes in `modes.parquet` (written by the modal stage).
+//! Schemas are documented in docs/formats.md.
+
+use std::collections::BTreeSet;
+use std::fs::File;
+use std::path::Path;
+
+use arrow_array::cast::AsArray;
+use arrow_array::types::{Float64Type, Int32Type, Int64Type, UInt32Type};
+use arrow_array::{Array, ArrayRef, RecordBatch};
+use arrow_schema::DataType;
+use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+
+use super::parquet::{write_parquet, TableBuilder};
+use crate::error::{Error, Location, Result};
+use crate::twin::ensemble::EnsembleResult;
+use crate::twin::objective::{MeasuredMode, MeasuredModes, ModeComparison};
+
+/// File metadata key of the schema name.
+pub const SCHEMA_KEY: &str = "quaketwin.schema";
+/// File metadata key of the output channel ids (JSON list) in modes.parquet.
+pub use super::modal_tables::OUTPUT_CHANNELS_KEY;
+/// File metadata key of the error summary (JSON) in twin_modes.parquet.
+pub const SUMMARY_KEY: &str = "quaketwin.summary";
+
+/// Measured modes as read from modes.parquet, with the file's mode numbers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModesFile {
+    pub measured: MeasuredModes,
+    /// `mode` column value of each measured mode (same order as `measured.modes`).
+    pub mode_numbers: Vec<u32>,
+}
+
+/// Read measured modes from `modes.parquet`: `mode` (UInt32/Int32/Int64), `frequency_hz`
+/// (Float64), `shape_re` (list<f64>, one entry per output channel), optional `shape_im`,
+/// and the channel ids as a JSON list in the `quaketwin.output_channels` metadata entry.
+/// Modes come out sorted by mode number.
+pub fn read_measured_modes(path: &Path) -> Result<ModesFile> {
+    let source = path.display().to_string();
+    let loc = || Location::file(source.clone());
+    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let builder = ParquetRecordBatchReaderBuilder::try_new(file)
+        .map_err(|e| Error::input(loc(), format!("not a readable Parquet file: {e}")))?;
+    let kv = builder
+        .metadata()
+        .file_metadata()
+        .key_value_metadata()
+        .cloned()
+        .unwrap_or_default();
+    let channels_json = kv
+        .iter()
+        .find(|e| e.key == OUTPUT_CHANNELS_KEY)
+        .and_then(|e| e.value.clone())
+        .ok_or_else(|| {
+            Error::input(
+                loc(),
+                format!("metadata entry {OUTPUT_CHANNELS_KEY} (output channel ids) missing"),
+            )
+        })?;
+    let channels: Vec<String> = serde_json::from_str(&channels_json).map_err(|e| {
+        Error::input(
+            loc(),
+            format!("metadata entry {OUTPUT_CHANNELS_KEY} is not a JSON list of strings: {e}"),
+        )
+    })?;
+    let mut seen = BTreeSet::new();
+    for c in &channels {
+        if !seen.insert(c.as_str()) {
+            return Err(Error::input(
+                loc().with_channel(c.clone()),
+                format!("channel listed twice in {OUTPUT_CHANNELS_KEY}"),
+            ));
+        }
+    }
+    let schema = builder.schema().clone();
+    let missing: Vec<&str> = ["mode", "frequency_hz", "shape_re"]
+        .into_iter()
+        .filter(|c| schema.field_with_name(c).is_err())
+        .collect();
+    if !missing.is_empty() {
+        return Err(Error::input(
+            loc(),
+            format!("modes table lacks column(s): {}", missing.join(", ")),
+        ));
+    }
+    let reader = builder
+        .build()
+        .map_err(|e| Error::input(loc(), e.to_string()))?;
+    let mut rows: Vec<(u32, MeasuredMode)> = Vec::new();
+    for batch in reader {
+        let batch: RecordBatch = batch.map_err(|e| Error::input(loc(), e.to_string()))?;
+        let col = |name: &str| -> Result<&ArrayRef> {
+            batch
+                .column_by_name(name)
+                .ok_or_else(|| Error::input(loc(), format!("column {name} missing")))
+        };
+        let numbers = mode_numbers(col("mode")?, &loc)?;
+        let freq = col("frequency_hz")?
+            .as_primitive_opt::<Float64Type>()
+            .ok_or_else(|| Error::input(loc(), "column frequency_hz is not Float64"))?;
+        let shape_re = col("shape_re")?;
+        let shape_im = batch.column_by_name("shape_im");
+        for (i, number) in numbers.iter().enumerate() {
+            let row_err = |m: String| Error::input(loc(), format!("mode {number}: {m}"));
+            if freq.is_null(i) {
+                return Err(row_err("frequency_hz is null".into()));
+            }
+            let re = list_row(shape_re, i, "shape_re").map_err(row_err)?;
+            let im = match shape_im {
+                Some(a) => Some(list_row(a, i, "shape_im").map_err(row_err)?),
+                None => None,
+            };
+            if re.len() != channels.len() || im.as_ref().is_some_and(|v| v.len() != re.len()) {
+                return Err(row_err(format!(
+                    "{} shape components for {} output channels",
+                    re.len(),
+                    channels.len()
+                )));
+            }
+            let shape = match im {
+                Some(im) => real_shape(&re, &im),
+                None => re,
+            };
+            rows.push((
+                *number,
+                MeasuredMode {
+                    frequency_hz: freq.value(i),
+                    shape,
+                },
+            ));
+        }
+    }
+    rows.sort_by_key(|(n, _)| *n);
+    if let Some(w) = rows.windows(2).find(|w| w[0].0 == w[1].0) {
+        return Err(Error::input(
+            loc(),
+            format!("mode number {} appears twice", w[0].0),
+        ));
+    }
+    Ok(ModesFile {
+        mode_numbers: rows.iter().map(|(n, _)| *n).collect(),
+        measured: MeasuredModes {
+            source,
+            channels,
+            modes: rows.into_iter().map(|(_, m)| m).collect(),
+        },
+    })
+}
+
+/// The `mode` column as u32 (UInt32, Int32 or Int64; negative or null values are errors).
+fn mode_numbers(a: &ArrayRef, loc: &dyn Fn() -> Location) -> Result<Vec<u32>> {
+    if a.null_count() > 0 {
+        return Err(Error::input(loc(), "column mode has null values"));
+    }
+    let bad = |v: i64| Error::input(loc(), format!("mode number {v} is not a valid mode number"));
+    match a.data_type() {
+        DataType::UInt32 => Ok(a.as_primitive::<UInt32Type>().values().to_vec()),
+        DataType::Int32 => a
+            .as_primitive::<Int32Type>()
+            .values()
+            .iter()
+            .map(|v| u32::try_from(*v).map_err(|_| bad(*v as i64)))
+            .collect(),
+        DataType::Int64 => a
+            .as_primitive::<Int64Type>()
+            .values()
+            .iter()
+            .map(|v| u32::try_from(*v).map_err(|_| bad(*v)))
+            .collect(),
+        t => Err(Error::input(
+            loc(),
+            format!("column mode has type {t}, expected UInt32 or Int64"),
+        )),
+    }
+}
+
+/// Row `i` of a list<f64> column (List or LargeList), nulls rejected.
+fn list_row(a: &ArrayRef, i: usize, name: &str) -> std::result::Result<Vec<f64>, String> {
+    if a.is_null(i) {
+        return Err(format!("{name} is null"));
+    }
+    let values = match a.data_type() {
+        DataType::List(_) => a.as_list::<i32>().value(i),
+        DataType::LargeList(_) => a.as_list::<i64>().value(i),
+        t => return Err(format!("column {name} has type {t}, expected list<f64>")),
+    };
+    let values = values
+        .as_primitive_opt::<Float64Type>()
+        .ok_or_else(|| format!("column {name} is not a list of Float64"))?;
+    if values.null_count() > 0 {
+        return Err(format!("{name} has null entries"));
+    }
+    Ok(values.values().to_vec())
+}
+
+/// Real mode shape of a complex shape φ = a + i b: the real part after the rotation
+/// e^{−iθ} that maximises Σ Re(e^{−iθ} φ_k)², i.e. the projection on the best-fitting real
+/// line, θ = ½·atan2(2 Σ a_k b_k, Σ (a_k² − b_k²)). For a real (monophase) shape up to a
+/// common phase this returns the shape exactly, up to sign; the twin's MAC ignores the sign.
+pub fn real_shape(re: &[f64], im: &[f64]) -> Vec<f64> {
+    let ab: f64 = re.iter().zip(im).map(|(a, b)| a * b).sum();
+    let aa_bb: f64 = re.iter().zip(im).map(|(a, b)| a * a - b * b).sum();
+    let theta = 0.5 * (2.0 * ab).atan2(aa_bb);
+    let (s, c) = theta.sin_cos();
+    re.iter().zip(im).map(|(a, b)| a * c + b * s).collect()
+}
+
+/// Write `twin_update.parquet`: one row per round and candidate. `parameter_names` name the
+/// `param_<name>` columns (ensemble parameter order); `metadata` is appended to the file's
+/// key/value metadata (e.g. settings).
+pub fn write_twin_update(
+    path: &Path,
+    parameter_names: &[String],
+    result: &EnsembleResult,
+    metadata: &[(String, String)],
+) -> Result<()> {
+    let rows: Vec<_> = result.rounds.iter().flat_map(|r| r.candidates.iter()).collect();
+    let mut t = TableBuilder::new()
+        .u32("round", rows.iter().map(|c| c.round as u32).collect())
+        .u32("candidate", rows.iter().map(|c| c.candidate as u32).collect())
+        .str(
+            "solver",
+            &rows.iter().map(|c| c.solver.as_str()).collect::<Vec<_>>(),
+        );
+    for (q, name) in parameter_names.iter().enumerate() {
+        let mut values = Vec::with_capacity(rows.len());
+        for c in &rows {
+            let v = c.parameters.get(q).copied().ok_or_else(|| {
+                Error::output(path, format!("candidate has no value for parameter {name}"))
+            })?;
+            values.push(v);
+        }
+        t = t.f64(&format!("param_{name}"), values);
+    }
+    let batch = t
+        .f64("objective_j", rows.iter().map(|c| c.objective).collect())
+        .list_f64("z", &rows.iter().map(|c| c.z.clone()).collect::<Vec<_>>())
+        .list_f64(
+            "scatter",
+            &rows.iter().map(|c| c.scatters.clone()).collect::<Vec<_>>(),
+        )
+        .list_f64(
+            "score",
+            &rows.iter().map(|c| c.scores.clone()).collect::<Vec<_>>(),
+        )
+        .u32("rank", rows.iter().map(|c| c.rank as u32).collect())
+        .f64(
+            "selection_weight",
+            rows.iter().map(|c| c.selection_weight).collect(),
+        )
+        .bool("selected", rows.iter().map(|c| c.selected).collect())
+        .i64(
+            "evaluations",
+            rows.iter().map(|c| c.evaluations as i64).collect(),
+        )
+        .build()?;
+    let rounds: Vec<serde_json::Value> = result
+        .rounds
+        .iter()
+        .map(|r| {
+            serde_json::json!({
+                "round": r.round,
+                "start": r.start,
+                "ranking": r.ranking,
+                "log_probability": r.log_probability,
+                "ranking_method": format!("{:?}", r.method),
+                "selected_parameters": r.selected_parameters,
+                "selected_objective": r.selected_objective,
+                "variance": r.variance,
+                "converged": r.converged,
+            })
+        })
+        .collect();
+    let mut meta = vec![
+        (SCHEMA_KEY.to_string(), "twin_update".to_string()),
+        (
+            "quaketwin.parameters".to_string(),
+            serde_json::json!(parameter_names).to_string(),
+        ),
+        (
+            "quaketwin.voters".to_string(),
+            serde_json::json!({"names": result.voter_names, "measured": result.measured})
+                .to_string(),
+        ),
+        (
+            "quaketwin.rounds".to_string(),
+            serde_json::Value::Array(rounds).to_string(),
+        ),
+        (
+            "quaketwin.result".to_string(),
+            serde_json::json!({
+                "parameters": result.parameters,
+                "objective_j": result.objective,
+                "converged": result.converged,
+                "evaluations": result.evaluations,
+            })
+            .to_string(),
+        ),
+    ];
+    meta.extend(metadata.iter().cloned());
+    write_parquet(path, &[batch], &meta)
+}
+
+/// Write `twin_modes.parquet`: the paired modes at the start values (`stage` "initial") and
+/// at the updated values ("updated"). `mode_numbers` are the measured modes' numbers (from
+/// modes.parquet); the mean errors of `ModeComparison` go into `quaketwin.summary`.
+pub fn write_twin_modes(
+    path: &Path,
+    mode_numbers: &[u32],
+    initial: &ModeComparison,
+    updated: &ModeComparison,
+    metadata: &[(String, String)],
+) -> Result<()> {
+    let mut stage = Vec::new();
+    let mut mode = Vec::new();
+    let mut model_mode = Vec::new();
+    let mut f_exp = Vec::new();
+    let mut f_num = Vec::new();
+    let mut rel_error = Vec::new();
+    let mut mac = Vec::new();
+    for (name, cmp) in [("initial", initial), ("updated", updated)] {
+        for p in &cmp.pairs {
+            stage.push(name);
+            mode.push(
+                mode_numbers
+                    .get(p.measured)
+                    .copied()
+                    .unwrap_or(p.measured as u32 + 1),
+            );
+            // Unpaired measured mode (the model had fewer modes): no model frequency.
+            let paired = p.model.is_some();
+            model_mode.push(p.model.map(|j| j as i32 + 1));
+            f_exp.push(p.f_exp);
+            f_num.push(paired.then_some(p.f_num));
+            rel_error.push(paired.then(|| (p.f_exp - p.f_num).abs() / p.f_exp));
+            mac.push(p.mac);
+        }
+    }
+    let batch = TableBuilder::new()
+        .str("stage", &stage)
+        .u32("mode", mode)
+        .opt_i32("model_mode", model_mode)
+        .f64("f_exp_hz", f_exp)
+        .opt_f64("f_num_hz", f_num)
+        .opt_f64("rel_error", rel_error)
+        .f64("mac", mac)
+        .build()?;
+    let summary = serde_json::json!({
+        "initial": {"frequency_error": initial.frequency_error, "shape_error": initial.shape_error},
+        "updated": {"frequency_error": updated.frequency_error, "shape_error": updated.shape_error},
+        "frequency_error": "mean over measured modes of |f_exp - f_num| / f_exp (unpaired modes count 1)",
+        "shape_error": "mean over measured modes of (1 - MAC)",
+    });
+    let mut meta = vec![
+        (SCHEMA_KEY.to_string(), "twin_modes".to_string()),
+        (SUMMARY_KEY.to_string(), summary.to_string()),
+    ];
+    meta.extend(metadata.iter().cloned());
+    write_parquet(path, &[batch], &meta)
+}
