@@ -112,10 +112,29 @@ pub fn run_pipeline(
 /// embedded in the binary, so the command works from any directory).
 pub const INGEST_PIPELINE: &str = include_str!("../pipelines/ingest.toml");
 
-/// `quaketwin ingest EVENT --out DIR`: read, condition, metrics.
-pub fn ingest(event: &Path, out: &Path, quiet: bool) -> Result<Vec<(String, StageOutcome)>> {
+/// `quaketwin ingest EVENT --out DIR [--mcap FILE]`: read, condition,
+/// metrics; optionally the conditioned event as MCAP for replay or viewing.
+pub fn ingest(event: &Path, out: &Path, mcap: Option<&Path>, quiet: bool) -> Result<Vec<(String, StageOutcome)>> {
     let p = PipelineFile::parse(INGEST_PIPELINE, "built-in ingest pipeline")?;
-    pipeline::run(&p, event, out, quiet)
+    let outcomes = pipeline::run(&p, event, out, quiet)?;
+    if let Some(path) = mcap {
+        let (conditioned, _) = crate::sinks::event_tables::read_samples(&out.join("samples.parquet"))?;
+        crate::sinks::mcap_writer::write_event(&conditioned, path, &Default::default())?;
+    }
+    Ok(outcomes)
+}
+
+/// `quaketwin report DIR`: writes DIR/report.html from the outputs in DIR.
+pub fn report(dir: &Path, settings: Option<&Path>) -> Result<std::path::PathBuf> {
+    let settings: crate::report::ReportSettings = match settings {
+        None => Default::default(),
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| crate::error::Error::io(p, e))?;
+            toml::from_str(&text)
+                .map_err(|e: toml::de::Error| crate::error::Error::usage(format!("{}: {}", p.display(), e.message())))?
+        }
+    };
+    crate::report::write_report(dir, &settings)
 }
 
 /// `quaketwin synth --out DIR`: writes the sample events.
@@ -125,4 +144,22 @@ pub fn synth(out: &Path, seed: u64) -> Result<Vec<std::path::PathBuf>> {
         ..Default::default()
     };
     crate::synth_event::write_sample_events(out, &settings)
+}
+
+/// `quaketwin modal EVENT --out DIR [--method M]`: ingest + condition + modal.
+pub fn modal(event: &Path, out: &Path, method: &str, quiet: bool) -> Result<()> {
+    let text = format!(
+        "{INGEST_PIPELINE}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\nmethod = {method:?}\n"
+    );
+    let p = PipelineFile::parse(&text, "built-in modal pipeline")?;
+    pipeline::run(&p, event, out, quiet).map(|_| ())
+}
+
+/// `quaketwin hysteresis EVENT --out DIR`: Bouc-Wen identification and damage
+/// index on the records as recorded (SI units only).  Fails when a direction
+/// cannot be identified (the pipeline stage records the reason instead).
+pub fn hysteresis(event: &Path, out: &Path, quiet: bool) -> Result<()> {
+    let text = "[pipeline]\nname = \"hysteresis\"\n[[stage]]\nname = \"ingest\"\nkind = \"ingest\"\n[[stage]]\nname = \"hysteresis\"\nkind = \"hysteresis\"\ninputs = [\"ingest\"]\n[stage.params]\nfail_on_error = true\n[[stage]]\nname = \"damage\"\nkind = \"damage\"\ninputs = [\"hysteresis\"]\n";
+    let p = PipelineFile::parse(text, "built-in hysteresis pipeline")?;
+    pipeline::run(&p, event, out, quiet).map(|_| ())
 }

@@ -35,6 +35,34 @@ enum Command {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
+        /// Also write the conditioned event as MCAP (replay, Foxglove).
+        #[arg(long)]
+        mcap: Option<PathBuf>,
+    },
+    /// Write DIR/report.html from the outputs of a pipeline run in DIR.
+    Report {
+        /// Output directory of a run.
+        dir: PathBuf,
+        /// Report settings (TOML: rating thresholds…), see docs/report.md.
+        #[arg(long)]
+        settings: Option<PathBuf>,
+    },
+    /// Subspace modal identification (writes modes.parquet, stabilization.parquet…).
+    Modal {
+        /// Event folder or zip.
+        event: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        /// auto (input–output when base channels exist), ssi-cov, ssi-data or io.
+        #[arg(long, default_value = "auto")]
+        method: String,
+    },
+    /// Bouc-Wen identification and damage index (bouc_wen.parquet, damage.parquet…).
+    Hysteresis {
+        /// Event folder or zip.
+        event: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Generate the synthetic sample events (known model, with truth files).
     Synth {
@@ -61,9 +89,16 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Inspect { event } => quaketwin::commands::inspect(event).map(|s| print!("{s}")),
-        Command::Ingest { event, out } => {
-            quaketwin::commands::ingest(event, out, cli.quiet).map(|_| ())
+        Command::Ingest { event, out, mcap } => {
+            quaketwin::commands::ingest(event, out, mcap.as_deref(), cli.quiet).map(|_| ())
         }
+        Command::Report { dir, settings } => quaketwin::commands::report(dir, settings.as_deref()).map(|p| {
+            if !cli.quiet {
+                eprintln!("wrote {}", p.display());
+            }
+        }),
+        Command::Modal { event, out, method } => quaketwin::commands::modal(event, out, method, cli.quiet),
+        Command::Hysteresis { event, out } => quaketwin::commands::hysteresis(event, out, cli.quiet),
         Command::Synth { out, seed } => quaketwin::commands::synth(out, *seed).map(|dirs| {
             for d in dirs {
                 println!("wrote {}", d.display());

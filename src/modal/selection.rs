@@ -69,6 +69,10 @@ pub struct ClusterSettings {
     pub threshold: f64,
     /// A cluster must hold poles of at least this fraction of the orders swept.
     pub min_cluster_fraction: f64,
+    /// Clusters closer than this relative frequency difference whose medoid
+    /// shapes have MAC ≥ `merge_mac_min` are merged (one mode split in two).
+    pub merge_frequency_tolerance: f64,
+    pub merge_mac_min: f64,
     /// Candidates must be stable in damping too, not only in frequency and
     /// shape.  Off by default: with noisy data damping estimates wander by
     /// more than 5 % between consecutive orders, and requiring it lost a true
@@ -83,6 +87,8 @@ impl Default for ClusterSettings {
             damping_weight: 0.1,
             threshold: 0.04,
             min_cluster_fraction: 0.4,
+            merge_frequency_tolerance: 0.01,
+            merge_mac_min: 0.98,
             require_damping_stability: false,
         }
     }
@@ -196,6 +202,40 @@ fn one_per_order_by(
     }
     kept.sort_by_key(|&i| (poles[i].order, i));
     kept
+}
+
+/// Merges clusters describing the same mode: mean frequencies within
+/// `merge_frequency_tolerance` and medoid shapes with MAC ≥ `merge_mac_min`.
+/// Two modes of a structure cannot share a shape (they are mass-orthogonal),
+/// so such clusters are one mode split by damping scatter between orders.
+fn merge_same_mode(
+    poles: &[Pole],
+    mut clusters: Vec<Vec<usize>>,
+    settings: &ClusterSettings,
+) -> Vec<Vec<usize>> {
+    let mean_f =
+        |c: &[usize]| c.iter().map(|&i| poles[i].frequency_hz).sum::<f64>() / c.len().max(1) as f64;
+    loop {
+        let mut merge: Option<(usize, usize)> = None;
+        'search: for a in 0..clusters.len() {
+            for b in (a + 1)..clusters.len() {
+                let (fa, fb) = (mean_f(&clusters[a]), mean_f(&clusters[b]));
+                if (fa - fb).abs() / fa.max(fb) > settings.merge_frequency_tolerance {
+                    continue;
+                }
+                let ma = medoid(poles, &clusters[a], settings.damping_weight);
+                let mb = medoid(poles, &clusters[b], settings.damping_weight);
+                if mac(&poles[ma].shape, &poles[mb].shape) >= settings.merge_mac_min {
+                    merge = Some((a, b));
+                    break 'search;
+                }
+            }
+        }
+        let Some((a, b)) = merge else { break };
+        let moved = clusters.remove(b);
+        clusters[a].extend(moved);
+    }
+    clusters
 }
 
 /// Medoid of a cluster: the member with the smallest summed distance to the others.
@@ -324,7 +364,11 @@ pub fn select_automatic(
                 && (!settings.require_damping_stability || p.stable_damping)
         })
         .collect();
-    let clusters = average_linkage(poles, &candidates, settings);
+    let clusters = merge_same_mode(
+        poles,
+        average_linkage(poles, &candidates, settings),
+        settings,
+    );
     let min_size = ((settings.min_cluster_fraction * orders_swept as f64).ceil() as usize).max(2);
     let mut kept: Vec<Vec<usize>> = clusters
         .into_iter()

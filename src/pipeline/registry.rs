@@ -14,7 +14,7 @@ use crate::stages::hysteresis::HysteresisParams;
 use crate::vocab::Event;
 
 /// Stage kinds available in this build, in pipeline order.
-pub const KINDS: &[&str] = &["ingest", "condition", "metrics", "modal", "hysteresis", "damage"];
+pub const KINDS: &[&str] = &["ingest", "condition", "metrics", "modal", "hysteresis", "damage", "report"];
 
 /// Output files (relative to the output directory) a stage declares.
 pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
@@ -33,6 +33,7 @@ pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
             "hysteresis_fit.parquet".into(),
         ],
         "damage" => vec!["damage.parquet".into()],
+        "report" => vec!["report.html".into()],
         other => return Err(Error::usage(format!("unknown stage kind {other:?}"))),
     })
 }
@@ -46,6 +47,7 @@ pub fn run_stage(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
         "modal" => stages::modal::run(stage, ctx),
         "hysteresis" => stages::hysteresis::run(stage, ctx),
         "damage" => stages::hysteresis::run_damage(stage, ctx),
+        "report" => stages::report::run(stage, ctx),
         other => Err(Error::usage(format!("unknown stage kind {other:?}"))),
     }
 }

@@ -216,10 +216,17 @@ pub fn write_twin_update(
     result: &EnsembleResult,
     metadata: &[(String, String)],
 ) -> Result<()> {
-    let rows: Vec<_> = result.rounds.iter().flat_map(|r| r.candidates.iter()).collect();
+    let rows: Vec<_> = result
+        .rounds
+        .iter()
+        .flat_map(|r| r.candidates.iter())
+        .collect();
     let mut t = TableBuilder::new()
         .u32("round", rows.iter().map(|c| c.round as u32).collect())
-        .u32("candidate", rows.iter().map(|c| c.candidate as u32).collect())
+        .u32(
+            "candidate",
+            rows.iter().map(|c| c.candidate as u32).collect(),
+        )
         .str(
             "solver",
             &rows.iter().map(|c| c.solver.as_str()).collect::<Vec<_>>(),

@@ -1,0 +1,324 @@
+//! Hybrid-test design (METHODS §5–6): rigid-body modes, POD, actuator layout, Guyan + rigid
+//! reduction, Craig–Bampton prototype, on a planar masonry facade under El Centro 1940.
+
+use std::path::Path;
+
+use faer::Mat;
+use quaketwin::design::craig_bampton::{craig_bampton_prototype, hybrid_bandwidth_hz, recommend_hybrid, HybridSettings};
+use quaketwin::design::layout::{interface_gravity_forces, place_actuators, reduction_basis, select_masters, validate_reduction, ActuatorSettings, ControlMode};
+use quaketwin::design::partition::partition_by_node_ids;
+use quaketwin::design::pod::{pod, reconstruction_quality};
+use quaketwin::design::rigid::{rigid_body_modes, ConstrainedSet, KERNEL_RELATIVE_TOLERANCE, MAX_CONSTRAINT_CONDITION};
+use quaketwin::readers::{at2, ReadOptions};
+use quaketwin::twin::newmark::{newmark_base_excitation, rayleigh_coefficients, NewmarkSettings};
+use quaketwin::twin::{dense_modes, parse_twin, Twin};
+use quaketwin::vocab::SourceRef;
+
+fn twin(text: &str) -> Twin {
+    parse_twin(text, "test.toml", Path::new(".")).expect("valid twin")
+}
+
+/// Rectangular patch nx × ny of `kind` elements over [0, lx] × [0, ly], mapped by `place`.
+fn patch_toml(kind: &str, dim: usize, nx: usize, ny: usize, lx: f64, ly: f64, place: impl Fn(f64, f64) -> [f64; 3]) -> String {
+    let mut nodes = Vec::new();
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let p = place(lx * i as f64 / nx as f64, ly * j as f64 / ny as f64);
+            let coords: Vec<String> = p.iter().take(dim).map(|v| format!("{v:e}")).collect();
+            nodes.push(format!("[{}, {}]", j * (nx + 1) + i + 1, coords.join(", ")));
+        }
+    }
+    let mut conn = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            let n1 = j * (nx + 1) + i + 1;
+            conn.push(format!("[{}, {}, {}, {}, {}]", j * nx + i + 1, n1, n1 + 1, n1 + nx + 2, n1 + nx + 1));
+        }
+    }
+    format!(
+        "[twin]\nname = \"patch\"\ndimension = {dim}\n[[materials]]\nname = \"m\"\nE = 1.5e9\nnu = 0.2\nrho = 1800.0\n\
+         [[sections]]\nname = \"t\"\nthickness = 0.4\n[mesh]\nnodes = [{}]\n\
+         [[elements]]\ntype = \"{kind}\"\nmaterial = \"m\"\nsection = \"t\"\ngroup = \"g\"\nconnectivity = [{}]\n",
+        nodes.join(", "),
+        conn.join(", ")
+    )
+}
+
+/// |K R| relative and RᵀR = I for the kernel found.
+fn check_kernel(t: &Twin, expected: usize) {
+    let k = t.system.stiffness_at(&[]).to_dense();
+    let rb = rigid_body_modes(k.as_ref(), KERNEL_RELATIVE_TOLERANCE).unwrap();
+    assert_eq!(rb.count(), expected, "eigenvalues {:?}", &rb.eigenvalues[..expected + 2]);
+    let kr = &k * &rb.modes;
+    let kmax = rb.eigenvalues.last().unwrap();
+    for j in 0..expected {
+        let norm = (0..kr.nrows()).map(|i| kr[(i, j)].powi(2)).sum::<f64>().sqrt();
+        assert!(norm <= 1e-10 * kmax, "|K r_{j}| = {norm:e}");
+    }
+    let (last_zero, first_elastic) = rb.gap();
+    assert!(last_zero < 1e-13 && first_elastic > 1e-7, "gap {last_zero:e} {first_elastic:e}");
+    // The proposed constrained set removes the rigid motion: a statically determined support.
+    let set = ConstrainedSet::propose(&rb, MAX_CONSTRAINT_CONDITION).unwrap();
+    assert_eq!(set.constrained.len(), expected);
+    assert!(set.condition < 1e3, "condition {}", set.condition);
+}
+
+#[test]
+fn free_q4_patch_has_three_rigid_body_modes() {
+    check_kernel(&twin(&patch_toml("q4", 2, 3, 2, 1.5, 1.0, |x, y| [x + 0.1 * y, y, 0.0])), 3);
+}
+
+#[test]
+fn free_shell_patch_has_six_rigid_body_modes() {
+    check_kernel(&twin(&patch_toml("shell4", 3, 2, 2, 2.0, 2.0, |x, y| [x, 0.6 * y, 0.8 * y + 0.1 * x])), 6);
+}
+
+#[test]
+fn q4_patch_rejects_constrained_sets_that_leave_rigid_motion() {
+    let t = twin(&patch_toml("q4", 2, 2, 2, 1.0, 1.0, |x, y| [x, y, 0.0]));
+    let k = t.system.stiffness_at(&[]).to_dense();
+    let rb = rigid_body_modes(k.as_ref(), KERNEL_RELATIVE_TOLERANCE).unwrap();
+    let map = t.system.dofs.as_ref().unwrap();
+    let at = |node: usize, dof: usize| map.free_index(node, dof).unwrap();
+    // ux at three nodes of the bottom edge (nodes 0, 1, 2): vertical translation is free.
+    let err = ConstrainedSet::validated(&rb, vec![at(0, 0), at(1, 0), at(2, 0)], MAX_CONSTRAINT_CONDITION).unwrap_err();
+    assert!(err.to_string().contains("does not remove the rigid-body modes"), "{err}");
+    // Two DoFs only: wrong count.
+    assert!(ConstrainedSet::validated(&rb, vec![at(0, 0), at(0, 1)], MAX_CONSTRAINT_CONDITION).is_err());
+    // A pinned node plus the far corner's uy: statically determined, accepted.
+    let ok = ConstrainedSet::validated(&rb, vec![at(0, 0), at(0, 1), at(2, 1)], MAX_CONSTRAINT_CONDITION).unwrap();
+    assert!(ok.condition < 1e3);
+}
+
+/// Seeded SplitMix64 → uniform in [-1, 1).
+fn splitmix(state: &mut u64) -> f64 {
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+}
+
+/// X = Σ_i a_i(t) p_i with three orthonormal spatial patterns and amplitudes of distinct
+/// energy: POD recovers the patterns (|cos| ≈ 1), their energy fractions, and 3 POMs
+/// reconstruct X exactly.
+#[test]
+fn pod_recovers_known_patterns() {
+    let (n, nt) = (40, 300);
+    let mut seed = 7u64;
+    let raw = Mat::from_fn(n, 3, |_, _| splitmix(&mut seed));
+    let q = raw.thin_svd().unwrap().U().to_owned(); // orthonormal patterns
+    let amp = [5.0, 2.0, 0.5];
+    let times: Vec<[f64; 3]> = (0..nt)
+        .map(|k| {
+            let t = k as f64 * 0.01;
+            [(2.0 * t).sin(), (7.3 * t).cos(), (19.0 * t).sin()]
+        })
+        .collect();
+    let x = Mat::from_fn(n, nt, |i, k| (0..3).map(|j| amp[j] * times[k][j] * q[(i, j)]).sum());
+    let p = pod(x.as_ref()).unwrap();
+    // Time functions are not exactly orthogonal over the window: compare the energies of the
+    // POD with the energy of the exact projection Σ_k (q_jᵀ x_k)² of each pattern.
+    let total: f64 = (0..n).flat_map(|i| (0..nt).map(move |k| (i, k))).map(|(i, k)| x[(i, k)].powi(2)).sum();
+    for j in 0..3 {
+        let cos: f64 = (0..n).map(|i| p.modes[(i, j)] * q[(i, j)]).sum::<f64>().abs();
+        assert!(cos > 0.999, "pattern {j}: |cos| = {cos}");
+        let e: f64 = (0..nt).map(|k| times[k][j].powi(2) * amp[j] * amp[j]).sum::<f64>() / total;
+        assert!((p.energy_fraction[j] - e).abs() < 2e-3, "energy {j}: {} vs {e}", p.energy_fraction[j]);
+    }
+    assert!(p.singular_values[3] < 1e-10 * p.singular_values[0]);
+    let curve = reconstruction_quality(x.as_ref(), &p, 5, 0.999999, Some(1e-10)).unwrap();
+    assert_eq!(curve.retained, 3);
+    assert!(curve.wnrmse[0] > curve.wnrmse[1] && curve.wnrmse[1] > curve.wnrmse[2]);
+    assert!(curve.wnrmse[2] < 1e-12, "{:?}", curve.wnrmse);
+}
+
+/// METHODS §6 / thesis: hybrid bandwidth = highest prototype frequency / λ.
+#[test]
+fn hybrid_bandwidth_reproduces_thesis_arithmetic() {
+    assert!((hybrid_bandwidth_hz(113.77, 200.0) - 0.569).abs() < 5e-4);
+    assert!((hybrid_bandwidth_hz(276.83, 200.0) - 1.384).abs() < 5e-4);
+}
+
+// ------------------------------------------------------------------ the masonry facade
+
+const NX: usize = 16; // 8 m in 0.5 m elements
+const NY: usize = 12; // 6 m
+const H: f64 = 0.5;
+
+fn facade_node(i: usize, j: usize) -> i64 {
+    (j * (NX + 1) + i + 1) as i64
+}
+
+/// 8 m × 6 m masonry wall, Q4 plane stress, t = 0.4 m, a 2 m × 2 m window at
+/// x ∈ [3, 5], y ∈ [2.5, 4.5]; base fixed.
+fn facade_toml() -> String {
+    let in_window = |i: usize, j: usize| {
+        let (xc, yc) = ((i as f64 + 0.5) * H, (j as f64 + 0.5) * H);
+        (3.0..5.0).contains(&xc) && (2.5..4.5).contains(&yc)
+    };
+    let mut nodes = Vec::new();
+    for j in 0..=NY {
+        for i in 0..=NX {
+            nodes.push(format!("[{}, {:e}, {:e}]", facade_node(i, j), i as f64 * H, j as f64 * H));
+        }
+    }
+    let mut conn = Vec::new();
+    for j in 0..NY {
+        for i in 0..NX {
+            if !in_window(i, j) {
+                conn.push(format!(
+                    "[{}, {}, {}, {}, {}]",
+                    j * NX + i + 1,
+                    facade_node(i, j),
+                    facade_node(i + 1, j),
+                    facade_node(i + 1, j + 1),
+                    facade_node(i, j + 1)
+                ));
+            }
+        }
+    }
+    let base: Vec<String> = (0..=NX).map(|i| facade_node(i, 0).to_string()).collect();
+    format!(
+        "[twin]\nname = \"facade\"\ndimension = 2\n[[materials]]\nname = \"masonry\"\nE = 1.5e9\nnu = 0.2\nrho = 1800.0\n\
+         [[sections]]\nname = \"wall\"\nthickness = 0.4\n[mesh]\nnodes = [{}]\n\
+         [[elements]]\ntype = \"q4\"\nmaterial = \"masonry\"\nsection = \"wall\"\ngroup = \"wall\"\nconnectivity = [{}]\n\
+         [[supports]]\nnodes = [{}]\ndofs = [\"ux\", \"uy\"]\n",
+        nodes.join(", "),
+        conn.join(", "),
+        base.join(", ")
+    )
+}
+
+/// El Centro 1940 NS (PEER AT2, g), first 10 s, in m/s².
+fn el_centro_10s() -> (f64, Vec<f64>) {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/records/peer-at2-records/elCentro.AT2");
+    let bytes = std::fs::read(path).expect("El Centro record");
+    let source = SourceRef { file: path.into(), member: None, column: None, format: "at2".into() };
+    let contents = at2::read(&bytes, &source, &ReadOptions::default()).unwrap();
+    let rec = &contents.records[0];
+    let to_si = rec.channel.units.to_si_factor().unwrap();
+    let dt = 1.0 / rec.channel.sampling_rate_hz;
+    let n = ((10.0 / dt).round() as usize).min(rec.samples.len());
+    (dt, rec.samples[..n].iter().map(|a| a * to_si).collect())
+}
+
+#[test]
+fn facade_design_must_show() {
+    let t = twin(&facade_toml());
+    let model = t.model.as_ref().unwrap();
+    let sys = &t.system;
+    let map = sys.dofs.as_ref().unwrap();
+    let (k, m) = (sys.stiffness_at(&[]), sys.mass_at(&[]));
+
+    // PS: the pier-and-spandrel region around the window, x ∈ [2, 6], y ∈ [1.5, 5.5]; floating.
+    let ps_ids: Vec<i64> = (4..=12).flat_map(|i| (3..=11).map(move |j| facade_node(i, j))).collect();
+    let part = partition_by_node_ids(model, map, &ps_ids, "design.toml").unwrap();
+    assert!(!part.interface.is_empty());
+    let rigid = rigid_body_modes(part.ps_stiffness.as_ref(), KERNEL_RELATIVE_TOLERANCE).unwrap();
+    assert_eq!(rigid.count(), 3);
+    let set = ConstrainedSet::propose(&rigid, MAX_CONSTRAINT_CONDITION).unwrap();
+
+    // Gravity + El Centro (horizontal), Newmark average acceleration, 5 % Rayleigh damping.
+    let gravity = sys.gravity_response(&[]).unwrap();
+    let (dt, accel) = el_centro_10s();
+    assert_eq!(accel.len(), 500);
+    let full_modes = dense_modes(k.to_dense().as_ref(), m.to_dense().as_ref(), 12).unwrap();
+    let f = full_modes.frequencies_hz();
+    eprintln!("full-model frequencies (Hz): {:?}", &f[..8]);
+    let rayleigh = rayleigh_coefficients(f[0], f[3], 0.05, 0.05).unwrap();
+    let exc = sys.base_excitation(&[], 0, accel).unwrap();
+    let settings = NewmarkSettings { dt, rayleigh, record: Some(part.ps_free.clone()) };
+    let resp = newmark_base_excitation(&k, &m, &[exc], &settings).unwrap();
+    let ug_ps = part.restrict(&gravity.displacement);
+    let history: Vec<Vec<f64>> = (0..resp.displacement[0].len())
+        .map(|step| (0..part.n_ps()).map(|p| ug_ps[p] + resp.displacement[p][step]).collect())
+        .collect();
+
+    // 1. Rigid-body removal: no rigid component left, and the result ignores added rigid motion.
+    let (x, lambdas) = set.deformation_snapshots(&rigid, &history);
+    let mut seed = 11u64;
+    let mut worst_invariance = 0.0_f64;
+    let mut worst_rigid = 0.0_f64;
+    for (step, u) in history.iter().enumerate().step_by(25) {
+        let (bar, _) = set.remove(&rigid, u);
+        let norm = bar.iter().map(|v| v * v).sum::<f64>().sqrt();
+        // Rigid part of ū in the c-decomposition u = ū_c-free + R α: α = (R^c)⁻¹ ū^c.
+        let (_, again) = set.remove(&rigid, &bar);
+        let alpha = again.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        worst_rigid = worst_rigid.max(alpha / norm);
+        // Add a large arbitrary rigid motion (100 × the deformation): ū must not change.
+        let beta: Vec<f64> = (0..3).map(|_| 100.0 * norm * splitmix(&mut seed)).collect();
+        let moved: Vec<f64> = (0..u.len()).map(|i| u[i] + (0..3).map(|j| rigid.modes[(i, j)] * beta[j]).sum::<f64>()).collect();
+        let (bar2, _) = set.remove(&rigid, &moved);
+        let diff = bar.iter().zip(&bar2).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
+        worst_invariance = worst_invariance.max(diff / norm);
+        assert!(lambdas[step].iter().all(|v| v.is_finite()));
+    }
+    eprintln!("rigid removal: rigid part left {worst_rigid:e}, invariance to added rigid motion {worst_invariance:e}");
+    assert!(worst_rigid <= 1e-10 && worst_invariance <= 1e-10);
+    // The PS response does contain rigid motion (the whole wall sways), so removal mattered.
+    let max_lambda = lambdas.iter().flatten().fold(0.0_f64, |a, v| a.max(v.abs()));
+    assert!(max_lambda > 1e-6, "rigid amplitude {max_lambda:e}");
+
+    // 2. POD: the retained POMs carry ≥ 99.9 % of the energy.
+    let p = pod(x.as_ref()).unwrap();
+    let curve = reconstruction_quality(x.as_ref(), &p, 10, 0.999, None).unwrap();
+    let kept = curve.retained;
+    eprintln!(
+        "POD energy {:?}, cumulative {:?}, WNRMSE {:?}, retained {kept}",
+        &p.energy_fraction[..5],
+        &p.cumulative_energy[..5],
+        &curve.wnrmse[..5]
+    );
+    assert!(p.cumulative_energy[kept - 1] >= 0.999);
+    assert!(kept == 1 || p.cumulative_energy[kept - 2] < 0.999);
+
+    // 3. Actuators and the Guyan + rigid-body basis; validation against the full response.
+    let masters = select_masters(&p, kept, &set).unwrap();
+    let basis = reduction_basis(&part, &rigid, &set, &masters).unwrap();
+    let validation = validate_reduction(&rigid, &set, &basis, &history);
+    eprintln!(
+        "masters {:?}: WNRMSE {:e}, total relative max error {:e}",
+        masters.iter().map(|&q| model.dof_label(part.ps_dofs[q].0, part.ps_dofs[q].1)).collect::<Vec<_>>(),
+        validation.wnrmse,
+        validation.relative_max_error_total
+    );
+    assert!(validation.wnrmse <= 1e-2, "WNRMSE {}", validation.wnrmse);
+
+    let fg = part.ps_gravity_load(sys.gravity, |a| map.dimension.translation_dof(a));
+    let f_int = interface_gravity_forces(&part, &ug_ps, &fg);
+    let interface_set: Vec<bool> = (0..part.n_ps()).map(|q| part.interface.contains(&q)).collect();
+    let f_scale = f_int.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    for (q, fq) in f_int.iter().enumerate() {
+        if !interface_set[q] {
+            assert!(fq.abs() <= 1e-8 * f_scale, "interior PS DoF {q} carries {fq} N");
+        }
+    }
+    // The NS carries the PS's weight: the vertical interface forces sum to the PS weight.
+    let weight: f64 = fg.iter().sum();
+    let vertical: f64 = part.ps_dofs.iter().zip(&f_int).filter(|((_, d), _)| *d == 1).map(|(_, v)| v).sum();
+    assert!((vertical + weight).abs() <= 1e-8 * weight.abs(), "{vertical} vs {weight}");
+    let actuators = place_actuators(model, &part, &set, &basis, &p, kept, x.as_ref(), &f_int, &ActuatorSettings::default()).unwrap();
+    for a in &actuators {
+        eprintln!("actuator {} node {} {} {} nominal {:.1} N participation {:?}", a.actuator, a.node_id, a.direction, a.control.name(), a.nominal_force, a.participation);
+    }
+    assert_eq!(actuators.len(), kept);
+
+    // 4. Craig–Bampton prototype with the PS represented by T (Eq. 87).
+    let hybrid = HybridSettings { band_of_interest_hz: f[1] * 1.001, ..HybridSettings::default() };
+    let rec = recommend_hybrid(&k, &m, &part, basis.transformation.as_ref(), &f, &hybrid);
+    match &rec {
+        Ok(r) => eprintln!("CB: {} NS modes, matched {:?}, top {:.2} Hz, λ {}, bandwidth {:.3} Hz", r.prototype.ns_modes, r.matched, r.prototype.highest_frequency_hz(), r.time_scale, r.bandwidth_hz),
+        Err(e) => eprintln!("CB with T: {e}"),
+    }
+    let proto = craig_bampton_prototype(&k, &m, &part, basis.transformation.as_ref(), 6).unwrap();
+    eprintln!("prototype (6 NS modes) frequencies {:?}", &proto.frequencies_hz);
+    let _ = ControlMode::Force;
+    let rec = rec.unwrap();
+    for &(full, proto, err) in &rec.matched {
+        assert!(err <= 0.01, "{full} vs {proto}");
+    }
+    assert!(rec.bandwidth_hz <= 2.0);
+}
