@@ -114,11 +114,17 @@ pub const INGEST_PIPELINE: &str = include_str!("../pipelines/ingest.toml");
 
 /// `quaketwin ingest EVENT --out DIR [--mcap FILE]`: read, condition,
 /// metrics; optionally the conditioned event as MCAP for replay or viewing.
-pub fn ingest(event: &Path, out: &Path, mcap: Option<&Path>, quiet: bool) -> Result<Vec<(String, StageOutcome)>> {
+pub fn ingest(
+    event: &Path,
+    out: &Path,
+    mcap: Option<&Path>,
+    quiet: bool,
+) -> Result<Vec<(String, StageOutcome)>> {
     let p = PipelineFile::parse(INGEST_PIPELINE, "built-in ingest pipeline")?;
     let outcomes = pipeline::run(&p, event, out, quiet)?;
     if let Some(path) = mcap {
-        let (conditioned, _) = crate::sinks::event_tables::read_samples(&out.join("samples.parquet"))?;
+        let (conditioned, _) =
+            crate::sinks::event_tables::read_samples(&out.join("samples.parquet"))?;
         crate::sinks::mcap_writer::write_event(&conditioned, path, &Default::default())?;
     }
     Ok(outcomes)
@@ -130,8 +136,9 @@ pub fn report(dir: &Path, settings: Option<&Path>) -> Result<std::path::PathBuf>
         None => Default::default(),
         Some(p) => {
             let text = std::fs::read_to_string(p).map_err(|e| crate::error::Error::io(p, e))?;
-            toml::from_str(&text)
-                .map_err(|e: toml::de::Error| crate::error::Error::usage(format!("{}: {}", p.display(), e.message())))?
+            toml::from_str(&text).map_err(|e: toml::de::Error| {
+                crate::error::Error::usage(format!("{}: {}", p.display(), e.message()))
+            })?
         }
     };
     crate::report::write_report(dir, &settings)

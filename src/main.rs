@@ -92,13 +92,18 @@ fn main() -> ExitCode {
         Command::Ingest { event, out, mcap } => {
             quaketwin::commands::ingest(event, out, mcap.as_deref(), cli.quiet).map(|_| ())
         }
-        Command::Report { dir, settings } => quaketwin::commands::report(dir, settings.as_deref()).map(|p| {
-            if !cli.quiet {
-                eprintln!("wrote {}", p.display());
-            }
-        }),
-        Command::Modal { event, out, method } => quaketwin::commands::modal(event, out, method, cli.quiet),
-        Command::Hysteresis { event, out } => quaketwin::commands::hysteresis(event, out, cli.quiet),
+        Command::Report { dir, settings } => quaketwin::commands::report(dir, settings.as_deref())
+            .map(|p| {
+                if !cli.quiet {
+                    eprintln!("wrote {}", p.display());
+                }
+            }),
+        Command::Modal { event, out, method } => {
+            quaketwin::commands::modal(event, out, method, cli.quiet)
+        }
+        Command::Hysteresis { event, out } => {
+            quaketwin::commands::hysteresis(event, out, cli.quiet)
+        }
         Command::Synth { out, seed } => quaketwin::commands::synth(out, *seed).map(|dirs| {
             for d in dirs {
                 println!("wrote {}", d.display());

@@ -42,10 +42,18 @@ impl Prototype {
 
 /// Assemble the reduced prototype with `ns_modes` fixed-interface NS modes and the PS basis
 /// `ps_basis` (n_PS × n_q, PS DoF order). `k`, `m`: the twin's assembled free-DoF matrices.
-pub fn craig_bampton_prototype(k: &CscMatrix, m: &CscMatrix, partition: &Partition, ps_basis: MatRef<'_, f64>, ns_modes: usize) -> Result<Prototype> {
+pub fn craig_bampton_prototype(
+    k: &CscMatrix,
+    m: &CscMatrix,
+    partition: &Partition,
+    ps_basis: MatRef<'_, f64>,
+    ns_modes: usize,
+) -> Result<Prototype> {
     let n = k.n;
     if ps_basis.nrows() != partition.n_ps() {
-        return Err(Error::usage("Craig–Bampton: the PS basis does not match the PS DoFs"));
+        return Err(Error::usage(
+            "Craig–Bampton: the PS basis does not match the PS DoFs",
+        ));
     }
     let mut in_ps = vec![false; n];
     for &f in &partition.ps_free {
@@ -58,20 +66,31 @@ pub fn craig_bampton_prototype(k: &CscMatrix, m: &CscMatrix, partition: &Partiti
     let ni = interior.len();
     let nq = ps_basis.ncols();
     if ns_modes > ni {
-        return Err(Error::usage(format!("Craig–Bampton: {ns_modes} NS modes requested, the NS interior has {ni} DoFs")));
+        return Err(Error::usage(format!(
+            "Craig–Bampton: {ns_modes} NS modes requested, the NS interior has {ni} DoFs"
+        )));
     }
     let k_ii = k.principal_submatrix(&interior);
     // Constraint modes applied to T_P (Eq. 64): −K_ii⁻¹ (K_iP T_P).
     let k_ip = k.dense_block(&interior, &partition.ps_free);
     let kt = &k_ip * ps_basis;
-    let rhs: Vec<Vec<f64>> = (0..nq).map(|j| (0..ni).map(|i| -kt[(i, j)]).collect()).collect();
-    let constraint = solve_spd(&k_ii, &rhs)
-        .map_err(|f| Error::numerical(format!("Craig–Bampton: the NS interior stiffness is singular ({f:?}); the NS needs supports")))?;
+    let rhs: Vec<Vec<f64>> = (0..nq)
+        .map(|j| (0..ni).map(|i| -kt[(i, j)]).collect())
+        .collect();
+    let constraint = solve_spd(&k_ii, &rhs).map_err(|f| {
+        Error::numerical(format!(
+            "Craig–Bampton: the NS interior stiffness is singular ({f:?}); the NS needs supports"
+        ))
+    })?;
     let phi = if ns_modes > 0 {
         let kd = k_ii.to_dense();
         let md = m.principal_submatrix(&interior).to_dense();
         dense_modes(kd.as_ref(), md.as_ref(), ns_modes)
-            .map_err(|f| Error::numerical(format!("Craig–Bampton: fixed-interface modes failed ({f:?})")))?
+            .map_err(|f| {
+                Error::numerical(format!(
+                    "Craig–Bampton: fixed-interface modes failed ({f:?})"
+                ))
+            })?
             .shapes
     } else {
         Mat::zeros(ni, 0)
@@ -93,9 +112,17 @@ pub fn craig_bampton_prototype(k: &CscMatrix, m: &CscMatrix, partition: &Partiti
     }
     let stiffness = sparse_congruence(k, psi.as_ref());
     let mass = sparse_congruence(m, psi.as_ref());
-    let modes = dense_modes(stiffness.as_ref(), mass.as_ref(), nc)
-        .map_err(|f| Error::numerical(format!("Craig–Bampton: prototype eigenproblem failed ({f:?}); is the PS basis rank deficient?")))?;
-    Ok(Prototype { ns_modes, stiffness, mass, frequencies_hz: modes.frequencies_hz() })
+    let modes = dense_modes(stiffness.as_ref(), mass.as_ref(), nc).map_err(|f| {
+        Error::numerical(format!(
+            "Craig–Bampton: prototype eigenproblem failed ({f:?}); is the PS basis rank deficient?"
+        ))
+    })?;
+    Ok(Prototype {
+        ns_modes,
+        stiffness,
+        mass,
+        frequencies_hz: modes.frequencies_hz(),
+    })
 }
 
 /// ψᵀ A ψ for sparse A, symmetrised.
@@ -170,13 +197,22 @@ pub fn recommend_hybrid(
     full_frequencies_hz: &[f64],
     settings: &HybridSettings,
 ) -> Result<HybridRecommendation> {
-    let targets: Vec<f64> = full_frequencies_hz.iter().copied().filter(|&f| f <= settings.band_of_interest_hz).collect();
+    let targets: Vec<f64> = full_frequencies_hz
+        .iter()
+        .copied()
+        .filter(|&f| f <= settings.band_of_interest_hz)
+        .collect();
     if targets.is_empty() {
-        return Err(Error::usage(format!("hybrid design: no full-model frequency below {} Hz", settings.band_of_interest_hz)));
+        return Err(Error::usage(format!(
+            "hybrid design: no full-model frequency below {} Hz",
+            settings.band_of_interest_hz
+        )));
     }
     let mut best_error = f64::INFINITY;
     for ns_modes in 0..=settings.max_ns_modes {
-        let Ok(prototype) = craig_bampton_prototype(k, m, partition, ps_basis, ns_modes) else { continue };
+        let Ok(prototype) = craig_bampton_prototype(k, m, partition, ps_basis, ns_modes) else {
+            continue;
+        };
         if prototype.frequencies_hz.len() < targets.len() {
             continue;
         }
@@ -189,13 +225,22 @@ pub fn recommend_hybrid(
         best_error = best_error.min(worst);
         if worst <= settings.accuracy {
             let top = prototype.highest_frequency_hz();
-            let Some(&time_scale) = settings.time_scales.iter().find(|&&l| hybrid_bandwidth_hz(top, l) <= settings.actuator_band_hz) else {
+            let Some(&time_scale) = settings
+                .time_scales
+                .iter()
+                .find(|&&l| hybrid_bandwidth_hz(top, l) <= settings.actuator_band_hz)
+            else {
                 return Err(Error::numerical(format!(
                     "hybrid design: the prototype's highest frequency {top:.2} Hz exceeds the actuator band {} Hz at every candidate time scale",
                     settings.actuator_band_hz
                 )));
             };
-            return Ok(HybridRecommendation { bandwidth_hz: hybrid_bandwidth_hz(top, time_scale), prototype, matched, time_scale });
+            return Ok(HybridRecommendation {
+                bandwidth_hz: hybrid_bandwidth_hz(top, time_scale),
+                prototype,
+                matched,
+                time_scale,
+            });
         }
     }
     Err(Error::numerical(format!(

@@ -56,18 +56,35 @@ pub struct ReductionBasis {
 /// Build T (Eq. 85–87): Guyan condensation of the PS with the constrained set c fixed onto the
 /// masters, plus the rigid-body modes. Errors: a master in c or repeated, a mechanism among the
 /// slaves.
-pub fn reduction_basis(partition: &Partition, rigid: &RigidBodyModes, set: &ConstrainedSet, masters: &[usize]) -> Result<ReductionBasis> {
+pub fn reduction_basis(
+    partition: &Partition,
+    rigid: &RigidBodyModes,
+    set: &ConstrainedSet,
+    masters: &[usize],
+) -> Result<ReductionBasis> {
     let nr = set.retained.len();
     let mut masters_in_retained = Vec::with_capacity(masters.len());
     for &m in masters {
         match set.retained.binary_search(&m) {
             Ok(i) => masters_in_retained.push(i),
-            Err(_) => return Err(Error::usage(format!("master PS DoF {m} is constrained or outside the PS"))),
+            Err(_) => {
+                return Err(Error::usage(format!(
+                    "master PS DoF {m} is constrained or outside the PS"
+                )))
+            }
         }
     }
-    let k_rr = Mat::from_fn(nr, nr, |i, j| partition.ps_stiffness[(set.retained[i], set.retained[j])]);
-    let m_rr = Mat::from_fn(nr, nr, |i, j| partition.ps_mass[(set.retained[i], set.retained[j])]);
-    let g = guyan_reduce(&CscMatrix::from_dense(k_rr.as_ref()), &CscMatrix::from_dense(m_rr.as_ref()), &masters_in_retained)?;
+    let k_rr = Mat::from_fn(nr, nr, |i, j| {
+        partition.ps_stiffness[(set.retained[i], set.retained[j])]
+    });
+    let m_rr = Mat::from_fn(nr, nr, |i, j| {
+        partition.ps_mass[(set.retained[i], set.retained[j])]
+    });
+    let g = guyan_reduce(
+        &CscMatrix::from_dense(k_rr.as_ref()),
+        &CscMatrix::from_dense(m_rr.as_ref()),
+        &masters_in_retained,
+    )?;
     let (nm, nrb, np) = (masters.len(), rigid.count(), partition.n_ps());
     let mut t = Mat::<f64>::zeros(np, nm + nrb);
     for (row, &p) in set.retained.iter().enumerate() {
@@ -82,7 +99,14 @@ pub fn reduction_basis(partition: &Partition, rigid: &RigidBodyModes, set: &Cons
     }
     let stiffness = congruence(partition.ps_stiffness.as_ref(), t.as_ref());
     let mass = congruence(partition.ps_mass.as_ref(), t.as_ref());
-    Ok(ReductionBasis { masters: masters.to_vec(), masters_in_retained, guyan: g.transformation, transformation: t, stiffness, mass })
+    Ok(ReductionBasis {
+        masters: masters.to_vec(),
+        masters_in_retained,
+        guyan: g.transformation,
+        transformation: t,
+        stiffness,
+        mass,
+    })
 }
 
 /// Tᵀ A T, symmetrised.
@@ -127,7 +151,10 @@ pub struct ActuatorSettings {
 
 impl Default for ActuatorSettings {
     fn default() -> Self {
-        ActuatorSettings { static_ratio: 0.05, min_force: 1.0 }
+        ActuatorSettings {
+            static_ratio: 0.05,
+            min_force: 1.0,
+        }
     }
 }
 
@@ -150,11 +177,17 @@ pub struct Actuator {
 /// Forces the NS exerts on the PS in the static gravity state: f_int = K_P u_P − f_g,P (PS
 /// order), with u_P the twin's gravity displacement restricted to the PS. Interior PS DoFs are
 /// in equilibrium, so f_int vanishes there up to round-off.
-pub fn interface_gravity_forces(partition: &Partition, u_ps: &[f64], ps_gravity_load: &[f64]) -> Vec<f64> {
+pub fn interface_gravity_forces(
+    partition: &Partition,
+    u_ps: &[f64],
+    ps_gravity_load: &[f64],
+) -> Vec<f64> {
     let n = partition.n_ps();
     (0..n)
         .map(|i| {
-            (0..n).map(|j| partition.ps_stiffness[(i, j)] * u_ps.get(j).copied().unwrap_or(0.0)).sum::<f64>()
+            (0..n)
+                .map(|j| partition.ps_stiffness[(i, j)] * u_ps.get(j).copied().unwrap_or(0.0))
+                .sum::<f64>()
                 - ps_gravity_load.get(i).copied().unwrap_or(0.0)
         })
         .collect()
@@ -175,30 +208,51 @@ pub fn place_actuators(
     interface_force: &[f64],
     settings: &ActuatorSettings,
 ) -> Result<Vec<Actuator>> {
-    let f_r: Vec<f64> = set.retained.iter().map(|&p| interface_force.get(p).copied().unwrap_or(0.0)).collect();
+    let f_r: Vec<f64> = set
+        .retained
+        .iter()
+        .map(|&p| interface_force.get(p).copied().unwrap_or(0.0))
+        .collect();
     let nr = set.retained.len();
     if deformation.nrows() != nr || pod.modes.nrows() != nr || k > pod.modes.ncols() {
-        return Err(Error::usage("actuator placement: snapshots, POMs and retained DoFs disagree in size"));
+        return Err(Error::usage(
+            "actuator placement: snapshots, POMs and retained DoFs disagree in size",
+        ));
     }
     let mut out = Vec::with_capacity(basis.masters.len());
-    for (a, (&p, &row)) in basis.masters.iter().zip(&basis.masters_in_retained).enumerate() {
+    for (a, (&p, &row)) in basis
+        .masters
+        .iter()
+        .zip(&basis.masters_in_retained)
+        .enumerate()
+    {
         let nominal_force: f64 = (0..nr).map(|i| basis.guyan[(i, a)] * f_r[i]).sum();
-        let x: Vec<f64> = (0..deformation.ncols()).map(|t| deformation[(row, t)]).collect();
+        let x: Vec<f64> = (0..deformation.ncols())
+            .map(|t| deformation[(row, t)])
+            .collect();
         let mean = x.iter().sum::<f64>() / x.len().max(1) as f64;
-        let std = (x.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / x.len().max(1) as f64).sqrt();
+        let std =
+            (x.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / x.len().max(1) as f64).sqrt();
         let peak = x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-        let control = if std <= settings.static_ratio * peak && nominal_force.abs() > settings.min_force {
-            ControlMode::Force
-        } else {
-            ControlMode::Displacement
-        };
+        let control =
+            if std <= settings.static_ratio * peak && nominal_force.abs() > settings.min_force {
+                ControlMode::Force
+            } else {
+                ControlMode::Displacement
+            };
         let (node, dof) = partition.ps_dofs[p];
         out.push(Actuator {
             actuator: a + 1,
             ps_position: p,
             node,
             node_id: model.nodes.get(node).map(|n| n.id).unwrap_or(-1),
-            direction: model.dimension.dof_names().get(dof).copied().unwrap_or("?").to_string(),
+            direction: model
+                .dimension
+                .dof_names()
+                .get(dof)
+                .copied()
+                .unwrap_or("?")
+                .to_string(),
             control,
             nominal_force,
             participation: (0..k).map(|j| pod.modes[(row, j)]).collect(),
@@ -224,7 +278,12 @@ pub struct ReductionValidation {
 /// and the reduced model's response T_d ū_k^m (the PS moved by its actuators only). NRMSE per
 /// retained DoF and WNRMSE compare the deformations (the rigid part is reproduced exactly by
 /// construction and would only dilute the error); the total-displacement error is reported too.
-pub fn validate_reduction(rigid: &RigidBodyModes, set: &ConstrainedSet, basis: &ReductionBasis, history: &[Vec<f64>]) -> ReductionValidation {
+pub fn validate_reduction(
+    rigid: &RigidBodyModes,
+    set: &ConstrainedSet,
+    basis: &ReductionBasis,
+    history: &[Vec<f64>],
+) -> ReductionValidation {
     let nr = set.retained.len();
     let nm = basis.masters.len();
     let nt = history.len();
@@ -242,13 +301,19 @@ pub fn validate_reduction(rigid: &RigidBodyModes, set: &ConstrainedSet, basis: &
         let mut q = um.clone();
         q.extend(lambda.iter().map(|l| -l));
         for (p, &up) in u.iter().enumerate().take(basis.transformation.nrows()) {
-            let ur: f64 = (0..q.len()).map(|j| basis.transformation[(p, j)] * q[j]).sum();
+            let ur: f64 = (0..q.len())
+                .map(|j| basis.transformation[(p, j)] * q[j])
+                .sum();
             max_err = max_err.max((up - ur).abs());
             max_u = max_u.max(up.abs());
         }
     }
     let (w, per, weights) = wnrmse(full.as_ref(), reduced.as_ref());
-    let is_master = set.retained.iter().map(|p| basis.masters.contains(p)).collect();
+    let is_master = set
+        .retained
+        .iter()
+        .map(|p| basis.masters.contains(p))
+        .collect();
     ReductionValidation {
         positions: set.retained.clone(),
         nrmse: per,
@@ -257,4 +322,35 @@ pub fn validate_reduction(rigid: &RigidBodyModes, set: &ConstrainedSet, basis: &
         wnrmse: w,
         relative_max_error_total: if max_u > 0.0 { max_err / max_u } else { 0.0 },
     }
+}
+
+/// The fewest masters whose Guyan + rigid-body basis reproduces the PS deformation history
+/// within `target_wnrmse`: for n_m = `min_masters`, `min_masters` + 1, … ≤ `max_masters`, the
+/// masters are the QR pivots of the first n_m POMs (`select_masters`), T is built (Eq. 85–87)
+/// and validated (`validate_reduction`). Errors when no count up to `max_masters` meets it.
+pub fn fewest_masters(
+    partition: &Partition,
+    rigid: &RigidBodyModes,
+    set: &ConstrainedSet,
+    pod: &Pod,
+    history: &[Vec<f64>],
+    min_masters: usize,
+    max_masters: usize,
+    target_wnrmse: f64,
+) -> Result<(ReductionBasis, ReductionValidation)> {
+    let mut best = f64::INFINITY;
+    for nm in min_masters.max(1)..=max_masters.min(pod.modes.ncols()) {
+        let masters = select_masters(pod, nm, set)?;
+        let Ok(basis) = reduction_basis(partition, rigid, set, &masters) else {
+            continue;
+        };
+        let validation = validate_reduction(rigid, set, &basis, history);
+        if validation.wnrmse <= target_wnrmse {
+            return Ok((basis, validation));
+        }
+        best = best.min(validation.wnrmse);
+    }
+    Err(Error::numerical(format!(
+        "actuator layout: up to {max_masters} masters the Guyan + rigid-body model reproduces the PS response with WNRMSE {best:.3e} at best (target {target_wnrmse:.1e})"
+    )))
 }

@@ -30,8 +30,8 @@ pub use craig_bampton::{
     HybridSettings, Prototype,
 };
 pub use layout::{
-    place_actuators, reduction_basis, validate_reduction, Actuator, ActuatorSettings,
-    ControlMode, ReductionBasis, ReductionValidation,
+    place_actuators, reduction_basis, validate_reduction, Actuator, ActuatorSettings, ControlMode,
+    ReductionBasis, ReductionValidation,
 };
 pub use partition::{partition_by_node_ids, partition_by_nodes, Partition};
 pub use pod::{nrmse, pod, reconstruction_quality, wnrmse, Pod, PodCurve};

@@ -49,7 +49,11 @@ impl Partition {
     }
     /// Gravity load on the floating PS: f = M_P r_g, r_g the rigid translation of every PS
     /// node by the gravity vector (consistent mass: the weight of the PS elements).
-    pub fn ps_gravity_load(&self, gravity: [f64; 3], dimension_translation: impl Fn(usize) -> Option<usize>) -> Vec<f64> {
+    pub fn ps_gravity_load(
+        &self,
+        gravity: [f64; 3],
+        dimension_translation: impl Fn(usize) -> Option<usize>,
+    ) -> Vec<f64> {
         let n = self.n_ps();
         let r: Vec<f64> = self
             .ps_dofs
@@ -68,13 +72,21 @@ impl Partition {
 }
 
 /// Partition by user node ids (the design file's form). Errors name the unknown id.
-pub fn partition_by_node_ids(model: &Model, dofs: &DofMap, ps_node_ids: &[i64], source: &str) -> Result<Partition> {
+pub fn partition_by_node_ids(
+    model: &Model,
+    dofs: &DofMap,
+    ps_node_ids: &[i64],
+    source: &str,
+) -> Result<Partition> {
     let mut nodes = Vec::with_capacity(ps_node_ids.len());
     for &id in ps_node_ids {
         let Some(i) = model.node_index(id) else {
             return Err(Error::input(
                 Location::file(source.to_string()),
-                format!("PS node set: node {id} does not exist in twin {}", model.source),
+                format!(
+                    "PS node set: node {id} does not exist in twin {}",
+                    model.source
+                ),
             ));
         };
         nodes.push(i);
@@ -85,28 +97,48 @@ pub fn partition_by_node_ids(model: &Model, dofs: &DofMap, ps_node_ids: &[i64], 
 /// Partition by node indices. Errors (`Input`, naming `source`): empty PS, a PS that is the
 /// whole model, a PS without interface, a PS DoF that is supported or a rigid-link slave in the
 /// twin (the PS must be floating: its rigid-body motion is then free in the assembled twin).
-pub fn partition_by_nodes(model: &Model, dofs: &DofMap, ps_nodes: &[usize], source: &str) -> Result<Partition> {
+pub fn partition_by_nodes(
+    model: &Model,
+    dofs: &DofMap,
+    ps_nodes: &[usize],
+    source: &str,
+) -> Result<Partition> {
     let loc = || Location::file(source.to_string());
     let mut in_set = vec![false; model.nodes.len()];
     for &n in ps_nodes {
         match in_set.get_mut(n) {
             Some(s) => *s = true,
-            None => return Err(Error::input(loc(), format!("PS node set: node index {n} out of range"))),
+            None => {
+                return Err(Error::input(
+                    loc(),
+                    format!("PS node set: node index {n} out of range"),
+                ))
+            }
         }
     }
     let (mut ps_elements, mut ns_elements) = (Vec::new(), Vec::new());
     for (e, el) in model.elements.iter().enumerate() {
-        if el.nodes.iter().all(|&n| in_set.get(n).copied().unwrap_or(false)) {
+        if el
+            .nodes
+            .iter()
+            .all(|&n| in_set.get(n).copied().unwrap_or(false))
+        {
             ps_elements.push(e);
         } else {
             ns_elements.push(e);
         }
     }
     if ps_elements.is_empty() {
-        return Err(Error::input(loc(), "PS node set contains no complete element: the physical substructure is empty"));
+        return Err(Error::input(
+            loc(),
+            "PS node set contains no complete element: the physical substructure is empty",
+        ));
     }
     if ns_elements.is_empty() {
-        return Err(Error::input(loc(), "PS node set covers every element: no numerical substructure is left"));
+        return Err(Error::input(
+            loc(),
+            "PS node set covers every element: no numerical substructure is left",
+        ));
     }
     let element_dofs = |e: usize| -> Vec<(usize, usize)> {
         let el = &model.elements[e];
@@ -115,10 +147,12 @@ pub fn partition_by_nodes(model: &Model, dofs: &DofMap, ps_nodes: &[usize], sour
             .flat_map(|&n| el.kind.dofs().iter().map(move |&d| (n, d)))
             .collect()
     };
-    let mut ps_dofs: Vec<(usize, usize)> = ps_elements.iter().flat_map(|&e| element_dofs(e)).collect();
+    let mut ps_dofs: Vec<(usize, usize)> =
+        ps_elements.iter().flat_map(|&e| element_dofs(e)).collect();
     ps_dofs.sort_unstable();
     ps_dofs.dedup();
-    let mut ns_dofs: Vec<(usize, usize)> = ns_elements.iter().flat_map(|&e| element_dofs(e)).collect();
+    let mut ns_dofs: Vec<(usize, usize)> =
+        ns_elements.iter().flat_map(|&e| element_dofs(e)).collect();
     ns_dofs.sort_unstable();
     ns_dofs.dedup();
     let interface: Vec<usize> = ps_dofs
@@ -160,5 +194,13 @@ pub fn partition_by_nodes(model: &Model, dofs: &DofMap, ps_nodes: &[usize], sour
             }
         }
     }
-    Ok(Partition { ps_elements, ns_elements, ps_dofs, ps_free, interface, ps_stiffness: k, ps_mass: m })
+    Ok(Partition {
+        ps_elements,
+        ns_elements,
+        ps_dofs,
+        ps_free,
+        interface,
+        ps_stiffness: k,
+        ps_mass: m,
+    })
 }

@@ -38,7 +38,9 @@ pub fn pod(snapshots: MatRef<'_, f64>) -> Result<Pod> {
     for j in 0..nt {
         for i in 0..n {
             if !snapshots[(i, j)].is_finite() {
-                return Err(Error::numerical(format!("POD: snapshot {j} has a non-finite value at DoF {i}")));
+                return Err(Error::numerical(format!(
+                    "POD: snapshot {j} has a non-finite value at DoF {i}"
+                )));
             }
         }
     }
@@ -54,10 +56,22 @@ pub fn pod(snapshots: MatRef<'_, f64>) -> Result<Pod> {
     }
     let energy_fraction: Vec<f64> = singular_values.iter().map(|v| v * v / total).collect();
     let mut acc = 0.0;
-    let cumulative_energy = energy_fraction.iter().map(|e| { acc += e; acc }).collect();
+    let cumulative_energy = energy_fraction
+        .iter()
+        .map(|e| {
+            acc += e;
+            acc
+        })
+        .collect();
     let v = svd.V();
     let time_coefficients = Mat::from_fn(nt, rank, |k, i| singular_values[i] * v[(k, i)]);
-    Ok(Pod { modes: svd.U().to_owned(), singular_values, time_coefficients, energy_fraction, cumulative_energy })
+    Ok(Pod {
+        modes: svd.U().to_owned(),
+        singular_values,
+        time_coefficients,
+        energy_fraction,
+        cumulative_energy,
+    })
 }
 
 /// NRMSE of one history (Eq. 83): sqrt(mean((x − x̃)²)) / (max x − min x). A constant history
@@ -66,8 +80,17 @@ pub fn nrmse(x: &[f64], approx: &[f64]) -> f64 {
     if x.is_empty() {
         return 0.0;
     }
-    let mse = x.iter().zip(approx).map(|(a, b)| (a - b) * (a - b)).sum::<f64>() / x.len() as f64;
-    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+    let mse = x
+        .iter()
+        .zip(approx)
+        .map(|(a, b)| (a - b) * (a - b))
+        .sum::<f64>()
+        / x.len() as f64;
+    let (lo, hi) = x
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
     let range = hi - lo;
     if range > 0.0 {
         mse.sqrt() / range
@@ -121,7 +144,9 @@ pub fn reconstruction_quality(
     wnrmse_target: Option<f64>,
 ) -> Result<PodCurve> {
     if !(energy_target > 0.0 && energy_target <= 1.0) {
-        return Err(Error::usage(format!("POD: energy target {energy_target} must lie in (0, 1]")));
+        return Err(Error::usage(format!(
+            "POD: energy target {energy_target} must lie in (0, 1]"
+        )));
     }
     let (n, nt) = (snapshots.nrows(), snapshots.ncols());
     let kmax = max_modes.min(pod.singular_values.len());
@@ -146,8 +171,13 @@ pub fn reconstruction_quality(
     let Some(retained) = retained else {
         return Err(Error::numerical(format!(
             "POD: no count of POMs up to {kmax} reaches energy {energy_target} {}",
-            wnrmse_target.map(|t| format!("and WNRMSE ≤ {t}")).unwrap_or_default()
+            wnrmse_target
+                .map(|t| format!("and WNRMSE ≤ {t}"))
+                .unwrap_or_default()
         )));
     };
-    Ok(PodCurve { wnrmse: curve, retained })
+    Ok(PodCurve {
+        wnrmse: curve,
+        retained,
+    })
 }

@@ -28,10 +28,24 @@ impl RigidBodyModes {
     }
     /// Ratio (largest kernel eigenvalue, smallest non-kernel eigenvalue) / λ_max: the gap.
     pub fn gap(&self) -> (f64, f64) {
-        let max = self.eigenvalues.last().copied().unwrap_or(0.0).abs().max(f64::MIN_POSITIVE);
+        let max = self
+            .eigenvalues
+            .last()
+            .copied()
+            .unwrap_or(0.0)
+            .abs()
+            .max(f64::MIN_POSITIVE);
         let r = self.count();
-        let last_zero = if r > 0 { self.eigenvalues[r - 1].abs() / max } else { 0.0 };
-        let first_non_zero = self.eigenvalues.get(r).map(|v| v / max).unwrap_or(f64::INFINITY);
+        let last_zero = if r > 0 {
+            self.eigenvalues[r - 1].abs() / max
+        } else {
+            0.0
+        };
+        let first_non_zero = self
+            .eigenvalues
+            .get(r)
+            .map(|v| v / max)
+            .unwrap_or(f64::INFINITY);
         (last_zero, first_non_zero)
     }
 }
@@ -41,33 +55,50 @@ impl RigidBodyModes {
 pub fn rigid_body_modes(k: MatRef<'_, f64>, relative_tolerance: f64) -> Result<RigidBodyModes> {
     let n = k.nrows();
     if n == 0 || k.ncols() != n {
-        return Err(Error::usage("rigid-body modes: the PS stiffness must be square and non-empty"));
+        return Err(Error::usage(
+            "rigid-body modes: the PS stiffness must be square and non-empty",
+        ));
     }
     if !(relative_tolerance > 0.0 && relative_tolerance < 1.0) {
-        return Err(Error::usage(format!("rigid-body modes: relative tolerance {relative_tolerance} must lie in (0, 1)")));
+        return Err(Error::usage(format!(
+            "rigid-body modes: relative tolerance {relative_tolerance} must lie in (0, 1)"
+        )));
     }
     let mut sym = Mat::<f64>::zeros(n, n);
     for j in 0..n {
         for i in 0..n {
             let v = 0.5 * (k[(i, j)] + k[(j, i)]);
             if !v.is_finite() {
-                return Err(Error::numerical("rigid-body modes: the PS stiffness has a non-finite entry"));
+                return Err(Error::numerical(
+                    "rigid-body modes: the PS stiffness has a non-finite entry",
+                ));
             }
             sym[(i, j)] = v;
         }
     }
-    let evd = sym
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| Error::numerical(format!("rigid-body modes: eigendecomposition of K_P failed ({e:?})")))?;
+    let evd = sym.self_adjoint_eigen(Side::Lower).map_err(|e| {
+        Error::numerical(format!(
+            "rigid-body modes: eigendecomposition of K_P failed ({e:?})"
+        ))
+    })?;
     let lambda: Vec<f64> = (0..n).map(|i| evd.S().column_vector()[i]).collect();
     let max = lambda.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
     if max == 0.0 {
-        return Err(Error::numerical("rigid-body modes: the PS stiffness is zero"));
+        return Err(Error::numerical(
+            "rigid-body modes: the PS stiffness is zero",
+        ));
     }
-    let r = lambda.iter().take_while(|v| v.abs() <= relative_tolerance * max).count();
+    let r = lambda
+        .iter()
+        .take_while(|v| v.abs() <= relative_tolerance * max)
+        .count();
     let u = evd.U();
     let modes = Mat::from_fn(n, r, |i, j| u[(i, j)]);
-    Ok(RigidBodyModes { modes, eigenvalues: lambda, relative_tolerance })
+    Ok(RigidBodyModes {
+        modes,
+        eigenvalues: lambda,
+        relative_tolerance,
+    })
 }
 
 /// A statically determined constrained set c (as many DoFs as rigid-body modes) and the
@@ -104,7 +135,11 @@ impl ConstrainedSet {
     /// User override: validate the given positions. Errors (`Usage`): wrong count, repeated or
     /// out-of-range positions, or R^c singular / worse conditioned than `max_condition` —
     /// then the set does not remove the rigid-body modes.
-    pub fn validated(rigid: &RigidBodyModes, constrained: Vec<usize>, max_condition: f64) -> Result<Self> {
+    pub fn validated(
+        rigid: &RigidBodyModes,
+        constrained: Vec<usize>,
+        max_condition: f64,
+    ) -> Result<Self> {
         let n = rigid.modes.nrows();
         let r = rigid.count();
         if constrained.len() != r {
@@ -117,8 +152,16 @@ impl ConstrainedSet {
         for &c in &constrained {
             match used.get_mut(c) {
                 Some(u) if !*u => *u = true,
-                Some(_) => return Err(Error::usage(format!("constrained set lists PS DoF {c} twice"))),
-                None => return Err(Error::usage(format!("constrained DoF {c} outside the PS (0..{n})"))),
+                Some(_) => {
+                    return Err(Error::usage(format!(
+                        "constrained set lists PS DoF {c} twice"
+                    )))
+                }
+                None => {
+                    return Err(Error::usage(format!(
+                        "constrained DoF {c} outside the PS (0..{n})"
+                    )))
+                }
             }
         }
         let retained: Vec<usize> = (0..n).filter(|&i| !used[i]).collect();
@@ -126,12 +169,16 @@ impl ConstrainedSet {
         let (condition, r_c_inverse) = if r == 0 {
             (1.0, Mat::zeros(0, 0))
         } else {
-            let svd = r_c
-                .thin_svd()
-                .map_err(|e| Error::numerical(format!("constrained set: SVD of R^c failed ({e:?})")))?;
+            let svd = r_c.thin_svd().map_err(|e| {
+                Error::numerical(format!("constrained set: SVD of R^c failed ({e:?})"))
+            })?;
             let s = svd.S().column_vector();
             let (smax, smin) = (s[0], s[r - 1]);
-            let condition = if smin > 0.0 { smax / smin } else { f64::INFINITY };
+            let condition = if smin > 0.0 {
+                smax / smin
+            } else {
+                f64::INFINITY
+            };
             if !(condition <= max_condition) {
                 return Err(Error::usage(format!(
                     "constrained set {constrained:?} does not remove the rigid-body modes: R^c has condition number {condition:.3e} (limit {max_condition:.1e}); choose DoFs that restrain every rigid-body motion"
@@ -139,19 +186,35 @@ impl ConstrainedSet {
             }
             // (R^c)⁻¹ = V Σ⁻¹ Uᵀ.
             let (u, v) = (svd.U(), svd.V());
-            let inv = Mat::from_fn(r, r, |i, j| (0..r).map(|l| v[(i, l)] * u[(j, l)] / s[l]).sum());
+            let inv = Mat::from_fn(r, r, |i, j| {
+                (0..r).map(|l| v[(i, l)] * u[(j, l)] / s[l]).sum()
+            });
             (condition, inv)
         };
-        Ok(ConstrainedSet { constrained, retained, r_c, r_c_inverse, condition })
+        Ok(ConstrainedSet {
+            constrained,
+            retained,
+            r_c,
+            r_c_inverse,
+            condition,
+        })
     }
 
     /// Rigid-body removal of one PS displacement vector (Eq. 50–51, 74–75):
     /// λ = −(R^c)⁻¹ u^c and ū = u + R λ, so that ū^c = 0. Returns (ū over all PS DoFs, λ).
     pub fn remove(&self, rigid: &RigidBodyModes, u: &[f64]) -> (Vec<f64>, Vec<f64>) {
         let r = self.constrained.len();
-        let uc: Vec<f64> = self.constrained.iter().map(|&c| u.get(c).copied().unwrap_or(0.0)).collect();
+        let uc: Vec<f64> = self
+            .constrained
+            .iter()
+            .map(|&c| u.get(c).copied().unwrap_or(0.0))
+            .collect();
         let lambda: Vec<f64> = (0..r)
-            .map(|i| -(0..r).map(|j| self.r_c_inverse[(i, j)] * uc[j]).sum::<f64>())
+            .map(|i| {
+                -(0..r)
+                    .map(|j| self.r_c_inverse[(i, j)] * uc[j])
+                    .sum::<f64>()
+            })
             .collect();
         let mut bar: Vec<f64> = u.to_vec();
         for (i, b) in bar.iter_mut().enumerate().take(rigid.modes.nrows()) {
@@ -169,7 +232,11 @@ impl ConstrainedSet {
     /// Snapshot matrix of deformations at the retained DoFs r: column k is ū_k^r (Eq. 51, 75),
     /// from PS displacement histories `history[k]` (one PS vector per time step).
     /// Also returns λ_k per step.
-    pub fn deformation_snapshots(&self, rigid: &RigidBodyModes, history: &[Vec<f64>]) -> (Mat<f64>, Vec<Vec<f64>>) {
+    pub fn deformation_snapshots(
+        &self,
+        rigid: &RigidBodyModes,
+        history: &[Vec<f64>],
+    ) -> (Mat<f64>, Vec<Vec<f64>>) {
         let mut x = Mat::<f64>::zeros(self.retained.len(), history.len());
         let mut lambdas = Vec::with_capacity(history.len());
         for (k, u) in history.iter().enumerate() {

@@ -383,6 +383,8 @@ fn apply_entry(
     }
     if let Some(u) = &entry.units {
         ch.units = u.parse::<Units>().map_err(err)?;
+        ch.missing.retain(|m| m != "units");
+        ch.inferred.push(format!("units {u} from the manifest"));
     }
     if let Some(s) = entry.sensitivity {
         match &mut ch.units {
@@ -478,6 +480,20 @@ fn infer_and_report_missing(event: &mut Event, has_manifest: bool) {
                 }
             }
         }
+        // Drop what readers listed as missing but the manifest has since stated.
+        ch.missing.retain(|m| match m.as_str() {
+            "level" => ch.level.is_none(),
+            "role" => ch.role == Role::Unknown,
+            "direction" => ch.direction.is_none(),
+            "sensitivity" => matches!(
+                ch.units,
+                Units::Counts {
+                    counts_per_si: None
+                }
+            ),
+            "start_time" => ch.start_ns.is_none(),
+            _ => true,
+        });
         let mut missing = Vec::new();
         if ch.level.is_none() {
             missing.push("level");

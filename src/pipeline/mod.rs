@@ -96,23 +96,20 @@ pub fn run(
         fingerprints.insert(stage.name.clone(), fp.clone());
         let outputs = registry::outputs(stage)?;
         if is_up_to_date(out, stage, &fp, &outputs, event_path) {
-            if !quiet {
-                eprintln!(
-                    "[{}] {:<12} up to date, skipped",
-                    pipeline.pipeline.name, stage.name
-                );
-            }
+            log(format!(
+                "[{}] {:<12} up to date, skipped",
+                pipeline.pipeline.name, stage.name
+            ));
+            bar.inc(1);
             ctx.mark_skipped(&stage.name);
             outcomes.push((stage.name.clone(), StageOutcome::Skipped));
             continue;
         }
         let t0 = Instant::now();
-        if !quiet {
-            eprintln!(
-                "[{}] {:<12} running ({})",
-                pipeline.pipeline.name, stage.name, stage.kind
-            );
-        }
+        log(format!(
+            "[{}] {:<12} running ({})",
+            pipeline.pipeline.name, stage.name, stage.kind
+        ));
         registry::run_stage(stage, &mut ctx).map_err(|e| {
             bar.finish_and_clear();
             match e {
@@ -141,15 +138,14 @@ pub fn run(
             serde_json::to_vec_pretty(&stamp).map_err(|e| Error::output(&sp, e.to_string()))?;
         crate::sinks::parquet::write_bytes_atomically(&sp, &json)?;
         let secs = t0.elapsed().as_secs_f64();
-        if !quiet {
-            eprintln!(
-                "[{}] {:<12} done in {:.2} s -> {}",
-                pipeline.pipeline.name,
-                stage.name,
-                secs,
-                outputs.join(", ")
-            );
-        }
+        log(format!(
+            "[{}] {:<12} done in {:.2} s -> {}",
+            pipeline.pipeline.name,
+            stage.name,
+            secs,
+            outputs.join(", ")
+        ));
+        bar.inc(1);
         outcomes.push((stage.name.clone(), StageOutcome::Ran { seconds: secs }));
     }
     bar.finish_and_clear();

@@ -8,13 +8,21 @@ use super::config::StageDecl;
 use crate::conditioning::Motion;
 use crate::error::{Error, Result};
 use crate::event_folder::LoadedEvent;
-use crate::stages;
 use crate::sinks::hysteresis_tables::DirectionOutcome;
+use crate::stages;
 use crate::stages::hysteresis::HysteresisParams;
 use crate::vocab::Event;
 
 /// Stage kinds available in this build, in pipeline order.
-pub const KINDS: &[&str] = &["ingest", "condition", "metrics", "modal", "hysteresis", "damage", "report"];
+pub const KINDS: &[&str] = &[
+    "ingest",
+    "condition",
+    "metrics",
+    "modal",
+    "hysteresis",
+    "damage",
+    "report",
+];
 
 /// Output files (relative to the output directory) a stage declares.
 pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {

@@ -32,30 +32,136 @@ fn meta(schema: &str, extra: &[(String, String)]) -> Vec<(String, String)> {
 
 /// `bouc_wen.parquet`: one row per direction, DoF and parameter (a direction
 /// that could not be identified has one row with `status` saying why).
-pub fn write_bouc_wen(path: &Path, outcomes: &[DirectionOutcome], extra_meta: &[(String, String)]) -> Result<()> {
+pub fn write_bouc_wen(
+    path: &Path,
+    outcomes: &[DirectionOutcome],
+    extra_meta: &[(String, String)],
+) -> Result<()> {
     let mut c = Cols::default();
     for o in outcomes {
         match o {
             DirectionOutcome::NotIdentifiable { direction, reason } => {
-                c.push_row(direction, -1, "none", None, f64::NAN, "", None, false, f64::NAN, f64::NAN, f64::NAN, "not_identifiable", reason);
+                c.push_row(
+                    direction,
+                    -1,
+                    "none",
+                    None,
+                    f64::NAN,
+                    "",
+                    None,
+                    false,
+                    f64::NAN,
+                    f64::NAN,
+                    f64::NAN,
+                    "not_identifiable",
+                    reason,
+                );
             }
             DirectionOutcome::Identified(d) => {
                 for dof in &d.dofs {
                     let st = dof.stability.as_ref();
                     let stable = st.map(|s| s.stable).unwrap_or(false);
                     let level = dof.dof as i32; // 1-based already
-                    let status = if stable { "identified" } else { "identified_unstable" };
+                    let status = if stable {
+                        "identified"
+                    } else {
+                        "identified_unstable"
+                    };
                     for (i, r) in dof.coupled.iter().enumerate() {
                         let rs = st.and_then(|s| s.k0_rel_std.get(i).copied());
                         let rds = st.and_then(|s| s.k0_delta_rel_std.get(i).copied());
                         let r1 = *r as i32; // 1-based already
-                        c.push_row(&d.direction, level, "K0", Some(r1), dof.k0[i], "N/m", rs, stable, dof.cost, dof.cost_relative, dof.hysteretic_share, status, "");
-                        c.push_row(&d.direction, level, "K0_delta", Some(r1), dof.k0_delta[i], "N/m", rds, stable, dof.cost, dof.cost_relative, dof.hysteretic_share, status, "");
-                        c.push_row(&d.direction, level, "delta", Some(r1), dof.delta[i], "1/J", None, stable, dof.cost, dof.cost_relative, dof.hysteretic_share, status, "");
+                        c.push_row(
+                            &d.direction,
+                            level,
+                            "K0",
+                            Some(r1),
+                            dof.k0[i],
+                            "N/m",
+                            rs,
+                            stable,
+                            dof.cost,
+                            dof.cost_relative,
+                            dof.hysteretic_share,
+                            status,
+                            "",
+                        );
+                        c.push_row(
+                            &d.direction,
+                            level,
+                            "K0_delta",
+                            Some(r1),
+                            dof.k0_delta[i],
+                            "N/m",
+                            rds,
+                            stable,
+                            dof.cost,
+                            dof.cost_relative,
+                            dof.hysteretic_share,
+                            status,
+                            "",
+                        );
+                        c.push_row(
+                            &d.direction,
+                            level,
+                            "delta",
+                            Some(r1),
+                            dof.delta[i],
+                            "1/J",
+                            None,
+                            stable,
+                            dof.cost,
+                            dof.cost_relative,
+                            dof.hysteretic_share,
+                            status,
+                            "",
+                        );
                     }
-                    c.push_row(&d.direction, level, "beta", None, dof.beta, "N^(1-N)/m", st.map(|s| s.beta_rel_std), stable, dof.cost, dof.cost_relative, dof.hysteretic_share, status, "");
-                    c.push_row(&d.direction, level, "gamma", None, dof.gamma, "N^(1-N)/m", st.map(|s| s.gamma_rel_std), stable, dof.cost, dof.cost_relative, dof.hysteretic_share, status, "");
-                    c.push_row(&d.direction, level, "N", None, dof.exponent, "-", st.map(|s| s.exponent_std), stable, dof.cost, dof.cost_relative, dof.hysteretic_share, status, "");
+                    c.push_row(
+                        &d.direction,
+                        level,
+                        "beta",
+                        None,
+                        dof.beta,
+                        "N^(1-N)/m",
+                        st.map(|s| s.beta_rel_std),
+                        stable,
+                        dof.cost,
+                        dof.cost_relative,
+                        dof.hysteretic_share,
+                        status,
+                        "",
+                    );
+                    c.push_row(
+                        &d.direction,
+                        level,
+                        "gamma",
+                        None,
+                        dof.gamma,
+                        "N^(1-N)/m",
+                        st.map(|s| s.gamma_rel_std),
+                        stable,
+                        dof.cost,
+                        dof.cost_relative,
+                        dof.hysteretic_share,
+                        status,
+                        "",
+                    );
+                    c.push_row(
+                        &d.direction,
+                        level,
+                        "N",
+                        None,
+                        dof.exponent,
+                        "-",
+                        st.map(|s| s.exponent_std),
+                        stable,
+                        dof.cost,
+                        dof.cost_relative,
+                        dof.hysteretic_share,
+                        status,
+                        "",
+                    );
                 }
             }
         }
@@ -131,10 +237,21 @@ impl Cols {
 
 /// `bouc_wen_instantaneous.parquet`: cumulative (t_e → t) estimates per frame.
 pub fn write_instantaneous(path: &Path, outcomes: &[DirectionOutcome]) -> Result<()> {
-    let (mut dir, mut dof, mut t, mut inf, mut n, mut cost, mut k0, mut beta, mut gamma) =
-        (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut dir, mut dof, mut t, mut inf, mut n, mut cost, mut k0, mut beta, mut gamma) = (
+        vec![],
+        vec![],
+        vec![],
+        vec![],
+        vec![],
+        vec![],
+        vec![],
+        vec![],
+        vec![],
+    );
     for o in outcomes {
-        let DirectionOutcome::Identified(d) = o else { continue };
+        let DirectionOutcome::Identified(d) = o else {
+            continue;
+        };
         for f in &d.dofs {
             for e in &f.instantaneous {
                 dir.push(d.direction.clone());
@@ -167,13 +284,20 @@ pub fn write_instantaneous(path: &Path, outcomes: &[DirectionOutcome]) -> Result
 /// `hysteresis_fit.parquet`: recorded vs model restoring force per storey.
 pub fn write_fit(path: &Path, outcomes: &[DirectionOutcome], decimate: usize) -> Result<()> {
     let step = decimate.max(1);
-    let (mut dir, mut dof, mut t, mut drift, mut fr, mut fm) = (vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut dir, mut dof, mut t, mut drift, mut fr, mut fm) =
+        (vec![], vec![], vec![], vec![], vec![], vec![]);
     for o in outcomes {
-        let DirectionOutcome::Identified(d) = o else { continue };
+        let DirectionOutcome::Identified(d) = o else {
+            continue;
+        };
         let dt = 1.0 / d.sampling_rate_hz;
         for f in &d.dofs {
             let s = &f.fit;
-            let len = s.force_record.len().min(s.force_model.len()).min(s.storey_drift.len());
+            let len = s
+                .force_record
+                .len()
+                .min(s.force_model.len())
+                .min(s.storey_drift.len());
             for i in (0..len).step_by(step) {
                 dir.push(d.direction.clone());
                 dof.push(f.dof as i32);
@@ -203,7 +327,9 @@ pub fn write_damage(path: &Path, outcomes: &[DirectionOutcome], decimate: usize)
         (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     let mut indefinite = serde_json::Map::new();
     for o in outcomes {
-        let DirectionOutcome::Identified(d) = o else { continue };
+        let DirectionOutcome::Identified(d) = o else {
+            continue;
+        };
         let s = &d.damage;
         indefinite.insert(d.direction.clone(), serde_json::json!(s.indefinite_steps));
         let last = s.time_s.len().saturating_sub(1);
@@ -231,6 +357,12 @@ pub fn write_damage(path: &Path, outcomes: &[DirectionOutcome], decimate: usize)
     write_parquet(
         path,
         &[batch],
-        &meta("damage", &[("quaketwin.indefinite_steps".into(), serde_json::Value::Object(indefinite).to_string())]),
+        &meta(
+            "damage",
+            &[(
+                "quaketwin.indefinite_steps".into(),
+                serde_json::Value::Object(indefinite).to_string(),
+            )],
+        ),
     )
 }

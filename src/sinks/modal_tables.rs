@@ -16,13 +16,25 @@ pub const OUTPUT_CHANNELS_KEY: &str = "quaketwin.output_channels";
 fn meta(schema: &str, result: &ModalResult, settings_json: &str) -> Vec<(String, String)> {
     vec![
         ("quaketwin.schema".into(), schema.into()),
-        (OUTPUT_CHANNELS_KEY.into(), serde_json::to_string(&result.output_ids).unwrap_or_default()),
-        ("quaketwin.input_channels".into(), serde_json::to_string(&result.input_ids).unwrap_or_default()),
+        (
+            OUTPUT_CHANNELS_KEY.into(),
+            serde_json::to_string(&result.output_ids).unwrap_or_default(),
+        ),
+        (
+            "quaketwin.input_channels".into(),
+            serde_json::to_string(&result.input_ids).unwrap_or_default(),
+        ),
         ("quaketwin.method".into(), result.method.name().into()),
         ("quaketwin.block_rows".into(), result.block_rows.to_string()),
         ("quaketwin.settings".into(), settings_json.into()),
-        ("quaketwin.history".into(), serde_json::to_string(&result.preprocessing).unwrap_or_default()),
-        ("quaketwin.notes".into(), serde_json::to_string(&result.notes).unwrap_or_default()),
+        (
+            "quaketwin.history".into(),
+            serde_json::to_string(&result.preprocessing).unwrap_or_default(),
+        ),
+        (
+            "quaketwin.notes".into(),
+            serde_json::to_string(&result.notes).unwrap_or_default(),
+        ),
     ]
 }
 
@@ -34,11 +46,22 @@ pub fn write_stabilization(path: &Path, r: &ModalResult, settings_json: &str) ->
         .f64("damping_ratio", p.iter().map(|x| x.damping_ratio).collect())
         .f64("mpc", p.iter().map(|x| x.mpc).collect())
         .f64("mpd_deg", p.iter().map(|x| x.mpd_deg).collect())
-        .bool("stable_frequency", p.iter().map(|x| x.stable_frequency).collect())
-        .bool("stable_damping", p.iter().map(|x| x.stable_damping).collect())
+        .bool(
+            "stable_frequency",
+            p.iter().map(|x| x.stable_frequency).collect(),
+        )
+        .bool(
+            "stable_damping",
+            p.iter().map(|x| x.stable_damping).collect(),
+        )
         .bool("stable_shape", p.iter().map(|x| x.stable_shape).collect())
         .bool("physical", p.iter().map(|x| x.physical).collect())
-        .i32("mode", p.iter().map(|x| x.mode.map(|m| m as i32 + 1).unwrap_or(-1)).collect())
+        .i32(
+            "mode",
+            p.iter()
+                .map(|x| x.mode.map(|m| m as i32 + 1).unwrap_or(-1))
+                .collect(),
+        )
         .build()?;
     write_parquet(path, &[batch], &meta("stabilization", r, settings_json))
 }
@@ -48,25 +71,49 @@ pub fn write_modes(path: &Path, r: &ModalResult, settings_json: &str) -> Result<
     let batch = TableBuilder::new()
         .u32("mode", (1..=m.len() as u32).collect())
         .f64("frequency_hz", m.iter().map(|x| x.frequency_hz).collect())
-        .f64("frequency_std_hz", m.iter().map(|x| x.frequency_std_hz).collect())
+        .f64(
+            "frequency_std_hz",
+            m.iter().map(|x| x.frequency_std_hz).collect(),
+        )
         .f64("damping_ratio", m.iter().map(|x| x.damping_ratio).collect())
         .f64("damping_std", m.iter().map(|x| x.damping_std).collect())
         .f64("mpc", m.iter().map(|x| x.mpc).collect())
         .f64("mpd_deg", m.iter().map(|x| x.mpd_deg).collect())
         .f64("mean_mac", m.iter().map(|x| x.mean_mac).collect())
-        .u32("pole_count", m.iter().map(|x| x.pole_count as u32).collect())
+        .u32(
+            "pole_count",
+            m.iter().map(|x| x.pole_count as u32).collect(),
+        )
         .u32("order_min", m.iter().map(|x| x.order_min as u32).collect())
         .u32("order_max", m.iter().map(|x| x.order_max as u32).collect())
         .bool("manual", m.iter().map(|x| x.manual).collect())
-        .list_f64("shape_re", &m.iter().map(|x| x.shape.iter().map(|c| c.re).collect()).collect::<Vec<_>>())
-        .list_f64("shape_im", &m.iter().map(|x| x.shape.iter().map(|c| c.im).collect()).collect::<Vec<_>>())
-        .list_f64("shape_std", &m.iter().map(|x| x.shape_std.clone()).collect::<Vec<_>>())
+        .list_f64(
+            "shape_re",
+            &m.iter()
+                .map(|x| x.shape.iter().map(|c| c.re).collect())
+                .collect::<Vec<_>>(),
+        )
+        .list_f64(
+            "shape_im",
+            &m.iter()
+                .map(|x| x.shape.iter().map(|c| c.im).collect())
+                .collect::<Vec<_>>(),
+        )
+        .list_f64(
+            "shape_std",
+            &m.iter().map(|x| x.shape_std.clone()).collect::<Vec<_>>(),
+        )
         .build()?;
     write_parquet(path, &[batch], &meta("modes", r, settings_json))
 }
 
 /// Singular values of the factorisation and of the PSD matrix, long format.
-pub fn write_spectrum(path: &Path, r: &ModalResult, overlay: Option<&SpectralOverlay>, settings_json: &str) -> Result<()> {
+pub fn write_spectrum(
+    path: &Path,
+    r: &ModalResult,
+    overlay: Option<&SpectralOverlay>,
+    settings_json: &str,
+) -> Result<()> {
     let (mut kind, mut index, mut freq, mut value) = (vec![], vec![], vec![], vec![]);
     for (i, s) in r.singular_values.iter().enumerate() {
         kind.push("subspace");
@@ -93,16 +140,39 @@ pub fn write_spectrum(path: &Path, r: &ModalResult, overlay: Option<&SpectralOve
     write_parquet(path, &[batch], &meta("modal_spectrum", r, settings_json))
 }
 
-pub fn write_shifts(path: &Path, shifts: &[FrequencyShift], reference_event: &str, this_event: &str) -> Result<()> {
+pub fn write_shifts(
+    path: &Path,
+    shifts: &[FrequencyShift],
+    reference_event: &str,
+    this_event: &str,
+) -> Result<()> {
     let s = shifts;
     let batch = TableBuilder::new()
-        .u32("reference_mode", s.iter().map(|x| x.reference_mode as u32 + 1).collect())
-        .u32("other_mode", s.iter().map(|x| x.other_mode as u32 + 1).collect())
-        .f64("frequency_reference_hz", s.iter().map(|x| x.frequency_reference_hz).collect())
-        .f64("frequency_other_hz", s.iter().map(|x| x.frequency_other_hz).collect())
-        .f64("relative_shift", s.iter().map(|x| x.relative_shift).collect())
+        .u32(
+            "reference_mode",
+            s.iter().map(|x| x.reference_mode as u32 + 1).collect(),
+        )
+        .u32(
+            "other_mode",
+            s.iter().map(|x| x.other_mode as u32 + 1).collect(),
+        )
+        .f64(
+            "frequency_reference_hz",
+            s.iter().map(|x| x.frequency_reference_hz).collect(),
+        )
+        .f64(
+            "frequency_other_hz",
+            s.iter().map(|x| x.frequency_other_hz).collect(),
+        )
+        .f64(
+            "relative_shift",
+            s.iter().map(|x| x.relative_shift).collect(),
+        )
         .f64("shift_in_std", s.iter().map(|x| x.shift_in_std).collect())
-        .f64("damping_reference", s.iter().map(|x| x.damping_reference).collect())
+        .f64(
+            "damping_reference",
+            s.iter().map(|x| x.damping_reference).collect(),
+        )
         .f64("damping_other", s.iter().map(|x| x.damping_other).collect())
         .f64("mac", s.iter().map(|x| x.mac).collect())
         .build()?;
@@ -126,46 +196,101 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
     use crate::error::{Error, Location};
     let loc = || Location::file(path.display().to_string());
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let builder = ParquetRecordBatchReaderBuilder::try_new(file).map_err(|e| Error::input(loc(), e.to_string()))?;
-    let kv = builder.metadata().file_metadata().key_value_metadata().cloned().unwrap_or_default();
+    let builder = ParquetRecordBatchReaderBuilder::try_new(file)
+        .map_err(|e| Error::input(loc(), e.to_string()))?;
+    let kv = builder
+        .metadata()
+        .file_metadata()
+        .key_value_metadata()
+        .cloned()
+        .unwrap_or_default();
     let channels: Vec<String> = kv
         .iter()
         .find(|e| e.key == OUTPUT_CHANNELS_KEY)
         .and_then(|e| e.value.as_deref())
         .and_then(|v| serde_json::from_str(v).ok())
-        .ok_or_else(|| Error::input(loc(), format!("metadata {OUTPUT_CHANNELS_KEY} missing: not a quaketwin modes.parquet")))?;
+        .ok_or_else(|| {
+            Error::input(
+                loc(),
+                format!("metadata {OUTPUT_CHANNELS_KEY} missing: not a quaketwin modes.parquet"),
+            )
+        })?;
     let mut modes = Vec::new();
-    for batch in builder.build().map_err(|e| Error::input(loc(), e.to_string()))? {
+    for batch in builder
+        .build()
+        .map_err(|e| Error::input(loc(), e.to_string()))?
+    {
         let b = batch.map_err(|e| Error::input(loc(), e.to_string()))?;
-        let col = |n: &str| b.column_by_name(n).ok_or_else(|| Error::input(loc(), format!("column {n} missing")));
+        let col = |n: &str| {
+            b.column_by_name(n)
+                .ok_or_else(|| Error::input(loc(), format!("column {n} missing")))
+        };
         let f = |n: &str| -> Result<Float64Array> {
-            col(n)?.as_any().downcast_ref::<Float64Array>().cloned().ok_or_else(|| Error::input(loc(), format!("column {n} is not Float64")))
+            col(n)?
+                .as_any()
+                .downcast_ref::<Float64Array>()
+                .cloned()
+                .ok_or_else(|| Error::input(loc(), format!("column {n} is not Float64")))
         };
         let u = |n: &str| -> Result<UInt32Array> {
-            col(n)?.as_any().downcast_ref::<UInt32Array>().cloned().ok_or_else(|| Error::input(loc(), format!("column {n} is not UInt32")))
+            col(n)?
+                .as_any()
+                .downcast_ref::<UInt32Array>()
+                .cloned()
+                .ok_or_else(|| Error::input(loc(), format!("column {n} is not UInt32")))
         };
         let l = |n: &str| -> Result<ListArray> {
-            col(n)?.as_any().downcast_ref::<ListArray>().cloned().ok_or_else(|| Error::input(loc(), format!("column {n} is not a list")))
+            col(n)?
+                .as_any()
+                .downcast_ref::<ListArray>()
+                .cloned()
+                .ok_or_else(|| Error::input(loc(), format!("column {n} is not a list")))
         };
-        let (fr, fs, z, zs, mpc, mpd, mm) =
-            (f("frequency_hz")?, f("frequency_std_hz")?, f("damping_ratio")?, f("damping_std")?, f("mpc")?, f("mpd_deg")?, f("mean_mac")?);
+        let (fr, fs, z, zs, mpc, mpd, mm) = (
+            f("frequency_hz")?,
+            f("frequency_std_hz")?,
+            f("damping_ratio")?,
+            f("damping_std")?,
+            f("mpc")?,
+            f("mpd_deg")?,
+            f("mean_mac")?,
+        );
         let (pc, omin, omax) = (u("pole_count")?, u("order_min")?, u("order_max")?);
-        let manual = col("manual")?.as_any().downcast_ref::<BooleanArray>().cloned();
+        let manual = col("manual")?
+            .as_any()
+            .downcast_ref::<BooleanArray>()
+            .cloned();
         let (re, im, sd) = (l("shape_re")?, l("shape_im")?, l("shape_std")?);
         let values = |a: &ListArray, i: usize| -> Vec<f64> {
-            a.value(i).as_any().downcast_ref::<Float64Array>().map(|v| v.values().to_vec()).unwrap_or_default()
+            a.value(i)
+                .as_any()
+                .downcast_ref::<Float64Array>()
+                .map(|v| v.values().to_vec())
+                .unwrap_or_default()
         };
         for i in 0..b.num_rows() {
             let (r, m) = (values(&re, i), values(&im, i));
             if r.len() != channels.len() || m.len() != channels.len() {
-                return Err(Error::input(loc(), format!("mode {} has a shape of {} entries for {} channels", i + 1, r.len(), channels.len())));
+                return Err(Error::input(
+                    loc(),
+                    format!(
+                        "mode {} has a shape of {} entries for {} channels",
+                        i + 1,
+                        r.len(),
+                        channels.len()
+                    ),
+                ));
             }
             modes.push(crate::modal::Mode {
                 frequency_hz: fr.value(i),
                 frequency_std_hz: fs.value(i),
                 damping_ratio: z.value(i),
                 damping_std: zs.value(i),
-                shape: r.iter().zip(&m).map(|(a, b)| faer::c64::new(*a, *b)).collect(),
+                shape: r
+                    .iter()
+                    .zip(&m)
+                    .map(|(a, b)| faer::c64::new(*a, *b))
+                    .collect(),
                 shape_std: values(&sd, i),
                 mpc: mpc.value(i),
                 mpd_deg: mpd.value(i),

@@ -90,19 +90,32 @@ impl HysteresisParams {
         s.form = match self.form.as_str() {
             "jerk" => BasisForm::Jerk,
             "integral" => BasisForm::Integral,
-            f => return Err(Error::usage(format!("form {f:?} must be \"jerk\" or \"integral\""))),
+            f => {
+                return Err(Error::usage(format!(
+                    "form {f:?} must be \"jerk\" or \"integral\""
+                )))
+            }
         };
         s.velocity_drift = match self.velocity_drift.as_str() {
             "none" => VelocityDrift::None,
             "endpoint_ramp" => VelocityDrift::EndpointRamp,
-            v => return Err(Error::usage(format!("velocity_drift {v:?} must be \"none\" or \"endpoint_ramp\""))),
+            v => {
+                return Err(Error::usage(format!(
+                    "velocity_drift {v:?} must be \"none\" or \"endpoint_ramp\""
+                )))
+            }
         };
         if self.band_low_hz > 0.0 {
             s.band = FrequencyBand::above(self.band_low_hz);
             s.transform = crate::hysteresis::Transform::Fft;
         }
-        if !(self.exponent_min >= 1.0 && self.exponent_max > self.exponent_min && self.exponent_resolution > 0.0) {
-            return Err(Error::usage("exponent range must satisfy 1 ≤ exponent_min < exponent_max, resolution > 0"));
+        if !(self.exponent_min >= 1.0
+            && self.exponent_max > self.exponent_min
+            && self.exponent_resolution > 0.0)
+        {
+            return Err(Error::usage(
+                "exponent range must satisfy 1 ≤ exponent_min < exponent_max, resolution > 0",
+            ));
         }
         Ok(s)
     }
@@ -116,15 +129,30 @@ pub fn auto_directions(event: &Event) -> (Vec<DirectionSpec>, Vec<DirectionOutco
     let mut dirs: Vec<String> = event
         .records
         .iter()
-        .filter_map(|r| r.channel.direction.filter(|d| !d.is_vertical()).map(|d| d.to_string()))
+        .filter_map(|r| {
+            r.channel
+                .direction
+                .filter(|d| !d.is_vertical())
+                .map(|d| d.to_string())
+        })
         .collect();
     dirs.sort();
     dirs.dedup();
     for dir in dirs {
-        let same = |r: &&crate::vocab::Record| r.channel.direction.map(|d| d.to_string()).as_deref() == Some(dir.as_str());
-        let base = event.records.iter().filter(same).find(|r| r.channel.level == Some(0) && r.channel.role == Role::Input);
-        let mut floors: Vec<_> =
-            event.records.iter().filter(same).filter(|r| r.channel.level.map(|l| l > 0).unwrap_or(false)).collect();
+        let same = |r: &&crate::vocab::Record| {
+            r.channel.direction.map(|d| d.to_string()).as_deref() == Some(dir.as_str())
+        };
+        let base = event
+            .records
+            .iter()
+            .filter(same)
+            .find(|r| r.channel.level == Some(0) && r.channel.role == Role::Input);
+        let mut floors: Vec<_> = event
+            .records
+            .iter()
+            .filter(same)
+            .filter(|r| r.channel.level.map(|l| l > 0).unwrap_or(false))
+            .collect();
         floors.sort_by_key(|r| r.channel.level);
         let Some(base) = base else {
             skipped.push(DirectionOutcome::NotIdentifiable {
@@ -170,11 +198,17 @@ pub fn identify_event(event: &Event, p: &HysteresisParams) -> Result<Vec<Directi
             .par_iter()
             .map(|spec| {
                 let floors: Vec<&str> = spec.floors.iter().map(|s| s.as_str()).collect();
-                let r = DirectionRecords::from_event(&event, &spec.direction, &spec.base, &floors, spec.masses_kg.as_deref())
-                    .and_then(|mut rec| {
-                        rec.declared_processing = event.history.clone();
-                        identify_direction(&rec, &settings)
-                    });
+                let r = DirectionRecords::from_event(
+                    &event,
+                    &spec.direction,
+                    &spec.base,
+                    &floors,
+                    spec.masses_kg.as_deref(),
+                )
+                .and_then(|mut rec| {
+                    rec.declared_processing = event.history.clone();
+                    identify_direction(&rec, &settings)
+                });
                 (spec.direction.clone(), r)
             })
             .collect()
@@ -182,28 +216,42 @@ pub fn identify_event(event: &Event, p: &HysteresisParams) -> Result<Vec<Directi
     for (direction, r) in results {
         match r {
             Ok(d) => outcomes.push(DirectionOutcome::Identified(Box::new(d))),
-            Err(e) if !p.fail_on_error => {
-                outcomes.push(DirectionOutcome::NotIdentifiable { direction, reason: e.to_string() })
-            }
+            Err(e) if !p.fail_on_error => outcomes.push(DirectionOutcome::NotIdentifiable {
+                direction,
+                reason: e.to_string(),
+            }),
             Err(e) => return Err(e),
         }
     }
     outcomes.sort_by(|a, b| a.direction().cmp(b.direction()));
-    if p.fail_on_error && outcomes.iter().any(|o| matches!(o, DirectionOutcome::NotIdentifiable { .. })) {
+    if p.fail_on_error
+        && outcomes
+            .iter()
+            .any(|o| matches!(o, DirectionOutcome::NotIdentifiable { .. }))
+    {
         let reasons: Vec<String> = outcomes
             .iter()
             .filter_map(|o| match o {
-                DirectionOutcome::NotIdentifiable { direction, reason } => Some(format!("{direction}: {reason}")),
+                DirectionOutcome::NotIdentifiable { direction, reason } => {
+                    Some(format!("{direction}: {reason}"))
+                }
                 _ => None,
             })
             .collect();
-        return Err(Error::NotIdentifiable { stage: "hysteresis".into(), message: reasons.join("; ") });
+        return Err(Error::NotIdentifiable {
+            stage: "hysteresis".into(),
+            message: reasons.join("; "),
+        });
     }
     Ok(outcomes)
 }
 
 /// Writes the three identification tables.
-pub fn write_identification(dir: &std::path::Path, outcomes: &[DirectionOutcome], p: &HysteresisParams) -> Result<()> {
+pub fn write_identification(
+    dir: &std::path::Path,
+    outcomes: &[DirectionOutcome],
+    p: &HysteresisParams,
+) -> Result<()> {
     let settings_json = serde_json::json!({
         "form": p.form, "band_low_hz": p.band_low_hz, "exponent_min": p.exponent_min,
         "exponent_max": p.exponent_max, "exponent_resolution": p.exponent_resolution,
@@ -212,17 +260,27 @@ pub fn write_identification(dir: &std::path::Path, outcomes: &[DirectionOutcome]
     let processing: serde_json::Map<String, serde_json::Value> = outcomes
         .iter()
         .filter_map(|o| match o {
-            DirectionOutcome::Identified(d) => Some((d.direction.clone(), serde_json::to_value(&d.processing).unwrap_or_default())),
+            DirectionOutcome::Identified(d) => Some((
+                d.direction.clone(),
+                serde_json::to_value(&d.processing).unwrap_or_default(),
+            )),
             _ => None,
         })
         .collect();
     let meta = vec![
         ("quaketwin.settings".to_string(), settings_json.to_string()),
-        ("quaketwin.history".to_string(), serde_json::Value::Object(processing).to_string()),
+        (
+            "quaketwin.history".to_string(),
+            serde_json::Value::Object(processing).to_string(),
+        ),
     ];
     tables::write_bouc_wen(&dir.join("bouc_wen.parquet"), outcomes, &meta)?;
     tables::write_instantaneous(&dir.join("bouc_wen_instantaneous.parquet"), outcomes)?;
-    tables::write_fit(&dir.join("hysteresis_fit.parquet"), outcomes, p.output_decimation)
+    tables::write_fit(
+        &dir.join("hysteresis_fit.parquet"),
+        outcomes,
+        p.output_decimation,
+    )
 }
 
 pub fn run(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
@@ -255,5 +313,9 @@ pub fn run_damage(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
         ctx.hysteresis = Some((outcomes, hp));
     }
     let (outcomes, _) = ctx.hysteresis.as_ref().expect("set above"); // ok: set above
-    tables::write_damage(&ctx.out_dir.join("damage.parquet"), outcomes, p.output_decimation.max(1))
+    tables::write_damage(
+        &ctx.out_dir.join("damage.parquet"),
+        outcomes,
+        p.output_decimation.max(1),
+    )
 }

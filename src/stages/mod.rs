@@ -6,6 +6,6 @@ pub mod condition;
 pub mod hysteresis;
 pub mod ingest;
 pub mod metrics;
-pub mod update;
 pub mod modal;
 pub mod report;
+pub mod update;

@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
-use crate::modal::{frequency_shifts, identify_event, spectral_overlay, Method, ModalResult, ModalSettings};
+use crate::modal::{
+    frequency_shifts, identify_event, spectral_overlay, Method, ModalResult, ModalSettings,
+};
 use crate::pipeline::{params, RunContext, StageDecl};
 use crate::sinks::modal_tables as tables;
 use crate::vocab::{Event, Role};
@@ -69,13 +71,22 @@ impl ModalParams {
                     Method::SsiCov
                 }
             }
-            m => Method::from_name(m).ok_or_else(|| Error::usage(format!("method {m:?}: use auto, ssi-cov, ssi-data or io")))?,
+            m => Method::from_name(m).ok_or_else(|| {
+                Error::usage(format!("method {m:?}: use auto, ssi-cov, ssi-data or io"))
+            })?,
         };
         let [first, last, step] = self.orders;
         if first == 0 || step == 0 || last < first {
-            return Err(Error::usage("orders must be [first, last, step] with 0 < first ≤ last and step > 0"));
+            return Err(Error::usage(
+                "orders must be [first, last, step] with 0 < first ≤ last and step > 0",
+            ));
         }
-        let mut s = ModalSettings { method, block_rows: self.block_rows, orders: (first..=last).step_by(step).collect(), ..Default::default() };
+        let mut s = ModalSettings {
+            method,
+            block_rows: self.block_rows,
+            orders: (first..=last).step_by(step).collect(),
+            ..Default::default()
+        };
         s.filters.damping_min = self.damping_min;
         s.filters.damping_max = self.damping_max;
         s.filters.frequency_min_hz = self.frequency_min_hz;
@@ -98,19 +109,35 @@ pub fn identify_and_write(event: &Event, p: &ModalParams, out: &Path) -> Result<
         .iter()
         .filter_map(|id| event.record(id).map(|r| r.samples.clone()))
         .collect();
-    let dt = event.record(&result.output_ids[0]).map(|r| r.channel.dt()).unwrap_or(result.dt);
+    let dt = event
+        .record(&result.output_ids[0])
+        .map(|r| r.channel.dt())
+        .unwrap_or(result.dt);
     let overlay = spectral_overlay(&outputs, dt, p.psd_segment).ok();
-    tables::write_spectrum(&out.join("modal_spectrum.parquet"), &result, overlay.as_ref(), &settings_json)?;
+    tables::write_spectrum(
+        &out.join("modal_spectrum.parquet"),
+        &result,
+        overlay.as_ref(),
+        &settings_json,
+    )?;
     if let Some(reference) = &p.reference_modes {
         let (ref_modes, ref_channels) = tables::read_modes(reference)?;
         if ref_channels != result.output_ids {
             return Err(Error::input(
                 crate::error::Location::file(reference.display().to_string()),
-                format!("reference modes are given at channels {ref_channels:?}, this event at {:?}", result.output_ids),
+                format!(
+                    "reference modes are given at channels {ref_channels:?}, this event at {:?}",
+                    result.output_ids
+                ),
             ));
         }
         let shifts = frequency_shifts(&ref_modes, &result.modes, 0.8);
-        tables::write_shifts(&out.join("frequency_shifts.parquet"), &shifts, &reference.display().to_string(), &event.name)?;
+        tables::write_shifts(
+            &out.join("frequency_shifts.parquet"),
+            &shifts,
+            &reference.display().to_string(),
+            &event.name,
+        )?;
     }
     Ok(result)
 }
@@ -125,7 +152,11 @@ pub fn run(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
 
 /// Output files of the stage (the shifts file only with `reference_modes`).
 pub fn outputs(p: &ModalParams) -> Vec<String> {
-    let mut v = vec!["stabilization.parquet".to_string(), "modes.parquet".into(), "modal_spectrum.parquet".into()];
+    let mut v = vec![
+        "stabilization.parquet".to_string(),
+        "modes.parquet".into(),
+        "modal_spectrum.parquet".into(),
+    ];
     if p.reference_modes.is_some() {
         v.push("frequency_shifts.parquet".into());
     }
