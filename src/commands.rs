@@ -170,3 +170,23 @@ pub fn hysteresis(event: &Path, out: &Path, quiet: bool) -> Result<()> {
     let p = PipelineFile::parse(text, "built-in hysteresis pipeline")?;
     pipeline::run(&p, event, out, quiet).map(|_| ())
 }
+
+/// `quaketwin update TWIN --modes modes.parquet --out DIR`: ensemble updating
+/// of the twin against measured modes (METHODS §3).
+pub fn update(
+    twin: &Path,
+    modes: &Path,
+    out: &Path,
+    settings: Option<&Path>,
+) -> Result<crate::stages::update::UpdateSummary> {
+    let params: crate::stages::update::UpdateParams = match settings {
+        None => Default::default(),
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| crate::error::Error::io(p, e))?;
+            toml::from_str(&text).map_err(|e: toml::de::Error| {
+                crate::error::Error::usage(format!("{}: {}", p.display(), e.message()))
+            })?
+        }
+    };
+    crate::stages::update::update_from_files(twin, modes, out, &params)
+}

@@ -39,6 +39,19 @@ enum Command {
         #[arg(long)]
         mcap: Option<PathBuf>,
     },
+    /// Update a digital twin against measured modes (ensemble + Plackett–Luce).
+    Update {
+        /// Twin file (TOML, docs/twin.md).
+        twin: PathBuf,
+        /// modes.parquet from the modal stage.
+        #[arg(long)]
+        modes: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        /// Update settings (TOML: solvers, seed, max_rounds, tolerance, selection…).
+        #[arg(long)]
+        settings: Option<PathBuf>,
+    },
     /// Write DIR/report.html from the outputs of a pipeline run in DIR.
     Report {
         /// Output directory of a run.
@@ -92,6 +105,16 @@ fn main() -> ExitCode {
         Command::Ingest { event, out, mcap } => {
             quaketwin::commands::ingest(event, out, mcap.as_deref(), cli.quiet).map(|_| ())
         }
+        Command::Update {
+            twin,
+            modes,
+            out,
+            settings,
+        } => quaketwin::commands::update(twin, modes, out, settings.as_deref()).map(|s| {
+            if !cli.quiet {
+                eprintln!("{}", serde_json::to_string_pretty(&s).unwrap_or_default());
+            }
+        }),
         Command::Report { dir, settings } => quaketwin::commands::report(dir, settings.as_deref())
             .map(|p| {
                 if !cli.quiet {

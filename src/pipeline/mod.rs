@@ -25,9 +25,13 @@ use fingerprint::Fnv64;
 /// What happened to one stage in a run.
 #[derive(Debug, Clone, PartialEq)]
 pub enum StageOutcome {
-    Ran { seconds: f64 },
+    Ran {
+        seconds: f64,
+    },
     Skipped,
     Disabled,
+    /// The stage does not apply to this event (the reason says why).
+    NotApplicable(String),
 }
 
 /// Stamp written after a stage succeeds.
@@ -81,6 +85,15 @@ pub fn run(
         if !stage.enabled {
             bar.inc(1);
             outcomes.push((stage.name.clone(), StageOutcome::Disabled));
+            continue;
+        }
+        if let Some(why) = registry::not_applicable(stage, &mut ctx)? {
+            log(format!(
+                "[{}] {:<12} not applicable: {why}",
+                pipeline.pipeline.name, stage.name
+            ));
+            bar.inc(1);
+            outcomes.push((stage.name.clone(), StageOutcome::NotApplicable(why)));
             continue;
         }
         let mut h = Fnv64::default();

@@ -21,6 +21,7 @@ pub const KINDS: &[&str] = &[
     "modal",
     "hysteresis",
     "damage",
+    "update",
     "report",
 ];
 
@@ -42,7 +43,30 @@ pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
         ],
         "damage" => vec!["damage.parquet".into()],
         "report" => vec!["report.html".into()],
+        "update" => vec![
+            stages::update::TWIN_UPDATE_FILE.into(),
+            stages::update::TWIN_MODES_FILE.into(),
+            stages::update::UPDATED_TWIN_FILE.into(),
+        ],
         other => return Err(Error::usage(format!("unknown stage kind {other:?}"))),
+    })
+}
+
+/// Why a declared stage does not apply to this event (None = it applies).
+pub fn not_applicable(stage: &StageDecl, ctx: &mut RunContext) -> Result<Option<String>> {
+    Ok(match stage.kind.as_str() {
+        "update" => {
+            let names_twin = ctx
+                .loaded_event()?
+                .event
+                .structure
+                .as_ref()
+                .and_then(|s| s.twin.as_ref())
+                .is_some();
+            (!names_twin)
+                .then(|| "the event names no twin (structure.twin in event.toml)".to_string())
+        }
+        _ => None,
     })
 }
 
@@ -56,6 +80,7 @@ pub fn run_stage(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
         "hysteresis" => stages::hysteresis::run(stage, ctx),
         "damage" => stages::hysteresis::run_damage(stage, ctx),
         "report" => stages::report::run(stage, ctx),
+        "update" => stages::update::run(stage, ctx),
         other => Err(Error::usage(format!("unknown stage kind {other:?}"))),
     }
 }
