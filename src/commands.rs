@@ -190,3 +190,108 @@ pub fn update(
     };
     crate::stages::update::update_from_files(twin, modes, out, &params)
 }
+
+/// A value made safe for a Hive partition directory name (`key=value`).
+fn partition_value(s: &str) -> String {
+    let v: String = s
+        .trim()
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if v.is_empty() {
+        "unnamed".into()
+    } else {
+        v
+    }
+}
+
+/// Expands the EVENT arguments: a folder with no manifest whose
+/// sub-folders each hold an `event.toml` is a folder of event folders.
+pub fn expand_events(events: &[std::path::PathBuf]) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for e in events {
+        let is_collection = e.is_dir() && !e.join(crate::event_folder::MANIFEST_NAME).exists() && {
+            let subs: Vec<_> = std::fs::read_dir(e)
+                .map(|rd| {
+                    rd.flatten()
+                        .map(|d| d.path())
+                        .filter(|p| p.is_dir())
+                        .collect()
+                })
+                .unwrap_or_default();
+            !subs.is_empty()
+                && subs
+                    .iter()
+                    .all(|p| p.join(crate::event_folder::MANIFEST_NAME).exists())
+        };
+        if is_collection {
+            let mut subs: Vec<_> = std::fs::read_dir(e)
+                .map(|rd| {
+                    rd.flatten()
+                        .map(|d| d.path())
+                        .filter(|p| p.is_dir())
+                        .collect()
+                })
+                .unwrap_or_default();
+            subs.sort();
+            out.extend(subs);
+        } else {
+            out.push(e.clone());
+        }
+    }
+    out
+}
+
+/// The Hive partition directory of one event: `structure=<name>/event=<name>`
+/// (names from the manifest, else the folder name).
+pub fn partition_dir(out: &Path, event: &Path) -> Result<std::path::PathBuf> {
+    let loaded = event_folder::load(event)?;
+    let folder = event
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let structure = loaded
+        .event
+        .structure
+        .as_ref()
+        .and_then(|s| s.name.clone())
+        .unwrap_or_else(|| "unknown".into());
+    Ok(out
+        .join(format!("structure={}", partition_value(&structure)))
+        .join(format!("event={}", partition_value(&folder))))
+}
+
+/// `quaketwin run PIPELINE EVENT1 EVENT2 … --out DIR`: events in parallel on
+/// all cores, each into its Hive partition `DIR/structure=…/event=…/`, so the
+/// tables of a whole network read as one dataset (pyarrow, DuckDB).  Every
+/// event is attempted; the first failure is returned after all have run.
+pub fn run_many(
+    pipeline_path: &Path,
+    events: &[std::path::PathBuf],
+    out: &Path,
+    quiet: bool,
+) -> Result<Vec<(std::path::PathBuf, Result<()>)>> {
+    use rayon::prelude::*;
+    let p = PipelineFile::load(pipeline_path)?;
+    let results: Vec<(std::path::PathBuf, Result<()>)> = events
+        .par_iter()
+        .map(|e| {
+            let r =
+                partition_dir(out, e).and_then(|dir| pipeline::run(&p, e, &dir, true).map(|_| ()));
+            if !quiet {
+                match &r {
+                    Ok(()) => eprintln!("[{}] {} done", p.pipeline.name, e.display()),
+                    Err(err) => eprintln!("[{}] {} failed: {err}", p.pipeline.name, e.display()),
+                }
+            }
+            (e.clone(), r)
+        })
+        .collect();
+    Ok(results)
+}

@@ -86,12 +86,14 @@ enum Command {
         #[arg(long, default_value_t = 2026)]
         seed: u64,
     },
-    /// Run a pipeline file on an event folder.
+    /// Run a pipeline file on an event folder; several events (or a folder of
+    /// event folders) run in parallel into a Hive-partitioned dataset.
     Run {
         /// Pipeline file (pipelines/*.toml).
         pipeline: PathBuf,
-        /// Event folder or zip.
-        event: PathBuf,
+        /// Event folder(s) or zip(s).
+        #[arg(required = true)]
+        event: Vec<PathBuf>,
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
@@ -136,7 +138,22 @@ fn main() -> ExitCode {
             pipeline,
             event,
             out,
-        } => quaketwin::commands::run_pipeline(pipeline, event, out, cli.quiet).map(|_| ()),
+        } => {
+            let events = quaketwin::commands::expand_events(event);
+            if event.len() == 1 && events.len() == 1 && events[0] == event[0] {
+                quaketwin::commands::run_pipeline(pipeline, &events[0], out, cli.quiet).map(|_| ())
+            } else {
+                quaketwin::commands::run_many(pipeline, &events, out, cli.quiet).and_then(
+                    |results| {
+                        results
+                            .into_iter()
+                            .map(|(_, r)| r)
+                            .find(|r| r.is_err())
+                            .unwrap_or(Ok(()))
+                    },
+                )
+            }
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

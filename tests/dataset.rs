@@ -1,0 +1,64 @@
+//! Many events → one Hive-partitioned Parquet dataset
+//! (`structure=…/event=…/`), read back with pyarrow.dataset when python3
+//! with pyarrow is available (CI installs it).
+
+use std::path::PathBuf;
+use std::process::Command;
+
+#[test]
+fn events_run_in_parallel_into_a_hive_partitioned_dataset_readable_by_pyarrow() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let out = tempfile::tempdir().unwrap();
+    // The folder of event folders expands to the three sample events.
+    let events = quaketwin::commands::expand_events(&[root.join("sample-records")]);
+    assert_eq!(events.len(), 3, "{events:?}");
+    let results = quaketwin::commands::run_many(
+        &root.join("pipelines/ingest.toml"),
+        &events,
+        out.path(),
+        true,
+    )
+    .unwrap();
+    for (e, r) in &results {
+        assert!(r.is_ok(), "{}: {:?}", e.display(), r.as_ref().err());
+    }
+    let quake = out
+        .path()
+        .join("structure=Sample_4-storey_frame/event=synthetic-4storey-quake/channels.parquet");
+    assert!(quake.exists(), "missing {}", quake.display());
+    let yielding = out.path().join(
+        "structure=Sample_2-storey_yielding_frame/event=synthetic-2storey-yielding/samples.parquet",
+    );
+    assert!(yielding.exists());
+
+    let script = r#"
+import glob, sys
+import pyarrow.dataset as ds
+root = sys.argv[1]
+files = sorted(glob.glob(root + "/structure=*/event=*/channels.parquet"))
+d = ds.dataset(files, format="parquet", partitioning="hive", partition_base_dir=root)
+t = d.to_table(columns=["channel_id", "pga_m_s2", "structure", "event"])
+print(t.num_rows, ",".join(sorted(set(t.column("event").to_pylist()))))
+"#;
+    let run = Command::new("python3")
+        .arg("-c")
+        .arg(script)
+        .arg(out.path())
+        .output();
+    let Ok(run) = run else {
+        println!("SKIPPED: python3 not available");
+        return;
+    };
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    if !run.status.success() && stderr.contains("No module named 'pyarrow'") {
+        println!("SKIPPED: pyarrow not installed");
+        return;
+    }
+    assert!(run.status.success(), "{stderr}");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    // 10 + 8 + 3 channels.
+    assert_eq!(
+        stdout.trim(),
+        "21 synthetic-2storey-yielding,synthetic-4storey-ambient,synthetic-4storey-quake"
+    );
+}
