@@ -155,7 +155,12 @@ pub fn sniff(name: &str, head: &[u8]) -> Option<Format> {
     // "(Format v01.20 with 13 text lines)", GeoNet "… GNS Science", SMC
     // "2 CORRECTED ACCELEROGRAM", CSMIP "CORRECTED ACCELEROGRAM …"); CSMIP V3
     // spectra ("RESPONSE AND FOURIER …") stay unrecognised: they hold no records.
-    let first_line = text_head.lines().next().unwrap_or("").trim().to_ascii_lowercase();
+    let first_line = text_head
+        .lines()
+        .next()
+        .unwrap_or("")
+        .trim()
+        .to_ascii_lowercase();
     if first_line.contains("(format v") {
         return Some(Format::Cosmos);
     }
@@ -172,7 +177,9 @@ pub fn sniff(name: &str, head: &[u8]) -> Option<Format> {
             Format::Dmg
         });
     }
-    if first_line.starts_with("corrected accelerogram") || first_line.starts_with("uncorrected accelerogram") {
+    if first_line.starts_with("corrected accelerogram")
+        || first_line.starts_with("uncorrected accelerogram")
+    {
         return Some(Format::Dmg);
     }
     if text_head.contains("NPTS=") && text_head.contains("DT=") {
