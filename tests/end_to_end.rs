@@ -197,3 +197,54 @@ fn yielding_sample_bouc_wen_and_damage_match_the_truth() {
         "final iota {final_iota} vs {final_true}"
     );
 }
+
+/// Pre/post comparison: the modes of one run read back as the reference of
+/// another run of the same event give every mode paired with MAC ≈ 1 and no
+/// frequency shift; the ambient record of the same building, compared with
+/// the earthquake, pairs its modes within 1 % in frequency.
+#[test]
+fn frequency_shifts_against_a_reference_event() {
+    use quaketwin::pipeline::{self, PipelineFile};
+    let first = tempfile::tempdir().unwrap();
+    run("synthetic-4storey-quake", first.path());
+    let reference = first.path().join("modes.parquet");
+    let (ref_modes, ref_channels) = quaketwin::sinks::modal_tables::read_modes(&reference).unwrap();
+    assert_eq!(ref_modes.len(), 8);
+    assert_eq!(ref_channels.len(), 8, "{ref_channels:?}");
+    let text = format!(
+        "{}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\nreference_modes = {:?}\n",
+        quaketwin::commands::INGEST_PIPELINE,
+        reference.display().to_string()
+    );
+    let p = PipelineFile::parse(&text, "t.toml").unwrap();
+    let second = tempfile::tempdir().unwrap();
+    pipeline::run(
+        &p,
+        &root().join("sample-records/synthetic-4storey-quake"),
+        second.path(),
+        true,
+    )
+    .unwrap();
+    let shifts = second.path().join("frequency_shifts.parquet");
+    let rel = column_f64(&shifts, "relative_shift");
+    let mac = column_f64(&shifts, "mac");
+    assert_eq!(rel.len(), 8);
+    assert!(rel.iter().all(|r| r.abs() < 1e-9), "{rel:?}");
+    assert!(mac.iter().all(|m| *m > 0.999), "{mac:?}");
+
+    // Ambient record of the same building (floors only, same channel ids).
+    let third = tempfile::tempdir().unwrap();
+    pipeline::run(
+        &p,
+        &root().join("sample-records/synthetic-4storey-ambient"),
+        third.path(),
+        true,
+    )
+    .unwrap();
+    let rel = column_f64(
+        &third.path().join("frequency_shifts.parquet"),
+        "relative_shift",
+    );
+    assert!(rel.len() >= 6, "paired {} modes", rel.len());
+    assert!(rel.iter().all(|r| r.abs() < 0.01), "{rel:?}");
+}
