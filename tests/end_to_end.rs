@@ -118,6 +118,12 @@ fn sample_quake_modes_and_twin_update_match_the_truth() {
             "{name}: {k} vs truth {truth_k}"
         );
     }
+    // The building stays linear: no direction may report Bouc-Wen parameters.
+    let status = column_str(&out.path().join("bouc_wen.parquet"), "status");
+    assert!(
+        !status.is_empty() && status.iter().all(|s| s == "not_identifiable"),
+        "{status:?}"
+    );
     let html = std::fs::read_to_string(out.path().join("report.html")).unwrap();
     assert!(html.contains("<svg") && !html.contains("https://"));
 }

@@ -214,6 +214,13 @@ pub fn identify_event(event: &Event, p: &HysteresisParams) -> Result<Vec<Directi
             .collect()
     };
     for (direction, r) in results {
+        let r = r.and_then(|d| match unidentifiable_reason(&d, &settings) {
+            Some(message) => Err(Error::NotIdentifiable {
+                stage: "hysteresis".into(),
+                message,
+            }),
+            None => Ok(d),
+        });
         match r {
             Ok(d) => outcomes.push(DirectionOutcome::Identified(Box::new(d))),
             Err(e) if !p.fail_on_error => outcomes.push(DirectionOutcome::NotIdentifiable {
@@ -244,6 +251,39 @@ pub fn identify_event(event: &Event, p: &HysteresisParams) -> Result<Vec<Directi
         });
     }
     Ok(outcomes)
+}
+
+/// Evidence, after a solve, that the data do not determine the nonlinear
+/// parameters (so none are reported): an exponent N at the edge of its search
+/// range (the optimum of J(N), Eq. 31, is not inside the admissible set), or
+/// estimates that are unstable over time at every DoF (model inadequate).
+/// Seen on a linear building with 40 dB noise: N = 1.000 at two storeys,
+/// γ = −β at its Eq. 47 bound, every DoF unstable.
+fn unidentifiable_reason(
+    d: &crate::hysteresis::DirectionIdentification,
+    s: &IdentifySettings,
+) -> Option<String> {
+    let edge = s.exponent_resolution.max(1e-9) * 1.5;
+    if let Some(dof) = d.dofs.iter().find(|f| {
+        (f.exponent - s.exponent_min).abs() < edge || (s.exponent_max - f.exponent).abs() < edge
+    }) {
+        return Some(format!(
+            "direction {}, DoF {}: the exponent N = {:.3} sits at the edge of its search range [{}, {}]: \
+             the record does not determine the nonlinear parameters",
+            d.direction, dof.dof, dof.exponent, s.exponent_min, s.exponent_max
+        ));
+    }
+    let all_unstable = !d.dofs.is_empty()
+        && d.dofs
+            .iter()
+            .all(|f| f.stability.as_ref().map(|st| !st.stable).unwrap_or(false));
+    all_unstable.then(|| {
+        format!(
+            "direction {}: the parameter estimates are unstable over time at every DoF (model-adequacy check): \
+             not identifiable from this record",
+            d.direction
+        )
+    })
 }
 
 /// Writes the three identification tables.
