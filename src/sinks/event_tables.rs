@@ -6,13 +6,11 @@
 //! carries the channels and the processing history as JSON metadata so a
 //! later stage can load the conditioned event back without re-running.
 
-use std::fs::File;
 use std::path::Path;
 
-use arrow_array::{Array, Float64Array, RecordBatch, StringArray};
-use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+use arrow_array::{Array, Float64Array, StringArray};
 
-use super::parquet::{write_parquet, TableBuilder};
+use super::parquet::{write_parquet, ReadTable, TableBuilder};
 use crate::conditioning::Motion;
 use crate::error::{Error, Result};
 use crate::metrics::StrongMotionMetrics;
@@ -369,17 +367,9 @@ pub fn write_drift(path: &Path, event: &Event, rows: &[DriftRow]) -> Result<()> 
 /// Loads a conditioned event back from `samples.parquet` (channels and
 /// history from its metadata, samples from its columns).
 pub fn read_samples(path: &Path) -> Result<(Event, Vec<Motion>)> {
-    let loc = || crate::error::Location::file(path.display().to_string());
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    let builder = ParquetRecordBatchReaderBuilder::try_new(file)
-        .map_err(|e| Error::input(loc(), e.to_string()))?;
-    let kv = builder
-        .metadata()
-        .file_metadata()
-        .key_value_metadata()
-        .cloned()
-        .unwrap_or_default();
-    let get = |k: &str| kv.iter().find(|e| e.key == k).and_then(|e| e.value.clone());
+    let table = ReadTable::open(path)?;
+    let loc = || table.location();
+    let get = |k: &str| table.metadata(k).map(String::from);
     if get(SCHEMA_KEY).as_deref() != Some("samples") {
         return Err(Error::input(
             loc(),
@@ -392,32 +382,13 @@ pub fn read_samples(path: &Path) -> Result<(Event, Vec<Motion>)> {
         serde_json::from_str(&get(HISTORY_KEY).unwrap_or_default()).unwrap_or_default();
     let ev: serde_json::Value =
         serde_json::from_str(&get(EVENT_KEY).unwrap_or_default()).unwrap_or_default();
-    let reader = builder
-        .build()
-        .map_err(|e| Error::input(loc(), e.to_string()))?;
     let mut cols: std::collections::BTreeMap<String, (Vec<f64>, Vec<f64>, Vec<f64>)> =
         Default::default();
-    for batch in reader {
-        let batch: RecordBatch = batch.map_err(|e| Error::input(loc(), e.to_string()))?;
-        let col = |name: &str| {
-            batch
-                .column_by_name(name)
-                .ok_or_else(|| Error::input(loc(), format!("column {name} missing")))
-        };
-        let ids = col("channel_id")?
-            .as_any()
-            .downcast_ref::<StringArray>()
-            .cloned();
-        let f = |name: &str| -> Result<Float64Array> {
-            col(name)?
-                .as_any()
-                .downcast_ref::<Float64Array>()
-                .cloned()
-                .ok_or_else(|| Error::input(loc(), format!("column {name} is not Float64")))
-        };
-        let (Some(ids), acc, vel, disp) = (ids, f("acc_m_s2")?, f("vel_m_s")?, f("disp_m")?) else {
-            return Err(Error::input(loc(), "column channel_id is not Utf8"));
-        };
+    for batch in &table.batches {
+        let ids: StringArray = table.column(batch, "channel_id")?;
+        let acc: Float64Array = table.column(batch, "acc_m_s2")?;
+        let vel: Float64Array = table.column(batch, "vel_m_s")?;
+        let disp: Float64Array = table.column(batch, "disp_m")?;
         for i in 0..batch.num_rows() {
             let e = cols.entry(ids.value(i).to_string()).or_default();
             e.0.push(acc.value(i));

@@ -191,23 +191,13 @@ pub fn write_shifts(
 /// with the output channel ids of its metadata.
 pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)> {
     use arrow_array::{Array, BooleanArray, Float64Array, ListArray, UInt32Array};
-    use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 
-    use crate::error::{Error, Location};
-    let loc = || Location::file(path.display().to_string());
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let builder = ParquetRecordBatchReaderBuilder::try_new(file)
-        .map_err(|e| Error::input(loc(), e.to_string()))?;
-    let kv = builder
-        .metadata()
-        .file_metadata()
-        .key_value_metadata()
-        .cloned()
-        .unwrap_or_default();
-    let channels: Vec<String> = kv
-        .iter()
-        .find(|e| e.key == OUTPUT_CHANNELS_KEY)
-        .and_then(|e| e.value.as_deref())
+    use super::parquet::ReadTable;
+    use crate::error::Error;
+    let table = ReadTable::open(path)?;
+    let loc = || table.location();
+    let channels: Vec<String> = table
+        .metadata(OUTPUT_CHANNELS_KEY)
         .and_then(|v| serde_json::from_str(v).ok())
         .ok_or_else(|| {
             Error::input(
@@ -216,36 +206,10 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
             )
         })?;
     let mut modes = Vec::new();
-    for batch in builder
-        .build()
-        .map_err(|e| Error::input(loc(), e.to_string()))?
-    {
-        let b = batch.map_err(|e| Error::input(loc(), e.to_string()))?;
-        let col = |n: &str| {
-            b.column_by_name(n)
-                .ok_or_else(|| Error::input(loc(), format!("column {n} missing")))
-        };
-        let f = |n: &str| -> Result<Float64Array> {
-            col(n)?
-                .as_any()
-                .downcast_ref::<Float64Array>()
-                .cloned()
-                .ok_or_else(|| Error::input(loc(), format!("column {n} is not Float64")))
-        };
-        let u = |n: &str| -> Result<UInt32Array> {
-            col(n)?
-                .as_any()
-                .downcast_ref::<UInt32Array>()
-                .cloned()
-                .ok_or_else(|| Error::input(loc(), format!("column {n} is not UInt32")))
-        };
-        let l = |n: &str| -> Result<ListArray> {
-            col(n)?
-                .as_any()
-                .downcast_ref::<ListArray>()
-                .cloned()
-                .ok_or_else(|| Error::input(loc(), format!("column {n} is not a list")))
-        };
+    for b in &table.batches {
+        let f = |n: &str| table.column::<Float64Array>(b, n);
+        let u = |n: &str| table.column::<UInt32Array>(b, n);
+        let l = |n: &str| table.column::<ListArray>(b, n);
         let (fr, fs, z, zs, mpc, mpd, mm) = (
             f("frequency_hz")?,
             f("frequency_std_hz")?,
@@ -256,7 +220,9 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
             f("mean_mac")?,
         );
         let (pc, omin, omax) = (u("pole_count")?, u("order_min")?, u("order_max")?);
-        let manual = col("manual")?
+        let manual = b
+            .column_by_name("manual")
+            .ok_or_else(|| Error::input(loc(), "column manual missing"))?
             .as_any()
             .downcast_ref::<BooleanArray>()
             .cloned();

@@ -225,3 +225,70 @@ pub fn write_bytes_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
         f.sync_all().map_err(|e| Error::io(path, e))
     })
 }
+
+/// A Parquet file read back whole: its record batches and key/value
+/// metadata, with typed column access whose errors name the file and column.
+/// The read-back half of this module, shared by every table reader.
+pub struct ReadTable {
+    pub path: PathBuf,
+    pub batches: Vec<RecordBatch>,
+    metadata: Vec<(String, Option<String>)>,
+}
+
+impl ReadTable {
+    pub fn open(path: &Path) -> Result<ReadTable> {
+        use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+        let loc = || crate::error::Location::file(path.display().to_string());
+        let file = File::open(path).map_err(|e| Error::io(path, e))?;
+        let builder = ParquetRecordBatchReaderBuilder::try_new(file)
+            .map_err(|e| Error::input(loc(), e.to_string()))?;
+        let metadata = builder
+            .metadata()
+            .file_metadata()
+            .key_value_metadata()
+            .map(|kv| {
+                kv.iter()
+                    .map(|e| (e.key.clone(), e.value.clone()))
+                    .collect()
+            })
+            .unwrap_or_default();
+        let batches = builder
+            .build()
+            .map_err(|e| Error::input(loc(), e.to_string()))?
+            .collect::<std::result::Result<Vec<_>, _>>()
+            .map_err(|e| Error::input(loc(), e.to_string()))?;
+        Ok(ReadTable {
+            path: path.to_path_buf(),
+            batches,
+            metadata,
+        })
+    }
+
+    /// Value of a key/value metadata entry.
+    pub fn metadata(&self, key: &str) -> Option<&str> {
+        self.metadata
+            .iter()
+            .find(|(k, _)| k == key)
+            .and_then(|(_, v)| v.as_deref())
+    }
+
+    pub fn location(&self) -> crate::error::Location {
+        crate::error::Location::file(self.path.display().to_string())
+    }
+
+    /// Column `name` of `batch` as the Arrow array type `T`.
+    pub fn column<T: Array + Clone + 'static>(&self, batch: &RecordBatch, name: &str) -> Result<T> {
+        let col = batch
+            .column_by_name(name)
+            .ok_or_else(|| Error::input(self.location(), format!("column {name} missing")))?;
+        col.as_any().downcast_ref::<T>().cloned().ok_or_else(|| {
+            Error::input(
+                self.location(),
+                format!(
+                    "column {name} has type {}, not the expected one",
+                    col.data_type()
+                ),
+            )
+        })
+    }
+}
