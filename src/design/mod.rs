@@ -6,10 +6,12 @@
 //!   constrained set c, rigid-body removal per time step (Eq. 50–51, 74–75);
 //! - `pod`: proper orthogonal decomposition by thin SVD, energy fractions (Eq. 56–58, 79–81),
 //!   NRMSE / WNRMSE of the reconstruction (Eq. 83–84);
-//! - `layout`: actuator placement (QR with column pivoting on the retained POMs), control
-//!   modes, nominal gravity forces, Guyan + rigid-body basis T (Eq. 85–87) and its validation;
+//! - `interface`: the interface super-element (control nodes, piecewise-affine followers);
+//! - `layout`: Guyan + rigid-body basis T (Eq. 85–87), actuators and control modes, the reduced
+//!   twin and its validation against the full twin;
 //! - `craig_bampton`: reduced hybrid prototype (Eq. 60–68), hybrid bandwidth and the
-//!   recommendation of NS mode count and time scale λ (METHODS §6).
+//!   recommendation of NS mode count and time scale λ (METHODS §6);
+//! - `plan`: the whole design (`design_hybrid_test`).
 //!
 //! Output tables the lead writes from these results (Parquet):
 //! - `actuator_layout.parquet` ← [`layout::Actuator`]: actuator, node (id), direction (DoF
@@ -20,8 +22,10 @@
 //!   NRMSE, weight max|x − μ|, master (bool); the overall WNRMSE in the metadata.
 
 pub mod craig_bampton;
+pub mod interface;
 pub mod layout;
 pub mod partition;
+pub mod plan;
 pub mod pod;
 pub mod rigid;
 
@@ -29,10 +33,12 @@ pub use craig_bampton::{
     craig_bampton_prototype, hybrid_bandwidth_hz, recommend_hybrid, HybridRecommendation,
     HybridSettings, Prototype,
 };
+pub use interface::{interface_chains, InterfaceKinematics};
 pub use layout::{
-    place_actuators, reduction_basis, validate_reduction, Actuator, ActuatorSettings, ControlMode,
+    compare_responses, reduction_basis, Actuator, ActuatorSettings, ControlMode, ReducedTwin,
     ReductionBasis, ReductionValidation,
 };
 pub use partition::{partition_by_node_ids, partition_by_nodes, Partition};
+pub use plan::{design_hybrid_test, BaseComponent, BaseMotion, DesignSettings, TestDesign};
 pub use pod::{nrmse, pod, reconstruction_quality, wnrmse, Pod, PodCurve};
 pub use rigid::{rigid_body_modes, ConstrainedSet, RigidBodyModes};

@@ -132,6 +132,32 @@ impl ConstrainedSet {
         Self::validated(rigid, c, max_condition)
     }
 
+    /// Proposal restricted to `candidates` (PS positions, e.g. the interface control DoFs that
+    /// can be bolted to the reaction frame): QR with column pivoting on the candidate columns
+    /// of Rᵀ.
+    pub fn propose_among(
+        rigid: &RigidBodyModes,
+        candidates: &[usize],
+        max_condition: f64,
+    ) -> Result<Self> {
+        let r = rigid.count();
+        if r == 0 {
+            return Self::validated(rigid, Vec::new(), max_condition);
+        }
+        let n = rigid.modes.nrows();
+        if candidates.len() < r || candidates.iter().any(|&c| c >= n) {
+            return Err(Error::usage(format!(
+                "constrained set: {} candidate DoFs for {r} rigid-body modes",
+                candidates.len()
+            )));
+        }
+        let rt = Mat::from_fn(r, candidates.len(), |i, j| rigid.modes[(candidates[j], i)]);
+        let qr = rt.col_piv_qr();
+        let (forward, _) = qr.P().arrays();
+        let c: Vec<usize> = forward.iter().take(r).map(|&j| candidates[j]).collect();
+        Self::validated(rigid, c, max_condition)
+    }
+
     /// User override: validate the given positions. Errors (`Usage`): wrong count, repeated or
     /// out-of-range positions, or R^c singular / worse conditioned than `max_condition` —
     /// then the set does not remove the rigid-body modes.
