@@ -6,8 +6,11 @@ use std::path::Path;
 use faer::Mat;
 use quaketwin::design::craig_bampton::hybrid_bandwidth_hz;
 use quaketwin::design::layout::{interface_gravity_forces, ControlMode};
+use quaketwin::design::partition::partition_by_node_ids;
+use quaketwin::design::plan::design_hybrid_test_with;
 use quaketwin::design::plan::{design_hybrid_test, BaseComponent, BaseMotion, DesignSettings};
-use quaketwin::design::pod::{pod, reconstruction_quality};
+use quaketwin::design::pod::{pod, reconstruction_quality, wnrmse};
+use quaketwin::design::recorded::{expand_recorded_deformation, RecordedResponse};
 use quaketwin::design::rigid::{
     rigid_body_modes, ConstrainedSet, KERNEL_RELATIVE_TOLERANCE, MAX_CONSTRAINT_CONDITION,
 };
@@ -472,4 +475,122 @@ fn facade_design_must_show() {
     }
     assert!(rec.bandwidth_hz <= 2.0);
     let _ = ControlMode::Force;
+}
+
+/// Snapshot source (b): displacement "records" at 8 PS nodes (the PS corners and edge
+/// midpoints, both directions; here the twin's own response, so the truth is known) give,
+/// after rigid-body removal on the sensors and static expansion, the same dominant deformation
+/// pattern as the full twin response, and the design proceeds from them.
+#[test]
+fn recorded_snapshots_recover_the_twin_deformation() {
+    let t = twin(&facade_toml());
+    let sys = &t.system;
+    let model = t.model.as_ref().unwrap();
+    let map = sys.dofs.as_ref().unwrap();
+    let ps_ids: Vec<i64> = (4..=12)
+        .flat_map(|i| (3..=11).map(move |j| facade_node(i, j)))
+        .collect();
+    let part = partition_by_node_ids(model, map, &ps_ids, "design.toml").unwrap();
+    let (dt, accel) = el_centro_10s();
+    let (k, m) = (sys.stiffness_at(&[]), sys.mass_at(&[]));
+    let f = dense_modes(k.to_dense().as_ref(), m.to_dense().as_ref(), 4)
+        .unwrap()
+        .frequencies_hz();
+    let resp = newmark_base_excitation(
+        &k,
+        &m,
+        &[sys.base_excitation(&[], 0, accel.clone()).unwrap()],
+        &NewmarkSettings {
+            dt,
+            rayleigh: rayleigh_coefficients(f[0], f[3], 0.05, 0.05).unwrap(),
+            record: Some(part.ps_free.clone()),
+        },
+    )
+    .unwrap();
+    let sensors: Vec<(i64, String)> = [
+        (4, 3),
+        (8, 3),
+        (12, 3),
+        (4, 7),
+        (12, 7),
+        (4, 11),
+        (8, 11),
+        (12, 11),
+    ]
+    .iter()
+    .flat_map(|&(i, j)| ["ux", "uy"].map(|d| (facade_node(i, j), d.to_string())))
+    .collect();
+    let displacement: Vec<Vec<f64>> = sensors
+        .iter()
+        .map(|(id, d)| {
+            let node = model.node_index(*id).unwrap();
+            let p = part.position(node, if d == "ux" { 0 } else { 1 }).unwrap();
+            resp.displacement[p].clone()
+        })
+        .collect();
+    let recorded = RecordedResponse {
+        dofs: sensors.clone(),
+        displacement,
+        source: "synthetic records".into(),
+    };
+
+    // The expansion against the twin's own deformation, with the same constrained set.
+    let rigid = rigid_body_modes(part.ps_stiffness.as_ref(), KERNEL_RELATIVE_TOLERANCE).unwrap();
+    let expanded = expand_recorded_deformation(model, &part, &rigid, &recorded).unwrap();
+    let history: Vec<Vec<f64>> = (0..resp.displacement[0].len())
+        .map(|s| (0..part.n_ps()).map(|p| resp.displacement[p][s]).collect())
+        .collect();
+    let (x_twin, _) = expanded.set.deformation_snapshots(&rigid, &history);
+    let (x_rec, _) = expanded
+        .set
+        .deformation_snapshots(&rigid, &expanded.history);
+    let (w, _, _) = wnrmse(x_twin.as_ref(), x_rec.as_ref());
+    eprintln!("expanded vs twin deformation: WNRMSE {w:e}");
+    assert!(w <= 0.02, "WNRMSE {w}");
+
+    let motion = BaseMotion {
+        dt,
+        components: vec![BaseComponent {
+            axis: 0,
+            acceleration: accel,
+        }],
+        source: "elCentro.AT2".into(),
+    };
+    let mut settings = DesignSettings::default();
+    settings.hybrid.band_of_interest_hz = 40.0;
+    let design = design_hybrid_test_with(
+        &t,
+        &ps_ids,
+        &motion,
+        Some(&recorded),
+        &settings,
+        "design.toml",
+    )
+    .unwrap();
+    let mac = design.pom_mac.clone().unwrap();
+    eprintln!(
+        "recorded POD energy {:?}; MAC with the twin's POMs {:?}; {}",
+        &design.pod.energy_fraction[..3],
+        &mac[..3],
+        design.snapshot_source
+    );
+    assert!(mac[0] >= 0.99, "MAC of POM 1: {}", mac[0]);
+    assert!(design.snapshot_source.starts_with("records (16 DoFs"));
+    assert!(design.validation.wnrmse <= 1e-2);
+
+    // Too few sensors to separate deformation from rigid motion; a DoF outside the PS.
+    let few = RecordedResponse {
+        dofs: sensors[..3].to_vec(),
+        displacement: recorded.displacement[..3].to_vec(),
+        source: "three sensors".into(),
+    };
+    let err = expand_recorded_deformation(model, &part, &rigid, &few).unwrap_err();
+    assert!(err.to_string().contains("at least 4"), "{err}");
+    let outside = RecordedResponse {
+        dofs: vec![(facade_node(0, 12), "ux".into())],
+        displacement: vec![vec![0.0; 3]],
+        source: "roof sensor".into(),
+    };
+    let err = expand_recorded_deformation(model, &part, &rigid, &outside).unwrap_err();
+    assert!(err.to_string().contains("not a DoF of the PS"), "{err}");
 }

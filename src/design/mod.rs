@@ -11,6 +11,8 @@
 //!   twin and its validation against the full twin;
 //! - `craig_bampton`: reduced hybrid prototype (Eq. 60–68), hybrid bandwidth and the
 //!   recommendation of NS mode count and time scale λ (METHODS §6);
+//! - `recorded`: snapshots from recorded response (rigid removal on the sensors, static
+//!   expansion to the PS);
 //! - `plan`: the whole design (`design_hybrid_test`).
 //!
 //! Output tables the lead writes from these results (Parquet):
@@ -27,6 +29,7 @@ pub mod layout;
 pub mod partition;
 pub mod plan;
 pub mod pod;
+pub mod recorded;
 pub mod rigid;
 
 pub use craig_bampton::{
@@ -39,6 +42,10 @@ pub use layout::{
     ReductionBasis, ReductionValidation,
 };
 pub use partition::{partition_by_node_ids, partition_by_nodes, Partition};
-pub use plan::{design_hybrid_test, BaseComponent, BaseMotion, DesignSettings, TestDesign};
+pub use plan::{
+    design_hybrid_test, design_hybrid_test_with, BaseComponent, BaseMotion, DesignSettings,
+    TestDesign,
+};
 pub use pod::{nrmse, pod, reconstruction_quality, wnrmse, Pod, PodCurve};
+pub use recorded::{expand_recorded_deformation, RecordedResponse};
 pub use rigid::{rigid_body_modes, ConstrainedSet, RigidBodyModes};

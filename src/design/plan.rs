@@ -27,12 +27,14 @@ use super::layout::{
 };
 use super::partition::{partition_by_node_ids, Partition};
 use super::pod::{pod, reconstruction_quality, Pod, PodCurve};
+use super::recorded::{expand_recorded_deformation, RecordedResponse};
 use super::rigid::{
     rigid_body_modes, ConstrainedSet, RigidBodyModes, KERNEL_RELATIVE_TOLERANCE,
     MAX_CONSTRAINT_CONDITION,
 };
 use crate::error::{Error, Location};
 use crate::twin::newmark::{newmark_base_excitation, rayleigh_coefficients, NewmarkSettings};
+use crate::twin::objective::mac;
 use crate::twin::sparse::CscMatrix;
 use crate::twin::Twin;
 use crate::Result;
@@ -129,14 +131,36 @@ pub struct TestDesign {
     pub hybrid: HybridRecommendation,
     /// Full-twin eigenfrequencies used for damping and the prototype check (Hz).
     pub full_frequencies_hz: Vec<f64>,
+    /// Where the POD snapshots came from ("twin response" or "records (…)").
+    pub snapshot_source: String,
+    /// With recorded snapshots: MAC between each recorded POM and the twin's POM of the same
+    /// rank (how far the twin predicts the recorded deformation patterns).
+    pub pom_mac: Option<Vec<f64>>,
 }
 
 /// Design a hybrid test of the PS `ps_node_ids` of `twin` under `motion` (see the module
-/// notes for the steps). `source` names the design file in errors.
+/// notes for the steps), with snapshots from the twin's response. `source` names the design
+/// file in errors.
 pub fn design_hybrid_test(
     twin: &Twin,
     ps_node_ids: &[i64],
     motion: &BaseMotion,
+    settings: &DesignSettings,
+    source: &str,
+) -> Result<TestDesign> {
+    design_hybrid_test_with(twin, ps_node_ids, motion, None, settings, source)
+}
+
+/// As [`design_hybrid_test`]; when `recorded` is given, the POD snapshots come from the
+/// recorded response expanded to the PS (`recorded::expand_recorded_deformation`, snapshot
+/// source (b)) instead of the twin's, and the agreement of the two sets of POMs is reported
+/// (MAC per retained POM). The reduced twin is still validated against the full twin under
+/// `motion`.
+pub fn design_hybrid_test_with(
+    twin: &Twin,
+    ps_node_ids: &[i64],
+    motion: &BaseMotion,
+    recorded: Option<&RecordedResponse>,
     settings: &DesignSettings,
     source: &str,
 ) -> Result<TestDesign> {
@@ -245,8 +269,32 @@ pub fn design_hybrid_test(
         }
     };
 
-    // POD of the seismic deformation (gravity excluded, thesis §5.3.3).
-    let (snapshots, _) = set.deformation_snapshots(&rigid, &reference);
+    // POD of the seismic deformation (gravity excluded, thesis §5.3.3), from the twin's
+    // response or from the records expanded to the PS (re-expressed with the design's c).
+    let (twin_snapshots, _) = set.deformation_snapshots(&rigid, &reference);
+    let (snapshots, snapshot_source, pom_mac) = match recorded {
+        None => (twin_snapshots, "twin response".to_string(), None),
+        Some(rec) => {
+            let expanded = expand_recorded_deformation(model, &partition, &rigid, rec)?;
+            let (x, _) = set.deformation_snapshots(&rigid, &expanded.history);
+            let twin_pod = pod(twin_snapshots.as_ref())?;
+            let rec_pod = pod(x.as_ref())?;
+            let n = rec_pod.singular_values.len().min(settings.max_poms);
+            let mac: Vec<f64> = (0..n)
+                .map(|j| {
+                    let a: Vec<f64> = (0..x.nrows()).map(|i| rec_pod.modes[(i, j)]).collect();
+                    let b: Vec<f64> = (0..x.nrows()).map(|i| twin_pod.modes[(i, j)]).collect();
+                    mac(&a, &b)
+                })
+                .collect();
+            let label = format!(
+                "records ({} DoFs measured: {})",
+                expanded.sensed.len(),
+                rec.source
+            );
+            (x, label, Some(mac))
+        }
+    };
     let pod = pod(snapshots.as_ref())?;
     let pod_curve = reconstruction_quality(
         snapshots.as_ref(),
@@ -391,6 +439,8 @@ pub fn design_hybrid_test(
         refinement,
         hybrid,
         full_frequencies_hz,
+        snapshot_source,
+        pom_mac,
     })
 }
 
