@@ -150,7 +150,9 @@ pub fn synth(out: &Path, seed: u64) -> Result<Vec<std::path::PathBuf>> {
         seed,
         ..Default::default()
     };
-    crate::synth_event::write_sample_events(out, &settings)
+    let mut written = crate::synth_event::write_sample_events(out, &settings)?;
+    written.push(crate::synth_facade::write_facade_sample(out, seed)?);
+    Ok(written)
 }
 
 /// `quaketwin modal EVENT --out DIR [--method M]`: ingest + condition + modal.
@@ -189,6 +191,12 @@ pub fn update(
         }
     };
     crate::stages::update::update_from_files(twin, modes, out, &params)
+}
+
+/// `quaketwin design DESIGN.toml --out DIR`: hybrid-test design (METHODS §5–6) from the
+/// design file's twin, PS node set and base motion; writes the design tables into DIR.
+pub fn design(design: &Path, out: &Path) -> Result<crate::stages::design::DesignSummary> {
+    crate::stages::design::design_from_file(design, out)
 }
 
 /// A value made safe for a Hive partition directory name (`key=value`).

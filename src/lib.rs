@@ -9,6 +9,7 @@
 pub mod commands;
 pub mod conditioning;
 pub mod design;
+pub mod design_file;
 pub mod error;
 pub mod event_folder;
 pub mod hysteresis;
@@ -21,6 +22,7 @@ pub mod sinks;
 pub mod stages;
 pub mod synth;
 pub mod synth_event;
+pub mod synth_facade;
 pub mod twin;
 pub mod vocab;
 

@@ -77,6 +77,15 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Hybrid-test design from recorded response: actuator layout (POD), Guyan + rigid-body
+    /// reduction, Craig–Bampton prototype (docs/test-design.md).
+    Design {
+        /// Design file (TOML: twin, PS node set, base motion, settings).
+        design: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Generate the synthetic sample events (known model, with truth files).
     Synth {
         /// Directory to write the event folders into.
@@ -128,6 +137,13 @@ fn main() -> ExitCode {
         }
         Command::Hysteresis { event, out } => {
             quaketwin::commands::hysteresis(event, out, cli.quiet)
+        }
+        Command::Design { design, out } => {
+            quaketwin::commands::design(design, out).map(|s| {
+                if !cli.quiet {
+                    eprintln!("{}", serde_json::to_string_pretty(&s).unwrap_or_default());
+                }
+            })
         }
         Command::Synth { out, seed } => quaketwin::commands::synth(out, *seed).map(|dirs| {
             for d in dirs {

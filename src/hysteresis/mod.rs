@@ -12,6 +12,7 @@
 //!   scalar and instantaneous estimates, stability, non-identifiability checks.
 //! - [`damage`]: ι(t), ω_s(t), c_s(t) (Eq. 32–34).
 //! - [`reduced_mass`]: reduced lumped masses (Eq. 35–36).
+//! - [`storey_masses`]: storey masses and Eq. 35–36 targets from the twin.
 //!
 //! Processing is explicit: the stage takes minimally processed absolute
 //! accelerations (by default it integrates them itself with no filtering) and
@@ -47,6 +48,7 @@ pub mod identify;
 pub mod reduced_mass;
 pub mod solve;
 pub mod stft;
+pub mod storey_masses;
 
 pub use basis::{
     BaseRecord, BasisForm, DirectionKinematics, DirectionRecords, DofParameters, FloorRecord,
@@ -58,6 +60,7 @@ pub use ground_motion::{synthetic_ground_motion, GroundMotionSpec, SplitMix64};
 pub use identify::{
     identify_direction, identify_directions, identify_kinematics, DirectionIdentification,
     DofIdentification, FitSeries, IdentifySettings, InstantaneousEstimate, ParameterStability,
+    Significance,
 };
 pub use reduced_mass::{
     first_pulsation_2dof, reduced_lumped_masses, ReducedMassTarget, ReducedMasses,

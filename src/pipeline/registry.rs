@@ -22,6 +22,7 @@ pub const KINDS: &[&str] = &[
     "hysteresis",
     "damage",
     "update",
+    "design",
     "report",
 ];
 
@@ -48,8 +49,19 @@ pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
             stages::update::TWIN_MODES_FILE.into(),
             stages::update::UPDATED_TWIN_FILE.into(),
         ],
+        "design" => stages::design::outputs(),
         other => return Err(Error::usage(format!("unknown stage kind {other:?}"))),
     })
+}
+
+/// Inputs of a stage outside the event folder (files named by its params), as a fingerprint
+/// the pipeline adds to the stage's own; empty for stages that read only the event and
+/// earlier stages.
+pub fn extra_fingerprint(stage: &StageDecl, ctx: &RunContext) -> Result<String> {
+    match stage.kind.as_str() {
+        "design" => stages::design::fingerprint(stage, ctx),
+        _ => Ok(String::new()),
+    }
 }
 
 /// Why a declared stage does not apply to this event (None = it applies).
@@ -66,6 +78,7 @@ pub fn not_applicable(stage: &StageDecl, ctx: &mut RunContext) -> Result<Option<
             (!names_twin)
                 .then(|| "the event names no twin (structure.twin in event.toml)".to_string())
         }
+        "design" => stages::design::not_applicable(stage, ctx)?,
         _ => None,
     })
 }
@@ -81,6 +94,7 @@ pub fn run_stage(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
         "damage" => stages::hysteresis::run_damage(stage, ctx),
         "report" => stages::report::run(stage, ctx),
         "update" => stages::update::run(stage, ctx),
+        "design" => stages::design::run(stage, ctx),
         other => Err(Error::usage(format!("unknown stage kind {other:?}"))),
     }
 }

@@ -2,6 +2,7 @@
 //! I/O lives here, at the edge; stages hand over plain data.
 
 pub mod event_tables;
+pub mod design_tables;
 pub mod hysteresis_tables;
 pub mod mcap_writer;
 pub mod modal_tables;

@@ -3,6 +3,7 @@
 //! nothing here does mathematics.
 
 pub mod condition;
+pub mod design;
 pub mod hysteresis;
 pub mod ingest;
 pub mod metrics;

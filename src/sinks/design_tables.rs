@@ -1,0 +1,323 @@
+//! Tables and matrices of the hybrid-test design (schemas in docs/test-design.md and
+//! docs/formats.md): `actuator_layout.parquet`, `pod.parquet`, `reduction_validation.parquet`,
+//! `interface_refinement.parquet`, `hybrid_prototype.parquet`, and Matrix Market files of the
+//! Craig–Bampton prototype (`prototype_stiffness.mtx`, `prototype_mass.mtx`, symmetric) and of
+//! the PS basis u_PS = T q (`ps_basis.mtx`, general). Every file is written atomically.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use faer::MatRef;
+
+use super::parquet::{write_bytes_atomically, write_parquet, TableBuilder};
+use crate::design::plan::TestDesign;
+use crate::error::Result;
+use crate::twin::matrix_market::format_matrix_market_symmetric;
+use crate::twin::model::Model;
+use crate::twin::sparse::CscMatrix;
+
+pub const ACTUATOR_LAYOUT_FILE: &str = "actuator_layout.parquet";
+pub const POD_FILE: &str = "pod.parquet";
+pub const REDUCTION_VALIDATION_FILE: &str = "reduction_validation.parquet";
+pub const INTERFACE_REFINEMENT_FILE: &str = "interface_refinement.parquet";
+pub const HYBRID_PROTOTYPE_FILE: &str = "hybrid_prototype.parquet";
+pub const PROTOTYPE_STIFFNESS_FILE: &str = "prototype_stiffness.mtx";
+pub const PROTOTYPE_MASS_FILE: &str = "prototype_mass.mtx";
+pub const PS_BASIS_FILE: &str = "ps_basis.mtx";
+
+/// Every file `write_design` writes, in order.
+pub const DESIGN_FILES: &[&str] = &[
+    ACTUATOR_LAYOUT_FILE,
+    POD_FILE,
+    REDUCTION_VALIDATION_FILE,
+    INTERFACE_REFINEMENT_FILE,
+    HYBRID_PROTOTYPE_FILE,
+    PROTOTYPE_STIFFNESS_FILE,
+    PROTOTYPE_MASS_FILE,
+    PS_BASIS_FILE,
+];
+
+/// Metadata key of the overall WNRMSE (deformation) in reduction_validation.parquet.
+pub const WNRMSE_KEY: &str = "quaketwin.wnrmse";
+/// Metadata key of the overall WNRMSE of the total displacement.
+pub const WNRMSE_TOTAL_KEY: &str = "quaketwin.wnrmse_total";
+
+/// Where a design came from: recorded in every table's metadata.
+#[derive(Debug, Clone, Default)]
+pub struct DesignProvenance {
+    pub design_file: String,
+    pub twin: String,
+    pub motion_source: String,
+    /// The design settings as JSON (`design_file::settings_json`).
+    pub settings_json: String,
+}
+
+fn meta(schema: &str, p: &DesignProvenance) -> Vec<(String, String)> {
+    vec![
+        ("quaketwin.schema".into(), schema.into()),
+        ("quaketwin.design_file".into(), p.design_file.clone()),
+        ("quaketwin.twin".into(), p.twin.clone()),
+        ("quaketwin.motion".into(), p.motion_source.clone()),
+        ("quaketwin.settings".into(), p.settings_json.clone()),
+    ]
+}
+
+/// Node id and DoF name of a PS position.
+fn dof_of(model: &Model, d: &TestDesign, p: usize) -> (i64, String) {
+    let Some(&(node, dof)) = d.partition.ps_dofs.get(p) else {
+        return (-1, "?".into());
+    };
+    (
+        model.nodes.get(node).map(|n| n.id).unwrap_or(-1),
+        model
+            .dimension
+            .dof_names()
+            .get(dof)
+            .copied()
+            .unwrap_or("?")
+            .to_string(),
+    )
+}
+
+/// `actuator_layout.parquet`: one row per actuator; `pom_1` … `pom_k` hold each retained
+/// POM's component at the actuated DoF.
+pub fn write_actuator_layout(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()> {
+    let a = &d.actuators;
+    let k = a.iter().map(|x| x.participation.len()).max().unwrap_or(0);
+    let mut t = TableBuilder::new()
+        .u32("actuator", a.iter().map(|x| x.actuator as u32).collect())
+        .i64("node_id", a.iter().map(|x| x.node_id).collect())
+        .str(
+            "direction",
+            &a.iter().map(|x| x.direction.as_str()).collect::<Vec<_>>(),
+        )
+        .str(
+            "control_mode",
+            &a.iter().map(|x| x.control.name()).collect::<Vec<_>>(),
+        )
+        .f64(
+            "nominal_force_n",
+            a.iter().map(|x| x.nominal_force).collect(),
+        );
+    for j in 0..k {
+        t = t.f64(
+            &format!("pom_{}", j + 1),
+            a.iter()
+                .map(|x| x.participation.get(j).copied().unwrap_or(0.0))
+                .collect(),
+        );
+    }
+    let mut m = meta("actuator_layout", p);
+    m.push(("quaketwin.retained_poms".into(), k.to_string()));
+    write_parquet(path, &[t.build()?], &m)
+}
+
+/// `pod.parquet`: one row per listed POM.
+pub fn write_pod(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()> {
+    let pod = &d.pod;
+    let n = d.pod_curve.wnrmse.len().min(pod.singular_values.len());
+    let batch = TableBuilder::new()
+        .u32("pom", (1..=n as u32).collect())
+        .f64("singular_value", pod.singular_values[..n].to_vec())
+        .f64("energy_fraction", pod.energy_fraction[..n].to_vec())
+        .f64("cumulative_energy", pod.cumulative_energy[..n].to_vec())
+        .f64("wnrmse", d.pod_curve.wnrmse[..n].to_vec())
+        .bool(
+            "retained",
+            (1..=n).map(|i| i <= d.pod_curve.retained).collect(),
+        )
+        .build()?;
+    let mut m = meta("pod", p);
+    m.push((
+        "quaketwin.retained_poms".into(),
+        d.pod_curve.retained.to_string(),
+    ));
+    m.push((
+        "quaketwin.snapshot_dofs".into(),
+        d.pod.modes.nrows().to_string(),
+    ));
+    write_parquet(path, &[batch], &m)
+}
+
+/// `reduction_validation.parquet`: one row per retained PS DoF; the overall WNRMSE (deformation
+/// and total displacement) in the metadata.
+pub fn write_reduction_validation(
+    path: &Path,
+    model: &Model,
+    d: &TestDesign,
+    p: &DesignProvenance,
+) -> Result<()> {
+    let v = &d.validation;
+    let dofs: Vec<(i64, String)> = v.positions.iter().map(|&q| dof_of(model, d, q)).collect();
+    let batch = TableBuilder::new()
+        .i64("node_id", dofs.iter().map(|x| x.0).collect())
+        .str(
+            "direction",
+            &dofs.iter().map(|x| x.1.as_str()).collect::<Vec<_>>(),
+        )
+        .f64("nrmse", v.nrmse.clone())
+        .f64("weight", v.weight.clone())
+        .bool("is_master", v.is_master.clone())
+        .build()?;
+    let mut m = meta("reduction_validation", p);
+    m.push((WNRMSE_KEY.into(), format!("{:e}", v.wnrmse)));
+    m.push((WNRMSE_TOTAL_KEY.into(), format!("{:e}", v.wnrmse_total)));
+    m.push((
+        "quaketwin.relative_max_error_total".into(),
+        format!("{:e}", v.relative_max_error_total),
+    ));
+    write_parquet(path, &[batch], &m)
+}
+
+/// `interface_refinement.parquet`: one row per step of the interface refinement.
+pub fn write_interface_refinement(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()> {
+    let r = &d.refinement;
+    let batch = TableBuilder::new()
+        .u32("step", (1..=r.len() as u32).collect())
+        .u32(
+            "control_nodes",
+            r.iter().map(|x| x.control_nodes as u32).collect(),
+        )
+        .u32(
+            "coupled_dofs",
+            r.iter().map(|x| x.coupled_dofs as u32).collect(),
+        )
+        .u32("actuators", r.iter().map(|x| x.actuators as u32).collect())
+        .f64("wnrmse_total", r.iter().map(|x| x.wnrmse_total).collect())
+        .f64(
+            "wnrmse_deformation",
+            r.iter().map(|x| x.wnrmse_deformation).collect(),
+        )
+        .f64(
+            "first_frequency_error",
+            r.iter().map(|x| x.first_frequency_error).collect(),
+        )
+        .build()?;
+    write_parquet(path, &[batch], &meta("interface_refinement", p))
+}
+
+/// `hybrid_prototype.parquet`: one row per prototype eigenfrequency, paired in ascending order
+/// with the full model's; the recommendation (NS modes, λ, bandwidth) on every row and in the
+/// metadata.
+pub fn write_hybrid_prototype(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()> {
+    let h = &d.hybrid;
+    let f = &h.prototype.frequencies_hz;
+    let n = f.len();
+    let full: Vec<Option<f64>> = (0..n)
+        .map(|i| d.full_frequencies_hz.get(i).copied())
+        .collect();
+    let error: Vec<Option<f64>> = (0..n)
+        .map(|i| full[i].filter(|&x| x > 0.0).map(|x| (f[i] - x).abs() / x))
+        .collect();
+    let batch = TableBuilder::new()
+        .u32("mode", (1..=n as u32).collect())
+        .f64("prototype_frequency_hz", f.clone())
+        .opt_f64("full_frequency_hz", full)
+        .opt_f64("relative_error", error)
+        .bool("in_band", (0..n).map(|i| i < h.matched.len()).collect())
+        .f64(
+            "test_frequency_hz",
+            f.iter().map(|x| x / h.time_scale).collect(),
+        )
+        .u32("ns_modes", vec![h.prototype.ns_modes as u32; n])
+        .f64("time_scale", vec![h.time_scale; n])
+        .f64("bandwidth_hz", vec![h.bandwidth_hz; n])
+        .build()?;
+    let mut m = meta("hybrid_prototype", p);
+    m.push((
+        "quaketwin.recommendation".into(),
+        serde_json::json!({
+            "ns_modes": h.prototype.ns_modes,
+            "time_scale": h.time_scale,
+            "bandwidth_hz": h.bandwidth_hz,
+            "highest_frequency_hz": h.prototype.highest_frequency_hz(),
+            "matched": h.matched.iter().map(|(a, b, e)| serde_json::json!({
+                "full_hz": a, "prototype_hz": b, "relative_error": e
+            })).collect::<Vec<_>>(),
+        })
+        .to_string(),
+    ));
+    write_parquet(path, &[batch], &m)
+}
+
+/// Matrix Market text of a dense rectangular matrix (`coordinate real general`, exact zeros
+/// left out, column-major order, 17 significant digits), with `comments` as `%` lines after
+/// the banner.
+pub fn format_matrix_market_general(a: MatRef<'_, f64>, comments: &[String]) -> String {
+    let mut entries = Vec::new();
+    for c in 0..a.ncols() {
+        for r in 0..a.nrows() {
+            let v = a[(r, c)];
+            if v != 0.0 {
+                entries.push((r, c, v));
+            }
+        }
+    }
+    let mut s = String::with_capacity(entries.len() * 44 + 64 * (comments.len() + 2));
+    s.push_str("%%MatrixMarket matrix coordinate real general\n");
+    for line in comments {
+        let _ = writeln!(s, "% {line}");
+    }
+    let _ = writeln!(s, "{} {} {}", a.nrows(), a.ncols(), entries.len());
+    for (r, c, v) in entries {
+        let _ = writeln!(s, "{} {} {:.17e}", r + 1, c + 1, v);
+    }
+    s
+}
+
+/// Writes all design outputs into `out_dir`; returns the paths written (order of
+/// [`DESIGN_FILES`]).
+pub fn write_design(
+    out_dir: &Path,
+    model: &Model,
+    d: &TestDesign,
+    p: &DesignProvenance,
+) -> Result<Vec<PathBuf>> {
+    let path = |name: &str| out_dir.join(name);
+    write_actuator_layout(&path(ACTUATOR_LAYOUT_FILE), d, p)?;
+    write_pod(&path(POD_FILE), d, p)?;
+    write_reduction_validation(&path(REDUCTION_VALIDATION_FILE), model, d, p)?;
+    write_interface_refinement(&path(INTERFACE_REFINEMENT_FILE), d, p)?;
+    write_hybrid_prototype(&path(HYBRID_PROTOTYPE_FILE), d, p)?;
+    let proto = &d.hybrid.prototype;
+    write_bytes_atomically(
+        &path(PROTOTYPE_STIFFNESS_FILE),
+        format_matrix_market_symmetric(&CscMatrix::from_dense(proto.stiffness.as_ref())).as_bytes(),
+    )?;
+    write_bytes_atomically(
+        &path(PROTOTYPE_MASS_FILE),
+        format_matrix_market_symmetric(&CscMatrix::from_dense(proto.mass.as_ref())).as_bytes(),
+    )?;
+    // u_PS = G T q: the interface kinematics G applied to the Guyan + rigid-body basis T.
+    let basis = &d.interface.map * &d.basis.transformation;
+    let mut comments = vec![
+        format!(
+            "PS basis u_PS = T q of the hybrid-test design {} (twin {})",
+            p.design_file, p.twin
+        ),
+        format!(
+            "columns 1..{}: actuated master DoFs (actuator order); columns {}..{}: rigid-body amplitudes",
+            d.basis.masters.len(),
+            d.basis.masters.len() + 1,
+            basis.ncols()
+        ),
+    ];
+    for (a, act) in d.actuators.iter().enumerate() {
+        comments.push(format!(
+            "column {}: actuator {} node {} {}",
+            a + 1,
+            act.actuator,
+            act.node_id,
+            act.direction
+        ));
+    }
+    for r in 0..basis.nrows() {
+        let (id, dof) = dof_of(model, d, r);
+        comments.push(format!("row {}: node {id} {dof}", r + 1));
+    }
+    write_bytes_atomically(
+        &path(PS_BASIS_FILE),
+        format_matrix_market_general(basis.as_ref(), &comments).as_bytes(),
+    )?;
+    Ok(DESIGN_FILES.iter().map(|f| path(f)).collect())
+}
