@@ -52,6 +52,18 @@ pub struct DesignDoc {
     pub actuators: Option<Spanned<ActuatorSection>>,
     #[serde(default)]
     pub hybrid: Option<Spanned<HybridSection>>,
+    #[serde(default)]
+    pub snapshots: Option<Spanned<SnapshotsSection>>,
+}
+
+/// Where the POD snapshots come from: the twin's response to the motion ("twin", default) or
+/// the event's records at PS nodes ("records": channels mapped to twin DoFs by the twin's
+/// `[[sensors]]`, made relative to the base, integrated with polynomial drift control and
+/// expanded statically to the PS; see `design::recorded`).
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SnapshotsSection {
+    pub source: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -155,6 +167,7 @@ pub struct ConstrainedDof {
 pub struct InterfaceSection {
     pub wnrmse_target: Option<f64>,
     pub max_control_nodes: Option<usize>,
+    pub refinement_candidates: Option<usize>,
     #[serde(default)]
     pub control_nodes: Vec<Spanned<i64>>,
     /// Constrained set override, one entry per rigid-body mode.
@@ -241,6 +254,8 @@ pub struct LoadedDesign {
     pub ps_node_ids: Vec<i64>,
     pub motion: MotionSpec,
     pub settings: DesignSettings,
+    /// POD snapshots from the event's records (`[snapshots] source = "records"`).
+    pub snapshots_from_records: bool,
 }
 
 impl LoadedDesign {
@@ -445,6 +460,15 @@ pub fn resolve_design(
             }
             settings.max_control_nodes = v;
         }
+        if let Some(v) = s.refinement_candidates {
+            if v == 0 {
+                return Err(Error::input(
+                    loc(),
+                    "[interface] refinement_candidates must be at least 1",
+                ));
+            }
+            settings.refinement_candidates = v;
+        }
         for id in &s.control_nodes {
             let Some(n) = model.node_index(*id.get_ref()) else {
                 return Err(Error::input(
@@ -586,6 +610,27 @@ pub fn resolve_design(
     }
 
     let motion = resolve_motion(&doc.motion, text, &source, base)?;
+    let snapshots_from_records = match &doc.snapshots {
+        None => false,
+        Some(sn) => match sn.get_ref().source.as_deref() {
+            None | Some("twin") => false,
+            Some("records") => {
+                if matches!(motion.source, MotionSource::File { .. }) {
+                    return Err(Error::input(
+                        at(sn.span()),
+                        "[snapshots] source = \"records\" needs the motion from an event ([motion] event), whose channels at PS nodes are the records",
+                    ));
+                }
+                true
+            }
+            Some(other) => {
+                return Err(Error::input(
+                    at(sn.span()),
+                    format!("[snapshots] source {other:?}: expected \"twin\" or \"records\""),
+                ))
+            }
+        },
+    };
     Ok(LoadedDesign {
         path: path.to_path_buf(),
         source,
@@ -595,6 +640,7 @@ pub fn resolve_design(
         ps_node_ids,
         motion,
         settings,
+        snapshots_from_records,
     })
 }
 

@@ -138,13 +138,11 @@ fn main() -> ExitCode {
         Command::Hysteresis { event, out } => {
             quaketwin::commands::hysteresis(event, out, cli.quiet)
         }
-        Command::Design { design, out } => {
-            quaketwin::commands::design(design, out).map(|s| {
-                if !cli.quiet {
-                    eprintln!("{}", serde_json::to_string_pretty(&s).unwrap_or_default());
-                }
-            })
-        }
+        Command::Design { design, out } => quaketwin::commands::design(design, out).map(|s| {
+            if !cli.quiet {
+                eprintln!("{}", serde_json::to_string_pretty(&s).unwrap_or_default());
+            }
+        }),
         Command::Synth { out, seed } => quaketwin::commands::synth(out, *seed).map(|dirs| {
             for d in dirs {
                 println!("wrote {}", d.display());

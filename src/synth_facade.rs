@@ -6,6 +6,12 @@
 //! 0.5 m elements, thickness 0.4 m, E = 1.5 GPa, ν = 0.2, ρ = 1800 kg/m³, a 2 m × 2 m window
 //! at x ∈ [3, 5] m, y ∈ [2.5, 4.5] m, base nodes fixed (ux, uy); gravity −y. PS: the nodes in
 //! x ∈ [2, 6], y ∈ [1.5, 5.5] (floating: it touches no support).
+//!
+//! The event also holds "recorded" response at the PS: 16 accelerometer channels (ux, uy at the
+//! PS corners and edge midpoints, mapped by the twin's `[[sensors]]`), the absolute
+//! accelerations of the twin itself under the base record (Newmark, 5 % Rayleigh damping at the
+//! 1st and 4th frequencies). The design file takes its POD snapshots from them
+//! (`[snapshots] source = "records"`): test design fed by recorded response, with a known truth.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -13,6 +19,8 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 use crate::sinks::parquet::write_bytes_atomically;
 use crate::synth::ground_motion::{synthetic_ground_motion, GroundMotionParams};
+use crate::twin::newmark::{newmark_base_excitation, rayleigh_coefficients, NewmarkSettings};
+use crate::twin::parse_twin;
 
 /// Folder name of the sample under the synth output directory.
 pub const FACADE_FOLDER: &str = "synthetic-facade";
@@ -32,8 +40,41 @@ pub fn facade_node_id(i: usize, j: usize) -> i64 {
     (j * (NX + 1) + i + 1) as i64
 }
 
-/// The facade twin file (docs/twin.md).
+/// Grid points (i, j) of the PS sensors: corners and edge midpoints of the PS.
+pub const SENSOR_POINTS: [(usize, usize); 8] = [
+    (4, 3),
+    (8, 3),
+    (12, 3),
+    (4, 7),
+    (12, 7),
+    (4, 11),
+    (8, 11),
+    (12, 11),
+];
+
+/// Channel id of the sensor at grid point (i, j) along X or Y.
+pub fn sensor_channel(i: usize, j: usize, direction: &str) -> String {
+    format!("S{}-{direction}", facade_node_id(i, j))
+}
+
+/// The facade twin file with its `[[sensors]]` (docs/twin.md).
 pub fn facade_twin_toml() -> String {
+    let mut s = facade_mesh_toml();
+    for &(i, j) in &SENSOR_POINTS {
+        for (dir, dof) in [("X", "ux"), ("Y", "uy")] {
+            let _ = writeln!(
+                s,
+                "\n[[sensors]]\nchannel = \"{}\"\nnode = {}\ndof = \"{dof}\"",
+                sensor_channel(i, j, dir),
+                facade_node_id(i, j)
+            );
+        }
+    }
+    s
+}
+
+/// The facade twin without sensors.
+fn facade_mesh_toml() -> String {
     let in_window = |i: usize, j: usize| {
         let (xc, yc) = ((i as f64 + 0.5) * H, (j as f64 + 0.5) * H);
         (3.0..5.0).contains(&xc) && (2.5..4.5).contains(&yc)
@@ -96,6 +137,8 @@ pub fn facade_design_toml() -> String {
      # Base motion: the base channel of this event folder, conditioned like the post-earthquake pipeline.\n\
      [motion]\nevent = \".\"\nduration_s = 10.0\n\n\
      [pod]\nenergy_target = 0.999\nmax_poms = 10\n\n\
+     # POD snapshots from the records at the PS (16 channels mapped by the twin's [[sensors]]).\n\
+     [snapshots]\nsource = \"records\"\n\n\
      [interface]\nwnrmse_target = 0.01\nmax_control_nodes = 64\n\n\
      [damping]\nratio = 0.05\n\n\
      [actuators]\nstatic_ratio = 0.05\nmin_force = 1.0\n\n\
@@ -112,12 +155,68 @@ fn event_toml(seed: u64, params: &GroundMotionParams) -> String {
          origin_time = \"2026-03-02T08:15:00Z\"\n\
          description = \"Kanai-Tajimi/Clough-Penzien ground motion (f_g = {} Hz, PGA {} m/s2, seed {}); the design sample of docs/test-design.md\"\n\n\
          [structure]\nname = \"Masonry facade (twin: facade.toml)\"\n\n\
-         [[channel]]\nfile = \"base.csv\"\ncolumn = \"acc_X\"\nid = \"B-X\"\nlevel = 0\ndirection = \"X\"\nrole = \"input\"\nunits = \"m/s2\"\ntime_column = \"time_s\"\n",
-        params.ground_frequency_hz, params.pga_m_per_s2, params.seed
+         [[channel]]\nfile = \"base.csv\"\ncolumn = \"acc_X\"\nid = \"B-X\"\nlevel = 0\ndirection = \"X\"\nrole = \"input\"\nunits = \"m/s2\"\ntime_column = \"time_s\"\n{}",
+        params.ground_frequency_hz,
+        params.pga_m_per_s2,
+        params.seed,
+        sensor_channels_toml()
     )
 }
 
-/// Writes `out/synthetic-facade/` (facade.toml, base.csv, event.toml, design.toml); the same
+/// `[[channel]]` entries of the PS accelerometers (absolute accelerations, file ps.csv).
+fn sensor_channels_toml() -> String {
+    let mut s = String::new();
+    for &(i, j) in &SENSOR_POINTS {
+        for dir in ["X", "Y"] {
+            let id = sensor_channel(i, j, dir);
+            let _ = write!(
+                s,
+                "\n[[channel]]\nfile = \"ps.csv\"\ncolumn = \"{id}\"\nid = \"{id}\"\ndirection = \"{dir}\"\nrole = \"output\"\nnode = \"{}\"\nunits = \"m/s2\"\ntime_column = \"time_s\"\n",
+                facade_node_id(i, j)
+            );
+        }
+    }
+    s
+}
+
+/// The twin's absolute accelerations at the PS sensors under the base record `acc` (x axis):
+/// one history per sensor channel, in `SENSOR_POINTS` × (X, Y) order.
+fn sensor_records(acc: &[f64]) -> Result<Vec<(String, Vec<f64>)>> {
+    let twin = parse_twin(&facade_twin_toml(), "facade.toml", Path::new("."))?;
+    let sys = &twin.system;
+    let (Some(model), Some(map)) = (twin.model.as_ref(), sys.dofs.as_ref()) else {
+        return Err(Error::numerical("facade sample: the twin is not a mesh"));
+    };
+    let mut channels = Vec::new();
+    let mut dofs = Vec::new();
+    for &(i, j) in &SENSOR_POINTS {
+        let node = model
+            .node_index(facade_node_id(i, j))
+            .ok_or_else(|| Error::numerical("facade sample: sensor node missing"))?;
+        for (dir, d) in [("X", 0), ("Y", 1)] {
+            let free = map
+                .free_index(node, d)
+                .ok_or_else(|| Error::numerical("facade sample: sensor DoF is not free"))?;
+            channels.push(sensor_channel(i, j, dir));
+            dofs.push(free);
+        }
+    }
+    let f = sys.modes(&[], 4)?.frequencies_hz();
+    let settings = NewmarkSettings {
+        dt: DT,
+        rayleigh: rayleigh_coefficients(f[0], f[3], 0.05, 0.05)?,
+        record: Some(dofs),
+    };
+    let exc = sys.base_excitation(&[], 0, acc.to_vec())?;
+    let resp =
+        newmark_base_excitation(&sys.stiffness_at(&[]), &sys.mass_at(&[]), &[exc], &settings)?;
+    Ok(channels
+        .into_iter()
+        .zip(resp.absolute_acceleration)
+        .collect())
+}
+
+/// Writes `out/synthetic-facade/` (facade.toml, base.csv, ps.csv, event.toml, design.toml); the same
 /// seed gives the same bytes.
 pub fn write_facade_sample(out: &Path, seed: u64) -> Result<PathBuf> {
     let dir = out.join(FACADE_FOLDER);
@@ -136,9 +235,25 @@ pub fn write_facade_sample(out: &Path, seed: u64) -> Result<PathBuf> {
     for (i, a) in acc.iter().enumerate() {
         let _ = writeln!(csv, "{:.4},{:.8e}", i as f64 * DT, a);
     }
+    let sensors = sensor_records(&acc)?;
+    let mut ps_csv = String::with_capacity(acc.len() * 16 * 17);
+    ps_csv.push_str("time_s");
+    for (id, _) in &sensors {
+        ps_csv.push(',');
+        ps_csv.push_str(id);
+    }
+    ps_csv.push('\n');
+    for k in 0..acc.len() {
+        let _ = write!(ps_csv, "{:.4}", k as f64 * DT);
+        for (_, h) in &sensors {
+            let _ = write!(ps_csv, ",{:.8e}", h[k]);
+        }
+        ps_csv.push('\n');
+    }
     let write = |name: &str, text: &str| write_bytes_atomically(&dir.join(name), text.as_bytes());
     write("facade.toml", &facade_twin_toml())?;
     write("base.csv", &csv)?;
+    write("ps.csv", &ps_csv)?;
     write("event.toml", &event_toml(seed, &params))?;
     write("design.toml", &facade_design_toml())?;
     Ok(dir)

@@ -51,6 +51,8 @@ fn minimal_design_file_takes_every_default() {
     assert_eq!(s.max_poms, def.max_poms);
     assert_eq!(s.wnrmse_target, def.wnrmse_target);
     assert_eq!(s.max_control_nodes, def.max_control_nodes);
+    assert_eq!(s.refinement_candidates, def.refinement_candidates);
+    assert!(!d.snapshots_from_records);
     assert_eq!(s.control_nodes, def.control_nodes);
     assert_eq!(s.constrained, def.constrained);
     assert_eq!(s.damping_ratio, def.damping_ratio);
@@ -507,6 +509,16 @@ fn design_command_on_the_sample_writes_consistent_tables_deterministically() {
         .unwrap()
         .ends_with("facade.toml"));
     assert!(pod.metadata("quaketwin.motion").unwrap().contains("B-X→x"));
+    // The sample's snapshots are its 16 PS records (the twin's own accelerations under the
+    // unconditioned base record, then conditioned and integrated): the recorded dominant
+    // pattern must be the twin's (MAC ≥ 0.99).
+    assert!(pod
+        .metadata("quaketwin.snapshot_source")
+        .unwrap()
+        .starts_with("records (16 DoFs measured"));
+    let mac: Vec<f64> =
+        serde_json::from_str(pod.metadata("quaketwin.pom_mac_with_twin").unwrap()).unwrap();
+    assert!(mac[0] >= 0.99, "MAC of POM 1 with the twin's: {}", mac[0]);
     assert!(pod
         .metadata("quaketwin.settings")
         .unwrap()
@@ -776,4 +788,25 @@ fn design_stage_is_not_applicable_without_base_channel() {
     assert_eq!(motion.components[0].axis, 0);
     assert_eq!(motion.components[0].acceleration.len(), 500);
     assert!(motion.source.contains("R-X→x"), "{}", motion.source);
+}
+
+#[test]
+fn snapshot_source_is_checked() {
+    let ws = workspace();
+    let bad = format!("{MINIMAL}[snapshots]\nsource = \"lidar\"\n");
+    let e = error_of(ws.path(), &bad);
+    assert!(
+        e.contains("design.toml") && e.contains("line 7") && e.contains("\"lidar\""),
+        "{e}"
+    );
+    let file_motion = "[design]\ntwin = \"facade.toml\"\n[ps]\nboxes = [{ x = [2.0, 6.0], y = [1.5, 5.5] }]\n[motion]\nfile = \"base.at2\"\naxis = \"x\"\n[snapshots]\nsource = \"records\"\n";
+    let e = error_of(ws.path(), file_motion);
+    assert!(e.contains("needs the motion from an event"), "{e}");
+    let ok = format!(
+        "{MINIMAL}[snapshots]\nsource = \"records\"\n[interface]\nrefinement_candidates = 3\n"
+    );
+    let p = write(ws.path(), "design.toml", &ok);
+    let d = load_design(&p).unwrap();
+    assert!(d.snapshots_from_records);
+    assert_eq!(d.settings.refinement_candidates, 3);
 }

@@ -136,6 +136,17 @@ pub fn write_pod(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()
         "quaketwin.snapshot_dofs".into(),
         d.pod.modes.nrows().to_string(),
     ));
+    m.push((
+        "quaketwin.snapshot_source".into(),
+        d.snapshot_source.clone(),
+    ));
+    if let Some(mac) = &d.pom_mac {
+        // MAC of each recorded POM with the twin's POM of the same rank (JSON array).
+        m.push((
+            "quaketwin.pom_mac_with_twin".into(),
+            serde_json::to_string(mac).unwrap_or_default(),
+        ));
+    }
     write_parquet(path, &[batch], &m)
 }
 

@@ -1,8 +1,8 @@
 //! Sinks: where results leave the pipeline (Parquet tables, MCAP replays).
 //! I/O lives here, at the edge; stages hand over plain data.
 
-pub mod event_tables;
 pub mod design_tables;
+pub mod event_tables;
 pub mod hysteresis_tables;
 pub mod mcap_writer;
 pub mod modal_tables;

@@ -20,8 +20,10 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::conditioning::integrate::{integrate_motion, DriftControl};
 use crate::conditioning::{condition_event_with_motion, ConditioningSettings};
-use crate::design::plan::{design_hybrid_test, BaseComponent, BaseMotion, TestDesign};
+use crate::design::plan::{design_hybrid_test_with, BaseComponent, BaseMotion, TestDesign};
+use crate::design::recorded::RecordedResponse;
 use crate::design_file::{load_design, settings_json, LoadedDesign, MotionSource, MotionSpec};
 use crate::error::{Error, Location, Result};
 use crate::pipeline::fingerprint::{path_fingerprint, Fnv64};
@@ -396,6 +398,11 @@ pub fn base_motion_from_file(
 /// The design's base motion when run on its own (`quaketwin design`): the event folder of the
 /// design file, loaded and conditioned like the pipeline's condition stage, or the file.
 pub fn load_motion(design: &LoadedDesign) -> Result<BaseMotion> {
+    Ok(load_inputs(design)?.0)
+}
+
+/// The base motion and, with `[snapshots] source = "records"`, the recorded response.
+pub fn load_inputs(design: &LoadedDesign) -> Result<(BaseMotion, Option<RecordedResponse>)> {
     let model = design.model()?;
     match &design.motion.source {
         MotionSource::Event {
@@ -406,31 +413,139 @@ pub fn load_motion(design: &LoadedDesign) -> Result<BaseMotion> {
             let loaded = crate::event_folder::load(folder)?;
             let mut event = loaded.event;
             condition_event_with_motion(&mut event, &event_conditioning_settings()?)?;
-            base_motion_from_event(
+            let origin = folder.display().to_string();
+            let motion = base_motion_from_event(
                 &event,
-                &folder.display().to_string(),
+                &origin,
                 channels,
                 axes,
                 &design.motion,
                 model,
                 &design.source,
-            )
+            )?;
+            let recorded = if design.snapshots_from_records {
+                Some(recorded_response_from_event(
+                    &event, &origin, design, &motion,
+                )?)
+            } else {
+                None
+            };
+            Ok((motion, recorded))
         }
-        MotionSource::File { .. } => base_motion_from_file(&design.motion, model, &design.source),
+        MotionSource::File { .. } => Ok((
+            base_motion_from_file(&design.motion, model, &design.source)?,
+            None,
+        )),
     }
 }
 
-/// Run the design and write its outputs into `out_dir`.
+/// Snapshot source (b): the event's records at PS nodes. Channels are mapped to twin DoFs by
+/// the twin's `[[sensors]]` (node and DoF); each PS translation DoF's absolute acceleration
+/// minus the base motion along the same axis is integrated twice with polynomial drift
+/// control (`DriftControl::default()`), over the motion's samples. Errors name the channel
+/// whose step differs from the motion's or whose sensor DoF is a rotation.
+pub fn recorded_response_from_event(
+    event: &Event,
+    origin: &str,
+    design: &LoadedDesign,
+    motion: &BaseMotion,
+) -> Result<RecordedResponse> {
+    let model = design.model()?;
+    let in_ps: std::collections::BTreeSet<i64> = design.ps_node_ids.iter().copied().collect();
+    let mut dofs = Vec::new();
+    let mut displacement = Vec::new();
+    let mut used = Vec::new();
+    let steps = motion
+        .components
+        .iter()
+        .map(|c| c.acceleration.len())
+        .min()
+        .unwrap_or(0);
+    for sensor in &design.twin.file.sensors {
+        let (Some(node), Some(dof)) = (sensor.node, sensor.dof.as_ref()) else {
+            continue;
+        };
+        if !in_ps.contains(&node) {
+            continue;
+        }
+        let Some(record) = event
+            .records
+            .iter()
+            .find(|r| r.channel.id == sensor.channel)
+        else {
+            continue;
+        };
+        let loc = || Location::file(design.source.clone()).with_channel(sensor.channel.clone());
+        let d = model.dimension.dof_names().iter().position(|n| n == dof);
+        let axis = d.and_then(|d| (0..3).find(|&a| model.dimension.translation_dof(a) == Some(d)));
+        let Some(axis) = axis else {
+            return Err(Error::input(
+                loc(),
+                format!(
+                    "[snapshots] records: sensor {} measures {dof}, not a translation",
+                    sensor.channel
+                ),
+            ));
+        };
+        if !record.channel.units.is_acceleration() {
+            return Err(Error::input(
+                loc(),
+                format!(
+                    "[snapshots] records: channel {} is in {}, not an acceleration",
+                    sensor.channel,
+                    record.channel.units.name()
+                ),
+            ));
+        }
+        let dt = record.channel.dt();
+        if (dt - motion.dt).abs() > 1e-9 * motion.dt {
+            return Err(Error::input(
+                loc(),
+                format!("[snapshots] records: channel {} is sampled every {dt} s, the base motion every {} s; resample in the condition stage", sensor.channel, motion.dt),
+            ));
+        }
+        if record.samples.len() < steps {
+            return Err(Error::input(
+                loc(),
+                format!(
+                    "[snapshots] records: channel {} has {} samples, the base motion {steps}",
+                    sensor.channel,
+                    record.samples.len()
+                ),
+            ));
+        }
+        let to_si = record.channel.units.to_si_factor().unwrap_or(1.0);
+        let base = motion.components.iter().find(|c| c.axis == axis);
+        let relative: Vec<f64> = (0..steps)
+            .map(|k| record.samples[k] * to_si - base.map(|b| b.acceleration[k]).unwrap_or(0.0))
+            .collect();
+        let integrated =
+            integrate_motion(&sensor.channel, &relative, dt, &DriftControl::default())?;
+        dofs.push((node, dof.clone()));
+        displacement.push(integrated.displacement);
+        used.push(sensor.channel.clone());
+    }
+    Ok(RecordedResponse {
+        dofs,
+        displacement,
+        source: format!("event {origin}, channels {}", used.join(", ")),
+    })
+}
+
+/// Run the design and write its outputs into `out_dir`; `recorded` is the snapshot source (b)
+/// when the design file asks for it.
 pub fn run_design(
     design: &LoadedDesign,
     motion: &BaseMotion,
+    recorded: Option<&RecordedResponse>,
     out_dir: &Path,
 ) -> Result<DesignSummary> {
     let model = design.model()?;
-    let d: TestDesign = design_hybrid_test(
+    let d: TestDesign = design_hybrid_test_with(
         &design.twin,
         &design.ps_node_ids,
         motion,
+        recorded,
         &design.settings,
         &design.source,
     )?;
@@ -473,11 +588,12 @@ pub fn run_design(
     })
 }
 
-/// `quaketwin design DESIGN --out DIR`: load, build the motion, design, write.
+/// `quaketwin design DESIGN --out DIR`: load, build the motion (and the records, snapshot
+/// source (b)), design, write.
 pub fn design_from_file(design_path: &Path, out_dir: &Path) -> Result<DesignSummary> {
     let design = load_design(design_path)?;
-    let motion = load_motion(&design)?;
-    run_design(&design, &motion, out_dir)
+    let (motion, recorded) = load_inputs(&design)?;
+    run_design(&design, &motion, recorded.as_ref(), out_dir)
 }
 
 /// Output files of the stage.
@@ -546,11 +662,11 @@ pub fn run(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
     let path = design_path(stage, ctx)?;
     let design = load_design(&path)?;
     let model = design.model()?;
-    let motion = match &design.motion.source {
+    let (motion, recorded) = match &design.motion.source {
         MotionSource::Event { channels, axes, .. } => {
             let origin = ctx.event_path.display().to_string();
             let (event, _) = ctx.conditioned_event()?;
-            base_motion_from_event(
+            let motion = base_motion_from_event(
                 event,
                 &origin,
                 channels,
@@ -558,11 +674,22 @@ pub fn run(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
                 &design.motion,
                 model,
                 &design.source,
-            )?
+            )?;
+            let recorded = if design.snapshots_from_records {
+                Some(recorded_response_from_event(
+                    event, &origin, &design, &motion,
+                )?)
+            } else {
+                None
+            };
+            (motion, recorded)
         }
-        MotionSource::File { .. } => base_motion_from_file(&design.motion, model, &design.source)?,
+        MotionSource::File { .. } => (
+            base_motion_from_file(&design.motion, model, &design.source)?,
+            None,
+        ),
     };
-    let summary = run_design(&design, &motion, &ctx.out_dir)?;
+    let summary = run_design(&design, &motion, recorded.as_ref(), &ctx.out_dir)?;
     if !ctx.quiet {
         eprintln!(
             "design: {} actuators ({} force-controlled), {} POMs retained, WNRMSE {:.2e}, {} NS modes, λ = {}, bandwidth {:.3} Hz",
