@@ -175,6 +175,9 @@ fn yielding_sample_bouc_wen_and_damage_match_the_truth() {
         status.iter().all(|s| s.starts_with("identified")),
         "{status:?}"
     );
+    // The hysteretic terms are significant at every identified DoF (F-test, p < 1e-3).
+    let p_values = column_f64(&path, "p_value");
+    assert!(p_values.iter().all(|&p| p < 1e-3), "{p_values:?}");
     for i in 0..params.len() {
         let d = dof[i] as usize;
         match (params[i].as_str(), coupled[i]) {

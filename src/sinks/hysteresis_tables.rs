@@ -56,6 +56,7 @@ pub fn write_bouc_wen(
                     "not_identifiable",
                     reason,
                 );
+                c.fill_significance(None);
             }
             DirectionOutcome::Identified(d) => {
                 for dof in &d.dofs {
@@ -162,6 +163,10 @@ pub fn write_bouc_wen(
                         status,
                         "",
                     );
+                    c.fill_significance(Some((
+                        dof.significance.f_statistic,
+                        dof.significance.p_value,
+                    )));
                 }
             }
         }
@@ -180,6 +185,8 @@ pub fn write_bouc_wen(
         .f64("hysteretic_share", c.share)
         .str("status", &c.status)
         .str("reason", &c.reason)
+        .opt_f64("f_statistic", c.f_statistic)
+        .opt_f64("p_value", c.p_value)
         .build()?;
     write_parquet(path, &[batch], &meta("bouc_wen", extra_meta))
 }
@@ -199,9 +206,19 @@ struct Cols {
     share: Vec<f64>,
     status: Vec<String>,
     reason: Vec<String>,
+    f_statistic: Vec<Option<f64>>,
+    p_value: Vec<Option<f64>>,
 }
 
 impl Cols {
+    /// The F-test of the hysteretic terms for the rows pushed since the last call.
+    fn fill_significance(&mut self, test: Option<(f64, f64)>) {
+        while self.f_statistic.len() < self.direction.len() {
+            self.f_statistic.push(test.map(|t| t.0));
+            self.p_value.push(test.map(|t| t.1));
+        }
+    }
+
     #[allow(clippy::too_many_arguments)]
     fn push_row(
         &mut self,
