@@ -659,6 +659,21 @@ fn test_design_pipeline_runs_and_tracks_the_design_file() {
     for f in DESIGN_FILES {
         assert!(out.join(f).is_file(), "{f}");
     }
+    // The report a person reads carries the design: its facts and the two plots.
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    let section = &html[html.find("id=\"test-design\"").expect("design section")..];
+    let section = &section[..section.find("</section>").unwrap_or(section.len())];
+    let layout = ReadTable::open(&out.join("actuator_layout.parquet")).unwrap();
+    assert!(
+        section.contains(&format!(
+            "<dt>Actuators</dt><dd>{} (",
+            layout.batches.iter().map(|b| b.num_rows()).sum::<usize>()
+        )),
+        "{section}"
+    );
+    assert!(section.contains("Reduced vs full twin at the PS (WNRMSE)"));
+    assert!(section.contains("MAC of recorded vs twin POMs 1–3"));
+    assert_eq!(section.matches("<svg").count(), 2);
     let again = pipeline::run(&p, &event, &out, true).unwrap();
     assert_eq!(again.last().unwrap().1, StageOutcome::Skipped);
 
