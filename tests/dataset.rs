@@ -9,9 +9,9 @@ use std::process::Command;
 fn events_run_in_parallel_into_a_hive_partitioned_dataset_readable_by_pyarrow() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let out = tempfile::tempdir().unwrap();
-    // The folder of event folders expands to the three sample events.
+    // The folder of event folders expands to the four sample events.
     let events = quaketwin::commands::expand_events(&[root.join("sample-records")]);
-    assert_eq!(events.len(), 3, "{events:?}");
+    assert_eq!(events.len(), 4, "{events:?}");
     let results = quaketwin::commands::run_many(
         &root.join("pipelines/ingest.toml"),
         &events,
@@ -56,9 +56,9 @@ print(t.num_rows, ",".join(sorted(set(t.column("event").to_pylist()))))
     }
     assert!(run.status.success(), "{stderr}");
     let stdout = String::from_utf8_lossy(&run.stdout);
-    // 10 + 8 + 3 channels.
+    // 10 + 8 + 3 + 17 (facade: base + 16 at the PS) channels.
     assert_eq!(
         stdout.trim(),
-        "21 synthetic-2storey-yielding,synthetic-4storey-ambient,synthetic-4storey-quake"
+        "38 synthetic-2storey-yielding,synthetic-4storey-ambient,synthetic-4storey-quake,synthetic-facade"
     );
 }
