@@ -675,7 +675,7 @@ fn test_design_pipeline_runs_and_tracks_the_design_file() {
     assert!(section.contains("MAC of recorded vs twin POMs 1–3"));
     assert_eq!(section.matches("<svg").count(), 2);
     let again = pipeline::run(&p, &event, &out, true).unwrap();
-    assert_eq!(again.last().unwrap().1, StageOutcome::Skipped);
+    assert_eq!(stage(&again, "design"), &StageOutcome::Skipped);
 
     // A design file outside the event folder (absolute path in the stage params).
     let outside = ws.path().join("outside.toml");
@@ -693,12 +693,8 @@ fn test_design_pipeline_runs_and_tracks_the_design_file() {
     let out2 = ws.path().join("run2");
     pipeline::run(&p2, &event, &out2, true).unwrap();
     assert_eq!(
-        pipeline::run(&p2, &event, &out2, true)
-            .unwrap()
-            .last()
-            .unwrap()
-            .1,
-        StageOutcome::Skipped
+        stage(&pipeline::run(&p2, &event, &out2, true).unwrap(), "design"),
+        &StageOutcome::Skipped
     );
     std::fs::write(
         &outside,
@@ -709,7 +705,7 @@ fn test_design_pipeline_runs_and_tracks_the_design_file() {
     .unwrap();
     let third = pipeline::run(&p2, &event, &out2, true).unwrap();
     assert!(
-        matches!(third.last().unwrap().1, StageOutcome::Ran { .. }),
+        matches!(stage(&third, "design"), StageOutcome::Ran { .. }),
         "{third:?}"
     );
     // The design from the pipeline equals the one of `quaketwin design` on the same file.
@@ -779,7 +775,7 @@ fn design_stage_is_not_applicable_without_base_channel() {
     );
     let p = PipelineFile::parse(&text, "test-design.toml").unwrap();
     let outcomes = pipeline::run(&p, &event, &ws.path().join("out"), true).unwrap();
-    match &outcomes.last().unwrap().1 {
+    match stage(&outcomes, "design") {
         StageOutcome::NotApplicable(why) => assert!(why.contains("no base channel"), "{why}"),
         other => panic!("expected not applicable, got {other:?}"),
     }
@@ -824,4 +820,13 @@ fn snapshot_source_is_checked() {
     let d = load_design(&p).unwrap();
     assert!(d.snapshots_from_records);
     assert_eq!(d.settings.refinement_candidates, 3);
+}
+
+/// The outcome of the stage named `name`.
+fn stage<'a>(outcomes: &'a [(String, StageOutcome)], name: &str) -> &'a StageOutcome {
+    &outcomes
+        .iter()
+        .find(|(n, _)| n == name)
+        .unwrap_or_else(|| panic!("no stage {name} in {outcomes:?}"))
+        .1
 }
