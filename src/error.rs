@@ -67,8 +67,12 @@ impl fmt::Display for Location {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Bad input data: names the place and says what is wrong.
+    /// (The location is boxed to keep `Result<T, Error>` small: clippy `result_large_err`.)
     #[error("{location}: {message}")]
-    Input { location: Location, message: String },
+    Input {
+        location: Box<Location>,
+        message: String,
+    },
     /// Bad settings, pipeline file or command-line usage.
     #[error("{0}")]
     Usage(String),
@@ -91,7 +95,7 @@ pub enum Error {
 impl Error {
     pub fn input(location: Location, message: impl Into<String>) -> Self {
         Error::Input {
-            location,
+            location: Box::new(location),
             message: message.into(),
         }
     }

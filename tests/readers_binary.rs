@@ -37,7 +37,7 @@ fn read_as(format: readers::Format, rel: &str) -> FileContents {
 
 fn input_error(e: Error) -> (quaketwin::Location, String) {
     match e {
-        Error::Input { location, message } => (location, message),
+        Error::Input { location, message } => (*location, message),
         other => panic!("expected an input error, got {other:?}"),
     }
 }

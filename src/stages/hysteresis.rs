@@ -277,7 +277,7 @@ fn manifest_location(event_dir: Option<&Path>) -> Location {
 
 fn err_clone(e: &Error) -> Error {
     match e {
-        Error::Input { location, message } => Error::input(location.clone(), message.clone()),
+        Error::Input { location, message } => Error::input((**location).clone(), message.clone()),
         other => Error::usage(other.to_string()),
     }
 }
