@@ -91,6 +91,12 @@ pub struct PsSection {
     /// Box tolerance, m (default [`DEFAULT_BOX_TOLERANCE_M`]).
     #[serde(default)]
     pub tolerance: Option<f64>,
+    /// Element ids of the PS: their nodes belong to the PS node set.
+    #[serde(default)]
+    pub elements: Vec<Spanned<i64>>,
+    /// Element groups of the twin (`group` of `[[elements]]`): the nodes of their elements.
+    #[serde(default)]
+    pub groups: Vec<Spanned<String>>,
 }
 
 /// Inclusive coordinate intervals; an absent axis is unbounded.
@@ -359,6 +365,40 @@ pub fn resolve_design(
         };
         in_ps[i] = true;
     }
+    for id in &ps.elements {
+        let Some(el) = model.elements.iter().find(|e| e.id == *id.get_ref()) else {
+            return Err(Error::input(
+                at(id.span()),
+                format!(
+                    "[ps] elements: element {} does not exist in twin {}",
+                    id.get_ref(),
+                    twin_path.display()
+                ),
+            ));
+        };
+        for &n in &el.nodes {
+            in_ps[n] = true;
+        }
+    }
+    for g in &ps.groups {
+        let mut count = 0usize;
+        for el in model.elements.iter().filter(|e| &e.group == g.get_ref()) {
+            for &n in &el.nodes {
+                in_ps[n] = true;
+            }
+            count += 1;
+        }
+        if count == 0 {
+            return Err(Error::input(
+                at(g.span()),
+                format!(
+                    "[ps] groups: no element of twin {} is in group {:?}",
+                    twin_path.display(),
+                    g.get_ref()
+                ),
+            ));
+        }
+    }
     for b in &ps.boxes {
         let bx = b.get_ref();
         let mut count = 0usize;
@@ -409,7 +449,7 @@ pub fn resolve_design(
     if ps_node_ids.is_empty() {
         return Err(Error::input(
             at(doc.ps.span()),
-            "[ps] the PS node set is empty: give `nodes` and/or `boxes`",
+            "[ps] the PS node set is empty: give `nodes`, `boxes`, `elements` and/or `groups`",
         ));
     }
 

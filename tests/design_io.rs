@@ -830,3 +830,49 @@ fn stage<'a>(outcomes: &'a [(String, StageOutcome)], name: &str) -> &'a StageOut
         .unwrap_or_else(|| panic!("no stage {name} in {outcomes:?}"))
         .1
 }
+
+#[test]
+fn ps_by_elements_and_groups() {
+    let ws = workspace();
+    // Elements (i, j) of the 0.5 m grid have ids 16 j + i + 1; (4, 3) and (5, 3) share an edge.
+    let by_elements = MINIMAL.replace(
+        "boxes = [{ x = [2.0, 6.0], y = [1.5, 5.5] }]",
+        "elements = [53, 54]",
+    );
+    let d = load_design(&write(ws.path(), "design.toml", &by_elements)).unwrap();
+    let node = |i: i64, j: i64| 17 * j + i + 1;
+    let mut expected = vec![
+        node(4, 3),
+        node(5, 3),
+        node(6, 3),
+        node(4, 4),
+        node(5, 4),
+        node(6, 4),
+    ];
+    expected.sort();
+    assert_eq!(d.ps_node_ids, expected);
+    // The group of every element selects every node of the wall but the 3 × 3 nodes inside the
+    // window, which no element uses.
+    let by_group = MINIMAL.replace(
+        "boxes = [{ x = [2.0, 6.0], y = [1.5, 5.5] }]",
+        "groups = [\"wall\"]",
+    );
+    let d = load_design(&write(ws.path(), "design.toml", &by_group)).unwrap();
+    assert_eq!(d.ps_node_ids.len(), 17 * 13 - 9);
+    let e = error_of(
+        ws.path(),
+        &MINIMAL.replace(
+            "boxes = [{ x = [2.0, 6.0], y = [1.5, 5.5] }]",
+            "groups = [\"roof\"]",
+        ),
+    );
+    assert!(e.contains("line 4") && e.contains("group \"roof\""), "{e}");
+    let e = error_of(
+        ws.path(),
+        &MINIMAL.replace(
+            "boxes = [{ x = [2.0, 6.0], y = [1.5, 5.5] }]",
+            "elements = [53, 99999]",
+        ),
+    );
+    assert!(e.contains("line 4") && e.contains("element 99999"), "{e}");
+}
