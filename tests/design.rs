@@ -594,3 +594,41 @@ fn recorded_snapshots_recover_the_twin_deformation() {
     let err = expand_recorded_deformation(model, &part, &rigid, &outside).unwrap_err();
     assert!(err.to_string().contains("not a DoF of the PS"), "{err}");
 }
+
+/// A limit stated, not hidden: the PS reaching the free top edge (x ∈ [2, 6], y ∈ [2, 6]) with
+/// the first three modes in band. Even with every interface node driven, the Guyan
+/// condensation of the PS interior leaves the third frequency ≈ 4 % off: the design says so
+/// instead of returning a layout that misses the target.
+#[test]
+fn design_reports_when_every_interface_node_is_not_enough() {
+    let t = twin(&facade_toml());
+    let ps_ids: Vec<i64> = (4..=12)
+        .flat_map(|i| (4..=12).map(move |j| facade_node(i, j)))
+        .collect();
+    let (dt, accel) = el_centro_10s();
+    let motion = BaseMotion {
+        dt,
+        components: vec![BaseComponent {
+            axis: 0,
+            acceleration: accel,
+        }],
+        source: "elCentro.AT2".into(),
+    };
+    let mut settings = DesignSettings::default();
+    settings.hybrid.band_of_interest_hz = 45.0;
+    let err = design_hybrid_test(&t, &ps_ids, &motion, &settings, "design.toml").unwrap_err();
+    let text = err.to_string();
+    assert!(
+        text.contains("every interface node is a control node"),
+        "{text}"
+    );
+    assert!(
+        text.contains("Guyan condensation of the PS interior"),
+        "{text}"
+    );
+    // With only the first mode in band the same PS is designed within the targets.
+    settings.hybrid.band_of_interest_hz = 20.0;
+    let design = design_hybrid_test(&t, &ps_ids, &motion, &settings, "design.toml").unwrap();
+    assert!(design.validation.wnrmse <= 1e-2 && design.validation.wnrmse_total <= 1e-2);
+    assert!(design.hybrid.matched.iter().all(|m| m.2 <= 0.01));
+}
