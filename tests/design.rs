@@ -268,6 +268,19 @@ fn facade_toml() -> String {
     )
 }
 
+/// The first 10 s of El Centro along x, as the design's base motion.
+fn el_centro_motion() -> BaseMotion {
+    let (dt, acceleration) = el_centro_10s();
+    BaseMotion {
+        dt,
+        components: vec![BaseComponent {
+            axis: 0,
+            acceleration,
+        }],
+        source: "elCentro.AT2".into(),
+    }
+}
+
 /// El Centro 1940 NS (PEER AT2, g), first 10 s, in m/s².
 fn el_centro_10s() -> (f64, Vec<f64>) {
     let path = concat!(
@@ -605,15 +618,7 @@ fn design_reports_when_every_interface_node_is_not_enough() {
     let ps_ids: Vec<i64> = (4..=12)
         .flat_map(|i| (4..=12).map(move |j| facade_node(i, j)))
         .collect();
-    let (dt, accel) = el_centro_10s();
-    let motion = BaseMotion {
-        dt,
-        components: vec![BaseComponent {
-            axis: 0,
-            acceleration: accel,
-        }],
-        source: "elCentro.AT2".into(),
-    };
+    let motion = el_centro_motion();
     let mut settings = DesignSettings::default();
     settings.hybrid.band_of_interest_hz = 45.0;
     let err = design_hybrid_test(&t, &ps_ids, &motion, &settings, "design.toml").unwrap_err();

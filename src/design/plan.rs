@@ -393,31 +393,27 @@ pub fn design_hybrid_test_with(
             &weighted_poms,
             settings.refinement_candidates.max(1),
         );
+        let step = refinement.last().expect("pushed above");
+        let shortfall = format!(
+            "PS deformation WNRMSE {:.3e} (total {:.3e}; target {:.1e}), frequencies below {} Hz within {:.2} % (target {:.2} %)",
+            step.wnrmse_deformation,
+            step.wnrmse_total,
+            settings.wnrmse_target,
+            settings.hybrid.band_of_interest_hz,
+            100.0 * step.band_frequency_error,
+            100.0 * settings.hybrid.accuracy
+        );
         if candidates.is_empty() {
-            let step = refinement.last().expect("pushed above");
             return Err(Error::numerical(format!(
-                "test design: every interface node is a control node ({} coupled DoFs) and the reduced twin still misses the targets: PS deformation WNRMSE {:.3e} (total {:.3e}; target {:.1e}), frequencies below {} Hz within {:.2} % (target {:.2} %). What is left is the Guyan condensation of the PS interior (its inertia is condensed statically): narrow the band of interest or choose a smaller PS",
-                kin.coupled.len(),
-                step.wnrmse_deformation,
-                step.wnrmse_total,
-                settings.wnrmse_target,
-                settings.hybrid.band_of_interest_hz,
-                100.0 * step.band_frequency_error,
-                100.0 * settings.hybrid.accuracy
+                "test design: every interface node is a control node ({} coupled DoFs) and the reduced twin still misses the targets: {shortfall}. What is left is the Guyan condensation of the PS interior (its inertia is condensed statically): narrow the band of interest or choose a smaller PS",
+                kin.coupled.len()
             )));
         }
         if kin.control_nodes.len() >= settings.max_control_nodes {
-            let step = refinement.last().expect("pushed above");
             return Err(Error::numerical(format!(
-                "test design: with {} interface control nodes ({} coupled DoFs) the reduced twin reproduces the PS deformation with WNRMSE {:.3e} (total {:.3e}; target {:.1e}) and the frequencies below {} Hz within {:.2} % (target {:.2} %). Raise max_control_nodes or choose a PS with a shorter interface",
+                "test design: with {} interface control nodes ({} coupled DoFs) the reduced twin misses the targets: {shortfall}. Raise max_control_nodes or choose a PS with a shorter interface",
                 kin.control_nodes.len(),
-                kin.coupled.len(),
-                step.wnrmse_deformation,
-                step.wnrmse_total,
-                settings.wnrmse_target,
-                settings.hybrid.band_of_interest_hz,
-                100.0 * step.band_frequency_error,
-                100.0 * settings.hybrid.accuracy
+                kin.coupled.len()
             )));
         }
         let mut best: Option<(f64, usize, InterfaceKinematics, Evaluation)> = None;
