@@ -222,10 +222,11 @@ pub fn design_hybrid_test_with(
     // chosen among the chain ends (which every refinement keeps as control nodes).
     let rigid = rigid_body_modes(partition.ps_stiffness.as_ref(), KERNEL_RELATIVE_TOLERANCE)?;
     let chains = interface_chains(model, &partition);
+    let on_interface = interface_nodes(&partition);
     let mut control: BTreeSet<usize> = BTreeSet::new();
     for &id in &settings.control_nodes {
         match model.node_index(id) {
-            Some(n) if interface_nodes(&partition).contains(&n) => {
+            Some(n) if on_interface.binary_search(&n).is_ok() => {
                 control.insert(n);
             }
             _ => {
@@ -256,7 +257,7 @@ pub fn design_hybrid_test_with(
                     ));
                 };
                 positions.push(p);
-                if interface_nodes(&partition).contains(&node) {
+                if on_interface.binary_search(&node).is_ok() {
                     control.insert(node);
                 }
             }
@@ -276,30 +277,31 @@ pub fn design_hybrid_test_with(
     // POD of the seismic deformation (gravity excluded, thesis §5.3.3), from the twin's
     // response or from the records expanded to the PS (re-expressed with the design's c).
     let (twin_snapshots, _) = set.deformation_snapshots(&rigid, &reference);
-    let (snapshots, snapshot_source, pom_mac) = match recorded {
+    let (snapshots, snapshot_source, twin_pod) = match recorded {
         None => (twin_snapshots, "twin response".to_string(), None),
         Some(rec) => {
             let expanded = expand_recorded_deformation(model, &partition, &rigid, rec)?;
             let (x, _) = set.deformation_snapshots(&rigid, &expanded.history);
-            let twin_pod = pod(twin_snapshots.as_ref())?;
-            let rec_pod = pod(x.as_ref())?;
-            let n = rec_pod.singular_values.len().min(settings.max_poms);
-            let mac: Vec<f64> = (0..n)
-                .map(|j| {
-                    let a: Vec<f64> = (0..x.nrows()).map(|i| rec_pod.modes[(i, j)]).collect();
-                    let b: Vec<f64> = (0..x.nrows()).map(|i| twin_pod.modes[(i, j)]).collect();
-                    mac(&a, &b)
-                })
-                .collect();
             let label = format!(
                 "records ({} DoFs measured: {})",
                 expanded.sensed.len(),
                 rec.source
             );
-            (x, label, Some(mac))
+            (x, label, Some(pod(twin_snapshots.as_ref())?))
         }
     };
     let pod = pod(snapshots.as_ref())?;
+    // With records: how far the twin predicts them (MAC of each POM with the twin's).
+    let pom_mac = twin_pod.map(|twin_pod| {
+        let rows = snapshots.nrows();
+        (0..pod.singular_values.len().min(settings.max_poms))
+            .map(|j| {
+                let a: Vec<f64> = (0..rows).map(|i| pod.modes[(i, j)]).collect();
+                let b: Vec<f64> = (0..rows).map(|i| twin_pod.modes[(i, j)]).collect();
+                mac(&a, &b)
+            })
+            .collect::<Vec<f64>>()
+    });
     let pod_curve = reconstruction_quality(
         snapshots.as_ref(),
         &pod,
@@ -343,35 +345,21 @@ pub fn design_hybrid_test_with(
     // Greedy refinement of the interface super-element: at each step the
     // `refinement_candidates` followers worst interpolated are tried and the one whose
     // reduced twin comes closest to the targets becomes a control node.
-    let evaluate_control =
-        |control: &BTreeSet<usize>| -> Result<(InterfaceKinematics, Evaluation)> {
-            let kin = InterfaceKinematics::new(model, &partition, &chains, control);
-            let evaluation = evaluate(
-                &k,
-                &m,
-                &partition,
-                &rigid,
-                &set,
-                &kin,
-                &excitations,
-                &newmark,
-                &reference,
-                full_frequencies_hz.len(),
-            )?;
-            Ok((kin, evaluation))
-        };
-    let score = |e: &Evaluation| -> f64 {
-        (e.validation.wnrmse / settings.wnrmse_target)
-            .max(e.validation.wnrmse_total / settings.wnrmse_target)
-            .max(
-                band_error(&full_frequencies_hz, &e.frequencies_hz, &settings.hybrid)
-                    / settings.hybrid.accuracy,
-            )
-    };
-    let mut refinement = Vec::new();
-    let (mut kin, mut evaluation) = evaluate_control(&control)?;
-    let (interface, evaluation) = loop {
-        refinement.push(RefinementStep {
+    let evaluate_control = |control: &BTreeSet<usize>| -> Result<Candidate> {
+        let kin = InterfaceKinematics::new(model, &partition, &chains, control);
+        let evaluation = evaluate(
+            &k,
+            &m,
+            &partition,
+            &rigid,
+            &set,
+            &kin,
+            &excitations,
+            &newmark,
+            &reference,
+            full_frequencies_hz.len(),
+        )?;
+        let step = RefinementStep {
             control_nodes: kin.control_nodes.len(),
             coupled_dofs: kin.coupled.len(),
             actuators: evaluation.basis.masters.len(),
@@ -383,17 +371,22 @@ pub fn design_hybrid_test_with(
                 &evaluation.frequencies_hz,
                 &settings.hybrid,
             ),
-        });
-        if score(&evaluation) <= 1.0 {
-            break (kin, evaluation);
+        };
+        Ok(Candidate {
+            score: step.score(settings),
+            kin,
+            evaluation,
+            step,
+        })
+    };
+    let mut refinement = Vec::new();
+    let mut current = evaluate_control(&control)?;
+    let (interface, evaluation) = loop {
+        refinement.push(current.step.clone());
+        if current.score <= 1.0 {
+            break (current.kin, current.evaluation);
         }
-        let candidates = worst_followers(
-            &kin,
-            &partition,
-            &weighted_poms,
-            settings.refinement_candidates.max(1),
-        );
-        let step = refinement.last().expect("pushed above");
+        let (kin, step) = (&current.kin, &current.step);
         let shortfall = format!(
             "PS deformation WNRMSE {:.3e} (total {:.3e}; target {:.1e}), frequencies below {} Hz within {:.2} % (target {:.2} %)",
             step.wnrmse_deformation,
@@ -402,6 +395,12 @@ pub fn design_hybrid_test_with(
             settings.hybrid.band_of_interest_hz,
             100.0 * step.band_frequency_error,
             100.0 * settings.hybrid.accuracy
+        );
+        let candidates = worst_followers(
+            kin,
+            &partition,
+            &weighted_poms,
+            settings.refinement_candidates.max(1),
         );
         if candidates.is_empty() {
             return Err(Error::numerical(format!(
@@ -416,21 +415,21 @@ pub fn design_hybrid_test_with(
                 kin.coupled.len()
             )));
         }
-        let mut best: Option<(f64, usize, InterfaceKinematics, Evaluation)> = None;
+        let mut best: Option<(usize, Candidate)> = None;
         for node in candidates {
             let mut trial = control.clone();
             trial.insert(node);
-            let (k_trial, e_trial) = evaluate_control(&trial)?;
-            let s_trial = score(&e_trial);
+            let candidate = evaluate_control(&trial)?;
             // Strictly better only: ties keep the earlier (worse-interpolated) candidate.
-            if best.as_ref().is_none_or(|(s, ..)| s_trial < *s) {
-                best = Some((s_trial, node, k_trial, e_trial));
+            if best.as_ref().is_none_or(|(_, b)| candidate.score < b.score) {
+                best = Some((node, candidate));
             }
         }
-        let (_, node, k_next, e_next) = best.expect("at least one candidate");
+        let Some((node, next)) = best else {
+            return Err(Error::numerical("test design: no refinement candidate"));
+        };
         control.insert(node);
-        kin = k_next;
-        evaluation = e_next;
+        current = next;
     };
 
     // Actuators on the masters: nominal gravity forces, control modes, POM participation.
@@ -540,6 +539,23 @@ fn steps_by_position(histories: &[Vec<f64>]) -> Vec<Vec<f64>> {
     (0..steps)
         .map(|t| histories.iter().map(|h| h[t]).collect())
         .collect()
+}
+
+/// An evaluated interface with its refinement row and its score (≤ 1 meets every target).
+struct Candidate {
+    kin: InterfaceKinematics,
+    evaluation: Evaluation,
+    step: RefinementStep,
+    score: f64,
+}
+
+impl RefinementStep {
+    /// The worst ratio of the reduced twin's errors to their targets: ≤ 1 meets them all.
+    fn score(&self, settings: &DesignSettings) -> f64 {
+        (self.wnrmse_deformation / settings.wnrmse_target)
+            .max(self.wnrmse_total / settings.wnrmse_target)
+            .max(self.band_frequency_error / settings.hybrid.accuracy)
+    }
 }
 
 /// One candidate interface: its reduced PS, basis, reduced-twin response and validation.

@@ -514,7 +514,16 @@ pub fn recorded_response_from_event(
                 ),
             ));
         }
-        let to_si = record.channel.units.to_si_factor().unwrap_or(1.0);
+        let Some(to_si) = record.channel.units.to_si_factor() else {
+            return Err(Error::input(
+                loc(),
+                format!(
+                    "[snapshots] records: channel {} has units {} with no SI factor",
+                    sensor.channel,
+                    record.channel.units.name()
+                ),
+            ));
+        };
         let base = motion.components.iter().find(|c| c.axis == axis);
         let relative: Vec<f64> = (0..steps)
             .map(|k| record.samples[k] * to_si - base.map(|b| b.acceleration[k]).unwrap_or(0.0))
