@@ -1,0 +1,29 @@
+//! All integration tests in one binary (one link instead of one per area:
+//! linking was most of CI's time).  One module per area; shared helpers in
+//! `common`.  Tests that read the real records of `../shared/records` have
+//! `shared_` in their name or live in a module that says so, and fail with a
+//! clear message when the folder is missing.
+//!
+//! Slow statistical studies are `#[ignore]`d; run them with
+//! `cargo test --release --test it -- --ignored`.
+
+mod common;
+
+mod conditioning;
+mod dataset;
+mod design;
+mod design_io;
+mod end_to_end;
+mod event_folder;
+mod hysteresis;
+mod hysteresis_masses;
+mod hysteresis_real;
+mod metrics;
+mod modal;
+mod pipeline;
+mod plackett_luce;
+mod readers_binary;
+mod readers_text;
+mod report;
+mod twin;
+mod twin_update_io;
