@@ -88,6 +88,7 @@ pub fn render_inventory(loaded: &LoadedEvent) -> String {
             );
         }
     }
+    render_geometry(&mut s, &loaded.geometry);
     if !e.notes.is_empty() {
         let _ = writeln!(s, "\nnotes:");
         for n in &e.notes {
@@ -95,6 +96,63 @@ pub fn render_inventory(loaded: &LoadedEvent) -> String {
         }
     }
     s
+}
+
+/// The building geometry applied at ingest: axes (stated or inferred),
+/// what was done to each channel, the floors combined.
+fn render_geometry(s: &mut String, g: &crate::geometry::GeometryReport) {
+    let _ = writeln!(s, "\ngeometry:");
+    match &g.axes {
+        Some(a) => {
+            let _ = writeln!(
+                s,
+                "  building axes X = {}°, Y = {}° ({})",
+                a.x_azimuth_deg,
+                a.y_azimuth_deg,
+                match a.source {
+                    crate::geometry::AxesSource::Stated => "stated: structure.x_axis_azimuth_deg",
+                    crate::geometry::AxesSource::Inferred => "inferred from the sensor azimuths",
+                }
+            );
+        }
+        None => {
+            let _ = writeln!(
+                s,
+                "  no channel is labelled by azimuth: directions as stated"
+            );
+        }
+    }
+    for a in &g.actions {
+        let partner = a
+            .partner
+            .as_ref()
+            .map(|p| format!(" (with {p})"))
+            .unwrap_or_default();
+        let _ = writeln!(
+            s,
+            "  {:<22} {:<13} {} -> {}{partner}",
+            a.channel, a.action, a.from, a.to
+        );
+    }
+    for f in &g.floors {
+        let _ = writeln!(
+            s,
+            "  level {}: {} of {} -> {}{}",
+            f.level,
+            f.method,
+            f.channels.join(", "),
+            if f.floors.is_empty() {
+                "-".to_string()
+            } else {
+                f.floors.join(", ")
+            },
+            if f.note.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", f.note)
+            }
+        );
+    }
 }
 
 /// `quaketwin run PIPELINE EVENT --out DIR`.

@@ -1,5 +1,5 @@
 //! Signal conditioning (METHODS §1): units to m/s², quality checks,
-//! resampling and alignment, orientation normalisation, detrending, cosine
+//! resampling and alignment, detrending, cosine
 //! taper, Butterworth filtering (zero-phase, scipy-identical), and
 //! integration to velocity and displacement with drift control. Each step
 //! is a pure function on slices; `condition_event` applies the configured
@@ -8,7 +8,6 @@
 pub mod baseline;
 pub mod butterworth;
 pub mod integrate;
-pub mod orientation;
 pub mod qa;
 pub mod resample;
 pub mod sosfilt;
@@ -16,7 +15,6 @@ pub mod sosfilt;
 pub use baseline::{cosine_taper, remove_linear_trend, remove_mean, remove_polynomial};
 pub use butterworth::{butter_sos, BandType, Section};
 pub use integrate::{cumulative_trapezoid, integrate_motion, DriftControl, Motion};
-pub use orientation::{normalise_orientation, OrientationAction, OrientationSettings};
 pub use qa::{quality_flags, QaSettings};
 pub use resample::{align_records, resample_to_rate, Alignment};
 pub use sosfilt::{sosfilt, sosfilt_zi, sosfiltfilt, sosfiltfilt_channels, sosfiltfilt_padlen};
@@ -54,6 +52,16 @@ fn yes() -> bool {
     true
 }
 
+/// The condition stage's `orientation` moved to the event manifest, so that
+/// every stage (not only those after conditioning) sees the same axes.
+fn orientation_moved<'de, D: serde::Deserializer<'de>>(
+    _: D,
+) -> std::result::Result<Option<()>, D::Error> {
+    Err(serde::de::Error::custom(
+        "`orientation` is no longer a conditioning setting: state the building axes in event.toml (structure.x_axis_azimuth_deg); they are applied once at ingest so every stage sees the same X/Y",
+    ))
+}
+
 /// Integration to velocity and displacement.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 pub struct IntegrationSettings {
@@ -64,16 +72,19 @@ pub struct IntegrationSettings {
 /// The conditioning chain; defaults are METHODS §1: SI units, mean removal,
 /// 5 % cosine taper (at each end), 4th-order Butterworth band-pass
 /// 0.5–20 Hz zero-phase, integration with drift control. Resampling,
-/// alignment and orientation are off unless configured.
+/// alignment are off unless configured. Orientation is not a conditioning
+/// step: the building geometry is applied once at ingest (`geometry`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct ConditioningSettings {
     pub qa: QaSettings,
     /// Common sampling rate, Hz (None = keep each record's rate).
     pub resample_hz: Option<f64>,
     /// Trim records to their common time window (needs equal rates).
     pub align: bool,
-    pub orientation: Option<OrientationSettings>,
+    /// Refused with a message saying where the building axes are stated now.
+    #[serde(skip_serializing, deserialize_with = "orientation_moved")]
+    pub orientation: Option<()>,
     pub detrend: Detrend,
     /// Fraction of the record tapered at each end (None = no taper).
     pub taper_fraction: Option<f64>,
@@ -255,13 +266,6 @@ pub fn condition_event_with_motion(
         event
             .history
             .push("align", serde_json::to_value(&a).unwrap_or_default());
-    }
-    // 6. Orientation.
-    if let Some(o) = &settings.orientation {
-        let actions = normalise_orientation(&mut event.records, o)?;
-        event
-            .history
-            .push("orientation", json!({ "settings": o, "actions": actions }));
     }
     let acc_ids: Vec<String> = event
         .records

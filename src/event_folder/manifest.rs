@@ -41,6 +41,9 @@ pub struct StructureSection {
     /// Azimuth (degrees clockwise from north) of the building X axis; used to
     /// rotate azimuth-labelled sensors to building axes.
     pub x_axis_azimuth_deg: Option<f64>,
+    /// Plan position (X, Y, metres) of the floors' centre of mass: the
+    /// reference point of the rigid-floor combination.
+    pub centre_of_mass_m: Option<[f64; 2]>,
 }
 
 impl StructureSection {
@@ -50,6 +53,8 @@ impl StructureSection {
             storey_heights_m: self.storey_heights_m.clone(),
             masses_kg: self.masses_kg.clone(),
             twin: self.twin.clone(),
+            x_axis_azimuth_deg: self.x_axis_azimuth_deg,
+            centre_of_mass_m: self.centre_of_mass_m,
         }
     }
 }
@@ -102,6 +107,13 @@ pub struct ChannelEntry {
     /// FE node of the twin.
     pub node: Option<String>,
     pub elevation_m: Option<f64>,
+    /// Dip in degrees (StationXML convention: −90 = up, +90 = down, 0 =
+    /// horizontal); with `direction` as an azimuth it says the sensor is
+    /// horizontal, alone ±90 makes it vertical.
+    pub dip_deg: Option<f64>,
+    /// Position on the floor plan in building axes (X, Y), metres: lets the
+    /// rigid-floor combination resolve the floor's rotation.
+    pub position_m: Option<[f64; 2]>,
     /// Multiply samples by −1 (sensor mounted reversed).
     #[serde(default)]
     pub reversed: bool,
@@ -140,6 +152,24 @@ impl Manifest {
                     "structure.masses_kg must be positive numbers",
                 ));
             }
+            if let Some(az) = s.x_axis_azimuth_deg {
+                if !az.is_finite() {
+                    return Err(Error::input(
+                        loc(),
+                        format!(
+                            "structure.x_axis_azimuth_deg {az} must be a finite angle in degrees"
+                        ),
+                    ));
+                }
+            }
+            if let Some(c) = s.centre_of_mass_m {
+                if !c.iter().all(|v| v.is_finite()) {
+                    return Err(Error::input(
+                        loc(),
+                        "structure.centre_of_mass_m must be two finite numbers [x, y] in metres",
+                    ));
+                }
+            }
         }
         let mut ids = std::collections::HashSet::new();
         for (i, c) in self.channels.iter().enumerate() {
@@ -173,6 +203,18 @@ impl Manifest {
             if let Some(s) = c.sensitivity {
                 if !(s.is_finite() && s != 0.0) {
                     return Err(at(format!("sensitivity {s} must be a non-zero number")));
+                }
+            }
+            if let Some(dip) = c.dip_deg {
+                if !(dip.is_finite() && (-90.0..=90.0).contains(&dip)) {
+                    return Err(at(format!("dip_deg {dip} must lie in [-90, 90] degrees")));
+                }
+            }
+            if let Some(p) = c.position_m {
+                if !p.iter().all(|v| v.is_finite()) {
+                    return Err(at(
+                        "position_m must be two finite numbers [x, y] in metres".into()
+                    ));
                 }
             }
             if let Some(DirectionEntry::Label(d)) = &c.direction {

@@ -5,12 +5,14 @@
 
 mod archive;
 pub mod manifest;
+mod referenced;
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
 pub use archive::{collect, ArchiveLimits, EventFile};
 pub use manifest::{ChannelEntry, ColumnRef, DirectionEntry, Manifest};
+pub use referenced::{ReferencedFiles, MAX_REFERENCED_BYTES};
 
 use crate::error::{Error, Location, Result};
 use crate::readers::{self, FileContents, FileSpectrum, Format, ReadOptions};
@@ -38,6 +40,8 @@ pub struct LoadedEvent {
     /// Spectra stated by the files (V3), for cross-checks.
     pub file_spectra: Vec<FileSpectrum>,
     pub manifest: Option<Manifest>,
+    /// The building geometry applied (axes, rotations, floor combinations).
+    pub geometry: crate::geometry::GeometryReport,
 }
 
 /// Loads the event at `path` (directory or zip).
@@ -243,11 +247,13 @@ pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEve
             "no record files found in the event",
         ));
     }
+    let geometry = crate::geometry::apply_building_geometry(&mut event)?;
     Ok(LoadedEvent {
         event,
         files: reports,
         file_spectra: spectra,
         manifest,
+        geometry,
     })
 }
 
@@ -373,6 +379,21 @@ fn apply_entry(
                 Direction::parse(s).ok_or_else(|| err(format!("bad direction {s:?}")))?
             }
         });
+    }
+    if let Some(dip) = entry.dip_deg {
+        ch.dip_deg = Some(dip);
+        if (dip + 90.0).abs() < 1e-6 {
+            ch.direction = Some(Direction::Up);
+        } else if (dip - 90.0).abs() < 1e-6 {
+            ch.direction = Some(Direction::Down);
+        } else if dip.abs() > 1e-6 {
+            return Err(err(format!(
+                "dip_deg {dip}: an inclined sensor is neither horizontal nor vertical; quaketwin reads horizontal (dip 0) and vertical (dip ±90) sensors"
+            )));
+        }
+    }
+    if let Some(p) = entry.position_m {
+        ch.position_m = Some(p);
     }
     if let Some(r) = &entry.role {
         ch.role = if r == "input" {

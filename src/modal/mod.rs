@@ -360,17 +360,21 @@ fn location_of(record: &Record) -> Location {
 /// unknown role are left out (listed in the returned notes).  All channels
 /// used must share one sampling rate; they are cut to the shortest length
 /// (noted).  Values are used as stored: convert units and normalise
-/// orientation beforehand (METHODS §0).
+/// orientation beforehand (METHODS §0).  Floor motions formed by the
+/// rigid-floor combination are left out: they are linear combinations of
+/// the sensor channels, which carry the shapes (torsion included).
 pub fn input_from_event(event: &Event) -> Result<(ModalInput, Vec<String>)> {
     let mut notes = Vec::new();
-    let outputs: Vec<&Record> = event
-        .records
-        .iter()
+    let sensors = || {
+        event
+            .records
+            .iter()
+            .filter(|r| !r.channel.is_floor_motion())
+    };
+    let outputs: Vec<&Record> = sensors()
         .filter(|r| r.channel.role == Role::Output)
         .collect();
-    let inputs: Vec<&Record> = event
-        .records
-        .iter()
+    let inputs: Vec<&Record> = sensors()
         .filter(|r| r.channel.role == Role::Input)
         .collect();
     for r in event

@@ -102,7 +102,7 @@ pub fn run(
             .write_str(&stage.name);
         h.write_str(&toml::to_string(&stage.params).unwrap_or_default());
         h.write_str(&event_fp);
-        h.write_str(&registry::extra_fingerprint(stage, &ctx)?);
+        h.write_str(&registry::extra_fingerprint(stage, &mut ctx)?);
         for i in &stage.inputs {
             h.write_str(fingerprints.get(i).map(|s| s.as_str()).unwrap_or(""));
         }

@@ -57,7 +57,7 @@ pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
 /// Inputs of a stage outside the event folder (files named by its params), as a fingerprint
 /// the pipeline adds to the stage's own; empty for stages that read only the event and
 /// earlier stages.
-pub fn extra_fingerprint(stage: &StageDecl, ctx: &RunContext) -> Result<String> {
+pub fn extra_fingerprint(stage: &StageDecl, ctx: &mut RunContext) -> Result<String> {
     match stage.kind.as_str() {
         "design" => stages::design::fingerprint(stage, ctx),
         _ => Ok(String::new()),
@@ -79,6 +79,7 @@ pub fn not_applicable(stage: &StageDecl, ctx: &mut RunContext) -> Result<Option<
                 .then(|| "the event names no twin (structure.twin in event.toml)".to_string())
         }
         "design" => stages::design::not_applicable(stage, ctx)?,
+        "modal" => stages::modal::not_applicable(&ctx.loaded_event()?.event),
         _ => None,
     })
 }
@@ -114,6 +115,8 @@ pub struct RunContext {
     pub hysteresis: Option<(Vec<DirectionOutcome>, HysteresisParams)>,
     /// The declarations of the pipeline's stages (a stage may need another's params).
     pub stage_decls: Vec<StageDecl>,
+    /// Files the event refers to (twin, design file), read from a zipped event too.
+    pub referenced: crate::event_folder::ReferencedFiles,
 }
 
 impl RunContext {
@@ -127,6 +130,7 @@ impl RunContext {
             conditioned: None,
             hysteresis: None,
             stage_decls: Vec::new(),
+            referenced: crate::event_folder::ReferencedFiles::new(event_path),
         }
     }
     /// The first stage of `kind` in the pipeline.

@@ -284,26 +284,22 @@ pub fn drift_rows(event: &Event, motions: &[Motion]) -> Result<Vec<DriftRow>> {
     if heights.is_empty() {
         return Ok(Vec::new());
     }
+    // One motion per level and direction: the rigid-floor combination where
+    // a level has several channels (geometry::floor).
+    let selection = crate::geometry::one_record_per_level(&event.records);
     let mut by_dir: std::collections::BTreeMap<String, Vec<(i32, &Record, &Motion)>> =
         Default::default();
-    for r in &event.records {
-        let (Some(level), Some(dir)) = (r.channel.level, r.channel.direction) else {
-            continue;
-        };
-        if dir.is_vertical() {
-            continue;
-        }
+    for (&(axis, level), r) in &selection.records {
         if let Some(m) = motions.iter().find(|m| m.channel_id == r.channel.id) {
             by_dir
-                .entry(dir.to_string())
+                .entry(format!("{axis:?}"))
                 .or_default()
-                .push((level, r, m));
+                .push((level, *r, m));
         }
     }
     let mut rows = Vec::new();
     for (dir, mut list) in by_dir {
-        list.sort_by_key(|(l, r, _)| (*l, r.channel.id.clone()));
-        list.dedup_by_key(|(l, _, _)| *l);
+        list.sort_by_key(|(l, _, _)| *l);
         for w in list.windows(2) {
             let (l0, r0, m0) = &w[0];
             let (l1, r1, m1) = &w[1];

@@ -13,7 +13,7 @@
 //!   then `Y`: a spatial twin maps X → x, Y → y; a plane (x–y) twin maps X → x and has no
 //!   axis for Y (out of plane);
 //! - azimuth-labelled channels have no building axis: normalise them in the condition stage
-//!   (`orientation`) or name their axis in the design file;
+//!   (event.toml `structure.x_axis_azimuth_deg`) or name their axis in the design file;
 //! - `[motion] axis = { CHANNEL = "x" }` overrides the mapping of a channel (sign +).
 
 use std::path::{Path, PathBuf};
@@ -120,7 +120,7 @@ pub fn twin_axis_of(
                 .into()
         }),
         Some(Direction::Azimuth(az)) => Err(format!(
-            "the channel points at azimuth {az}°, not along a building axis: set `orientation` in the condition stage or name its axis in [motion] axis"
+            "the channel points at azimuth {az}°, not along a building axis: state the building axes in event.toml (structure.x_axis_azimuth_deg) or name its axis in [motion] axis"
         )),
     }
 }
@@ -610,12 +610,16 @@ pub fn outputs() -> Vec<String> {
     DESIGN_FILES.iter().map(|s| s.to_string()).collect()
 }
 
-/// The design file of a stage: relative to the event folder (to the directory of a zip).
-fn design_path(stage: &StageDecl, ctx: &RunContext) -> Result<PathBuf> {
+/// The design file of a stage: relative to the event folder; for a zipped event a member
+/// of the zip, else a file beside the zip.
+fn design_path(stage: &StageDecl, ctx: &mut RunContext) -> Result<PathBuf> {
     let p: DesignParams = params(stage)?;
     let given = Path::new(&p.design);
     if given.is_absolute() {
         return Ok(given.to_path_buf());
+    }
+    if ctx.referenced.contains(&p.design)? {
+        return ctx.referenced.resolve(&p.design, "design file");
     }
     let base = if ctx.event_path.is_dir() {
         ctx.event_path.clone()
@@ -630,7 +634,7 @@ fn design_path(stage: &StageDecl, ctx: &RunContext) -> Result<PathBuf> {
 
 /// Extra fingerprint of the stage: the design file, its twin and (for a file source) the
 /// ground-motion file — inputs outside the event folder that the pipeline would not see.
-pub fn fingerprint(stage: &StageDecl, ctx: &RunContext) -> Result<String> {
+pub fn fingerprint(stage: &StageDecl, ctx: &mut RunContext) -> Result<String> {
     let path = design_path(stage, ctx)?;
     let design = load_design(&path)?;
     let mut h = Fnv64::default();

@@ -19,7 +19,7 @@ use crate::hysteresis::{
 };
 use crate::pipeline::{params, RunContext, StageDecl};
 use crate::sinks::hysteresis_tables::{self as tables, DirectionOutcome};
-use crate::vocab::{Event, Role};
+use crate::vocab::{Axis, Event, Role};
 
 /// Explicit channels of one direction.
 #[derive(Debug, Clone, Deserialize)]
@@ -136,48 +136,46 @@ impl HysteresisParams {
 pub fn auto_directions(event: &Event) -> (Vec<DirectionSpec>, Vec<DirectionOutcome>) {
     let mut specs = Vec::new();
     let mut skipped = Vec::new();
-    let mut dirs: Vec<String> = event
-        .records
-        .iter()
-        .filter_map(|r| {
-            r.channel
-                .direction
-                .filter(|d| !d.is_vertical())
-                .map(|d| d.to_string())
-        })
-        .collect();
-    dirs.sort();
-    dirs.dedup();
-    for dir in dirs {
-        let same = |r: &&crate::vocab::Record| {
-            r.channel.direction.map(|d| d.to_string()).as_deref() == Some(dir.as_str())
-        };
-        let base = event
+    // One motion per level and direction (the rigid-floor combination where
+    // a level has several channels), in building axes.
+    let selection = crate::geometry::one_record_per_level(&event.records);
+    let mut axes: Vec<Axis> = selection.records.keys().map(|(a, _)| *a).collect();
+    axes.extend(selection.ambiguous.iter().map(|(a, _, _)| *a));
+    axes.sort();
+    axes.dedup();
+    for axis in axes {
+        let dir = format!("{axis:?}");
+        if let Some((_, level, ids)) = selection.ambiguous.iter().find(|(a, _, _)| *a == axis) {
+            skipped.push(DirectionOutcome::NotIdentifiable {
+                direction: dir,
+                reason: format!(
+                    "level {level} has channels {} in this direction that could not be combined into one floor motion (see the rigid_floor step of the history)",
+                    ids.join(", ")
+                ),
+            });
+            continue;
+        }
+        let base = selection
+            .records
+            .get(&(axis, 0))
+            .filter(|r| r.channel.role == Role::Input);
+        let floors: Vec<&crate::vocab::Record> = selection
             .records
             .iter()
-            .filter(same)
-            .find(|r| r.channel.level == Some(0) && r.channel.role == Role::Input);
-        let mut floors: Vec<_> = event
-            .records
-            .iter()
-            .filter(same)
-            .filter(|r| r.channel.level.map(|l| l > 0).unwrap_or(false))
+            .filter(|((a, l), _)| *a == axis && *l > 0)
+            .map(|(_, r)| *r)
             .collect();
-        floors.sort_by_key(|r| r.channel.level);
         let Some(base) = base else {
             skipped.push(DirectionOutcome::NotIdentifiable {
-                direction: dir.clone(),
+                direction: dir,
                 reason: "no base (level 0, role input) channel in this direction".into(),
             });
             continue;
         };
-        let levels: Vec<i32> = floors.iter().filter_map(|r| r.channel.level).collect();
-        if levels.is_empty() || levels.windows(2).any(|w| w[0] == w[1]) {
+        if floors.is_empty() {
             skipped.push(DirectionOutcome::NotIdentifiable {
-                direction: dir.clone(),
-                reason: format!(
-                    "floor channels at levels {levels:?}: need at least one floor and one channel per level"
-                ),
+                direction: dir,
+                reason: "no floor channel (level > 0) in this direction".into(),
             });
             continue;
         }

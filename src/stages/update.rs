@@ -243,7 +243,7 @@ pub fn update_from_files(
 }
 
 /// Pipeline stage: the twin named by the event's `structure.twin` (relative to the event
-/// folder) against `modes.parquet` in the output folder. An event without a twin is a usage
+/// folder, or a member of a zipped event) against `modes.parquet` in the output folder. An event without a twin is a usage
 /// error; the registry decides whether to skip the stage instead.
 pub fn run(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
     let p: UpdateParams = params(stage)?;
@@ -259,7 +259,7 @@ pub fn run(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
                 stage.name
             ))
         })?;
-    let twin_path = ctx.event_path.join(twin);
+    let twin_path = ctx.referenced.resolve(&twin, "structure.twin")?;
     let modes_path = ctx.out_dir.join("modes.parquet");
     update_from_files(&twin_path, &modes_path, &ctx.out_dir, &p)?;
     Ok(())

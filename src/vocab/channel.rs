@@ -197,6 +197,17 @@ pub struct Channel {
     /// Multiplier already applied or to apply (sensitivity, gain); informative.
     pub calibration: Option<f64>,
     pub source: SourceRef,
+    /// Position on the floor plan in building axes (X, Y), metres, when
+    /// stated: used by the rigid-floor combination (floor rotation).
+    #[serde(default)]
+    pub position_m: Option<[f64; 2]>,
+    /// For a floor motion formed by the rigid-floor combination: the ids of
+    /// the sensor channels it was formed from (empty for a sensor channel).
+    #[serde(default)]
+    pub combines: Vec<String>,
+    /// For a sensor channel that entered a floor motion: that floor's id.
+    #[serde(default)]
+    pub combined_into: Option<String>,
     pub qa: Vec<QaFlag>,
     /// Fields that were inferred rather than read, with how ("role=input from level 0").
     pub inferred: Vec<String>,
@@ -230,6 +241,9 @@ impl Channel {
             start_ns: None,
             calibration: None,
             source,
+            position_m: None,
+            combines: Vec::new(),
+            combined_into: None,
             qa: Vec::new(),
             inferred: Vec::new(),
             missing: Vec::new(),
@@ -237,5 +251,18 @@ impl Channel {
     }
     pub fn dt(&self) -> f64 {
         1.0 / self.sampling_rate_hz
+    }
+    /// A floor motion formed from several sensors (rigid-floor combination).
+    pub fn is_floor_motion(&self) -> bool {
+        !self.combines.is_empty()
+    }
+    /// The building axis the channel measures along, once the geometry has
+    /// been applied (`Z` for vertical channels).
+    pub fn axis(&self) -> Option<Axis> {
+        match self.direction? {
+            Direction::Axis(a) => Some(a),
+            Direction::Up | Direction::Down => Some(Axis::Z),
+            Direction::Azimuth(_) => None,
+        }
     }
 }

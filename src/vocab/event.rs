@@ -37,6 +37,16 @@ pub struct Structure {
     pub masses_kg: Vec<f64>,
     /// Path of a digital-twin file, relative to the event folder.
     pub twin: Option<String>,
+    /// Azimuth of the building X axis (degrees clockwise from north), as
+    /// stated in the manifest; the axes actually applied (stated or
+    /// inferred) are in the history step `building_axes`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub x_axis_azimuth_deg: Option<f64>,
+    /// Plan position (X, Y, metres) of the floors' centre of mass, when
+    /// stated: the reference point of the rigid-floor combination (default:
+    /// the centroid of each floor's sensors).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre_of_mass_m: Option<[f64; 2]>,
 }
 
 /// An earthquake (or ambient) event as ingested: records of every channel,

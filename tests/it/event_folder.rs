@@ -55,10 +55,14 @@ fn reads_a_directory_with_manifest_in_manifest_order() {
     let a = &loaded.event.records[1].channel;
     assert_eq!(a.role, quaketwin::vocab::Role::Input, "level 0 → input");
     assert!(a.inferred.iter().any(|s| s.contains("level 0")));
+    // The only azimuth-labelled sensor fixes the inferred building X axis.
     assert_eq!(
         a.direction,
-        Some(quaketwin::vocab::Direction::Azimuth(90.0))
+        Some(quaketwin::vocab::Direction::Axis(quaketwin::vocab::Axis::X))
     );
+    let axes = loaded.geometry.axes.as_ref().unwrap();
+    assert_eq!(axes.x_azimuth_deg, 90.0);
+    assert_eq!(axes.source, quaketwin::geometry::AxesSource::Inferred);
     assert_eq!(loaded.event.records[0].samples.len(), 7);
     assert_eq!(loaded.event.records[0].channel.sampling_rate_hz, 100.0);
 }

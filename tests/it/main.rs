@@ -15,6 +15,7 @@ mod design;
 mod design_io;
 mod end_to_end;
 mod event_folder;
+mod geometry;
 mod hysteresis;
 mod hysteresis_masses;
 mod hysteresis_real;

@@ -431,6 +431,7 @@ fn context(event_dir: &Path, out_dir: &Path, twin: Option<&str>) -> RunContext {
         files: vec![],
         file_spectra: vec![],
         manifest: None,
+        geometry: Default::default(),
     });
     ctx
 }

@@ -2,7 +2,7 @@
 //! along azimuths are brought to the building axes. A sensor along an axis
 //! (within tolerance) is relabelled; one 180° off (e.g. 351° vs 171°) is
 //! sign-flipped; an orthogonal pair at one location that is off-axis is
-//! rotated. A vertical channel positive down is flipped to positive up.
+//! rotated. Vertical channels are the caller's (`geometry::apply_building_geometry`).
 //!
 //! Axis convention: the building X axis points to azimuth `x_azimuth_deg`
 //! (clockwise from north); Y defaults to X − 90°, so that X, Y, Z(up) is
@@ -141,17 +141,6 @@ pub fn normalise_orientation(
                 }
                 None => off_axis.push(i),
             },
-            Some(Direction::Down) => {
-                r.samples.iter_mut().for_each(|v| *v = -*v);
-                r.channel.direction = Some(Direction::Up);
-                actions.push(OrientationAction {
-                    channel: r.channel.id.clone(),
-                    action: "flip_vertical".into(),
-                    from: "DOWN".into(),
-                    to: "UP".into(),
-                    partner: None,
-                });
-            }
             _ => {}
         }
     }
@@ -167,6 +156,7 @@ pub fn normalise_orientation(
             !used[b]
                 && location_key(&records[ia]) == location_key(&records[ib])
                 && records[ia].samples.len() == records[ib].samples.len()
+                && records[ia].channel.units == records[ib].channel.units
                 && match (records[ia].channel.direction, records[ib].channel.direction) {
                     (Some(Direction::Azimuth(p)), Some(Direction::Azimuth(q))) => {
                         (angle_diff(p, q).abs() - 90.0).abs() <= tol

@@ -1,0 +1,193 @@
+//! The building geometry, applied once when an event is read (METHODS §0):
+//! every channel leaves ingest expressed in building axes X, Y (horizontal,
+//! right-handed with Z up) and Z (vertical, positive up), with the rotations
+//! and sign flips recorded in the history, so conditioning, metrics and
+//! drift, modal, hysteresis, design and the report all see the same axes.
+//!
+//! - The building axes are stated (`structure.x_axis_azimuth_deg` in
+//!   event.toml) or, failing that, inferred from the sensors' azimuths (the
+//!   sensor line carrying most horizontal channels becomes X; stated as
+//!   inferred in the history and the event notes).
+//! - Channels are relabelled, sign-flipped or rotated onto the axes
+//!   ([`orientation`]); vertical channels become Z, positive up.
+//! - Several channels in one direction at one level are combined under the
+//!   rigid-floor assumption into the floor's motion ([`floor`]).
+//!
+//! Numerical code only: no I/O.
+
+pub mod floor;
+pub mod orientation;
+
+use serde::Serialize;
+use serde_json::json;
+
+pub use floor::{combine_floors, one_record_per_level, FloorSettings, LevelSelection};
+pub use orientation::{normalise_orientation, rotate_pair, OrientationAction, OrientationSettings};
+
+use crate::error::Result;
+use crate::vocab::{Axis, Direction, Event};
+
+/// Angular tolerance for "along an axis", "reversed" and "orthogonal", degrees.
+pub const AXIS_TOLERANCE_DEG: f64 = 5.0;
+
+/// Where the building axes came from.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AxesSource {
+    /// `structure.x_axis_azimuth_deg` in the manifest.
+    Stated,
+    /// From the sensors' azimuths (see [`infer_x_axis`]).
+    Inferred,
+}
+
+/// The building axes applied to an event.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BuildingAxes {
+    /// Azimuth of X, degrees clockwise from north.
+    pub x_azimuth_deg: f64,
+    /// Azimuth of Y = X − 90° (X, Y, Z up right-handed).
+    pub y_azimuth_deg: f64,
+    pub source: AxesSource,
+}
+
+/// What applying the geometry did, for `inspect`, the history and the report.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct GeometryReport {
+    /// `None` when no channel carries an azimuth (all already in building axes).
+    pub axes: Option<BuildingAxes>,
+    pub actions: Vec<OrientationAction>,
+    pub floors: Vec<floor::FloorCombination>,
+}
+
+/// Infers the X axis from the horizontal sensors' azimuths: the azimuths are
+/// folded onto sensor lines (mod 180°); the line carrying most channels is X
+/// (ties: the smaller line azimuth in [0°, 180°)), pointing to that line's
+/// azimuth in [0°, 180°). `None` without azimuth-labelled channels.
+pub fn infer_x_axis(azimuths: &[f64], tolerance_deg: f64) -> Option<f64> {
+    let mut lines: Vec<(f64, usize)> = Vec::new();
+    let mut folded: Vec<f64> = azimuths.iter().map(|a| a.rem_euclid(180.0)).collect();
+    folded.sort_by(f64::total_cmp);
+    for a in folded {
+        let near = |l: f64| {
+            let d = (a - l).rem_euclid(180.0);
+            d.min(180.0 - d) <= tolerance_deg
+        };
+        match lines.iter_mut().find(|(l, _)| near(*l)) {
+            Some((_, n)) => *n += 1,
+            None => lines.push((a, 1)),
+        }
+    }
+    // Most channels first; on a tie, the line of smaller azimuth (lines were
+    // created in increasing azimuth order, and the sort is stable).
+    lines.sort_by(|a, b| b.1.cmp(&a.1));
+    lines.first().map(|(l, _)| *l)
+}
+
+/// Applies the building geometry to `event` in place (see module doc) and
+/// records it in `event.history` (steps `building_axes` and, when floors were
+/// combined, `rigid_floor`) and `event.notes`.
+pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
+    let mut report = GeometryReport::default();
+    let stated = event.structure.as_ref().and_then(|s| s.x_axis_azimuth_deg);
+    let azimuths: Vec<f64> = event
+        .records
+        .iter()
+        .filter_map(|r| match r.channel.direction {
+            Some(Direction::Azimuth(a)) => Some(a),
+            _ => None,
+        })
+        .collect();
+    let axes = match stated {
+        Some(x) => Some(BuildingAxes {
+            x_azimuth_deg: x.rem_euclid(360.0),
+            y_azimuth_deg: (x - 90.0).rem_euclid(360.0),
+            source: AxesSource::Stated,
+        }),
+        None => infer_x_axis(&azimuths, AXIS_TOLERANCE_DEG).map(|x| BuildingAxes {
+            x_azimuth_deg: x,
+            y_azimuth_deg: (x - 90.0).rem_euclid(360.0),
+            source: AxesSource::Inferred,
+        }),
+    };
+    if let Some(axes) = &axes {
+        report.actions = normalise_orientation(
+            &mut event.records,
+            &OrientationSettings {
+                x_azimuth_deg: axes.x_azimuth_deg,
+                y_azimuth_deg: Some(axes.y_azimuth_deg),
+                tolerance_deg: AXIS_TOLERANCE_DEG,
+            },
+        )?;
+        if axes.source == AxesSource::Inferred {
+            event.notes.push(format!(
+                "building axes inferred from the sensor azimuths: X = {}°, Y = {}° (state structure.x_axis_azimuth_deg in event.toml to fix them)",
+                axes.x_azimuth_deg, axes.y_azimuth_deg
+            ));
+        }
+    }
+    // Vertical channels: Z, positive up.
+    for r in &mut event.records {
+        match r.channel.direction {
+            Some(Direction::Down) => {
+                r.samples.iter_mut().for_each(|v| *v = -*v);
+                r.channel.direction = Some(Direction::Axis(Axis::Z));
+                report
+                    .actions
+                    .push(vertical_action(&r.channel.id, "flip_vertical", "DOWN"));
+            }
+            Some(Direction::Up) => {
+                r.channel.direction = Some(Direction::Axis(Axis::Z));
+                report
+                    .actions
+                    .push(vertical_action(&r.channel.id, "relabel", "UP"));
+            }
+            _ => {}
+        }
+    }
+    for a in report.actions.iter().filter(|a| a.action == "unresolved") {
+        event.notes.push(format!(
+            "channel {} at {} is neither along a building axis nor paired with an orthogonal sensor at its location: stages working in X/Y leave it out",
+            a.channel, a.from
+        ));
+    }
+    report.axes = axes;
+    if report.axes.is_some() || !report.actions.is_empty() {
+        event.history.push(
+            "building_axes",
+            json!({
+                "axes": report.axes,
+                "tolerance_deg": AXIS_TOLERANCE_DEG,
+                "actions": report.actions,
+            }),
+        );
+    }
+    report.floors = combine_floors(event, &FloorSettings::default())?;
+    Ok(report)
+}
+
+fn vertical_action(channel: &str, action: &str, from: &str) -> OrientationAction {
+    OrientationAction {
+        channel: channel.to_string(),
+        action: action.into(),
+        from: from.into(),
+        to: "Z".into(),
+        partner: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn x_axis_is_the_line_with_most_sensors() {
+        // 351/171 line: 3 sensors; 261/81 line: 2.
+        assert_eq!(
+            infer_x_axis(&[351.0, 171.0, 261.0, 350.0, 81.0], 5.0),
+            Some(170.0)
+        );
+        // A tie goes to the smaller line azimuth.
+        assert_eq!(infer_x_axis(&[351.0, 261.0], 5.0), Some(81.0));
+        assert_eq!(infer_x_axis(&[], 5.0), None);
+    }
+}
