@@ -103,12 +103,29 @@ pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
             y_azimuth_deg: (x - 90.0).rem_euclid(360.0),
             source: AxesSource::Stated,
         }),
+        // Channels already in structure axes (a bridge's Long/Tran, a
+        // manifest's X/Y) beside azimuth-labelled ones: how the two relate is
+        // unknown, so no axes are inferred from the azimuths alone.
+        None if mixes_axes_and_azimuths(event) => None,
         None => infer_x_axis(&azimuths, AXIS_TOLERANCE_DEG).map(|x| BuildingAxes {
             x_azimuth_deg: x,
             y_azimuth_deg: (x - 90.0).rem_euclid(360.0),
             source: AxesSource::Inferred,
         }),
     };
+    if axes.is_none() {
+        for r in &event.records {
+            if let Some(Direction::Azimuth(az)) = r.channel.direction {
+                report.actions.push(OrientationAction {
+                    channel: r.channel.id.clone(),
+                    action: "unresolved".into(),
+                    from: format!("{az}deg"),
+                    to: String::new(),
+                    partner: None,
+                });
+            }
+        }
+    }
     if let Some(axes) = &axes {
         report.actions = normalise_orientation(
             &mut event.records,
@@ -145,10 +162,17 @@ pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
         }
     }
     for a in report.actions.iter().filter(|a| a.action == "unresolved") {
-        event.notes.push(format!(
-            "channel {} at {} is neither along a building axis nor paired with an orthogonal sensor at its location: stages working in X/Y leave it out",
-            a.channel, a.from
-        ));
+        event.notes.push(if axes.is_some() {
+            format!(
+                "channel {} at {} is neither along a building axis nor paired with an orthogonal sensor at its location: stages working in X/Y leave it out",
+                a.channel, a.from
+            )
+        } else {
+            format!(
+                "channel {} at {}: other channels are labelled in the structure's own axes, so its relation to X/Y is unknown; state structure.x_axis_azimuth_deg in event.toml (stages working in X/Y leave it out)",
+                a.channel, a.from
+            )
+        });
     }
     report.axes = axes;
     if report.axes.is_some() || !report.actions.is_empty() {
@@ -163,6 +187,13 @@ pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
     }
     report.floors = combine_floors(event, &FloorSettings::default())?;
     Ok(report)
+}
+
+/// Whether some horizontal channels are in building axes and others at azimuths.
+fn mixes_axes_and_azimuths(event: &Event) -> bool {
+    let dirs = || event.records.iter().filter_map(|r| r.channel.direction);
+    dirs().any(|d| matches!(d, Direction::Axis(Axis::X) | Direction::Axis(Axis::Y)))
+        && dirs().any(|d| matches!(d, Direction::Azimuth(_)))
 }
 
 fn vertical_action(channel: &str, action: &str, from: &str) -> OrientationAction {

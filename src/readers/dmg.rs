@@ -25,8 +25,9 @@
 //! Channel ids are `{station}.{station channel:02}` (`01336.14`), the same
 //! for a V2 record and its V3 spectra.  `location_code` is the station
 //! channel number; `channel_code` keeps the recorder's label as printed
-//! (`CHAN 12: Long`), so `Long`/`Tran`/`H1` texts survive even though they
-//! give no azimuth (direction `None`, `missing` lists "direction").
+//! (`CHAN 12: Long`).  `Long`/`Tran` are the structure's own axes (a
+//! bridge's longitudinal and transverse axes) and become X and Y, said in
+//! `inferred`; `H1`-style labels give no direction (`missing` lists it).
 
 use super::textfmt::{self, Layout, Lines};
 use super::{FileContents, FileSpectrum, ReadOptions};
@@ -593,6 +594,12 @@ fn fill_channel(
             _ => None,
         }
     });
+    if let (Some(Direction::Axis(a)), Some(l)) = (channel.direction, &label) {
+        channel.inferred.push(format!(
+            "direction {a:?} from the recorder label {l:?} (the structure's {} axis: Long = X, Tran = Y)",
+            if a == crate::vocab::Axis::X { "longitudinal" } else { "transverse" }
+        ));
+    }
     if channel.direction.is_none() {
         channel.missing.push("direction".into());
     }
@@ -603,11 +610,16 @@ fn fill_channel(
     channel
 }
 
-/// `270 DEG`, `360 DEG`, `UP`, `Up`, `DOWN`; `Long`, `Tran`, `H1`… give none.
+/// `270 DEG`, `360 DEG`, `UP`, `Up`, `DOWN`; `Long` and `Tran` name the
+/// structure's own axes (a bridge's longitudinal and transverse axes: X and
+/// Y, said in `inferred` by the caller); `H1`, `RADL`… give none.
 fn label_direction(label: &str) -> Option<Direction> {
     let u = label.trim().to_ascii_uppercase();
-    if matches!(u.as_str(), "LONG" | "TRAN" | "H1" | "H2" | "RADL" | "TANG") {
-        return None;
+    match u.as_str() {
+        "LONG" => return Some(Direction::Axis(crate::vocab::Axis::X)),
+        "TRAN" => return Some(Direction::Axis(crate::vocab::Axis::Y)),
+        "H1" | "H2" | "RADL" | "TANG" => return None,
+        _ => {}
     }
     Direction::parse(&u)
 }
