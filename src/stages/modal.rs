@@ -151,15 +151,16 @@ pub fn run(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
 }
 
 /// Output files of the stage (the shifts file only with `reference_modes`).
-/// Why modal identification cannot run on `event`: no sensor channel has
-/// a role (a folder without event.toml whose headers name no base sensor).
+/// Why modal identification cannot run on `event`: no sensor channel is a
+/// structural response (role output) — e.g. a folder without event.toml
+/// whose headers name only the ground sensors.
 pub fn not_applicable(event: &Event) -> Option<String> {
-    let has_role = event
+    let has_output = event
         .records
         .iter()
-        .any(|r| !r.channel.is_floor_motion() && r.channel.role != Role::Unknown);
-    (!has_role).then(|| {
-        "no channel has a role (input = base/ground, output = structure): state `role` or `level` per channel in event.toml (docs/event-folder.md)".to_string()
+        .any(|r| !r.channel.is_floor_motion() && r.channel.role == Role::Output);
+    (!has_output).then(|| {
+        "no channel is known to be a structural response (role output; input = base/ground): state `role` or `level` per channel in event.toml (docs/event-folder.md)".to_string()
     })
 }
 
