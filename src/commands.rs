@@ -88,7 +88,7 @@ pub fn render_inventory(loaded: &LoadedEvent) -> String {
             );
         }
     }
-    render_geometry(&mut s, &loaded.geometry);
+    render_geometry(&mut s, &loaded.geometry, &e.history);
     if !e.notes.is_empty() {
         let _ = writeln!(s, "\nnotes:");
         for n in &e.notes {
@@ -100,8 +100,19 @@ pub fn render_inventory(loaded: &LoadedEvent) -> String {
 
 /// The building geometry applied at ingest: axes (stated or inferred),
 /// what was done to each channel, the floors combined.
-fn render_geometry(s: &mut String, g: &crate::geometry::GeometryReport) {
+fn render_geometry(
+    s: &mut String,
+    g: &crate::geometry::GeometryReport,
+    history: &crate::vocab::ProcessingHistory,
+) {
     let _ = writeln!(s, "\ngeometry:");
+    for step in history.steps.iter().filter(|h| h.step == "reverse_sign") {
+        let _ = writeln!(
+            s,
+            "  {:<22} reversed      (stated: manifest reversed = true)",
+            step.params["channel"].as_str().unwrap_or("?")
+        );
+    }
     match &g.axes {
         Some(a) => {
             let _ = writeln!(
