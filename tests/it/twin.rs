@@ -729,7 +729,13 @@ fn std_dev(v: &[f64]) -> f64 {
     (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
 }
 
+/// A statistical study over 10 seeds (each solver alone and the ensemble):
+/// ~80 s on the 2-core machine, so it runs on demand
+/// (`cargo test --release --test it -- --ignored`); the single-seed
+/// recovery of the same moduli is checked on every run by
+/// `twin_update_io::update_from_files_recovers_the_benchmark_moduli`.
 #[test]
+#[ignore = "statistical study over 10 seeds: cargo test --release --test it -- --ignored"]
 fn thesis_benchmark_ensemble_recovers_moduli_and_reduces_spread() {
     let t = twin(&thesis_cantilever_toml([5.05e9; 3]));
     let objective = ModalObjective::new(
