@@ -194,12 +194,34 @@ pub fn ingest(
     if let Some(path) = mcap {
         let (conditioned, _) =
             crate::sinks::event_tables::read_samples(&out.join("samples.parquet"))?;
-        crate::sinks::mcap_writer::write_event(&conditioned, path, &Default::default())?;
+        let write =
+            || crate::sinks::mcap_writer::write_event(&conditioned, path, &Default::default());
+        // An MCAP file inside the output directory is listed in its run
+        // manifest (so a later run of another event removes it); elsewhere
+        // it is the user's file (still never replacing a link or device).
+        match mcap_name_in(out, path) {
+            Some(name) => {
+                pipeline::write_extra_output(out, &name, "mcap (quaketwin ingest --mcap)", write)?
+            }
+            None => write()?,
+        }
     }
     Ok(outcomes)
 }
 
-/// `quaketwin report DIR`: writes DIR/report.html from the outputs in DIR.
+/// The file name of `path` when it lies directly in directory `out`.
+fn mcap_name_in(out: &Path, path: &Path) -> Option<String> {
+    let name = path.file_name()?.to_string_lossy().into_owned();
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let same = std::fs::canonicalize(parent).ok()? == std::fs::canonicalize(out).ok()?;
+    same.then_some(name)
+}
+
+/// `quaketwin report DIR`: writes DIR/report.html from the outputs in DIR
+/// (under the directory's lock, and listed in its run manifest when it has one).
 pub fn report(dir: &Path, settings: Option<&Path>) -> Result<std::path::PathBuf> {
     let settings: crate::report::ReportSettings = match settings {
         None => Default::default(),
@@ -210,7 +232,9 @@ pub fn report(dir: &Path, settings: Option<&Path>) -> Result<std::path::PathBuf>
             })?
         }
     };
-    crate::report::write_report(dir, &settings)
+    pipeline::write_extra_output(dir, "report.html", "report (quaketwin report)", || {
+        crate::report::write_report(dir, &settings)
+    })
 }
 
 /// `quaketwin synth --out DIR`: writes the sample events.

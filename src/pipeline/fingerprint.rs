@@ -26,6 +26,14 @@ impl Fnv64 {
         self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
         self
     }
+    /// Bytes without the separator (for hashing a file in chunks).
+    pub fn write_raw(&mut self, bytes: &[u8]) -> &mut Self {
+        for b in bytes {
+            self.0 ^= *b as u64;
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        self
+    }
     pub fn write_str(&mut self, s: &str) -> &mut Self {
         self.write(s.as_bytes())
     }

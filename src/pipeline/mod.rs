@@ -1,26 +1,38 @@
 //! The stage mechanism: a pipeline file lists named stages; each stage has
 //! a kind (what it computes), parameters, the earlier stages it reads, and
-//! output files.  A stage is skipped when a stamp shows its outputs were made
-//! from the same inputs, parameters and program version and the outputs are
-//! still there and newer than its inputs.  Data flows one way: stages hand
-//! their products to later stages through the `RunContext` (in memory) and
-//! through their output files (when a stage was skipped, later stages load
-//! its products back from them).
+//! output files.  Data flows one way: stages hand their products to later
+//! stages through the `RunContext` (in memory) and through their output
+//! files (when a stage was skipped, later stages load its products back from
+//! them).
+//!
+//! An output directory holds the results of one run of one event:
+//! - a run takes the directory's lock (`lock`, `DIR/.quaketwin.lock`) for
+//!   its whole length, so two runs never write into one directory;
+//! - the run manifest (`manifest`, `DIR/run.json`) records the event and,
+//!   per stage, the fingerprint of its inputs and settings and the size and
+//!   hash of each output.  Before anything runs, outputs of another event,
+//!   of stages that no longer apply and of stages that did not finish are
+//!   removed, with a note on stderr; temporary files of interrupted runs
+//!   are swept;
+//! - a stage is skipped as up to date only when its fingerprint matches and
+//!   every output still has its recorded size and hash; a damaged output is
+//!   removed and rebuilt.
 
 pub mod config;
 pub mod fingerprint;
+pub mod lock;
+pub mod manifest;
 pub mod registry;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
-
-use serde::{Deserialize, Serialize};
 
 pub use config::{params, PipelineFile, StageDecl};
 pub use registry::RunContext;
 
 use crate::error::{Error, Result};
 use fingerprint::Fnv64;
+use manifest::{EventIdentity, OutputRecord, RunManifest, StageRecord, StageState};
 
 /// What happened to one stage in a run.
 #[derive(Debug, Clone, PartialEq)]
@@ -34,33 +46,336 @@ pub enum StageOutcome {
     NotApplicable(String),
 }
 
-/// Stamp written after a stage succeeds.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-struct Stamp {
-    stage: String,
-    kind: String,
-    fingerprint: String,
-    outputs: Vec<String>,
-    version: String,
+/// Notes for the user about what a run removes or takes over, on stderr
+/// (shown even with `--quiet`: they say why files disappeared).
+fn note(msg: &str) {
+    eprintln!("quaketwin: note: {msg}");
 }
 
-fn stamp_path(out: &Path, stage: &str) -> PathBuf {
-    out.join(".quaketwin").join(format!("{stage}.stamp.json"))
+/// The stamp directory of quaketwin versions before the run manifest.
+const LEGACY_STAMP_DIR: &str = ".quaketwin";
+
+/// Whether `name` is a plain file name directly inside the output directory
+/// (no separator, not `.`/`..`, not hidden: hidden names are quaketwin's own
+/// lock and temporary files).
+fn is_plain_name(name: &str) -> bool {
+    let p = Path::new(name);
+    let mut c = p.components();
+    matches!(
+        (c.next(), c.next()),
+        (Some(std::path::Component::Normal(_)), None)
+    ) && !name.starts_with('.')
+        && name != manifest::MANIFEST_FILE
+}
+
+/// Creates the output directory, or checks that the existing path is one
+/// (a symbolic link to a directory is fine).
+fn prepare_out_dir(out: &Path) -> Result<()> {
+    match std::fs::metadata(out) {
+        Ok(m) if m.is_dir() => Ok(()),
+        Ok(_) => Err(Error::usage(format!(
+            "{}: the output path exists and is not a directory",
+            out.display()
+        ))),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))
+        }
+        Err(e) => Err(Error::io(out, e)),
+    }
+}
+
+/// The event's path as recorded in the manifest: absolute, links resolved.
+fn event_path_string(p: &Path) -> String {
+    std::fs::canonicalize(p)
+        .unwrap_or_else(|_| p.to_path_buf())
+        .display()
+        .to_string()
+}
+
+/// Removes the regular files among `names` in `out` (a link, directory or
+/// other non-regular file is left alone: writing there is refused later);
+/// returns the names removed, sorted.  Names that are not plain file names
+/// (a hand-edited manifest) are ignored.
+fn remove_files(out: &Path, names: impl IntoIterator<Item = String>) -> Result<Vec<String>> {
+    let mut removed = std::collections::BTreeSet::new();
+    for n in names {
+        if !is_plain_name(&n) {
+            continue;
+        }
+        let p = out.join(&n);
+        if let Ok(m) = std::fs::symlink_metadata(&p) {
+            if m.file_type().is_file() {
+                std::fs::remove_file(&p).map_err(|e| Error::io(&p, e))?;
+                removed.insert(n);
+            }
+        }
+    }
+    Ok(removed.into_iter().collect())
+}
+
+/// Outputs listed by the stamps of quaketwin versions before the run
+/// manifest (`DIR/.quaketwin/<stage>.stamp.json`); the stamps are removed.
+fn take_legacy_stamps(out: &Path) -> Result<Vec<String>> {
+    let dir = out.join(LEGACY_STAMP_DIR);
+    match std::fs::symlink_metadata(&dir) {
+        Ok(m) if m.is_dir() => {}
+        _ => return Ok(Vec::new()),
+    }
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(&dir).map_err(|e| Error::io(&dir, e))? {
+        let entry = entry.map_err(|e| Error::io(&dir, e))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let p = entry.path();
+        if !entry.file_type().map(|t| t.is_file()).unwrap_or(false) {
+            continue;
+        }
+        if name.ends_with(".stamp.json") {
+            if let Ok(v) =
+                serde_json::from_slice::<serde_json::Value>(&std::fs::read(&p).unwrap_or_default())
+            {
+                if let Some(list) = v.get("outputs").and_then(|o| o.as_array()) {
+                    files.extend(list.iter().filter_map(|s| s.as_str().map(String::from)));
+                }
+            }
+            std::fs::remove_file(&p).map_err(|e| Error::io(&p, e))?;
+        } else if crate::sinks::atomic::is_temp_name(&name) {
+            std::fs::remove_file(&p).map_err(|e| Error::io(&p, e))?;
+        }
+    }
+    let _ = std::fs::remove_dir(&dir); // only when nothing else is in it
+    Ok(files)
+}
+
+/// Puts `rec` into the manifest in place of the record of the same stage,
+/// keeping the records in pipeline order.
+fn set_record(m: &mut RunManifest, rec: StageRecord, pipeline: &PipelineFile) {
+    m.stages.retain(|r| r.name != rec.name);
+    m.stages.push(rec);
+    let pos = |name: &str| {
+        pipeline
+            .stages
+            .iter()
+            .position(|s| s.name == name)
+            .unwrap_or(usize::MAX)
+    };
+    m.stages.sort_by_key(|r| pos(&r.name));
+}
+
+fn hash_record(h: &mut Fnv64, r: Option<&StageRecord>) {
+    match r {
+        None => {
+            h.write_str("absent");
+        }
+        Some(r) => {
+            h.write_str(&r.name)
+                .write_str(&format!("{:?}", r.state))
+                .write_str(&r.fingerprint);
+            for o in &r.outputs {
+                h.write_str(&o.file)
+                    .write_str(o.fnv1a64.as_deref().unwrap_or(""));
+            }
+        }
+    }
+}
+
+/// Fingerprint of a stage: version, kind, name, params, the event, inputs
+/// outside the event folder, and the fingerprints and output hashes of the
+/// stages it reads (for the report: of every earlier stage).
+fn stage_fingerprint(
+    stage: &StageDecl,
+    index: usize,
+    event_fp: &str,
+    ctx: &mut RunContext,
+    current: &RunManifest,
+    pipeline: &PipelineFile,
+) -> Result<String> {
+    let mut h = Fnv64::default();
+    h.write_str(env!("CARGO_PKG_VERSION"))
+        .write_str(&stage.kind)
+        .write_str(&stage.name);
+    h.write_str(&toml::to_string(&stage.params).unwrap_or_default());
+    h.write_str(event_fp);
+    h.write_str(&registry::extra_fingerprint(stage, ctx)?);
+    if registry::reads_all_earlier(&stage.kind) {
+        for s in &pipeline.stages[..index] {
+            hash_record(&mut h, current.stage(&s.name));
+        }
+    } else {
+        for i in &stage.inputs {
+            hash_record(&mut h, current.stage(i));
+        }
+    }
+    Ok(h.finish_hex())
 }
 
 /// Runs `pipeline` on the event at `event_path`, writing into `out`.
-/// Returns the outcome of every stage, in order.
+/// Returns the outcome of every stage, in order.  Holds the directory's
+/// lock for the whole run; keeps the run manifest `out/run.json`.
 pub fn run(
     pipeline: &PipelineFile,
     event_path: &Path,
     out: &Path,
     quiet: bool,
 ) -> Result<Vec<(String, StageOutcome)>> {
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    prepare_out_dir(out)?;
     let event_fp = fingerprint::path_fingerprint(event_path)?;
+    let event = EventIdentity {
+        path: event_path_string(event_path),
+        fingerprint: event_fp,
+    };
+    let lock = lock::DirLock::acquire(
+        out,
+        &format!("pipeline {} on {}", pipeline.pipeline.name, event.path),
+    )?;
+    if let Some(said) = &lock.took_over {
+        note(said);
+    }
+    let result = run_locked(pipeline, event_path, &event, out, quiet);
+    drop(lock);
+    result
+}
+
+/// Brings the directory to a state holding only trusted results of this
+/// event (see the module doc) and returns the manifest to continue from.
+fn clean_out_dir(
+    out: &Path,
+    pipeline: &PipelineFile,
+    event: &EventIdentity,
+) -> Result<RunManifest> {
+    let swept = crate::sinks::atomic::sweep_temp_files(out)?;
+    if !swept.is_empty() {
+        note(&format!(
+            "{}: removed temporary files of an interrupted run: {}",
+            out.display(),
+            swept.join(", ")
+        ));
+    }
+    let mut current = RunManifest {
+        format: manifest::FORMAT,
+        quaketwin_version: env!("CARGO_PKG_VERSION").into(),
+        pipeline: pipeline.pipeline.name.clone(),
+        event: event.clone(),
+        stages: Vec::new(),
+    };
+    // (reason, files) groups to remove, said per group.
+    let mut groups: Vec<(String, Vec<String>)> = Vec::new();
+    let legacy = take_legacy_stamps(out)?;
+    if !legacy.is_empty() {
+        groups.push((
+            "results of an earlier quaketwin version (no run manifest)".into(),
+            legacy,
+        ));
+    }
+    match manifest::read(out) {
+        Err(why) => {
+            let files = pipeline
+                .stages
+                .iter()
+                .filter_map(|s| registry::outputs(s).ok())
+                .flatten()
+                .collect();
+            groups.push((
+                format!(
+                    "results of unknown origin ({} is not a valid run manifest: {why})",
+                    manifest::MANIFEST_FILE
+                ),
+                files,
+            ));
+        }
+        Ok(None) => {}
+        Ok(Some(old)) if old.event != *event => {
+            let what = if old.event.path == event.path {
+                format!("results of {} before its files changed", old.event.path)
+            } else {
+                format!("results of another event ({})", old.event.path)
+            };
+            groups.push((what, old.all_files()));
+        }
+        Ok(Some(old)) => {
+            for r in old.stages {
+                if pipeline.stages.iter().any(|s| s.name == r.name) {
+                    current.stages.push(r);
+                } else {
+                    let what = if r.kind == "extra" {
+                        format!("files written by {}", r.name)
+                    } else {
+                        format!(
+                            "outputs of stage {:?}, which is no longer in the pipeline",
+                            r.name
+                        )
+                    };
+                    groups.push((what, r.outputs.into_iter().map(|o| o.file).collect()));
+                }
+            }
+        }
+    }
+    let kept = current.all_files();
+    for (what, files) in groups {
+        let removed = remove_files(out, files.into_iter().filter(|f| !kept.contains(f)))?;
+        if !removed.is_empty() {
+            note(&format!(
+                "{}: removing {what}: {}",
+                out.display(),
+                removed.join(", ")
+            ));
+        }
+    }
+    manifest::write(out, &current)?;
+    Ok(current)
+}
+
+/// Marks a stage that does not run (disabled, not applicable) and removes
+/// its outputs of an earlier run.
+fn retire(
+    out: &Path,
+    current: &mut RunManifest,
+    pipeline: &PipelineFile,
+    stage: &StageDecl,
+    state: StageState,
+    reason: Option<String>,
+) -> Result<()> {
+    let files = current
+        .stage(&stage.name)
+        .map(|r| r.outputs.iter().map(|o| o.file.clone()).collect::<Vec<_>>())
+        .unwrap_or_default();
+    let removed = remove_files(out, files)?;
+    if !removed.is_empty() {
+        let what = match state {
+            StageState::Disabled => "is disabled",
+            _ => "does not apply to this event",
+        };
+        note(&format!(
+            "{}: stage {:?} {what}; removing its outputs of an earlier run: {}",
+            out.display(),
+            stage.name,
+            removed.join(", ")
+        ));
+    }
+    set_record(
+        current,
+        StageRecord {
+            name: stage.name.clone(),
+            kind: stage.kind.clone(),
+            state,
+            reason,
+            fingerprint: String::new(),
+            outputs: Vec::new(),
+        },
+        pipeline,
+    );
+    manifest::write(out, current)
+}
+
+fn run_locked(
+    pipeline: &PipelineFile,
+    event_path: &Path,
+    event: &EventIdentity,
+    out: &Path,
+    quiet: bool,
+) -> Result<Vec<(String, StageOutcome)>> {
+    let mut current = clean_out_dir(out, pipeline, event)?;
     let mut ctx = RunContext::new(event_path, out, quiet);
     ctx.stage_decls = pipeline.stages.clone();
-    let mut fingerprints: std::collections::BTreeMap<String, String> = Default::default();
     let mut outcomes = Vec::new();
     // One bar over the stages; indicatif hides it when stderr is not a terminal.
     let bar = if quiet {
@@ -75,86 +390,159 @@ pub fn run(
         b.enable_steady_tick(std::time::Duration::from_millis(200));
         b
     };
+    let result = run_stages(
+        pipeline,
+        event,
+        out,
+        quiet,
+        &bar,
+        &mut ctx,
+        &mut current,
+        &mut outcomes,
+    );
+    bar.finish_and_clear();
+    result.map(|()| outcomes)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_stages(
+    pipeline: &PipelineFile,
+    event: &EventIdentity,
+    out: &Path,
+    quiet: bool,
+    bar: &indicatif::ProgressBar,
+    ctx: &mut RunContext,
+    current: &mut RunManifest,
+    outcomes: &mut Vec<(String, StageOutcome)>,
+) -> Result<()> {
     let log = |line: String| {
         if !quiet {
             bar.suspend(|| eprintln!("{line}"));
         }
     };
-    for stage in &pipeline.stages {
+    let name = &pipeline.pipeline.name;
+    for (index, stage) in pipeline.stages.iter().enumerate() {
         bar.set_message(stage.name.clone());
         if !stage.enabled {
+            retire(out, current, pipeline, stage, StageState::Disabled, None)?;
             bar.inc(1);
             outcomes.push((stage.name.clone(), StageOutcome::Disabled));
             continue;
         }
-        if let Some(why) = registry::not_applicable(stage, &mut ctx)? {
-            log(format!(
-                "[{}] {:<12} not applicable: {why}",
-                pipeline.pipeline.name, stage.name
-            ));
+        if let Some(why) = registry::not_applicable(stage, ctx)? {
+            log(format!("[{name}] {:<12} not applicable: {why}", stage.name));
+            retire(
+                out,
+                current,
+                pipeline,
+                stage,
+                StageState::NotApplicable,
+                Some(why.clone()),
+            )?;
             bar.inc(1);
             outcomes.push((stage.name.clone(), StageOutcome::NotApplicable(why)));
             continue;
         }
-        let mut h = Fnv64::default();
-        h.write_str(env!("CARGO_PKG_VERSION"))
-            .write_str(&stage.kind)
-            .write_str(&stage.name);
-        h.write_str(&toml::to_string(&stage.params).unwrap_or_default());
-        h.write_str(&event_fp);
-        h.write_str(&registry::extra_fingerprint(stage, &mut ctx)?);
-        for i in &stage.inputs {
-            h.write_str(fingerprints.get(i).map(|s| s.as_str()).unwrap_or(""));
-        }
-        let fp = h.finish_hex();
-        fingerprints.insert(stage.name.clone(), fp.clone());
         let outputs = registry::outputs(stage)?;
-        if is_up_to_date(out, stage, &fp, &outputs, event_path) {
-            log(format!(
-                "[{}] {:<12} up to date, skipped",
-                pipeline.pipeline.name, stage.name
-            ));
+        for o in &outputs {
+            if !is_plain_name(o) {
+                return Err(Error::usage(format!(
+                    "stage {:?}: output {o:?} is not a plain file name inside the output directory",
+                    stage.name
+                )));
+            }
+            // A link, directory, device or FIFO at an output path: refused before any work.
+            crate::sinks::atomic::check_replaceable(&out.join(o))?;
+        }
+        let fp = stage_fingerprint(stage, index, &event.fingerprint, ctx, current, pipeline)?;
+        let previous = current.stage(&stage.name).cloned();
+        let mut damaged = Vec::new();
+        let up_to_date = match &previous {
+            Some(r)
+                if r.state == StageState::Done
+                    && r.kind == stage.kind
+                    && r.fingerprint == fp
+                    && r.outputs.iter().map(|o| &o.file).eq(outputs.iter()) =>
+            {
+                for o in &r.outputs {
+                    if let Err(why) = manifest::verify_output(out, o)? {
+                        damaged.push((o.file.clone(), why));
+                    }
+                }
+                damaged.is_empty()
+            }
+            _ => false,
+        };
+        if up_to_date {
+            log(format!("[{name}] {:<12} up to date, skipped", stage.name));
             bar.inc(1);
             ctx.mark_skipped(&stage.name);
             outcomes.push((stage.name.clone(), StageOutcome::Skipped));
             continue;
         }
-        let t0 = Instant::now();
-        log(format!(
-            "[{}] {:<12} running ({})",
-            pipeline.pipeline.name, stage.name, stage.kind
-        ));
-        registry::run_stage(stage, &mut ctx).map_err(|e| {
-            bar.finish_and_clear();
-            match e {
-                Error::Usage(m) => Error::Usage(format!("stage {:?}: {m}", stage.name)),
-                Error::Numerical(m) => Error::Numerical(format!("stage {:?}: {m}", stage.name)),
-                other => other,
-            }
-        })?;
-        for o in &outputs {
-            if !out.join(o).exists() {
-                return Err(Error::output(
-                    out.join(o),
-                    format!("stage {:?} did not write this declared output", stage.name),
+        // The stage runs: its earlier outputs go first, so a failure leaves
+        // none of them behind as if they were current.
+        if let Some(r) = &previous {
+            remove_files(out, r.outputs.iter().map(|o| o.file.clone()))?;
+            for (file, why) in &damaged {
+                note(&format!(
+                    "{}: not as {} recorded it ({why}); stage {:?} rebuilds it",
+                    out.join(file).display(),
+                    manifest::MANIFEST_FILE,
+                    stage.name
                 ));
             }
         }
-        let stamp = Stamp {
-            stage: stage.name.clone(),
-            kind: stage.kind.clone(),
-            fingerprint: fp,
-            outputs: outputs.clone(),
-            version: env!("CARGO_PKG_VERSION").into(),
-        };
-        let sp = stamp_path(out, &stage.name);
-        let json =
-            serde_json::to_vec_pretty(&stamp).map_err(|e| Error::output(&sp, e.to_string()))?;
-        crate::sinks::parquet::write_bytes_atomically(&sp, &json)?;
+        set_record(
+            current,
+            StageRecord {
+                name: stage.name.clone(),
+                kind: stage.kind.clone(),
+                state: StageState::Started,
+                reason: None,
+                fingerprint: fp.clone(),
+                outputs: outputs
+                    .iter()
+                    .map(|f| OutputRecord {
+                        file: f.clone(),
+                        bytes: None,
+                        fnv1a64: None,
+                    })
+                    .collect(),
+            },
+            pipeline,
+        );
+        manifest::write(out, current)?;
+        let t0 = Instant::now();
+        log(format!(
+            "[{name}] {:<12} running ({})",
+            stage.name, stage.kind
+        ));
+        registry::run_stage(stage, ctx).map_err(|e| match e {
+            Error::Usage(m) => Error::Usage(format!("stage {:?}: {m}", stage.name)),
+            Error::Numerical(m) => Error::Numerical(format!("stage {:?}: {m}", stage.name)),
+            other => other,
+        })?;
+        let records = outputs
+            .iter()
+            .map(|o| manifest::record_output(out, o))
+            .collect::<Result<Vec<_>>>()?;
+        set_record(
+            current,
+            StageRecord {
+                name: stage.name.clone(),
+                kind: stage.kind.clone(),
+                state: StageState::Done,
+                reason: None,
+                fingerprint: fp,
+                outputs: records,
+            },
+            pipeline,
+        );
+        manifest::write(out, current)?;
         let secs = t0.elapsed().as_secs_f64();
         log(format!(
-            "[{}] {:<12} done in {:.2} s -> {}",
-            pipeline.pipeline.name,
+            "[{name}] {:<12} done in {:.2} s -> {}",
             stage.name,
             secs,
             outputs.join(", ")
@@ -162,51 +550,64 @@ pub fn run(
         bar.inc(1);
         outcomes.push((stage.name.clone(), StageOutcome::Ran { seconds: secs }));
     }
-    bar.finish_and_clear();
-    Ok(outcomes)
+    Ok(())
 }
 
-fn mtime(p: &Path) -> Option<std::time::SystemTime> {
-    std::fs::metadata(p).and_then(|m| m.modified()).ok()
-}
-
-fn newest_input_mtime(p: &Path) -> Option<std::time::SystemTime> {
-    let meta = std::fs::metadata(p).ok()?;
-    if meta.is_dir() {
-        let mut newest = meta.modified().ok();
-        for e in std::fs::read_dir(p).ok()?.flatten() {
-            if let Some(t) = newest_input_mtime(&e.path()) {
-                newest = Some(newest.map_or(t, |n| n.max(t)));
-            }
+/// Adds a file written into a pipeline output directory outside a stage
+/// (`quaketwin report DIR`, `quaketwin ingest --mcap DIR/…`) to the run
+/// manifest, under the lock: `write` writes it; the record `record` lists it.
+/// Without a manifest in `dir` (not a pipeline output directory) the file is
+/// written as is.  Returns what `write` returns.
+pub fn write_extra_output<T>(
+    dir: &Path,
+    file: &str,
+    record: &str,
+    write: impl FnOnce() -> Result<T>,
+) -> Result<T> {
+    if !dir.join(manifest::MANIFEST_FILE).exists() || !is_plain_name(file) {
+        return write();
+    }
+    let _lock = lock::DirLock::acquire(dir, &format!("writing {file}"))?;
+    let value = write()?;
+    let mut m = match manifest::read(dir) {
+        Ok(Some(m)) => m,
+        Ok(None) => return Ok(value),
+        Err(why) => return Err(Error::output(dir.join(manifest::MANIFEST_FILE), why)),
+    };
+    let rec = manifest::record_output(dir, file)?;
+    // The stage that wrote the file before (if any) now records it as it is,
+    // with an empty fingerprint: the next run rebuilds it from its settings.
+    let mut found = false;
+    for s in m.stages.iter_mut() {
+        if let Some(o) = s.outputs.iter_mut().find(|o| o.file == file) {
+            *o = rec.clone();
+            s.fingerprint.clear();
+            found = true;
         }
-        newest
-    } else {
-        meta.modified().ok()
     }
+    if !found {
+        m.stages.retain(|s| s.name != record);
+        m.stages.push(StageRecord {
+            name: record.into(),
+            kind: "extra".into(),
+            state: StageState::Done,
+            reason: None,
+            fingerprint: String::new(),
+            outputs: vec![rec],
+        });
+    }
+    manifest::write(dir, &m)?;
+    Ok(value)
 }
 
-fn is_up_to_date(
-    out: &Path,
-    stage: &StageDecl,
-    fp: &str,
-    outputs: &[String],
-    event_path: &Path,
-) -> bool {
-    let Ok(text) = std::fs::read(stamp_path(out, &stage.name)) else {
-        return false;
-    };
-    let Ok(stamp) = serde_json::from_slice::<Stamp>(&text) else {
-        return false;
-    };
-    if stamp.fingerprint != fp || stamp.outputs != outputs {
-        return false;
+/// The files a pipeline run lists as results of `dir` (the `done` stages of
+/// its run manifest); `None` when `dir` has no run manifest (a directory
+/// not written by `quaketwin run`: every file counts).
+pub fn listed_results(dir: &Path) -> Option<Vec<String>> {
+    match manifest::read(dir) {
+        Ok(Some(m)) => Some(m.done_files()),
+        Ok(None) => None,
+        // An unreadable manifest lists nothing trustworthy.
+        Err(_) => Some(Vec::new()),
     }
-    let input_time = newest_input_mtime(event_path);
-    outputs
-        .iter()
-        .all(|o| match (mtime(&out.join(o)), input_time) {
-            (Some(t_out), Some(t_in)) => t_out >= t_in,
-            (Some(_), None) => true,
-            _ => false,
-        })
 }

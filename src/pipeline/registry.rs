@@ -54,6 +54,12 @@ pub fn outputs(stage: &StageDecl) -> Result<Vec<String>> {
     })
 }
 
+/// Whether a stage of `kind` reads the outputs of every earlier stage (not
+/// only its `inputs`): its fingerprint then covers them all.
+pub fn reads_all_earlier(kind: &str) -> bool {
+    kind == "report"
+}
+
 /// Inputs of a stage outside the event folder (files named by its params), as a fingerprint
 /// the pipeline adds to the stage's own; empty for stages that read only the event and
 /// earlier stages.

@@ -4,6 +4,8 @@
 //!
 //! Every number shown comes from the Parquet/JSON outputs in the directory
 //! (read back with the Arrow reader); nothing is recomputed from records.
+//! In a pipeline output directory only the files its run manifest
+//! (`run.json`) lists are read: a stray file is treated as absent.
 //! The only derived quantities are display choices: ratings (threshold
 //! comparisons of tabled values), maxima/final values of tabled series, and
 //! min–max decimation of traces for drawing.  Each section is always shown;

@@ -47,9 +47,20 @@ enum Loaded {
     Ok(Box<Table>),
 }
 
+/// Whether `file` in `dir` is a result the report may show: listed by the
+/// run manifest of a pipeline run (docs/pipelines.md), or — in a directory
+/// without a manifest — present.  A file a run did not list (another
+/// event's, a stage's that no longer applies) counts as absent.
+fn listed(dir: &Path, file: &str) -> bool {
+    match crate::pipeline::listed_results(dir) {
+        Some(files) => files.iter().any(|f| f == file) && dir.join(file).exists(),
+        None => dir.join(file).exists(),
+    }
+}
+
 fn load(dir: &Path, file: &str, only: Option<&[&str]>) -> Loaded {
     let path = dir.join(file);
-    if !path.exists() {
+    if !listed(dir, file) {
         return Loaded::Absent;
     }
     match table::load(&path, only) {
@@ -209,7 +220,7 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
 
 fn read_event(dir: &Path) -> Result<Value, String> {
     let path = dir.join("event.json");
-    if !path.exists() {
+    if !listed(dir, "event.json") {
         return Err(String::new());
     }
     let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -345,7 +356,9 @@ fn summary_section(dir: &Path, event: &Result<Value, String>, channels: &Loaded)
             let size = if *f == "report.html" {
                 Some(0)
             } else {
-                std::fs::metadata(dir.join(f)).ok().map(|m| m.len())
+                listed(dir, f)
+                    .then(|| std::fs::metadata(dir.join(f)).ok().map(|m| m.len()))
+                    .flatten()
             };
             vec![
                 Cell::raw(format!("<code>{}</code>", escape(f))),

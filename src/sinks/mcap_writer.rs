@@ -14,13 +14,12 @@
 //! zstd-compressed by default, compressed single-threaded so the same event
 //! gives the same bytes.
 //!
-//! [`write_event`] writes atomically: a temporary file in the target's
-//! directory, then a rename.
+//! [`write_event`] writes atomically (`sinks::atomic`): a temporary file in
+//! the target's directory, then a rename.
 
 use std::collections::BTreeMap;
-use std::fs::File;
 use std::io::{BufWriter, Seek, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::readers::mcap::{
@@ -52,30 +51,16 @@ impl Default for McapWriteOptions {
 /// Name of the metadata record holding the processing history.
 pub const HISTORY_METADATA_NAME: &str = "quaketwin.processing_history";
 
-/// Writes `event` to `path` atomically (temporary file in the same directory, then rename).
+/// Writes `event` to `path` atomically through [`super::atomic`]: a
+/// temporary file in the same directory, then a rename; anything but a
+/// regular file at `path` (symbolic link, device, FIFO, directory) is refused.
 pub fn write_event(event: &Event, path: &Path, opts: &McapWriteOptions) -> Result<()> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_else(|| "out.mcap".into());
-    let tmp: PathBuf = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| -> Result<()> {
-        let file = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+    super::atomic::write_atomically(path, |file| {
         let w = write_event_to(event, BufWriter::new(file), opts, path)?;
-        let file = w
-            .into_inner()
-            .map_err(|e| Error::io(&tmp, e.into_error()))?;
-        file.sync_all().map_err(|e| Error::io(&tmp, e))?;
-        std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp); // best effort: never leave a half-written temp file
-    }
-    result
+        w.into_inner()
+            .map_err(|e| Error::io(path, e.into_error()))?;
+        Ok(())
+    })
 }
 
 /// Writes `event` as MCAP into `w` and returns it; `path` names the target in errors.

@@ -1,6 +1,7 @@
 //! Sinks: where results leave the pipeline (Parquet tables, MCAP replays).
 //! I/O lives here, at the edge; stages hand over plain data.
 
+pub mod atomic;
 pub mod design_tables;
 pub mod event_tables;
 pub mod hysteresis_tables;

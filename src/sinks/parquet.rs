@@ -1,6 +1,7 @@
 //! Parquet sink: tables are declared as data (explicit Arrow types, one
-//! builder call per column) and written atomically — a temporary file in the
-//! target directory, then a rename — so a reader never sees half a file.
+//! builder call per column) and written atomically through
+//! [`super::atomic`] — a temporary file in the target directory, then a
+//! rename — so a reader never sees half a file.
 //!
 //! Every table carries key/value metadata: `quaketwin.version`, the table's
 //! `quaketwin.schema` name, and whatever the stage adds (processing history as
@@ -190,41 +191,9 @@ pub fn write_parquet(
     })
 }
 
-/// Temporary path beside `path` (same directory, so the rename is atomic).
-fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
-}
-
-/// Runs `write` on a temporary file beside `path`, then renames it over
-/// `path`.  On any error the temporary file is removed and `path` is untouched.
-pub fn write_atomically(path: &Path, write: impl FnOnce(File) -> Result<()>) -> Result<()> {
-    if let Some(dir) = path.parent() {
-        if !dir.as_os_str().is_empty() {
-            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        }
-    }
-    let tmp = temp_path(path);
-    let file = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
-    let result =
-        write(file).and_then(|_| std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e)));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
-
-/// Writes bytes atomically (reports, TOML files).
-pub fn write_bytes_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    use std::io::Write;
-    write_atomically(path, |mut f| {
-        f.write_all(bytes).map_err(|e| Error::io(path, e))?;
-        f.sync_all().map_err(|e| Error::io(path, e))
-    })
-}
+/// The atomic write helpers live in [`super::atomic`]; re-exported here
+/// for the writers that have always imported them from this module.
+pub use super::atomic::{write_atomically, write_bytes_atomically};
 
 /// A Parquet file read back whole: its record batches and key/value
 /// metadata, with typed column access whose errors name the file and column.

@@ -852,5 +852,5 @@ pub fn updated_twin_toml(file: &TwinFile, values: &[(String, f64)]) -> Result<St
 /// Write the updated twin file.
 pub fn write_updated_twin(file: &TwinFile, values: &[(String, f64)], path: &Path) -> Result<()> {
     let text = updated_twin_toml(file, values)?;
-    std::fs::write(path, text).map_err(|e| Error::output(path, e.to_string()))
+    crate::sinks::atomic::write_bytes_atomically(path, text.as_bytes())
 }

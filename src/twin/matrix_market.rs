@@ -141,6 +141,5 @@ pub fn format_matrix_market_symmetric(a: &CscMatrix) -> String {
 }
 
 pub fn write_matrix_market_symmetric(a: &CscMatrix, path: &std::path::Path) -> Result<()> {
-    std::fs::write(path, format_matrix_market_symmetric(a))
-        .map_err(|e| Error::output(path, e.to_string()))
+    crate::sinks::atomic::write_bytes_atomically(path, format_matrix_market_symmetric(a).as_bytes())
 }

@@ -21,6 +21,7 @@ mod hysteresis_masses;
 mod hysteresis_real;
 mod metrics;
 mod modal;
+mod outdir;
 mod pipeline;
 mod plackett_luce;
 mod readers_binary;

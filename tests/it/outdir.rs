@@ -1,0 +1,476 @@
+//! The output directory holds the results of one run of one event (issue 14
+//! items 1, 2, 3, 9): the run manifest `run.json`, the lock, re-runs that
+//! rebuild damaged files, and writes that never replace a link, FIFO or
+//! device and leave no temporary file behind.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use quaketwin::pipeline::manifest::{self, StageState};
+use quaketwin::pipeline::{self, PipelineFile, StageOutcome};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn event(name: &str) -> PathBuf {
+    root().join("sample-records").join(name)
+}
+
+fn exe() -> &'static str {
+    env!("CARGO_BIN_EXE_quaketwin")
+}
+
+const INGEST: &str = "[pipeline]\nname = \"t\"\n[[stage]]\nname = \"ingest\"\nkind = \"ingest\"\n[[stage]]\nname = \"condition\"\nkind = \"condition\"\ninputs = [\"ingest\"]\n";
+
+/// ingest → condition → modal → update (two quick solvers, one round) → report.
+fn twin_pipeline() -> PipelineFile {
+    let text = format!(
+        "{INGEST}[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n\
+         [[stage]]\nname = \"update\"\nkind = \"update\"\ninputs = [\"modal\"]\n[stage.params]\nsolvers = [\"ps\", \"qn\"]\nmax_rounds = 1\n\
+         [[stage]]\nname = \"report\"\nkind = \"report\"\ninputs = [\"modal\", \"update\"]\n"
+    );
+    PipelineFile::parse(&text, "twin.toml").unwrap()
+}
+
+fn ingest_pipeline() -> PipelineFile {
+    PipelineFile::parse(INGEST, "ingest.toml").unwrap()
+}
+
+fn section<'a>(html: &'a str, id: &str) -> &'a str {
+    let start = html
+        .find(&format!("<section id=\"{id}\">"))
+        .unwrap_or_else(|| panic!("no section {id}"));
+    let len = html[start..].find("</section>").unwrap();
+    &html[start..start + len]
+}
+
+fn names_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// Item 1: `run P quake --out D; run P yielding --out D` — the second event
+/// has no twin, so its update stage does not apply; the first event's twin
+/// files must not survive into D nor show in the report.
+#[test]
+fn a_second_event_removes_the_first_events_results_and_the_report_ignores_them() {
+    let out = tempfile::tempdir().unwrap();
+    let d = out.path();
+    let p = twin_pipeline();
+    let first = pipeline::run(&p, &event("synthetic-4storey-quake"), d, true).unwrap();
+    assert!(matches!(first[3].1, StageOutcome::Ran { .. }), "{first:?}");
+    for f in [
+        "twin_update.parquet",
+        "twin_modes.parquet",
+        "twin_updated.toml",
+    ] {
+        assert!(d.join(f).exists(), "{f} missing after the first event");
+    }
+    let html = std::fs::read_to_string(d.join("report.html")).unwrap();
+    assert!(section(&html, "twin").contains("<table"));
+
+    let second = pipeline::run(&p, &event("synthetic-2storey-yielding"), d, true).unwrap();
+    assert!(
+        matches!(second[3].1, StageOutcome::NotApplicable(_)),
+        "{second:?}"
+    );
+    assert!(
+        second
+            .iter()
+            .all(|(_, o)| !matches!(o, StageOutcome::Skipped)),
+        "nothing of the first event may count as up to date: {second:?}"
+    );
+    for f in [
+        "twin_update.parquet",
+        "twin_modes.parquet",
+        "twin_updated.toml",
+    ] {
+        assert!(!d.join(f).exists(), "{f} of the first event survived");
+    }
+    let html = std::fs::read_to_string(d.join("report.html")).unwrap();
+    let twin = section(&html, "twin");
+    assert!(!twin.contains("<table"), "{twin}");
+    assert!(
+        twin.contains("Stage not run / output absent: <code>twin_update.parquet</code>"),
+        "{twin}"
+    );
+    let m = manifest::read(d).unwrap().unwrap();
+    assert!(
+        m.event.path.ends_with("synthetic-2storey-yielding"),
+        "{m:?}"
+    );
+    let update = m.stage("update").unwrap();
+    assert_eq!(update.state, StageState::NotApplicable);
+    assert!(update.outputs.is_empty());
+    // Every file in D is listed by the manifest (or is the manifest).
+    let listed = m.done_files();
+    for n in names_in(d) {
+        assert!(n == "run.json" || listed.contains(&n), "unlisted {n} in D");
+    }
+}
+
+/// A file of another event that no manifest lists is not shown by the report.
+#[test]
+fn the_report_shows_only_files_the_run_manifest_lists() {
+    let out = tempfile::tempdir().unwrap();
+    let d = out.path();
+    let p = PipelineFile::parse(
+        &format!(
+            "{INGEST}[[stage]]\nname = \"report\"\nkind = \"report\"\ninputs = [\"condition\"]\n"
+        ),
+        "r.toml",
+    )
+    .unwrap();
+    // A stray channel table of another event (as an older run would leave it).
+    let other = tempfile::tempdir().unwrap();
+    let metrics = format!(
+        "{INGEST}[[stage]]\nname = \"metrics\"\nkind = \"metrics\"\ninputs = [\"condition\"]\n"
+    );
+    let m = PipelineFile::parse(&metrics, "m.toml").unwrap();
+    pipeline::run(&m, &event("synthetic-2storey-yielding"), other.path(), true).unwrap();
+    std::fs::copy(
+        other.path().join("channels.parquet"),
+        d.join("channels.parquet"),
+    )
+    .unwrap();
+    pipeline::run(&p, &event("synthetic-4storey-quake"), d, true).unwrap();
+    let html = std::fs::read_to_string(d.join("report.html")).unwrap();
+    let channels = section(&html, "channels");
+    assert!(
+        channels.contains("Stage not run / output absent: <code>channels.parquet</code>"),
+        "{channels}"
+    );
+    assert!(!channels.contains("<table"), "{channels}");
+}
+
+/// Item 2: a run while another holds the directory's lock fails at once,
+/// naming the holder; the lock of a killed run on this host is taken over.
+#[test]
+fn a_second_run_while_the_lock_is_held_fails_naming_the_holder() {
+    let out = tempfile::tempdir().unwrap();
+    let d = out.path();
+    let held = pipeline::lock::DirLock::acquire(d, "the first run").unwrap();
+    let r = Command::new(exe())
+        .args(["-q", "run"])
+        .arg(root().join("pipelines/ingest.toml"))
+        .arg(event("synthetic-4storey-quake"))
+        .arg("--out")
+        .arg(d)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("in use by another quaketwin run")
+            && stderr.contains(&format!("pid {}", std::process::id()))
+            && stderr.contains("the first run")
+            && stderr.contains(".quaketwin.lock"),
+        "{stderr}"
+    );
+    assert!(
+        !d.join("event.json").exists(),
+        "the refused run wrote into D"
+    );
+    // In-process too (same message, usage error).
+    let e = pipeline::run(
+        &ingest_pipeline(),
+        &event("synthetic-4storey-quake"),
+        d,
+        true,
+    )
+    .unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    drop(held);
+    assert!(!d.join(".quaketwin.lock").exists());
+
+    // A lock file left by a killed run on this host: taken over, and said so.
+    let stale = pipeline::lock::Holder {
+        pid: u32::MAX - 7,
+        host: pipeline::lock::host_name(),
+        started: "2026-01-01T00:00:00Z".into(),
+        what: "a killed run".into(),
+    };
+    std::fs::write(
+        d.join(".quaketwin.lock"),
+        serde_json::to_string(&stale).unwrap(),
+    )
+    .unwrap();
+    let r = Command::new(exe())
+        .args(["-q", "run"])
+        .arg(root().join("pipelines/ingest.toml"))
+        .arg(event("synthetic-4storey-quake"))
+        .arg("--out")
+        .arg(d)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("stale lock") && stderr.contains("a killed run"),
+        "{stderr}"
+    );
+    assert!(!d.join(".quaketwin.lock").exists());
+}
+
+/// Two runs of different events started together into one D: never both
+/// succeed with a mix of files; whatever ends last, D holds one event only.
+#[test]
+fn two_runs_started_together_never_mix_two_events() {
+    let out = tempfile::tempdir().unwrap();
+    let d = out.path();
+    let spawn = |ev: &str| {
+        Command::new(exe())
+            .args(["-q", "run"])
+            .arg(root().join("pipelines/ingest.toml"))
+            .arg(event(ev))
+            .arg("--out")
+            .arg(d)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let a = spawn("synthetic-4storey-quake");
+    let b = spawn("synthetic-2storey-yielding");
+    let (a, b) = (a.wait_with_output().unwrap(), b.wait_with_output().unwrap());
+    for r in [&a, &b] {
+        let code = r.status.code();
+        assert!(
+            code == Some(0) || code == Some(2),
+            "{}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+        if code == Some(2) {
+            assert!(String::from_utf8_lossy(&r.stderr).contains("in use"));
+        }
+    }
+    // Whichever ran (one or both, one after the other), D holds one event:
+    // the manifest's, with every result verified.
+    let m = manifest::read(d).unwrap().unwrap();
+    assert!(
+        m.stages.iter().all(|s| s.state == StageState::Done),
+        "{m:?}"
+    );
+    for s in &m.stages {
+        for o in &s.outputs {
+            assert_eq!(manifest::verify_output(d, o).unwrap(), Ok(()), "{}", o.file);
+        }
+    }
+}
+
+/// Item 3: a truncated samples.parquet and a garbage modes.parquet in a
+/// finished D are rebuilt by the next run (not "up to date").
+#[test]
+fn damaged_outputs_are_rebuilt_on_re_run() {
+    let out = tempfile::tempdir().unwrap();
+    let d = out.path();
+    let text = format!(
+        "{INGEST}[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n"
+    );
+    let p = PipelineFile::parse(&text, "m.toml").unwrap();
+    let ev = event("synthetic-4storey-ambient");
+    pipeline::run(&p, &ev, d, true).unwrap();
+    let samples = std::fs::read(d.join("samples.parquet")).unwrap();
+    let modes = std::fs::read(d.join("modes.parquet")).unwrap();
+
+    // Truncated samples.parquet: condition re-runs; modal is still valid.
+    std::fs::write(d.join("samples.parquet"), &samples[..samples.len() / 2]).unwrap();
+    let r = pipeline::run(&p, &ev, d, true).unwrap();
+    assert_eq!(r[0].1, StageOutcome::Skipped, "{r:?}");
+    assert!(matches!(r[1].1, StageOutcome::Ran { .. }), "{r:?}");
+    assert_eq!(std::fs::read(d.join("samples.parquet")).unwrap(), samples);
+
+    // Same size, other bytes: the hash, not only the size, is checked.
+    let mut garbage = modes.clone();
+    for b in garbage.iter_mut().skip(8).take(64) {
+        *b = b'x';
+    }
+    std::fs::write(d.join("modes.parquet"), &garbage).unwrap();
+    let r = pipeline::run(&p, &ev, d, true).unwrap();
+    assert_eq!(r[1].1, StageOutcome::Skipped, "{r:?}");
+    assert!(matches!(r[2].1, StageOutcome::Ran { .. }), "{r:?}");
+    assert_eq!(std::fs::read(d.join("modes.parquet")).unwrap(), modes);
+
+    // And now everything is up to date again.
+    let r = pipeline::run(&p, &ev, d, true).unwrap();
+    assert!(r.iter().all(|(_, o)| *o == StageOutcome::Skipped), "{r:?}");
+}
+
+/// Same input and settings: identical run manifest.
+#[test]
+fn the_run_manifest_is_deterministic_and_lists_sizes_and_hashes() {
+    let a = tempfile::tempdir().unwrap();
+    let b = tempfile::tempdir().unwrap();
+    let ev = event("synthetic-4storey-quake");
+    pipeline::run(&ingest_pipeline(), &ev, a.path(), true).unwrap();
+    pipeline::run(&ingest_pipeline(), &ev, b.path(), true).unwrap();
+    let ra = std::fs::read(a.path().join("run.json")).unwrap();
+    assert_eq!(ra, std::fs::read(b.path().join("run.json")).unwrap());
+    let m = manifest::read(a.path()).unwrap().unwrap();
+    let rec = m.stage("condition").unwrap();
+    let o = &rec.outputs[0];
+    assert_eq!(o.file, "samples.parquet");
+    assert_eq!(
+        o.bytes,
+        Some(
+            std::fs::metadata(a.path().join("samples.parquet"))
+                .unwrap()
+                .len()
+        )
+    );
+    assert_eq!(o.fnv1a64.as_deref().map(str::len), Some(16));
+}
+
+/// Item 9: temporary files of a killed run are swept; only quaketwin's.
+#[test]
+fn stale_temporary_files_are_swept_at_the_next_run() {
+    let out = tempfile::tempdir().unwrap();
+    let d = out.path();
+    pipeline::run(
+        &ingest_pipeline(),
+        &event("synthetic-4storey-quake"),
+        d,
+        true,
+    )
+    .unwrap();
+    for n in [
+        ".samples.parquet.quaketwin-4242-0.tmp",
+        ".event.json.4242.tmp",
+        ".x.mcap.tmp-4242",
+    ] {
+        std::fs::write(d.join(n), b"half").unwrap();
+    }
+    std::fs::write(d.join("notes.tmp"), b"mine").unwrap();
+    pipeline::run(
+        &ingest_pipeline(),
+        &event("synthetic-4storey-quake"),
+        d,
+        true,
+    )
+    .unwrap();
+    let names = names_in(d);
+    assert!(
+        names.iter().all(|n| !n.starts_with('.')),
+        "temporary files left: {names:?}"
+    );
+    assert!(d.join("notes.tmp").exists(), "a user's file was removed");
+}
+
+#[cfg(unix)]
+fn mkfifo(p: &Path) {
+    let st = Command::new("mkfifo").arg(p).status().unwrap();
+    assert!(st.success());
+}
+
+#[cfg(unix)]
+fn file_type(p: &Path) -> std::fs::FileType {
+    std::fs::symlink_metadata(p).unwrap().file_type()
+}
+
+/// Item 9: a symbolic link or FIFO at an output path is refused, never replaced.
+#[cfg(unix)]
+#[test]
+fn a_symlink_or_fifo_at_an_output_path_is_refused() {
+    use std::os::unix::fs::FileTypeExt;
+    let out = tempfile::tempdir().unwrap();
+    let d = out.path();
+    let elsewhere = tempfile::tempdir().unwrap();
+    let target = elsewhere.path().join("precious.parquet");
+    std::fs::write(&target, b"keep me").unwrap();
+    std::os::unix::fs::symlink(&target, d.join("samples.parquet")).unwrap();
+    let e = pipeline::run(
+        &ingest_pipeline(),
+        &event("synthetic-4storey-quake"),
+        d,
+        true,
+    )
+    .unwrap_err();
+    let msg = e.to_string();
+    assert_eq!(e.exit_code(), 2, "{msg}");
+    assert!(
+        msg.contains("samples.parquet") && msg.contains("symbolic link"),
+        "{msg}"
+    );
+    assert!(file_type(&d.join("samples.parquet")).is_symlink());
+    assert_eq!(std::fs::read(&target).unwrap(), b"keep me");
+
+    let d2 = tempfile::tempdir().unwrap();
+    mkfifo(&d2.path().join("event.json"));
+    let r = Command::new(exe())
+        .args(["-q", "run"])
+        .arg(root().join("pipelines/ingest.toml"))
+        .arg(event("synthetic-4storey-quake"))
+        .arg("--out")
+        .arg(d2.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("event.json") && stderr.contains("FIFO"),
+        "{stderr}"
+    );
+    assert!(file_type(&d2.path().join("event.json")).is_fifo());
+}
+
+/// Item 9: `ingest --mcap` never replaces a link or FIFO (elsewhere than D
+/// too); a regular MCAP file inside D is listed by the run manifest.
+#[cfg(unix)]
+#[test]
+fn mcap_output_refuses_links_and_fifos_and_is_listed_inside_the_output_directory() {
+    use std::os::unix::fs::FileTypeExt;
+    let out = tempfile::tempdir().unwrap();
+    let other = tempfile::tempdir().unwrap();
+    let target = other.path().join("real.mcap");
+    std::fs::write(&target, b"keep me").unwrap();
+    let link = other.path().join("link.mcap");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    let fifo = other.path().join("pipe.mcap");
+    mkfifo(&fifo);
+    for (path, what) in [(&link, "symbolic link"), (&fifo, "FIFO")] {
+        let r = Command::new(exe())
+            .args(["-q", "ingest"])
+            .arg(event("synthetic-4storey-quake"))
+            .arg("--out")
+            .arg(out.path())
+            .arg("--mcap")
+            .arg(path)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(what), "{stderr}");
+    }
+    assert!(file_type(&link).is_symlink());
+    assert!(file_type(&fifo).is_fifo());
+    assert_eq!(std::fs::read(&target).unwrap(), b"keep me");
+    let leftovers: Vec<_> = names_in(other.path())
+        .into_iter()
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+
+    let inside = out.path().join("replay.mcap");
+    quaketwin::commands::ingest(
+        &event("synthetic-4storey-quake"),
+        out.path(),
+        Some(&inside),
+        true,
+    )
+    .unwrap();
+    let m = manifest::read(out.path()).unwrap().unwrap();
+    assert!(m.done_files().contains(&"replay.mcap".to_string()), "{m:?}");
+    // A run of another event removes it.
+    pipeline::run(
+        &ingest_pipeline(),
+        &event("synthetic-2storey-yielding"),
+        out.path(),
+        true,
+    )
+    .unwrap();
+    assert!(!inside.exists());
+}
