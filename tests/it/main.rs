@@ -23,6 +23,7 @@ mod modal;
 mod pipeline;
 mod plackett_luce;
 mod readers_binary;
+mod readers_csv;
 mod readers_text;
 mod report;
 mod twin;
