@@ -125,20 +125,22 @@ fn date_time_column_under_another_name_is_the_time_column() {
 
 #[test]
 fn iso_time_column_errors_name_the_line() {
+    // The bad row after 4 good ones: the table is found, then each row is read.
     let bad = "timestamp,acc_x\n2024-03-01T12:00:00.00Z,1\n2024-03-01T12:00:00.01Z,2\n\
-               2024-03-01T12:00:00.02Z,3\nyesterday,4\n";
+               2024-03-01T12:00:00.02Z,3\n2024-03-01T12:00:00.03Z,4\nyesterday,5\n\
+               2024-03-01T12:00:00.05Z,6\n";
     let (loc, msg) = input_error(read("b.csv", bad).unwrap_err());
     assert_eq!(loc.file, "b.csv");
-    assert_eq!(loc.line, Some(5));
+    assert_eq!(loc.line, Some(6));
     assert_eq!(loc.channel.as_deref(), Some("timestamp"));
     assert!(msg.contains("\"yesterday\""), "{msg}");
     // 30 February does not exist: the calendar is checked, not just the shape.
-    let feb30 = bad.replace("yesterday", "2024-02-30T12:00:00.03Z");
+    let feb30 = bad.replace("yesterday", "2024-02-30T12:00:00.04Z");
     let (loc, _) = input_error(read("b.csv", &feb30).unwrap_err());
-    assert_eq!(loc.line, Some(5));
-    let back = bad.replace("yesterday", "2024-03-01T12:00:00.01Z");
+    assert_eq!(loc.line, Some(6));
+    let back = bad.replace("yesterday", "2024-03-01T12:00:00.02Z");
     let (loc, msg) = input_error(read("b.csv", &back).unwrap_err());
-    assert_eq!(loc.line, Some(5));
+    assert_eq!(loc.line, Some(6));
     assert!(msg.contains("does not increase"), "{msg}");
 }
 
