@@ -134,8 +134,17 @@ pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEve
             });
             spectra.extend(contents.spectra.iter().cloned());
             hints.push(contents.event.clone());
-            for entry in entries {
-                let rec = pick_record(&contents, entry, file)?;
+            for (k, entry) in entries.iter().enumerate() {
+                // The CSV reader returns one record per requested column, in
+                // the order asked: the k-th record is the k-th entry's.  Matching
+                // by name instead fails for an index (`column = 2`) or a name
+                // without its unit suffix (`acc_x` for `acc_x [g]`).
+                let rec = match &opts.columns {
+                    Some(cols) if contents.records.len() == cols.len() => {
+                        contents.records[k].clone()
+                    }
+                    _ => pick_record(&contents, entry, file)?,
+                };
                 let order = m
                     .channels
                     .iter()

@@ -1,24 +1,45 @@
 //! CSV / TSV reader, including the Xsens (Movella) DOT export.
 //!
-//! Written by hand rather than with the `csv` crate: the work here is not
-//! field splitting (no quoted delimiters in sensor exports) but finding where
-//! the table starts after a free-form preamble, guessing the delimiter, and
-//! turning a time column into a sampling rate — none of which a CSV crate does.
+//! Field splitting (quotes, `""` escapes, a delimiter inside a quoted field
+//! such as `"a, b"`) is done by the `csv` crate.  What is ours is finding
+//! where the table starts after a free-form preamble, guessing the delimiter,
+//! and turning a time column into a sampling rate and a start time — none of
+//! which a CSV crate does.
 //!
 //! Layout understood:
 //! - an optional `sep=X` first line (Excel hint) fixes the delimiter; otherwise
 //!   comma, tab, semicolon and whitespace are tried and the one giving the
-//!   widest consistent numeric table wins;
+//!   widest consistent table wins.  Whitespace-separated files (runs of spaces
+//!   or tabs used for alignment) are split by hand: the `csv` crate takes one
+//!   delimiter byte and would turn every extra space into an empty field;
 //! - preamble lines before the header row (`Key:,value` or `Key: value`):
 //!   `DeviceTag` → station, `StartTime` (`2025-03-06_12:26:07_000 PST`, or ISO
 //!   8601 UTC) → start time, `SampleRate`/`Sampling rate` → rate;
+//! - the table: the first row, with at least 3 rows after it of the same field
+//!   count (or up to the end of the file), in which more than half of the
+//!   fields, or the first field, are numbers or ISO 8601 date-times, and whose
+//!   first field does not end in `:` (a `Key:` preamble line).  Other fields may
+//!   be text (a station name, a quoted comment): text columns are never read
+//!   unless named, so they are not an error;
 //! - a header row (optional; without it columns are named by their 0-based index);
 //! - a time column (`ReadOptions.time_column`, else `time`, `t`, `timestamp`,
-//!   `seconds`, `SampleTimeFine`…) in seconds unless the header says `[ms]`,
-//!   `(us)`…; `SampleTimeFine` is the Xsens microsecond counter, which wraps at 2³².
+//!   `seconds`, `SampleTimeFine`…, else the first column holding ISO 8601
+//!   date-times).  Its cells are either
+//!   - numbers, in seconds unless the header says `[ms]`, `(us)`, `time_ms`…;
+//!     `SampleTimeFine` is the Xsens microsecond counter, which wraps at 2³².
+//!     A first value of at least 10⁹ seconds (2001-09-09) is Unix epoch time
+//!     and gives the start time.  Without a stated unit the magnitude of the
+//!     first value tells the epoch unit: below 10¹¹ seconds, below 10¹⁴
+//!     milliseconds, below 10¹⁷ microseconds, else nanoseconds (each covers
+//!     the years 1973 to 5138);
+//!   - ISO 8601 date-times, `2024-03-01T12:00:00.005Z`, with `T` or a space,
+//!     with a `Z`, an offset (`+01:00`, `-0500`) or no zone (taken as UTC,
+//!     noted in `inferred`); they give the start time.
+//!
 //!   Without a time column the rate comes from `ReadOptions.sampling_rate_hz` or the preamble;
 //! - columns from `ReadOptions.columns` (names or 0-based indices), else every
-//!   acceleration-like column (`Acc_*`, `acc*`, `a_*`, `ax`…).
+//!   acceleration-like column (`Acc_*`, `acc*`, `a_*`, `ax`…) whose first cell
+//!   is a number.
 //!
 //! The sampling interval is the median time step.  When it is within the time
 //! resolution of a whole rate in Hz (Xsens: 8333 µs = 1/120 s truncated to
@@ -26,10 +47,16 @@
 //! than max(1 % of the interval, 1.5 × resolution) from it make the column
 //! uneven: the samples are resampled linearly onto a uniform grid and flagged
 //! `QaFlag::Resampled` (steps longer than 1.5 intervals are also flagged `QaFlag::Gap`).
+//! The grid is bounded before it is allocated: at most
+//! [`MAX_RESAMPLE_GROWTH`] times the rows of the file and at most
+//! [`MAX_RESAMPLED_SAMPLES`] samples over all channels read; beyond that the
+//! file is refused, naming the line where the largest time jump ends.
 //!
 //! Units come from the column header (`acc_x[m/s2]`, `Acc_X (g)`).  When the
 //! header states none, m/s² is assumed, noted in `inferred`, and `"units"`
-//! is listed in `missing`.
+//! is listed in `missing` (a manifest `units` per column overrides both).
+
+use chrono::{DateTime, NaiveDateTime};
 
 use super::{FileContents, ReadOptions};
 use crate::error::{Error, Result};
@@ -37,20 +64,74 @@ use crate::vocab::{
     epoch_ns_from_civil, parse_iso8601_ns, Channel, QaFlag, Record, SourceRef, Units,
 };
 
+/// Most samples, summed over the channels read, that resampling an uneven
+/// time column may produce: 2²⁸ (2 GiB of f64).  Checked before allocating.
+pub const MAX_RESAMPLED_SAMPLES: usize = 1 << 28;
+
+/// Most samples per channel that resampling may produce per row of the file.
+/// A longer grid would be mostly interpolation across gaps (a time column
+/// jumping to 10⁶ s after 200 rows at 100 Hz asks for 10⁸ samples), which is
+/// a broken time column rather than a record; it is refused.
+pub const MAX_RESAMPLE_GROWTH: usize = 4;
+
+/// Unix epoch time starts here: 10⁹ s is 2001-09-09, far beyond any
+/// elapsed-time column of a sensor export.
+const EPOCH_MIN_S: f64 = 1e9;
+
 /// How fields are separated.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Delim {
-    Char(char),
+    Byte(u8),
     Whitespace,
 }
 
-impl Delim {
-    fn split<'a>(&self, line: &'a str) -> Vec<&'a str> {
-        let clean = |s: &'a str| s.trim().trim_matches('"').trim();
-        match self {
-            Delim::Char(c) => line.split(*c).map(clean).collect(),
-            Delim::Whitespace => line.split_whitespace().map(clean).collect(),
+/// One row of the file: its 0-based line index in the text and its fields.
+struct Row {
+    line: usize,
+    fields: csv::StringRecord,
+}
+
+/// The rows of `text` (which starts at line `first_line`), blank lines skipped.
+fn rows<'a>(
+    text: &'a str,
+    first_line: usize,
+    delim: Delim,
+) -> Box<dyn Iterator<Item = std::result::Result<Row, csv::Error>> + 'a> {
+    match delim {
+        Delim::Byte(b) => {
+            let rdr = csv::ReaderBuilder::new()
+                .has_headers(false)
+                // Preamble lines have their own field counts; ragged data rows
+                // are reported by us with the expected count.
+                .flexible(true)
+                .trim(csv::Trim::All)
+                .delimiter(b)
+                .from_reader(text.as_bytes());
+            Box::new(rdr.into_records().filter_map(move |r| match r {
+                Ok(fields) => {
+                    // The csv crate skips empty lines but not lines of spaces.
+                    if fields.len() == 1 && fields[0].is_empty() {
+                        return None;
+                    }
+                    let line = fields.position().map_or(1, |p| p.line()) as usize - 1;
+                    Some(Ok(Row {
+                        line: first_line + line,
+                        fields,
+                    }))
+                }
+                Err(e) => Some(Err(e)),
+            }))
         }
+        Delim::Whitespace => Box::new(text.split('\n').enumerate().filter_map(move |(i, l)| {
+            let fields: csv::StringRecord =
+                l.split_whitespace().map(|s| s.trim_matches('"')).collect();
+            (!fields.is_empty()).then(|| {
+                Ok(Row {
+                    line: first_line + i,
+                    fields,
+                })
+            })
+        })),
     }
 }
 
@@ -58,12 +139,123 @@ fn is_number(s: &str) -> bool {
     !s.is_empty() && s.parse::<f64>().is_ok()
 }
 
-/// More than half of the fields are numbers.
-fn mostly_numeric(fields: &[&str]) -> bool {
-    !fields.is_empty() && 2 * fields.iter().filter(|f| is_number(f)).count() > fields.len()
+/// Cheap shape test for `YYYY-MM-DD[T ]HH:…` (the full parse comes later).
+fn looks_like_datetime(s: &str) -> bool {
+    let b = s.as_bytes();
+    let digits = |r: std::ops::Range<usize>| r.into_iter().all(|i| b[i].is_ascii_digit());
+    b.len() >= 16
+        && digits(0..4)
+        && b[4] == b'-'
+        && digits(5..7)
+        && b[7] == b'-'
+        && digits(8..10)
+        && matches!(b[10], b'T' | b't' | b' ')
+        && digits(11..13)
+        && b[13] == b':'
 }
 
-/// Where the table is: header line index (if any), first data line index, field count.
+/// A number or a date-time: what a data row holds.
+fn is_value(s: &str) -> bool {
+    is_number(s) || looks_like_datetime(s)
+}
+
+fn count_values(fields: &csv::StringRecord) -> usize {
+    fields.iter().filter(|f| is_value(f)).count()
+}
+
+/// Could be a row of the table (see the module doc).
+fn data_like(fields: &csv::StringRecord) -> bool {
+    let first = fields.get(0).unwrap_or("");
+    if first.ends_with(':') {
+        return false;
+    }
+    let v = count_values(fields);
+    v >= 1 && (2 * v > fields.len() || is_value(first))
+}
+
+/// How an ISO 8601 cell stated its zone.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Zone {
+    Z,
+    Offset(i32),
+    Naive,
+}
+
+impl Zone {
+    fn describe(self) -> String {
+        match self {
+            Zone::Z => "Z = UTC".into(),
+            Zone::Offset(s) => format!(
+                "offset UTC{}{:02}:{:02} converted to UTC",
+                if s < 0 { '-' } else { '+' },
+                s.abs() / 3600,
+                s.abs() % 3600 / 60
+            ),
+            Zone::Naive => "no zone stated: taken as UTC".into(),
+        }
+    }
+}
+
+/// Parses an ISO 8601 date-time cell into ns since the epoch (UTC).
+fn parse_datetime_cell(s: &str) -> Option<(i64, Zone)> {
+    if !looks_like_datetime(s) {
+        return None;
+    }
+    if let Ok(dt) = DateTime::parse_from_rfc3339(s) {
+        let zone = if s.ends_with(['Z', 'z']) {
+            Zone::Z
+        } else {
+            Zone::Offset(dt.offset().local_minus_utc())
+        };
+        return Some((dt.timestamp_nanos_opt()?, zone));
+    }
+    // chrono's formats want the `T`; RFC 3339 above already took the space.
+    let norm = format!("{}T{}", &s[..10], &s[11..]);
+    if let Ok(dt) = DateTime::parse_from_str(&norm, "%Y-%m-%dT%H:%M:%S%.f%z") {
+        return Some((
+            dt.timestamp_nanos_opt()?,
+            Zone::Offset(dt.offset().local_minus_utc()),
+        ));
+    }
+    let naive = NaiveDateTime::parse_from_str(&norm, "%Y-%m-%dT%H:%M:%S%.f").ok()?;
+    Some((naive.and_utc().timestamp_nanos_opt()?, Zone::Naive))
+}
+
+/// Digits after the decimal point of a number or of the seconds of a date-time.
+fn fraction_digits(s: &str) -> usize {
+    s.split_once('.')
+        .map(|(_, d)| d.bytes().take_while(u8::is_ascii_digit).count())
+        .unwrap_or(0)
+}
+
+/// A plain decimal `[-]123.456` times `ns_per_unit`, exactly (f64 cannot hold
+/// epoch nanoseconds: 1.7e18 is past 2⁵³).  `None` for exponent forms.
+fn decimal_to_ns(s: &str, ns_per_unit: i128) -> Option<i64> {
+    let (neg, digits) = match s.strip_prefix('-') {
+        Some(d) => (true, d),
+        None => (false, s.strip_prefix('+').unwrap_or(s)),
+    };
+    let (int, frac) = digits.split_once('.').unwrap_or((digits, ""));
+    if int.is_empty() && frac.is_empty()
+        || !int.bytes().chain(frac.bytes()).all(|b| b.is_ascii_digit())
+        || int.len() > 20
+    {
+        return None;
+    }
+    let frac = &frac[..frac.len().min(18)];
+    let int_v: i128 = if int.is_empty() { 0 } else { int.parse().ok()? };
+    let frac_v: i128 = if frac.is_empty() {
+        0
+    } else {
+        frac.parse().ok()?
+    };
+    let scale = 10i128.pow(frac.len() as u32);
+    let ns = int_v.checked_mul(ns_per_unit)? + (frac_v * ns_per_unit + scale / 2) / scale;
+    i64::try_from(if neg { -ns } else { ns }).ok()
+}
+
+/// Where the table is: header row (index into the sniffed rows), first data
+/// row (index in the row sequence), field count.
 #[derive(Debug, Clone, Copy)]
 struct Layout {
     delim: Delim,
@@ -72,46 +264,59 @@ struct Layout {
     fields: usize,
 }
 
-fn find_layout(lines: &[&str], first: usize, delim: Delim) -> Option<Layout> {
-    let nonblank: Vec<usize> = (first..lines.len())
-        .filter(|&i| !lines[i].trim().is_empty())
-        .collect();
-    for (k, &i) in nonblank.iter().enumerate() {
-        let f = delim.split(lines[i]);
-        if !mostly_numeric(&f) {
-            continue;
+/// The table of `delim`, and the rows up to the end of its first 4 data rows
+/// (the preamble, header and the first data row are read from them).
+fn find_layout(
+    text: &str,
+    first_line: usize,
+    delim: Delim,
+) -> std::result::Result<Option<(Layout, Vec<Row>)>, csv::Error> {
+    let mut it = rows(text, first_line, delim);
+    let mut seen: Vec<Row> = Vec::new();
+    let mut done = false;
+    let mut k = 0;
+    loop {
+        // Row k qualifies when it and the (up to) 3 rows after it are data-like
+        // with the same field count: read ahead until those rows are in.
+        while !done && seen.len() < k + 4 {
+            match it.next() {
+                Some(r) => seen.push(r?),
+                None => done = true,
+            }
         }
+        if k >= seen.len() {
+            return Ok(None);
+        }
+        let f = &seen[k].fields;
         let n = f.len();
-        let follow = &nonblank[k + 1..nonblank.len().min(k + 4)];
-        if follow.iter().all(|&j| {
-            let g = delim.split(lines[j]);
-            g.len() == n && mostly_numeric(&g)
-        }) {
-            // Walk back over data rows with a bad cell (still mostly numeric) so they are parsed and reported.
-            let mut start = i;
-            while start > first {
-                let prev = lines[start - 1];
-                let g = delim.split(prev);
-                if prev.trim().is_empty() || g.len() != n || !mostly_numeric(&g) {
+        if data_like(f)
+            && seen[k + 1..]
+                .iter()
+                .all(|r| r.fields.len() == n && data_like(&r.fields))
+        {
+            // Walk back over data rows with a bad cell (still data-like) so they are parsed and reported.
+            let mut start = k;
+            while start > 0 {
+                let g = &seen[start - 1].fields;
+                if g.len() != n || !data_like(g) {
                     break;
                 }
                 start -= 1;
             }
-            let header = (start > first).then(|| start - 1).filter(|&h| {
-                let g = delim.split(lines[h]);
-                !lines[h].trim().is_empty()
-                    && g.len() == n
-                    && 2 * g.iter().filter(|x| is_number(x)).count() < n.max(1)
+            let header = start.checked_sub(1).filter(|&h| {
+                let g = &seen[h].fields;
+                g.len() == n && 2 * count_values(g) < n.max(1)
             });
-            return Some(Layout {
+            let layout = Layout {
                 delim,
                 header,
                 data_start: start,
                 fields: n,
-            });
+            };
+            return Ok(Some((layout, seen)));
         }
+        k += 1;
     }
-    None
 }
 
 /// Column name without a trailing unit in brackets or parentheses, lower case.
@@ -187,8 +392,8 @@ fn parse_start_time(s: &str) -> Option<(i64, String)> {
 /// How the time column counts.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum TimeKind {
-    /// Value × factor = seconds.
-    Seconds(f64),
+    /// Value × factor = seconds; `stated` when the header gave the unit.
+    Seconds { factor: f64, stated: bool },
     /// Xsens SampleTimeFine: µs, unsigned 32-bit counter that wraps.
     XsensFine,
 }
@@ -217,7 +422,10 @@ fn time_kind(name: &str) -> Option<TimeKind> {
         return None;
     }
     if let Some(u) = unit_text(name) {
-        return from_unit(&u).map(TimeKind::Seconds);
+        return from_unit(&u).map(|factor| TimeKind::Seconds {
+            factor,
+            stated: true,
+        });
     }
     let factor = match b.rsplit('_').next() {
         Some("ms") if suffixed => 1e-3,
@@ -225,7 +433,34 @@ fn time_kind(name: &str) -> Option<TimeKind> {
         Some("ns") if suffixed => 1e-9,
         _ => 1.0,
     };
-    Some(TimeKind::Seconds(factor))
+    let stated = suffixed || matches!(b.as_str(), "seconds" | "sec" | "time_s");
+    Some(TimeKind::Seconds { factor, stated })
+}
+
+/// Unit of a unitless epoch time column from the magnitude of its first value
+/// (see the module doc): (seconds per unit, name).
+fn epoch_unit(first: f64) -> (f64, &'static str) {
+    let a = first.abs();
+    if a < 1e11 {
+        (1.0, "seconds")
+    } else if a < 1e14 {
+        (1e-3, "milliseconds")
+    } else if a < 1e17 {
+        (1e-6, "microseconds")
+    } else {
+        (1e-9, "nanoseconds")
+    }
+}
+
+/// The time column as read: raw numbers, or date-times as epoch ns.
+enum TimeCells {
+    Numbers(Vec<f64>),
+    DateTimes(Vec<i64>, Zone),
+}
+
+/// Samples on the grid t0 + i·dt, i = 0..=floor(span/dt), as resample_linear makes it.
+fn grid_len(span: f64, dt: f64) -> f64 {
+    (span / dt + 1e-9).floor() + 1.0
 }
 
 /// Reads the selected columns of a CSV/TSV file, one record per column.
@@ -234,68 +469,87 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
     src.format = "csv".into();
     let text = String::from_utf8_lossy(bytes);
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
-    let lines: Vec<&str> = text.split('\n').map(|l| l.trim_end_matches('\r')).collect();
     let loc = |line: usize| super::location(&src).at_line(line + 1);
+    let csv_err = |e: csv::Error| {
+        let line = e.position().map_or(0, |p| p.line() as usize);
+        Error::input(
+            super::location(&src).at_line(line.max(1)),
+            format!("CSV: {e}"),
+        )
+    };
 
     // Optional `sep=X` first line.
-    let mut first = 0;
-    let mut forced: Option<Delim> = None;
-    if let Some(rest) = lines.first().and_then(|l| l.trim().strip_prefix("sep=")) {
-        forced = Some(match rest {
-            "\\t" | "\t" | "" => Delim::Char('\t'),
-            r => Delim::Char(r.chars().next().unwrap_or(',')),
-        });
-        first = 1;
-    }
-    let candidates = match forced {
-        Some(d) => vec![d],
+    let first_line_text = text.split('\n').next().unwrap_or("");
+    let (body, first) = match first_line_text.trim().strip_prefix("sep=") {
+        Some(_) => (text.get(first_line_text.len() + 1..).unwrap_or(""), 1usize),
+        None => (text, 0usize),
+    };
+    let candidates = match first_line_text.trim().strip_prefix("sep=") {
+        Some(rest) => vec![match rest {
+            "\\t" | "\t" | "" => Delim::Byte(b'\t'),
+            r if r.len() == 1 && r.is_ascii() => Delim::Byte(r.as_bytes()[0]),
+            r => {
+                return Err(Error::input(
+                    loc(0),
+                    format!("sep={r:?}: the delimiter must be one ASCII character"),
+                ))
+            }
+        }],
         None => vec![
-            Delim::Char(','),
-            Delim::Char('\t'),
-            Delim::Char(';'),
+            Delim::Byte(b','),
+            Delim::Byte(b'\t'),
+            Delim::Byte(b';'),
             Delim::Whitespace,
         ],
     };
-    let mut layout: Option<Layout> = None;
+    let mut found: Option<(Layout, Vec<Row>)> = None;
     for d in candidates {
-        if let Some(l) = find_layout(&lines, first, d) {
-            if layout.is_none_or(|best| l.fields > best.fields) {
-                layout = Some(l);
+        if let Some((l, r)) = find_layout(body, first, d).map_err(csv_err)? {
+            if found
+                .as_ref()
+                .is_none_or(|(best, _)| l.fields > best.fields)
+            {
+                found = Some((l, r));
             }
         }
     }
-    let layout = layout.ok_or_else(|| {
+    let (layout, sniffed) = found.ok_or_else(|| {
         Error::input(
             super::location(&src),
             "no table of numbers found in this CSV file",
         )
     })?;
     let names: Vec<String> = match layout.header {
-        Some(h) => layout
-            .delim
-            .split(lines[h])
-            .iter()
-            .map(|s| s.to_string())
-            .collect(),
+        Some(h) => sniffed[h].fields.iter().map(str::to_string).collect(),
         None => (0..layout.fields).map(|i| i.to_string()).collect(),
     };
-    let header_line = layout.header.unwrap_or(layout.data_start);
+    let first_data = &sniffed[layout.data_start];
+    let header_line = layout.header.map_or(first_data.line, |h| sniffed[h].line);
 
-    // Preamble key/value lines.
+    // Preamble key/value rows: `Key:,value` (key and value in separate fields)
+    // or `Key: value` (one field, or several when split on whitespace).
     let preamble_end = layout.header.unwrap_or(layout.data_start);
     let mut station: Option<String> = None;
     let mut start: Option<(i64, String, usize)> = None;
     let mut preamble_rate: Option<f64> = None;
     let mut is_xsens = false;
-    for (i, line) in lines.iter().enumerate().take(preamble_end).skip(first) {
-        if line.contains("Xsens") || line.contains("Movella") {
+    for row in &sniffed[..preamble_end] {
+        if row
+            .fields
+            .iter()
+            .any(|f| f.contains("Xsens") || f.contains("Movella"))
+        {
             is_xsens = true;
         }
-        let Some((key, value)) = line.split_once(':') else {
+        let Some((key, rest)) = row.fields.get(0).and_then(|f| f.split_once(':')) else {
             continue;
         };
         let key = key.trim().to_ascii_lowercase();
-        let value = value.trim().trim_start_matches([',', '\t', ';']).trim();
+        let value = std::iter::once(rest.trim())
+            .chain(row.fields.iter().skip(1))
+            .filter(|s| !s.is_empty())
+            .collect::<Vec<_>>()
+            .join(" ");
         match key.as_str() {
             "devicetag" => {
                 is_xsens = true;
@@ -303,11 +557,11 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
                     station = Some(value.to_string());
                 }
             }
-            "starttime" | "start time" | "start_time" => match parse_start_time(value) {
-                Some((ns, zone)) => start = Some((ns, zone, i)),
+            "starttime" | "start time" | "start_time" => match parse_start_time(&value) {
+                Some((ns, zone)) => start = Some((ns, zone, row.line)),
                 None => {
                     return Err(Error::input(
-                        loc(i),
+                        loc(row.line),
                         format!("StartTime {value:?} is not a date and time this reader knows"),
                     ))
                 }
@@ -332,6 +586,11 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
             })
             .or_else(|| s.parse::<usize>().ok().filter(|&i| i < names.len()))
     };
+    let first_cell = |c: usize| first_data.fields.get(c).unwrap_or("");
+    let default_kind = TimeKind::Seconds {
+        factor: 1.0,
+        stated: false,
+    };
     let time_col: Option<(usize, TimeKind)> = match &opts.time_column {
         Some(t) => {
             let i = resolve(t).ok_or_else(|| {
@@ -340,13 +599,20 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
                     format!("time column {t:?} not found; columns are {names:?}"),
                 )
             })?;
-            Some((i, time_kind(&names[i]).unwrap_or(TimeKind::Seconds(1.0))))
+            Some((i, time_kind(&names[i]).unwrap_or(default_kind)))
         }
         None => names
             .iter()
             .enumerate()
-            .find_map(|(i, n)| time_kind(n).map(|k| (i, k))),
+            .find_map(|(i, n)| time_kind(n).map(|k| (i, k)))
+            // A date-time column under another name (`Date/Time`, `UTC`…).
+            .or_else(|| {
+                (0..names.len())
+                    .find(|&i| looks_like_datetime(first_cell(i)))
+                    .map(|i| (i, default_kind))
+            }),
     };
+    let mut skipped_text: Vec<&str> = Vec::new();
     let selected: Vec<usize> = match &opts.columns {
         Some(cols) => cols
             .iter()
@@ -361,25 +627,37 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
             .collect::<Result<_>>()?,
         None => (0..names.len())
             .filter(|&i| Some(i) != time_col.map(|t| t.0) && is_acceleration_like(&names[i]))
+            // A text column whose name looks like acceleration (`accelerometer`
+            // holding a serial number) is not data; a number column with a bad
+            // cell further down still is, and that cell is reported.
+            .filter(|&i| {
+                let cell = first_cell(i);
+                let text = !cell.is_empty() && !is_number(cell);
+                if text {
+                    skipped_text.push(&names[i]);
+                }
+                !text
+            })
             .collect(),
     };
     if selected.is_empty() {
         return Err(Error::input(
             loc(header_line),
-            format!("no acceleration-like column (Acc_*, acc*, a_*); name the columns to read in the manifest. Columns are {names:?}"),
+            format!("no acceleration-like column (Acc_*, acc*, a_*) of numbers; name the columns to read in the manifest. Columns are {names:?}"),
         ));
     }
 
-    // Parse the cells we need.
+    // Parse the cells we need, row by row (the whole file again, now that the
+    // delimiter is known; only the selected columns are kept).
     let mut values: Vec<Vec<f64>> = vec![Vec::new(); selected.len()];
-    let mut times_raw: Vec<f64> = Vec::new();
+    let mut time_cells: Option<TimeCells> = None;
     let mut time_decimals = 0usize;
+    let mut time_first_text = String::new();
     let mut time_lines: Vec<usize> = Vec::new();
-    for (i, line) in lines.iter().enumerate().skip(layout.data_start) {
-        if line.trim().is_empty() {
-            continue;
-        }
-        let fields = layout.delim.split(line);
+    for row in rows(body, first, layout.delim).skip(layout.data_start) {
+        let row = row.map_err(csv_err)?;
+        let fields = &row.fields;
+        let i = row.line;
         if fields.len() != layout.fields {
             return Err(Error::input(
                 loc(i),
@@ -396,19 +674,35 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
                     loc(i).with_channel(names[c].clone()),
                     format!(
                         "cell {:?} in column {} ({}) is not a number",
-                        fields[c], c, names[c]
+                        &fields[c], c, names[c]
                     ),
                 )
             })
         };
         if let Some((tc, _)) = time_col {
-            times_raw.push(cell(tc)?);
-            time_decimals = time_decimals.max(
-                fields[tc]
-                    .split_once('.')
-                    .map(|(_, d)| d.len())
-                    .unwrap_or(0),
-            );
+            let tcell = &fields[tc];
+            let cells = time_cells.get_or_insert_with(|| {
+                time_first_text = tcell.to_string();
+                match parse_datetime_cell(tcell) {
+                    Some((_, zone)) if !is_number(tcell) => TimeCells::DateTimes(Vec::new(), zone),
+                    _ => TimeCells::Numbers(Vec::new()),
+                }
+            });
+            match cells {
+                TimeCells::Numbers(v) => v.push(cell(tc)?),
+                TimeCells::DateTimes(v, _) => {
+                    v.push(parse_datetime_cell(tcell).map(|(ns, _)| ns).ok_or_else(|| {
+                        Error::input(
+                            loc(i).with_channel(names[tc].clone()),
+                            format!(
+                                "cell {tcell:?} in time column {} is not an ISO 8601 date-time like the first one ({time_first_text:?})",
+                                names[tc]
+                            ),
+                        )
+                    })?)
+                }
+            }
+            time_decimals = time_decimals.max(fraction_digits(tcell));
             time_lines.push(i);
         }
         for (k, &c) in selected.iter().enumerate() {
@@ -418,7 +712,7 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
     let n = values[0].len();
     if n < 2 {
         return Err(Error::input(
-            loc(layout.data_start),
+            loc(first_data.line),
             "fewer than two data rows",
         ));
     }
@@ -426,34 +720,86 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
     // Sampling rate and grid.
     let mut inferred_common: Vec<String> = Vec::new();
     let mut qa_common: Vec<QaFlag> = Vec::new();
+    // Start time stated by the time column itself (epoch numbers, date-times).
+    let mut column_start: Option<(i64, String)> = None;
     let rate_hz: f64;
-    if let Some((tc, kind)) = time_col {
-        let (times, resolution) = match kind {
-            TimeKind::XsensFine => {
+    if let (Some((tc, kind)), Some(cells)) = (time_col, &time_cells) {
+        let tname = &names[tc];
+        // Times in seconds since the first row (differences first: epoch
+        // values are too large for f64 to keep their fractions otherwise).
+        let (times, resolution): (Vec<f64>, f64) = match (cells, kind) {
+            (TimeCells::DateTimes(ns, zone), _) => {
+                column_start = Some((
+                    ns[0],
+                    format!(
+                        "start time from the first cell of date-time column {tname} ({time_first_text}; {})",
+                        zone.describe()
+                    ),
+                ));
+                (
+                    ns.iter().map(|t| (t - ns[0]) as f64 * 1e-9).collect(),
+                    10f64.powi(-(time_decimals as i32)),
+                )
+            }
+            (TimeCells::Numbers(raw), TimeKind::XsensFine) => {
                 let mut wraps = 0.0;
                 let mut out = Vec::with_capacity(n);
-                for (k, &t) in times_raw.iter().enumerate() {
-                    if k > 0 && t < times_raw[k - 1] {
+                for (k, &t) in raw.iter().enumerate() {
+                    if k > 0 && t < raw[k - 1] {
                         wraps += 4_294_967_296.0; // 2^32 µs counter wrapped
                     }
-                    out.push((t + wraps) * 1e-6);
+                    out.push((t + wraps - raw[0]) * 1e-6);
                 }
                 (out, 1e-6)
             }
-            TimeKind::Seconds(f) => (
-                times_raw.iter().map(|t| t * f).collect::<Vec<_>>(),
-                10f64.powi(-(time_decimals as i32)) * f,
-            ),
+            (TimeCells::Numbers(raw), TimeKind::Seconds { factor, stated }) => {
+                let mut f = factor;
+                if !stated && raw[0].abs() >= EPOCH_MIN_S {
+                    let (unit_s, unit) = epoch_unit(raw[0]);
+                    f = unit_s;
+                    inferred_common.push(format!(
+                        "time column {tname} read as Unix epoch {unit}: no unit stated and its first value {} is at least 1e9",
+                        raw[0]
+                    ));
+                }
+                if (raw[0] * f).abs() >= EPOCH_MIN_S {
+                    let ns_per_unit = (f * 1e9).round() as i128;
+                    let ns = decimal_to_ns(&time_first_text, ns_per_unit)
+                        .or_else(|| {
+                            let v = raw[0] * f * 1e9;
+                            (v.abs() < 9.2e18).then(|| v.round() as i64)
+                        })
+                        .ok_or_else(|| {
+                            Error::input(
+                                loc(time_lines[0]).with_channel(tname.clone()),
+                                format!("epoch time {} is out of range", raw[0]),
+                            )
+                        })?;
+                    column_start = Some((
+                        ns,
+                        format!("start time from the first value of epoch time column {tname} ({time_first_text})"),
+                    ));
+                }
+                (
+                    raw.iter().map(|t| (t - raw[0]) * f).collect(),
+                    10f64.powi(-(time_decimals as i32)) * f,
+                )
+            }
+        };
+        let raw_text = |k: usize| -> String {
+            match cells {
+                TimeCells::Numbers(raw) => raw[k].to_string(),
+                TimeCells::DateTimes(ns, _) => crate::vocab::format_epoch_ns(ns[k]),
+            }
         };
         let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
         if let Some(k) = steps.iter().position(|s| *s <= 0.0 || !s.is_finite()) {
             return Err(Error::input(
-                loc(time_lines[k + 1]).with_channel(names[tc].clone()),
+                loc(time_lines[k + 1]).with_channel(tname.clone()),
                 format!(
-                    "time column {} does not increase ({} after {})",
-                    names[tc],
-                    times_raw[k + 1],
-                    times_raw[k]
+                    "time column {tname} does not increase ({} after {})",
+                    raw_text(k + 1),
+                    raw_text(k)
                 ),
             ));
         }
@@ -463,8 +809,8 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         let whole = (1.0 / dt).round();
         rate_hz = if whole >= 1.0 && (1.0 / whole - dt).abs() <= resolution {
             inferred_common.push(format!(
-                "sampling rate {whole} Hz: median step {:.9} s of column {} is 1/{whole} s within its resolution {resolution:e} s",
-                dt, names[tc]
+                "sampling rate {whole} Hz: median step {:.9} s of column {tname} is 1/{whole} s within its resolution {resolution:e} s",
+                dt
             ));
             whole
         } else {
@@ -473,6 +819,26 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         let tol = (0.01 * dt).max(1.5 * resolution);
         let uneven = raw_steps.iter().any(|s| (s - dt).abs() > tol);
         if uneven {
+            // Bound the grid before allocating it (module doc).
+            let span = times[n - 1] - times[0];
+            let grid = grid_len(span, 1.0 / rate_hz);
+            let per_row = (MAX_RESAMPLE_GROWTH * n) as f64;
+            let total = (MAX_RESAMPLED_SAMPLES / selected.len()) as f64;
+            if !(grid <= per_row && grid <= total) {
+                let (k, jump) = raw_steps
+                    .iter()
+                    .enumerate()
+                    .max_by(|a, b| a.1.total_cmp(b.1))
+                    .map(|(k, s)| (k, *s))
+                    .unwrap_or((0, 0.0));
+                return Err(Error::input(
+                    loc(time_lines[k + 1]).with_channel(tname.clone()),
+                    format!(
+                        "time column {tname} spans {span:e} s over {n} rows at a median step of {dt:e} s: resampling onto a uniform {rate_hz} Hz grid would need {grid:e} samples per channel, more than {MAX_RESAMPLE_GROWTH} × the rows and at most {MAX_RESAMPLED_SAMPLES} samples over the {} channels read; the largest jump, {jump:e} s, ends at this line",
+                        selected.len()
+                    ),
+                ));
+            }
             for (k, s) in raw_steps.iter().enumerate() {
                 if *s > 1.5 * dt {
                     qa_common.push(QaFlag::Gap {
@@ -483,7 +849,7 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
             }
             let (lo, hi) = (steps[0], steps[steps.len() - 1]);
             qa_common.push(QaFlag::Resampled {
-                from: format!("uneven time column {} (steps {lo:.6}–{hi:.6} s), linear interpolation onto {rate_hz} Hz", names[tc]),
+                from: format!("uneven time column {tname} (steps {lo:.6}–{hi:.6} s), linear interpolation onto {rate_hz} Hz"),
             });
             for v in values.iter_mut() {
                 *v = resample_linear(&times, v, 1.0 / rate_hz);
@@ -509,6 +875,21 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
             "no time column and no sampling rate: give `sampling_rate_hz` (or `time_column`) in the manifest",
         ));
     }
+    if !skipped_text.is_empty() {
+        qa_common.push(QaFlag::Note {
+            text: format!(
+                "columns {skipped_text:?} look like acceleration by name but hold text; not read"
+            ),
+        });
+    }
+    // The time column states the instant of each row; a preamble StartTime is
+    // only the recorder's note of when it started.
+    let start: Option<(i64, String)> = column_start.or(start.map(|(ns, zone, line)| {
+        (
+            ns,
+            format!("start time from the StartTime line {} ({zone})", line + 1),
+        )
+    }));
 
     let prefix = station.clone().unwrap_or_else(|| {
         std::path::Path::new(&src.file)
@@ -550,12 +931,9 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         };
         let mut ch = Channel::new(format!("{prefix}.{name}"), units, rate_hz, s);
         ch.station = station.clone();
-        if let Some((ns, zone, line)) = &start {
+        if let Some((ns, why)) = &start {
             ch.start_ns = Some(*ns);
-            inferred.push(format!(
-                "start time from the StartTime line {} ({zone})",
-                line + 1
-            ));
+            inferred.push(why.clone());
         }
         let nonfinite = values[k].iter().filter(|v| !v.is_finite()).count();
         if nonfinite > 0 {
@@ -669,5 +1047,72 @@ mod tests {
         assert_eq!(ns, epoch_ns_from_civil(2025, 3, 6, 20, 26, 7.0).unwrap());
         let (ns, _) = parse_start_time("2025-04-11_11:49:50_000 PDT").unwrap();
         assert_eq!(ns, epoch_ns_from_civil(2025, 4, 11, 18, 49, 50.0).unwrap());
+    }
+
+    #[test]
+    fn exact_decimal_epoch_values() {
+        assert_eq!(
+            decimal_to_ns("1709294400.005", 1_000_000_000),
+            Some(1_709_294_400_005_000_000)
+        );
+        assert_eq!(
+            decimal_to_ns("1709294400005", 1_000_000),
+            Some(1_709_294_400_005_000_000)
+        );
+        assert_eq!(decimal_to_ns("-1.5", 1_000), Some(-1_500));
+        assert_eq!(
+            decimal_to_ns("1.7e12", 1_000_000),
+            None,
+            "exponent: f64 path"
+        );
+        assert_eq!(
+            decimal_to_ns("99999999999", 1_000_000_000),
+            None,
+            "past i64 ns"
+        );
+        assert_eq!(decimal_to_ns(".", 1), None);
+    }
+
+    #[test]
+    fn epoch_unit_by_magnitude() {
+        assert_eq!(epoch_unit(1.7e9).1, "seconds");
+        assert_eq!(epoch_unit(1.7e12).1, "milliseconds");
+        assert_eq!(epoch_unit(1.7e15).1, "microseconds");
+        assert_eq!(epoch_unit(1.7e18).1, "nanoseconds");
+    }
+
+    #[test]
+    fn datetime_cells() {
+        let noon = epoch_ns_from_civil(2024, 3, 1, 12, 0, 0.0).unwrap();
+        let h = 3_600_000_000_000;
+        assert_eq!(
+            parse_datetime_cell("2024-03-01T12:00:00.005Z"),
+            Some((noon + 5_000_000, Zone::Z))
+        );
+        assert_eq!(
+            parse_datetime_cell("2024-03-01 12:00:00+01:00"),
+            Some((noon - h, Zone::Offset(3600)))
+        );
+        assert_eq!(
+            parse_datetime_cell("2024-03-01T12:00:00.123456789"),
+            Some((noon + 123_456_789, Zone::Naive))
+        );
+        assert_eq!(parse_datetime_cell("2024-02-30T12:00:00"), None);
+        assert_eq!(parse_datetime_cell("2024-03-01"), None);
+        assert_eq!(parse_datetime_cell("12:00:00"), None);
+    }
+
+    #[test]
+    fn rows_know_which_are_data() {
+        let rec = |f: &[&str]| csv::StringRecord::from(f.to_vec());
+        assert!(!data_like(&rec(&["SampleRate:", "60"])));
+        assert!(data_like(&rec(&[
+            "2024-03-01T12:00:00Z",
+            "ST01",
+            "a, b",
+            "0.1"
+        ])));
+        assert!(!data_like(&rec(&["ST01", "site", "0.1"])));
+        assert!(data_like(&rec(&["ST01", "0.2", "0.1"])));
     }
 }

@@ -29,7 +29,8 @@ pub struct ReadOptions {
     /// Sampling rate for files without a time column or header rate (CSV).
     pub sampling_rate_hz: Option<f64>,
     /// Columns to read (names or 0-based indices) for multi-column files;
-    /// `None` = every numeric acceleration-like column.
+    /// `None` = every numeric acceleration-like column.  The CSV reader
+    /// returns one record per entry, in this order.
     pub columns: Option<Vec<String>>,
     /// Name (or index) of the time column in CSV files.
     pub time_column: Option<String>,

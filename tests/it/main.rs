@@ -25,6 +25,7 @@ mod outdir;
 mod pipeline;
 mod plackett_luce;
 mod readers_binary;
+mod readers_csv;
 mod readers_text;
 mod report;
 mod twin;
