@@ -603,6 +603,16 @@ pub fn write_extra_output<T>(
 /// The files a pipeline run lists as results of `dir` (the `done` stages of
 /// its run manifest); `None` when `dir` has no run manifest (a directory
 /// not written by `quaketwin run`: every file counts).
+/// Why the stage of kind `kind` did not apply in the run recorded in `dir`
+/// (run.json), when it did not.
+pub fn not_applicable_reason(dir: &Path, kind: &str) -> Option<String> {
+    let m = manifest::read(dir).ok()??;
+    m.stages
+        .iter()
+        .find(|s| s.kind == kind && s.state == manifest::StageState::NotApplicable)
+        .and_then(|s| s.reason.clone())
+}
+
 pub fn listed_results(dir: &Path) -> Option<Vec<String>> {
     match manifest::read(dir) {
         Ok(Some(m)) => Some(m.done_files()),

@@ -42,7 +42,8 @@ fn stage_of(file: &str) -> &'static str {
 
 /// A file as the report found it.
 enum Loaded {
-    Absent,
+    /// Not there; with the reason when its stage did not apply (run.json).
+    Absent(Option<String>),
     Unreadable(String),
     Ok(Box<Table>),
 }
@@ -61,7 +62,7 @@ fn listed(dir: &Path, file: &str) -> bool {
 fn load(dir: &Path, file: &str, only: Option<&[&str]>) -> Loaded {
     let path = dir.join(file);
     if !listed(dir, file) {
-        return Loaded::Absent;
+        return Loaded::Absent(crate::pipeline::not_applicable_reason(dir, stage_of(file)));
     }
     match table::load(&path, only) {
         Ok(t) => Loaded::Ok(Box::new(t)),
@@ -72,7 +73,15 @@ fn load(dir: &Path, file: &str, only: Option<&[&str]>) -> Loaded {
 /// The section's message for a file that is not usable, or the table.
 fn require<'a>(loaded: &'a Loaded, file: &str, body: &mut String) -> Option<&'a Table> {
     match loaded {
-        Loaded::Absent => {
+        Loaded::Absent(Some(reason)) => {
+            body.push_str(&format!(
+                "<p class=\"absent\">Not applicable to this event (stage <code>{}</code>): {}</p>",
+                escape(stage_of(file)),
+                escape(reason)
+            ));
+            None
+        }
+        Loaded::Absent(None) => {
             body.push_str(&absent(file, stage_of(file)));
             None
         }
@@ -702,7 +711,8 @@ fn rating_section(
                 format!("{file}: rated")
             }
             Loaded::Ok(_) => format!("{file}: present but holds no ratable value"),
-            Loaded::Absent => format!("{file}: absent (stage {} not run)", stage_of(file)),
+            Loaded::Absent(Some(why)) => format!("{file}: not applicable ({why})"),
+            Loaded::Absent(None) => format!("{file}: absent (stage {} not run)", stage_of(file)),
             Loaded::Unreadable(_) => format!("{file}: unreadable"),
         });
     }
@@ -906,7 +916,7 @@ fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
 
     body.push_str("<h3>Frequency shift against a reference event</h3>");
     match &shifts {
-        Loaded::Absent => body.push_str(&format!(
+        Loaded::Absent(_) => body.push_str(&format!(
             "<p class=\"absent\">Output absent: <code>frequency_shifts.parquet</code> (written by the modal stage only when a previous event of the same structure is given).</p>"
         )),
         _ => {
