@@ -5,8 +5,10 @@
 
 use std::path::{Path, PathBuf};
 
-use arrow_array::{Array, Float64Array, Int32Array, StringArray};
+use arrow_array::{Array, Int32Array};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+
+use super::common::{column_f64, column_str};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -25,46 +27,6 @@ fn f64s(v: &toml::Value) -> Vec<f64> {
         .iter()
         .map(|x| x.as_float().unwrap())
         .collect()
-}
-
-fn column_f64(path: &Path, name: &str) -> Vec<f64> {
-    let r = ParquetRecordBatchReaderBuilder::try_new(std::fs::File::open(path).unwrap())
-        .unwrap()
-        .build()
-        .unwrap();
-    let mut out = Vec::new();
-    for b in r {
-        let b = b.unwrap();
-        let a = b
-            .column_by_name(name)
-            .unwrap()
-            .as_any()
-            .downcast_ref::<Float64Array>()
-            .unwrap()
-            .clone();
-        out.extend((0..a.len()).map(|i| a.value(i)));
-    }
-    out
-}
-
-fn column_str(path: &Path, name: &str) -> Vec<String> {
-    let r = ParquetRecordBatchReaderBuilder::try_new(std::fs::File::open(path).unwrap())
-        .unwrap()
-        .build()
-        .unwrap();
-    let mut out = Vec::new();
-    for b in r {
-        let b = b.unwrap();
-        let a = b
-            .column_by_name(name)
-            .unwrap()
-            .as_any()
-            .downcast_ref::<StringArray>()
-            .unwrap()
-            .clone();
-        out.extend((0..a.len()).map(|i| a.value(i).to_string()));
-    }
-    out
 }
 
 fn run(event: &str, out: &Path) {

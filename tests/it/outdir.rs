@@ -96,7 +96,9 @@ fn a_second_event_removes_the_first_events_results_and_the_report_ignores_them()
     let twin = section(&html, "twin");
     assert!(!twin.contains("<table"), "{twin}");
     assert!(
-        twin.contains("Not applicable to this event (stage <code>update</code>): the event names no twin"),
+        twin.contains(
+            "Not applicable to this event (stage <code>update</code>): the event names no twin"
+        ),
         "{twin}"
     );
     let m = manifest::read(d).unwrap().unwrap();
