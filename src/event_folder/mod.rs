@@ -104,12 +104,15 @@ pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEve
             let format = match entries.iter().find_map(|e| e.format.as_deref()) {
                 Some(f) => Format::from_name(f)
                     .ok_or_else(|| Error::usage(format!("unknown format {f}")))?,
-                None => readers::sniff(file.base_name(), &file.bytes).ok_or_else(|| {
-                    Error::input(
-                        file.location(),
-                        "cannot tell the file format; set `format` in the manifest",
-                    )
-                })?,
+                None => match readers::classify(file.base_name(), &file.bytes) {
+                    readers::Sniffed::Record(f) => f,
+                    readers::Sniffed::Skip(reason) => {
+                        return Err(Error::input(
+                            file.location(),
+                            format!("not read as a record: {reason}; set `format` in the manifest if it is one"),
+                        ))
+                    }
+                },
             };
             let opts = ReadOptions {
                 sampling_rate_hz: entries.iter().find_map(|e| e.sampling_rate_hz),
@@ -157,19 +160,25 @@ pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEve
         picked.sort_by_key(|(order, _)| *order);
         records = picked.into_iter().map(|(_, r)| r).collect();
     } else {
+        // All names, so an uncorrected V1 beside its corrected V2 is skipped.
+        let names: Vec<String> = files.iter().map(|f| f.display_name()).collect();
         for file in &files {
             if is_manifest(file) {
                 continue;
             }
-            let Some(format) = readers::sniff(file.base_name(), &file.bytes) else {
-                reports.push(FileReport {
-                    name: file.display_name(),
-                    format: None,
-                    channels: 0,
-                    skipped: Some("not a record file".into()),
-                });
-                continue;
-            };
+            let format =
+                match readers::classify_in_folder(&file.display_name(), &file.bytes, &names) {
+                    readers::Sniffed::Record(f) => f,
+                    readers::Sniffed::Skip(reason) => {
+                        reports.push(FileReport {
+                            name: file.display_name(),
+                            format: None,
+                            channels: 0,
+                            skipped: Some(reason),
+                        });
+                        continue;
+                    }
+                };
             if format == Format::StationXml {
                 reports.push(FileReport {
                     name: file.display_name(),

@@ -118,6 +118,36 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     Ok(contents)
 }
 
+/// Data lines checked after the `NPTS`/`DT` line when sniffing by content.
+const SNIFF_DATA_LINES: usize = 20;
+
+/// Whether `lines` (the head of a file, `\r` stripped) hold a complete AT2
+/// header: an `NPTS`/`DT` line within the first lines with a positive count
+/// and interval, followed by lines of numbers only (no more values than
+/// NPTS).  Used for content sniffing, so a README quoting `NPTS=… DT=` is
+/// not taken for a record.
+pub(crate) fn header_complete(lines: &[&str]) -> bool {
+    let Some(h) = (0..lines.len().min(MAX_HEADER_LINES))
+        .find(|&i| lines[i].to_ascii_uppercase().contains("NPTS"))
+    else {
+        return false;
+    };
+    let Some((npts, dt)) = npts_dt(lines[h]) else {
+        return false;
+    };
+    if npts == 0 || !(dt > 0.0 && dt.is_finite()) {
+        return false;
+    }
+    let data: Vec<&str> = lines[h + 1..]
+        .iter()
+        .take(SNIFF_DATA_LINES)
+        .copied()
+        .filter(|l| !l.trim().is_empty())
+        .collect();
+    let values: usize = data.iter().map(|l| textfmt::split_free(l).len()).sum();
+    !data.is_empty() && data.iter().all(|l| textfmt::is_numeric_line(l)) && values <= npts
+}
+
 /// `NPTS=   7999, DT=   .0050 SEC,` or `  4000   0.0100   NPTS, DT`.
 fn npts_dt(line: &str) -> Option<(usize, f64)> {
     let upper = line.to_ascii_uppercase();

@@ -21,14 +21,23 @@
 //! (m), [9..13] hypocentre and magnitude, [21] recorder LSB (µV/count), [29]
 //! start second, [41] sensor sensitivity (V/g), [46] gain, [61] sampling
 //! interval (ms).
+//!
+//! The record start is taken from the integer/real header and cross-checked
+//! against the text line `Rcrd start time: … UTC`; a difference above 5 ms
+//! is a `QaFlag::Note` (the header value is kept).
 
 use super::textfmt::{self, Layout, Lines};
 use super::{FileContents, ReadOptions};
 use crate::error::Result;
 use crate::vocab::{
-    epoch_ns_from_ordinal, parse_iso8601_ns, Channel, Direction, Record, SourceRef, Units,
-    STANDARD_GRAVITY,
+    epoch_ns_from_ordinal, format_epoch_ns, parse_iso8601_ns, Channel, Direction, QaFlag, Record,
+    SourceRef, Units, STANDARD_GRAVITY,
 };
+
+/// Largest difference between the two start times a COSMOS header states
+/// (integer/real fields and the `Rcrd start time:` text, printed to the
+/// millisecond) before it is flagged.
+const START_TOLERANCE_NS: i64 = 5_000_000;
 
 pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
     let text = textfmt::decode(bytes);
@@ -478,7 +487,7 @@ fn read_channel(
         channel.missing.push("direction".into());
     }
     channel.elevation_m = real_at(2);
-    channel.start_ns = match (int_at(39), int_at(40), int_at(43), int_at(44)) {
+    let header_start = match (int_at(39), int_at(40), int_at(43), int_at(44)) {
         (Some(y), Some(doy), Some(h), Some(m))
             if (1..=366).contains(&doy) && (0..24).contains(&h) && (0..60).contains(&m) =>
         {
@@ -490,8 +499,24 @@ fn read_channel(
                 real_at(29).unwrap_or(0.0),
             )
         }
-        _ => text_time(text_line(7), "Rcrd start time:"),
+        _ => None,
     };
+    let text_start = text_time(text_line(7), "Rcrd start time:");
+    // The header states the start twice; a disagreement is flagged, not
+    // silently resolved (the text prints milliseconds, hence the tolerance).
+    if let (Some(h), Some(t)) = (header_start, text_start) {
+        if (h - t).abs() > START_TOLERANCE_NS {
+            channel.qa.push(QaFlag::Note {
+                text: format!(
+                    "start time: the integer header ({}) and the text header's \"Rcrd start time\" ({}) disagree by {:.3} s; the integer header's is used",
+                    format_epoch_ns(h),
+                    format_epoch_ns(t),
+                    (h - t) as f64 / 1e9
+                ),
+            });
+        }
+    }
+    channel.start_ns = header_start.or(text_start);
     if channel.start_ns.is_none() {
         channel.missing.push("start_time".into());
     }

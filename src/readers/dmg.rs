@@ -94,6 +94,22 @@ fn is_int_line(line: &str) -> bool {
     }
 }
 
+/// Whether `lines` (the head of a file) hold a complete CSMIP header: a
+/// volume label on the first line, a `STATION NO.` line and the 16I5
+/// integer block within the text-header length.  Used for content sniffing.
+pub(crate) fn header_complete(lines: &[&str]) -> bool {
+    if lines.first().and_then(|l| volume_of(l)).is_none() {
+        return false;
+    }
+    let end = lines.len().min(MAX_TEXT_LINES);
+    match (5..end).find(|&i| is_int_line(lines[i])) {
+        Some(int_at) => lines[..int_at]
+            .iter()
+            .any(|l| l.to_ascii_uppercase().contains("STATION NO.")),
+        None => false,
+    }
+}
+
 /// What the text header says about one channel.
 #[derive(Debug, Default)]
 struct TextHeader {

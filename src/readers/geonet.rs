@@ -23,6 +23,15 @@ const DATA_LAYOUT: Layout = Layout::Fixed {
     width: 8,
 };
 
+/// Whether `lines` (the head of a file) hold a complete GeoNet header: the
+/// 16 text lines, then the numeric header rows.  Used for content sniffing.
+pub(crate) fn header_complete(lines: &[&str]) -> bool {
+    lines.len() > TEXT_LINES + 1
+        && lines[TEXT_LINES..TEXT_LINES + 2]
+            .iter()
+            .all(|l| textfmt::is_numeric_line(l))
+}
+
 pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
     let text = textfmt::decode(bytes);
     let lines = Lines::new(&text, source);

@@ -126,73 +126,308 @@ impl Format {
     }
 }
 
-/// Guesses a file's format from its name and first bytes.  `None` means "not
-/// a record file" (README, event.json, V3 spectra…), which the event folder
-/// lists as skipped rather than failing.
-pub fn sniff(name: &str, head: &[u8]) -> Option<Format> {
-    let lower = name.to_ascii_lowercase();
-    let ext = lower.rsplit('.').next().unwrap_or("");
-    if head.starts_with(b"\x89MCAP") {
-        return Some(Format::Mcap);
+/// What sniffing decided about one file: a record file in a known format,
+/// or a file that is skipped, with the reason shown to the user.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Sniffed {
+    Record(Format),
+    Skip(String),
+}
+
+impl Sniffed {
+    pub fn format(&self) -> Option<Format> {
+        match self {
+            Sniffed::Record(f) => Some(*f),
+            Sniffed::Skip(_) => None,
+        }
     }
-    let text_head = String::from_utf8_lossy(&head[..head.len().min(4096)]);
-    if ext == "xml" || text_head.contains("<FDSNStationXML") {
-        return text_head
-            .contains("<FDSNStationXML")
-            .then_some(Format::StationXml);
+}
+
+/// Extensions of documentation and metadata files.  Such a file is a record
+/// only when its content holds a complete record header (a README quoting
+/// `NPTS=… DT=` must never abort the folder).
+const DOC_EXTENSIONS: [&str; 16] = [
+    "md", "txt", "rst", "pdf", "json", "geojson", "html", "htm", "doc", "docx", "xls", "xlsx",
+    "png", "jpg", "jpeg", "toml",
+];
+
+/// Bytes of the head used for content sniffing (every header structure
+/// checked fits: SMC 17 lines, COSMOS ~15, CSMIP ≤ 40, AT2 ≤ 12 + data).
+const SNIFF_BYTES: usize = 16 * 1024;
+
+/// Guesses a file's format from its name and first bytes.  `None` means "not
+/// a record file" (README, event.json, V3 spectra…); [`classify`] says why.
+pub fn sniff(name: &str, head: &[u8]) -> Option<Format> {
+    classify(name, head).format()
+}
+
+/// Decides whether a file is a record file, and in which format, from its
+/// name and first bytes.  The extension decides among record formats; a
+/// file without a record extension is a record only when its content holds
+/// the format's complete header structure (content sniffing decides between
+/// record formats, it never makes a text file fatal).  Everything else is
+/// skipped with its reason: velocity, displacement and spectra products,
+/// documentation, unknown files.
+pub fn classify(name: &str, head: &[u8]) -> Sniffed {
+    let base = base_name(name);
+    let lower = base.to_ascii_lowercase();
+    let ext = if lower.contains('.') {
+        lower.rsplit('.').next().unwrap_or("")
+    } else {
+        ""
+    };
+    let skip = |reason: &str| Sniffed::Skip(reason.to_string());
+    if head.starts_with(b"\x89MCAP") {
+        return Sniffed::Record(Format::Mcap);
+    }
+    let text = String::from_utf8_lossy(&head[..head.len().min(SNIFF_BYTES)]);
+    // A head cut inside a line: that last partial line is not judged.
+    let mut lines: Vec<&str> = text
+        .split('\n')
+        .map(|l| l.strip_suffix('\r').unwrap_or(l))
+        .collect();
+    if head.len() > SNIFF_BYTES || !text.ends_with('\n') {
+        lines.pop();
+    }
+    let first_line = lines.first().map(|l| l.trim()).unwrap_or("");
+    let first = first_line.to_ascii_lowercase();
+
+    if ext == "xml" || text.contains("<FDSNStationXML") {
+        return if text.contains("<FDSNStationXML") {
+            Sniffed::Record(Format::StationXml)
+        } else {
+            skip("XML file that is not FDSN StationXML")
+        };
+    }
+    // Spectra products by extension (USGS NSMP `_f.fs1`, `_r.rs2`; COSMOS V3).
+    let digits_after = |p: &str| {
+        ext.strip_prefix(p)
+            .is_some_and(|d| !d.is_empty() && d.chars().all(|c| c.is_ascii_digit()))
+    };
+    if digits_after("fs") {
+        return Sniffed::Skip(format!("Fourier amplitude spectrum (.{ext})"));
+    }
+    if digits_after("rs") {
+        return Sniffed::Skip(format!("response spectrum (.{ext})"));
     }
     match ext {
-        "at2" => return Some(Format::At2),
-        "smc" => return Some(Format::Smc),
-        "sac" => return Some(Format::Sac),
-        "mseed" | "miniseed" => return Some(Format::MiniSeed),
-        "csv" | "tsv" => return Some(Format::Csv),
-        "v1a" | "v2a" => return Some(Format::GeoNet),
-        "v0c" | "v1c" | "v2c" => return Some(Format::Cosmos),
-        "mcap" => return Some(Format::Mcap),
+        "at2" => return Sniffed::Record(Format::At2),
+        "smc" => {
+            // The first line names the product (`2 CORRECTED ACCELEROGRAM`,
+            // `4 DISPLACEMENT`); a damaged `.smc` is an error from the
+            // reader, not a silent skip.
+            return smc_product(&first).map_or(Sniffed::Record(Format::Smc), smc_verdict);
+        }
+        "sac" => return Sniffed::Record(Format::Sac),
+        "mseed" | "miniseed" => return Sniffed::Record(Format::MiniSeed),
+        "csv" | "tsv" => return Sniffed::Record(Format::Csv),
+        "v1a" | "v2a" => return Sniffed::Record(Format::GeoNet),
+        "v0c" | "v1c" | "v2c" => {
+            return cosmos_product_skip(&first).unwrap_or(Sniffed::Record(Format::Cosmos))
+        }
+        "v3c" => return skip("COSMOS V3 spectra (no acceleration series)"),
+        "v3" => return skip(
+            "CSMIP V3 spectra (response and Fourier spectra; the acceleration is read from the V2)",
+        ),
+        "mcap" => return Sniffed::Record(Format::Mcap),
+        "v1" | "v2" => {
+            if first.starts_with("response and fourier") {
+                return skip("CSMIP V3 spectra (response and Fourier spectra; the acceleration is read from the V2)");
+            }
+            return if text.contains("COSMOS") || first.contains("(format v") {
+                cosmos_product_skip(&first).unwrap_or(Sniffed::Record(Format::Cosmos))
+            } else {
+                Sniffed::Record(Format::Dmg)
+            };
+        }
         _ => {}
     }
-    // Text strong-motion formats recognised by their first line (COSMOS
-    // "(Format v01.20 with 13 text lines)", GeoNet "… GNS Science", SMC
-    // "2 CORRECTED ACCELEROGRAM", CSMIP "CORRECTED ACCELEROGRAM …"); CSMIP V3
-    // spectra ("RESPONSE AND FOURIER …") stay unrecognised: they hold no records.
-    let first_line = text_head
-        .lines()
-        .next()
-        .unwrap_or("")
-        .trim()
-        .to_ascii_lowercase();
-    if first_line.contains("(format v") {
-        return Some(Format::Cosmos);
+
+    // Content sniffing: the first line names the format, and the rest of the
+    // header must have that format's structure.
+    if let Some(v) = smc_volume(&first) {
+        if smc_int_header_complete(&lines) {
+            return smc_verdict(v);
+        }
     }
-    if first_line.contains("gns science") && first_line.contains("accelerogram") {
-        return Some(Format::GeoNet);
+    if first.contains("(format v") && cosmos_header_complete(&lines) {
+        return cosmos_product_skip(&first).unwrap_or(Sniffed::Record(Format::Cosmos));
     }
-    if first_line == "1 uncorrected accelerogram" || first_line == "2 corrected accelerogram" {
-        return Some(Format::Smc);
-    }
-    if ext == "v1" || ext == "v2" {
-        return Some(if text_head.contains("COSMOS") {
-            Format::Cosmos
-        } else {
-            Format::Dmg
-        });
-    }
-    if first_line.starts_with("corrected accelerogram")
-        || first_line.starts_with("uncorrected accelerogram")
+    if first.contains("gns science")
+        && first.contains("accelerogram")
+        && geonet::header_complete(&lines)
     {
-        return Some(Format::Dmg);
+        return Sniffed::Record(Format::GeoNet);
     }
-    if text_head.contains("NPTS=") && text_head.contains("DT=") {
-        return Some(Format::At2);
+    if first.starts_with("response and fourier") && dmg::header_complete(&lines) {
+        return skip(
+            "CSMIP V3 spectra (response and Fourier spectra; the acceleration is read from the V2)",
+        );
+    }
+    if (first.starts_with("corrected accelerogram")
+        || first.starts_with("uncorrected accelerogram"))
+        && dmg::header_complete(&lines)
+    {
+        return Sniffed::Record(Format::Dmg);
+    }
+    if at2::header_complete(&lines) {
+        return Sniffed::Record(Format::At2);
+    }
+    if DOC_EXTENSIONS.contains(&ext) {
+        return Sniffed::Skip(format!(
+            "documentation or metadata file (.{ext}) without a record header"
+        ));
     }
     if mseed::looks_like(head) {
-        return Some(Format::MiniSeed);
+        return Sniffed::Record(Format::MiniSeed);
     }
     if sac::looks_like(head) {
-        return Some(Format::Sac);
+        return Sniffed::Record(Format::Sac);
     }
-    None
+    // Text: no control bytes other than tab, line ends, form feed and the
+    // DOS end-of-file byte old CDMG files are padded with.
+    let sample = &head[..head.len().min(SNIFF_BYTES)];
+    let binary = sample
+        .iter()
+        .any(|&b| b < 0x09 || (0x0e..0x20).contains(&b) && b != 0x1a || b == 0x7f);
+    if binary {
+        skip("not a record file (unknown binary format)")
+    } else {
+        skip("text file without a record header")
+    }
+}
+
+/// [`classify`] plus the one decision that needs the other files of the
+/// folder: an uncorrected CSMIP V1 (`CHAN001.V1`) or COSMOS V1/V0
+/// (`….V1c`, `….V0c`) beside the corrected V2 of the same name holds the
+/// same channel, so it is skipped as a duplicate and the V2 is read.  A V1
+/// without its V2 is read.  `path` and `folder` are full names (zip members
+/// as `a.zip:dir/CHAN001.V1`), compared case-insensitively.
+pub fn classify_in_folder(path: &str, head: &[u8], folder: &[String]) -> Sniffed {
+    let verdict = classify(path, head);
+    if !matches!(verdict, Sniffed::Record(Format::Dmg | Format::Cosmos)) {
+        return verdict;
+    }
+    let lower = path.to_ascii_lowercase();
+    let Some((stem, ext)) = lower.rsplit_once('.') else {
+        return verdict;
+    };
+    let better: &[&str] = match ext {
+        "v1" => &["v2"],
+        "v1c" => &["v2c"],
+        "v0c" => &["v2c", "v1c"],
+        "v0" => &["v2", "v1"],
+        _ => return verdict,
+    };
+    for b in better {
+        let want = format!("{stem}.{b}");
+        if let Some(other) = folder.iter().find(|n| n.to_ascii_lowercase() == want) {
+            let what = if ext.starts_with("v0") {
+                "raw V0"
+            } else {
+                "uncorrected V1"
+            };
+            return Sniffed::Skip(format!(
+                "{what} duplicate of the corrected {} of the same channel (which is read)",
+                base_name(other)
+            ));
+        }
+    }
+    verdict
+}
+
+/// Last component of a path or zip member name (`a.zip:dir/x.V2` → `x.V2`).
+fn base_name(name: &str) -> &str {
+    name.rsplit([':', '/', '\\']).next().unwrap_or(name)
+}
+
+/// SMC volume number from the first line (`2 CORRECTED ACCELEROGRAM`,
+/// `3 VELOCITY`, `4 DISPLACEMENT`, `5 RESPONSE SPECTRA`): the digit and a
+/// label that agrees with it.
+fn smc_volume(first_lower: &str) -> Option<u8> {
+    let (num, label) = first_lower.split_once(char::is_whitespace)?;
+    let v: u8 = num.parse().ok()?;
+    let label = label.trim();
+    let ok = match v {
+        1 => label.starts_with("uncorrected accelerogram"),
+        2 => label.starts_with("corrected accelerogram"),
+        3 => label.contains("velocity"),
+        4 => label.contains("displacement"),
+        5 => label.contains("spectr"),
+        _ => false,
+    };
+    ok.then_some(v)
+}
+
+/// SMC product named by the first line of a `.smc` file, by its words
+/// (the volume digit is not always present in NSMP products).
+fn smc_product(first_lower: &str) -> Option<u8> {
+    smc_volume(first_lower).or_else(|| {
+        if first_lower.contains("velocity") {
+            Some(3)
+        } else if first_lower.contains("displacement") {
+            Some(4)
+        } else if first_lower.contains("spectr") {
+            Some(5)
+        } else {
+            None
+        }
+    })
+}
+
+fn smc_verdict(volume: u8) -> Sniffed {
+    match volume {
+        1 | 2 => Sniffed::Record(Format::Smc),
+        3 => Sniffed::Skip("SMC velocity series (only acceleration is read)".into()),
+        4 => Sniffed::Skip("SMC displacement series (only acceleration is read)".into()),
+        _ => Sniffed::Skip("SMC response spectra (no acceleration series)".into()),
+    }
+}
+
+/// SMC structure after the first line: 11 text lines, then 6 lines of
+/// 8I10 integers.
+fn smc_int_header_complete(lines: &[&str]) -> bool {
+    lines.len() > 17
+        && lines[11..17].iter().all(|l| {
+            let f = textfmt::fixed_fields(l, 10, 8);
+            f.len() == 8 && f.iter().all(|x| textfmt::parse_int(x).is_some())
+        })
+}
+
+/// COSMOS structure: `(Format v01.20 with 13 text lines)` and the
+/// `… Integer-header values follow …` line right after those text lines.
+fn cosmos_header_complete(lines: &[&str]) -> bool {
+    let first = lines
+        .first()
+        .map(|l| l.to_ascii_lowercase())
+        .unwrap_or_default();
+    let Some(p) = first.find("(format v") else {
+        return false;
+    };
+    let Some(n) = textfmt::number_after(&first[p..], "with").filter(|n| (3.0..=100.0).contains(n))
+    else {
+        return false;
+    };
+    lines.get(n as usize).is_some_and(|l| {
+        l.to_ascii_lowercase()
+            .contains("integer-header values follow")
+    })
+}
+
+/// COSMOS products that are not acceleration series, from the first line
+/// (`Corrected velocity (Format v01.20 …)`).
+fn cosmos_product_skip(first_lower: &str) -> Option<Sniffed> {
+    let label = first_lower.split("(format").next().unwrap_or(first_lower);
+    let reason = if label.contains("velocity") {
+        "COSMOS velocity series (only acceleration is read)"
+    } else if label.contains("displacement") {
+        "COSMOS displacement series (only acceleration is read)"
+    } else if label.contains("spectr") {
+        "COSMOS spectra (no acceleration series)"
+    } else {
+        return None;
+    };
+    Some(Sniffed::Skip(reason.into()))
 }
 
 /// Reads one file's bytes in the given format.

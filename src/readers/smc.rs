@@ -1,19 +1,37 @@
 //! USGS SMC strong-motion files (one channel per file).
 //!
 //! Layout: 11 text lines (line 1 `2 CORRECTED ACCELEROGRAM` or
-//! `1 UNCORRECTED ACCELEROGRAM`), 48 integers (8I10 on 6 lines; the first is
-//! the "missing" code, then year, day-of-year, hour, minute, second,
-//! millisecond …, [13] horizontal orientation, [15] comment-line count,
-//! [16] number of samples), 50 reals (5E15.7 on 10 lines; the first is the
-//! "missing" value, then the sampling rate, epicentre latitude, longitude,
-//! depth, moment/surface/local magnitudes …), comment lines starting `|`,
-//! then the samples in 8E10.4 fixed fields that may touch.
+//! `1 UNCORRECTED ACCELEROGRAM`; line 4 the event date and `hhmm`, e.g.
+//! `     1989  10  18    0004 Loma Prieta, CA`), 48 integers (8I10 on 6
+//! lines; the first is the "missing" code, then the record start, [13]
+//! horizontal orientation, [15] comment-line count, [16] number of samples),
+//! 50 reals (5E15.7 on 10 lines; the first is the "missing" value, then the
+//! sampling rate, epicentre latitude, longitude, depth, moment/surface/local
+//! magnitudes …), comment lines starting `|`, then the samples in 8E10.4
+//! fixed fields that may touch.  A real equal to 1.7E+38 (the SMC sentinel)
+//! is missing even where the header's own missing value differs.
 //!
-//! Two variants are handled besides evenly sampled data:
+//! Only acceleration is read: velocity (`3 VELOCITY`) and displacement
+//! (`4 DISPLACEMENT`) files are refused here and skipped with that reason
+//! by the event folder (`readers::classify`).
+//!
+//! Record start: the integer header holds either year, day of year, hour,
+//! minute, second, millisecond (fields 2–7, the SMC default) or, in NSMP
+//! files, year, month, day, hour, minute, second, millisecond (fields 2–8).
+//! Both readings are checked against line 4's date and `hhmm` (within one
+//! hour: that is the event time, the record starts minutes later); the
+//! agreeing one is used and recorded in `inferred`.  When neither agrees or
+//! line 4 has no date, the default reading is kept and a `QaFlag::Note` says so.
+//!
+//! Variants handled besides evenly sampled data:
 //! - files with values after the declared count: the declared count is kept
 //!   and a `QaFlag::Note` says how many were ignored;
-//! - uncorrected files of uneven `(time, value)` pairs (digitised film
-//!   records): they are resampled onto a uniform grid by linear
+//! - uncorrected files (or files without a sampling rate) of uneven
+//!   `(time, value)` pairs (digitised film records): integer field 17 counts
+//!   either the pairs or the values (2 × pairs); the numbers present in the
+//!   data section decide (pairs with increasing times in the pair-count
+//!   reading, else in the value-count one, which is recorded in
+//!   `inferred`).  The pairs are resampled onto a uniform grid by linear
 //!   interpolation (at the header rate, or the median time step when the
 //!   header has none), flagged `QaFlag::Resampled`, and the step is recorded
 //!   in the channel's `inferred` list.
@@ -21,7 +39,10 @@
 use super::textfmt::{self, Layout, Lines};
 use super::{FileContents, ReadOptions};
 use crate::error::Result;
-use crate::vocab::{epoch_ns_from_ordinal, Channel, Direction, QaFlag, Record, SourceRef, Units};
+use crate::vocab::{
+    epoch_ns_from_civil, epoch_ns_from_ordinal, format_epoch_ns, Channel, Direction, QaFlag,
+    Record, SourceRef, Units,
+};
 
 const TEXT_LINES: usize = 11;
 const INT_LINES: usize = 6;
@@ -102,11 +123,12 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
         ));
     }
     let real_missing = reals[0];
+    // Missing reals: the header's own code (field 1), and the SMC sentinel
+    // 1.7E+38 itself, which real files use even where field 1 differs.
     let real_at = |k: usize| {
-        reals
-            .get(k)
-            .copied()
-            .filter(|&v| (v - real_missing).abs() > 1e-6 * real_missing.abs().max(1.0))
+        reals.get(k).copied().filter(|&v| {
+            (v - real_missing).abs() > 1e-6 * real_missing.abs().max(1.0) && v.abs() < 1e38
+        })
     };
 
     // Comment lines start with '|'; the header says how many.
@@ -178,18 +200,40 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     ];
     let mut start_offset_s = 0.0;
 
-    let pairs = values.len() >= 2 * npts && npts >= 2 && (uncorrected || rate.is_none()) && {
-        let times: Vec<f64> = values[..2 * npts].iter().step_by(2).copied().collect();
+    // Uneven (time, value) pairs: the integer header counts either the
+    // pairs or the values (2 × pairs) — both occur in real files — so the
+    // numbers actually present decide: pairs with increasing times, first
+    // in the pair-count reading, then in the value-count one.
+    let increasing_times = |n_values: usize| {
+        let times: Vec<f64> = values[..n_values].iter().step_by(2).copied().collect();
         times[0] >= 0.0 && times.windows(2).all(|w| w[1] > w[0])
     };
-    let (samples, rate_hz) = if pairs {
-        let times: Vec<f64> = values[..2 * npts].iter().step_by(2).copied().collect();
-        let accel: Vec<f64> = values[..2 * npts]
-            .iter()
-            .skip(1)
-            .step_by(2)
-            .copied()
-            .collect();
+    let maybe_pairs = uncorrected || rate.is_none();
+    let n_pairs = if maybe_pairs
+        && npts >= 2
+        && values.len() >= 2 * npts
+        && increasing_times(2 * npts)
+    {
+        Some(npts)
+    } else if maybe_pairs
+        && npts >= 4
+        && npts % 2 == 0
+        && values.len() >= npts
+        && increasing_times(npts)
+    {
+        inferred.push(format!(
+            "integer header field 17 = {npts} counts values, not pairs: the data section holds {} numbers forming {} (time, value) pairs with increasing times",
+            values.len(),
+            npts / 2
+        ));
+        Some(npts / 2)
+    } else {
+        None
+    };
+    let (samples, rate_hz) = if let Some(n_pairs) = n_pairs {
+        let used = 2 * n_pairs;
+        let times: Vec<f64> = values[..used].iter().step_by(2).copied().collect();
+        let accel: Vec<f64> = values[..used].iter().skip(1).step_by(2).copied().collect();
         let dt = match rate {
             Some(r) => 1.0 / r,
             None => median_step(&times),
@@ -206,15 +250,15 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
             from: "uneven (time,value) pairs".into(),
         });
         inferred.push(format!(
-            "samples resampled from {npts} uneven (time,value) pairs onto a uniform grid dt={dt} s ({}) by linear interpolation",
-            if rate.is_some() { "header rate" } else { "median time step" }
+            "samples resampled from {n_pairs} uneven (time,value) pairs onto a uniform grid dt={dt} s ({}) by linear interpolation",
+            if rate.is_some() { "header rate" } else { "median time step; the header has no sampling rate" }
         ));
         start_offset_s = times[0];
-        if values.len() > 2 * npts {
+        if values.len() > used {
             qa.push(QaFlag::Note {
                 text: format!(
-                    "{} values after the {npts} declared (time,value) pairs were ignored",
-                    values.len() - 2 * npts
+                    "{} values after the {n_pairs} declared (time,value) pairs were ignored",
+                    values.len() - used
                 ),
             });
         }
@@ -232,7 +276,7 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
             ));
         }
         let rate = rate.ok_or_else(|| {
-            lines.err(real_start, "real header field 2 (sampling rate) is missing")
+            lines.err(real_start, "real header field 2 (sampling rate) is missing, and the data are not (time, value) pairs")
         })?;
         if values.len() > npts {
             let at = textfmt::line_of_value(&marks, npts)
@@ -256,17 +300,12 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     if direction.is_none() {
         channel.missing.push("direction".into());
     }
-    // Start: year, day of year, hour, minute, second, millisecond.
-    channel.start_ns = match (int_at(1), int_at(2), int_at(3), int_at(4)) {
-        (Some(y), Some(doy), Some(h), Some(m))
-            if (0..=366).contains(&doy) && (0..24).contains(&h) && (0..60).contains(&m) =>
-        {
-            let sec = int_at(5).unwrap_or(0) as f64 + int_at(6).unwrap_or(0) as f64 / 1000.0;
-            epoch_ns_from_ordinal(y, doy as u32, h as u32, m as u32, sec)
-                .map(|t| t + (start_offset_s * 1e9).round() as i64)
-        }
-        _ => None,
-    };
+    let start = start_time(&ints, int_missing, lines.get(3));
+    inferred.extend(start.inferred);
+    qa.extend(start.qa);
+    channel.start_ns = start
+        .start_ns
+        .map(|t| t + (start_offset_s * 1e9).round() as i64);
     if channel.start_ns.is_none() {
         channel.missing.push("start_time".into());
     }
@@ -289,6 +328,150 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     }
     contents.records.push(Record::new(channel, samples));
     Ok(contents)
+}
+
+/// Record start and how it was decided.
+struct Start {
+    start_ns: Option<i64>,
+    inferred: Vec<String>,
+    qa: Vec<QaFlag>,
+}
+
+/// Largest distance between the record start and the text header's
+/// `hhmm` (the event time, to the minute) for the two to agree: records
+/// start within minutes of the origin, while a mistaken layout is off by
+/// days or hours.
+const TEXT_TIME_TOLERANCE_NS: i64 = 3_600 * 1_000_000_000;
+
+/// Record start from the integer header, whose first fields are laid out
+/// either as year, day of year, hour, minute, second, millisecond (SMC
+/// default) or as year, month, day, hour, minute, second, millisecond (NSMP
+/// files).  The layout is chosen by cross-checking with the date (and
+/// `hhmm`) the text header states on line 4 (`     2018  01  04    1039
+/// …`); the choice is recorded in `inferred`, and a disagreement or an
+/// unchecked start is a `QaFlag::Note`, never a silent choice.
+fn start_time(ints: &[i64], missing: i64, event_line: &str) -> Start {
+    let int_at = |k: usize| ints.get(k).copied().filter(|&v| v != missing);
+    let in_range = |v: i64, lo: i64, hi: i64| (lo..=hi).contains(&v);
+    let second = |s: usize, ms: usize| -> Option<f64> {
+        let sec = int_at(s).unwrap_or(0);
+        let milli = int_at(ms).unwrap_or(0);
+        (in_range(sec, 0, 60) && in_range(milli, 0, 999)).then(|| sec as f64 + milli as f64 / 1e3)
+    };
+    let doy_reading = match (int_at(1), int_at(2), int_at(3), int_at(4), second(5, 6)) {
+        (Some(y), Some(doy), Some(h), Some(m), Some(sec))
+            if in_range(doy, 1, 366) && in_range(h, 0, 23) && in_range(m, 0, 59) =>
+        {
+            epoch_ns_from_ordinal(y, doy as u32, h as u32, m as u32, sec)
+        }
+        _ => None,
+    };
+    let md_reading = match (
+        int_at(1),
+        int_at(2),
+        int_at(3),
+        int_at(4),
+        int_at(5),
+        second(6, 7),
+    ) {
+        (Some(y), Some(mo), Some(d), Some(h), Some(m), Some(sec))
+            if in_range(mo, 1, 12)
+                && in_range(d, 1, 31)
+                && in_range(h, 0, 23)
+                && in_range(m, 0, 59) =>
+        {
+            epoch_ns_from_civil(y, mo as u32, d as u32, h as u32, m as u32, sec)
+        }
+        _ => None,
+    };
+    const DOY: &str = "year, day of year, hour, minute, second, millisecond";
+    const MD: &str = "year, month, day, hour, minute, second, millisecond";
+    let show = |t: Option<i64>| t.map_or("not a valid time".to_string(), format_epoch_ns);
+    let mut out = Start {
+        start_ns: None,
+        inferred: Vec::new(),
+        qa: Vec::new(),
+    };
+    // The documented default, and what is kept when nothing confirms a layout.
+    let (default_ns, default_layout) = match (doy_reading, md_reading) {
+        (Some(t), _) => (Some(t), DOY),
+        (None, Some(t)) => (Some(t), MD),
+        (None, None) => (None, DOY),
+    };
+    let Some((text, text_ns, has_time)) = text_date(event_line) else {
+        out.start_ns = default_ns;
+        if default_ns.is_some() {
+            out.qa.push(QaFlag::Note {
+                text: format!(
+                    "start time not cross-checked: the text header (line 4) states no date; integer header read as {default_layout}"
+                ),
+            });
+        }
+        return out;
+    };
+    let agrees = |t: Option<i64>| {
+        t.is_some_and(|t| {
+            if has_time {
+                (t - text_ns).abs() <= TEXT_TIME_TOLERANCE_NS
+            } else {
+                (text_ns..text_ns + 86_400 * 1_000_000_000).contains(&t)
+            }
+        })
+    };
+    match (agrees(doy_reading), agrees(md_reading)) {
+        (true, _) => {
+            out.start_ns = doy_reading;
+            out.inferred.push(format!(
+                "start time from the integer header read as {DOY} (agrees with the text header's {text:?})"
+            ));
+        }
+        (false, true) => {
+            out.start_ns = md_reading;
+            out.inferred.push(format!(
+                "start time from the integer header read as {MD} (NSMP layout): it agrees with the text header's {text:?}, the {DOY} reading ({}) does not",
+                show(doy_reading)
+            ));
+        }
+        (false, false) => {
+            out.start_ns = default_ns;
+            out.qa.push(QaFlag::Note {
+                text: format!(
+                    "start time disagrees with the text header's {text:?} in both integer-header layouts ({DOY}: {}; {MD}: {}); {}",
+                    show(doy_reading),
+                    show(md_reading),
+                    if default_ns.is_some() {
+                        format!("the {default_layout} reading is kept")
+                    } else {
+                        "no start time".to_string()
+                    }
+                ),
+            });
+        }
+    }
+    out
+}
+
+/// Date (and `hhmm` when present) the text header states on line 4:
+/// `     1989  10  18    0004 Loma Prieta, CA` → (the text, epoch ns, has time).
+fn text_date(line: &str) -> Option<(String, i64, bool)> {
+    let tokens: Vec<&str> = line.split_whitespace().take(4).collect();
+    let num = |k: usize| -> Option<i64> {
+        let t = tokens.get(k)?;
+        t.chars()
+            .all(|c| c.is_ascii_digit())
+            .then(|| t.parse().ok())
+            .flatten()
+    };
+    let (y, mo, d) = (num(0)?, num(1)?, num(2)?);
+    if !((1900..=2200).contains(&y) && (1..=12).contains(&mo) && (1..=31).contains(&d)) {
+        return None;
+    }
+    let hhmm =
+        num(3).filter(|v| (3..=4).contains(&tokens[3].len()) && v / 100 < 24 && v % 100 < 60);
+    let (h, m) = hhmm.map_or((0, 0), |v| (v / 100, v % 100));
+    let ns = epoch_ns_from_civil(y, mo as u32, d as u32, h as u32, m as u32, 0.0)?;
+    let shown = tokens[..if hhmm.is_some() { 4 } else { 3 }].join(" ");
+    Some((shown, ns, hhmm.is_some()))
 }
 
 /// Median of successive differences of increasing times.

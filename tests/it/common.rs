@@ -65,3 +65,70 @@ pub fn column_str(path: &std::path::Path, name: &str) -> Vec<String> {
     }
     out
 }
+
+/// A USGS SMC file in the published layout (11 text lines, 48 integers in
+/// 8I10, 50 reals in 5E15.7, one `|` comment line, then `data_lines`).
+/// `label` is line 1, `line4` the event line (date and `hhmm`), `station`
+/// the 4-character station code, `component` the orientation text;
+/// `ints` patches integer fields (0-based) over the defaults (missing code
+/// -32768; start 2020, day 2, 03:04:05; orientation 360; 1 comment line;
+/// `npts` samples); `rate` None leaves the sampling rate at the SMC missing
+/// sentinel 1.7E+38.
+#[allow(clippy::too_many_arguments)]
+pub fn smc_file(
+    label: &str,
+    line4: &str,
+    station: &str,
+    component: &str,
+    ints: &[(usize, i64)],
+    npts: usize,
+    rate: Option<f64>,
+    data_lines: &[String],
+) -> String {
+    let mut s = String::new();
+    s.push_str(&format!(
+        "{label}\n*\n{station}A\n{line4}\nMoment Mag=      5.0\n"
+    ));
+    s.push_str(&format!(
+        "station = Test site component=    {component}\nepicentral dist =  1.0\ninst type=X\n*\n*\n*\n"
+    ));
+    let miss = -32768i64;
+    let mut header = vec![miss; 48];
+    header[1] = 2020;
+    header[2] = 2;
+    header[3] = 3;
+    header[4] = 4;
+    header[5] = 5;
+    header[13] = 360;
+    header[15] = 1;
+    header[16] = npts as i64;
+    for &(k, v) in ints {
+        header[k] = v;
+    }
+    for row in header.chunks(8) {
+        s.push_str(&row.iter().map(|v| format!("{v:10}")).collect::<String>());
+        s.push('\n');
+    }
+    let mut reals = vec![1.7e38; 50];
+    if let Some(r) = rate {
+        reals[1] = r;
+    }
+    for row in reals.chunks(5) {
+        s.push_str(&row.iter().map(|v| format!("{v:15.7E}")).collect::<String>());
+        s.push('\n');
+    }
+    s.push_str("| a comment\n");
+    for l in data_lines {
+        s.push_str(l);
+        s.push('\n');
+    }
+    s
+}
+
+/// Values in the SMC data layout (8 fields of E10.4 per line).
+pub fn fixed_e10(values: &[f64]) -> Vec<String> {
+    values
+        .chunks(8)
+        .map(|c| c.iter().map(|v| format!("{v:10.4E}")).collect())
+        .collect()
+}

@@ -4,6 +4,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use crate::common::{fixed_e10, smc_file};
 use quaketwin::event_folder::{self, ArchiveLimits};
 use quaketwin::Error;
 use zip::write::SimpleFileOptions;
@@ -446,5 +447,195 @@ fn folder_without_manifest_still_gives_a_report() {
     assert!(
         html.contains("role"),
         "the report says what is missing to go further"
+    );
+}
+
+/// Why `name` (a suffix of its display name) was skipped; panics when it was read.
+fn skip_reason(loaded: &event_folder::LoadedEvent, name: &str) -> String {
+    let f = loaded
+        .files
+        .iter()
+        .find(|f| f.name.ends_with(name))
+        .unwrap_or_else(|| panic!("{name} not listed: {:?}", loaded.files));
+    f.skipped
+        .clone()
+        .unwrap_or_else(|| panic!("{name} was read, not skipped"))
+}
+
+#[test]
+fn nsmp_zip_reads_acceleration_and_lists_other_products_with_reasons() {
+    // Per channel: acceleration, velocity, displacement, Fourier and
+    // response spectra, as in USGS NSMP event zips.
+    let values: Vec<f64> = (0..16).map(|k| (k as f64 * 0.4).sin() * 10.0).collect();
+    let data = fixed_e10(&values);
+    let line4 = "     2018  01  04    1039 Anchorage test";
+    let start = [
+        (1, 2018),
+        (2, 1),
+        (3, 4),
+        (4, 10),
+        (5, 39),
+        (6, 0),
+        (7, 164),
+    ];
+    let mut members: Vec<(String, Vec<u8>)> = Vec::new();
+    for (code, comp) in [("ANC1", "360"), ("ANC2", "90")] {
+        for (suffix, label) in [
+            ("a.smc", "2 CORRECTED ACCELEROGRAM"),
+            ("v.smc", "3 VELOCITY"),
+            ("d.smc", "4 DISPLACEMENT"),
+        ] {
+            let text = smc_file(label, line4, code, comp, &start, 16, Some(100.0), &data);
+            members.push((format!("8040/{code}_{suffix}"), text.into_bytes()));
+        }
+        members.push((
+            format!("8040/{code}_f.fs1"),
+            b"5 FOURIER AMPLITUDE SPECTRA\n 0.1 0.2\n".to_vec(),
+        ));
+        members.push((
+            format!("8040/{code}_r.rs2"),
+            b"5 RESPONSE SPECTRA\n 0.1 0.2\n".to_vec(),
+        ));
+    }
+    let refs: Vec<(&str, &[u8])> = members
+        .iter()
+        .map(|(n, b)| (n.as_str(), b.as_slice()))
+        .collect();
+    let dir = tempfile::tempdir().unwrap();
+    let p = temp_file(dir.path(), "nsmp.zip", &zip_bytes(&refs));
+    let loaded = event_folder::load(&p).unwrap();
+
+    let ids: Vec<&str> = loaded
+        .event
+        .records
+        .iter()
+        .map(|r| r.channel.id.as_str())
+        .collect();
+    assert_eq!(ids, ["ANC1.360", "ANC2.90"]);
+    for r in &loaded.event.records {
+        assert_eq!(
+            r.channel.start_ns,
+            quaketwin::vocab::epoch_ns_from_civil(2018, 1, 4, 10, 39, 0.164)
+        );
+    }
+    let skipped: Vec<_> = loaded
+        .files
+        .iter()
+        .filter(|f| f.skipped.is_some())
+        .collect();
+    assert_eq!(skipped.len(), 8, "{:?}", loaded.files);
+    for code in ["ANC1", "ANC2"] {
+        let r = skip_reason(&loaded, &format!("{code}_v.smc"));
+        assert!(
+            r.contains("SMC velocity series (only acceleration is read)"),
+            "{r}"
+        );
+        let r = skip_reason(&loaded, &format!("{code}_d.smc"));
+        assert!(r.contains("SMC displacement series"), "{r}");
+        let r = skip_reason(&loaded, &format!("{code}_f.fs1"));
+        assert!(r.contains("Fourier amplitude spectrum (.fs1)"), "{r}");
+        let r = skip_reason(&loaded, &format!("{code}_r.rs2"));
+        assert!(r.contains("response spectrum (.rs2)"), "{r}");
+    }
+}
+
+#[test]
+fn documentation_quoting_a_record_header_is_skipped_not_fatal() {
+    let dir = tempfile::tempdir().unwrap();
+    temp_file(dir.path(), "rec.AT2", AT2.as_bytes());
+    temp_file(
+        dir.path(),
+        "README.md",
+        b"# Test event\n\nThe AT2 header line reads\nNPTS=  100, DT= 0.01\nand the values follow.\n",
+    );
+    temp_file(
+        dir.path(),
+        "PROVENANCE.md",
+        b"Records copied unchanged.\nNPTS=  100, DT= 0.01 SEC\n",
+    );
+    let loaded = event_folder::load(dir.path()).unwrap();
+    assert_eq!(loaded.event.records.len(), 1);
+    assert_eq!(loaded.event.records[0].samples.len(), 7);
+    for doc in ["README.md", "PROVENANCE.md"] {
+        let r = skip_reason(&loaded, doc);
+        assert!(
+            r.contains("documentation") && r.contains(".md"),
+            "{doc}: {r}"
+        );
+    }
+}
+
+/// A CSMIP file of one channel (station 99999, channel 1) in the published
+/// layout: `label` on line 1, 16I5 and 8F10 headers, then the 8-value
+/// acceleration section.
+fn csmip_channel(label: &str) -> String {
+    let mut t = format!("{label}\nTEST EARTHQUAKE\n");
+    t.push_str(
+        "STATION NO. 99999   34.000N, 118.000W   SMA-1  S/N 0001\nTEST SITE\nCHAN  1:  90 DEG\n",
+    );
+    t.push_str(
+        &[1i64, 1, 1, 3, 3]
+            .iter()
+            .map(|v| format!("{v:5}"))
+            .collect::<String>(),
+    );
+    t.push_str(&"    0".repeat(11));
+    t.push('\n');
+    for _ in 0..5 {
+        t.push_str(&"    0".repeat(16));
+        t.push('\n');
+    }
+    t.push_str(&"    0".repeat(4));
+    t.push('\n');
+    for row in 0..13 {
+        t.push_str(&"      .000".repeat(if row == 12 { 4 } else { 8 }));
+        t.push('\n');
+    }
+    t.push_str("    8 POINTS OF ACCEL DATA EQUALLY SPACED AT  .020 SEC. (UNITS: CM/SEC/SEC)\n");
+    t.push_str(
+        "     1.000     2.000     3.000     4.000     5.000     6.000     7.000     8.000\n",
+    );
+    t.push_str("/&  ----------  END OF DATA FOR CHANNEL  1  ----------\n");
+    t
+}
+
+#[test]
+fn csmip_v1_beside_its_v2_is_a_duplicate_and_alone_is_read() {
+    let v1 = csmip_channel("UNCORRECTED ACCELEROGRAM DATA");
+    let v2 = csmip_channel("CORRECTED ACCELEROGRAM");
+    let dir = tempfile::tempdir().unwrap();
+    let both = temp_file(
+        dir.path(),
+        "both.zip",
+        &zip_bytes(&[("CHAN001.V1", v1.as_bytes()), ("CHAN001.V2", v2.as_bytes())]),
+    );
+    let loaded = event_folder::load(&both).unwrap();
+    assert_eq!(loaded.event.records.len(), 1, "{:?}", loaded.files);
+    let rec = &loaded.event.records[0];
+    assert_eq!(
+        rec.channel.id, "99999.01",
+        "no #n suffix: the V1 was not read"
+    );
+    assert_eq!(rec.channel.source.member.as_deref(), Some("CHAN001.V2"));
+    let r = skip_reason(&loaded, "CHAN001.V1");
+    assert!(
+        r.contains("uncorrected V1 duplicate") && r.contains("CHAN001.V2"),
+        "{r}"
+    );
+
+    let only = temp_file(
+        dir.path(),
+        "raw.zip",
+        &zip_bytes(&[("CHAN001.V1", v1.as_bytes())]),
+    );
+    let loaded = event_folder::load(&only).unwrap();
+    assert_eq!(loaded.event.records.len(), 1);
+    assert_eq!(
+        loaded.event.records[0].channel.source.member.as_deref(),
+        Some("CHAN001.V1")
+    );
+    assert_eq!(
+        loaded.event.records[0].samples,
+        [1., 2., 3., 4., 5., 6., 7., 8.]
     );
 }

@@ -9,6 +9,8 @@ use quaketwin::readers::{self, FileContents, Format, ReadOptions};
 use quaketwin::vocab::{epoch_ns_from_civil, Direction, QaFlag, Record, SourceRef, Units};
 use std::io::Read;
 
+use crate::common::{fixed_e10, smc_file};
+
 const RECORDS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/records");
 
 fn source(file: &str, member: Option<&str>, format: Format) -> SourceRef {
@@ -258,48 +260,16 @@ fn smc_loma_prieta_matches_gmprocess_reference() {
 
 /// SMC header for crafted files: `npts` samples, `rate` (None → missing).
 fn smc_text(label: &str, npts: usize, rate: Option<f64>, data_lines: &[String]) -> String {
-    let mut s = String::new();
-    s.push_str(&format!(
-        "{label}\n*\nTST0A\n     2020   1   2    0304 Test quake\nMoment Mag=      5.0\n"
-    ));
-    s.push_str(
-        "station = Test site component=    360\nepicentral dist =  1.0\ninst type=X\n*\n*\n*\n",
-    );
-    let miss = -32768i64;
-    let mut ints = vec![miss; 48];
-    ints[1] = 2020;
-    ints[2] = 2;
-    ints[3] = 3;
-    ints[4] = 4;
-    ints[5] = 5;
-    ints[13] = 360;
-    ints[15] = 1;
-    ints[16] = npts as i64;
-    for row in ints.chunks(8) {
-        s.push_str(&row.iter().map(|v| format!("{v:10}")).collect::<String>());
-        s.push('\n');
-    }
-    let mut reals = vec![1.7e38; 50];
-    if let Some(r) = rate {
-        reals[1] = r;
-    }
-    for row in reals.chunks(5) {
-        s.push_str(&row.iter().map(|v| format!("{v:15.7E}")).collect::<String>());
-        s.push('\n');
-    }
-    s.push_str("| a comment\n");
-    for l in data_lines {
-        s.push_str(l);
-        s.push('\n');
-    }
-    s
-}
-
-fn fixed_e10(values: &[f64]) -> Vec<String> {
-    values
-        .chunks(8)
-        .map(|c| c.iter().map(|v| format!("{v:10.4E}")).collect())
-        .collect()
+    smc_file(
+        label,
+        "     2020   1   2    0304 Test quake",
+        "TST0",
+        "360",
+        &[],
+        npts,
+        rate,
+        data_lines,
+    )
 }
 
 #[test]
@@ -380,6 +350,138 @@ fn smc_extra_values_keep_declared_count_with_note() {
         .qa
         .iter()
         .any(|q| matches!(q, QaFlag::Note { text } if text.contains("4 values after the 16"))));
+}
+
+#[test]
+fn smc_pairs_counted_as_values_without_rate() {
+    // NSMP V1 film digitisation: integer field 17 gives the number of
+    // *values* (2 × pairs), and the rate is the missing sentinel 1.7E+38.
+    let times: Vec<f64> = (0..25)
+        .map(|k| 0.02 * k as f64 + if k % 4 == 1 { 0.005 } else { 0.0 })
+        .collect();
+    let f = |t: f64| 3.0 + 20.0 * t;
+    let values: Vec<f64> = times.iter().flat_map(|&t| [t, f(t)]).collect();
+    let text = smc_text(
+        "1 UNCORRECTED ACCELEROGRAM",
+        values.len(),
+        None,
+        &fixed_e10(&values),
+    );
+    let c = read_text(Format::Smc, "v1.smc", &text).unwrap();
+    let r = &c.records[0];
+    // Median step 0.02 s over 0..0.48 s → 25 uniform samples.
+    assert!(
+        (r.channel.dt() - 0.02).abs() < 1e-12,
+        "dt {}",
+        r.channel.dt()
+    );
+    assert_eq!(r.len(), 25);
+    for (k, v) in r.samples.iter().enumerate() {
+        assert!((v - f(0.02 * k as f64)).abs() < 1e-3, "sample {k}: {v}");
+    }
+    assert!(
+        r.channel
+            .inferred
+            .iter()
+            .any(|s| s.contains("counts values, not pairs") && s.contains("25 (time, value) pairs")),
+        "{:?}",
+        r.channel.inferred
+    );
+    assert!(r
+        .channel
+        .inferred
+        .iter()
+        .any(|s| s.contains("median time step")));
+    assert!(r.channel.qa.contains(&QaFlag::Resampled {
+        from: "uneven (time,value) pairs".into()
+    }));
+    // Evenly sampled values with no rate and no increasing times are still an error.
+    let even: Vec<f64> = (0..16).map(|k| (k as f64 * 0.9).sin()).collect();
+    expect_input_error(
+        read_text(
+            Format::Smc,
+            "even.smc",
+            &smc_text("2 CORRECTED ACCELEROGRAM", 16, None, &fixed_e10(&even)),
+        ),
+        "even.smc",
+        None,
+        "sampling rate",
+    );
+}
+
+/// An SMC file with the given start fields (integer header 1..) and line 4.
+fn smc_with_start(start: &[i64], line4: &str) -> Record {
+    let ints: Vec<(usize, i64)> = start.iter().enumerate().map(|(k, &v)| (k + 1, v)).collect();
+    let values: Vec<f64> = (0..16).map(|k| k as f64 - 7.5).collect();
+    let text = smc_file(
+        "2 CORRECTED ACCELEROGRAM",
+        line4,
+        "ANC1",
+        "90",
+        &ints,
+        16,
+        Some(100.0),
+        &fixed_e10(&values),
+    );
+    read_text(Format::Smc, "t_a.smc", &text).unwrap().records[0].clone()
+}
+
+#[test]
+fn smc_start_time_layout_is_cross_checked_with_the_text_header() {
+    // NSMP: year, month, day, hour, minute, second, millisecond.
+    let r = smc_with_start(
+        &[2018, 1, 4, 10, 39, 0, 164],
+        "     2018  01  04    1039 Anchorage test",
+    );
+    assert_eq!(
+        r.channel.start_ns,
+        Some(ns(2018, 1, 4, 10, 39, 0.164)),
+        "{:?}",
+        r.channel.start_ns.map(quaketwin::vocab::format_epoch_ns)
+    );
+    assert!(
+        r.channel
+            .inferred
+            .iter()
+            .any(|s| s.contains("year, month, day") && s.contains("2018 01 04 1039")),
+        "{:?}",
+        r.channel.inferred
+    );
+    assert!(r.channel.qa.is_empty(), "{:?}", r.channel.qa);
+
+    // The default layout (year, day of year, …) when it is the one that agrees.
+    let r = smc_with_start(&[2018, 4, 10, 39, 0, 164], "     2018  01  04    1039 Test");
+    assert_eq!(r.channel.start_ns, Some(ns(2018, 1, 4, 10, 39, 0.164)));
+    assert!(r.channel.qa.is_empty(), "{:?}", r.channel.qa);
+
+    // Neither layout agrees: the default reading is kept, and a QA note says so.
+    let r = smc_with_start(
+        &[2018, 1, 4, 10, 39, 0, 164],
+        "     2018  02  20    1200 Test",
+    );
+    assert_eq!(r.channel.start_ns, Some(ns(2018, 1, 1, 4, 10, 39.0)));
+    assert!(
+        r.channel
+            .qa
+            .iter()
+            .any(|q| matches!(q, QaFlag::Note { text }
+            if text.contains("disagrees") && text.contains("2018 02 20 1200"))),
+        "{:?}",
+        r.channel.qa
+    );
+
+    // No date in the text header: default reading, flagged as not cross-checked.
+    let r = smc_with_start(&[2018, 4, 10, 39, 0, 164], "Test quake without a date");
+    assert_eq!(r.channel.start_ns, Some(ns(2018, 1, 4, 10, 39, 0.164)));
+    assert!(
+        r.channel
+            .qa
+            .iter()
+            .any(|q| matches!(q, QaFlag::Note { text }
+            if text.contains("not cross-checked"))),
+        "{:?}",
+        r.channel.qa
+    );
 }
 
 // ------------------------------------------------------------------ GeoNet
@@ -860,6 +962,89 @@ fn sniff_by_content_without_extension() {
         Some(Format::Dmg)
     );
     assert_eq!(readers::sniff("notes.txt", b"hello"), None);
+}
+
+#[test]
+fn content_sniffing_needs_a_complete_header() {
+    use readers::Sniffed;
+    let skip_reason = |name: &str, text: &str| match readers::classify(name, text.as_bytes()) {
+        Sniffed::Skip(r) => r,
+        other => panic!("{name}: expected a skip, got {other:?}"),
+    };
+    // A README quoting an AT2 header line is documentation, not a record.
+    let readme =
+        "# Records\n\nEach file has a line like\nNPTS=  100, DT= 0.01 SEC\nthen the values.\n";
+    assert!(skip_reason("README.md", readme).contains("documentation"));
+    assert!(skip_reason("PROVENANCE", readme).contains("text file without a record header"));
+    // The same line followed by numbers only is a complete AT2 header,
+    // whatever the extension.
+    assert_eq!(
+        readers::sniff("record.txt", AT2_OK.as_bytes()),
+        Some(Format::At2)
+    );
+    assert_eq!(
+        readers::sniff("record", AT2_OK.as_bytes()),
+        Some(Format::At2)
+    );
+    // A count of values above NPTS is not an AT2 header.
+    let too_many = AT2_OK.replace("NPTS=      7", "NPTS=      3");
+    assert_eq!(readers::sniff("record.dat", too_many.as_bytes()), None);
+    // First lines alone are not enough for the other text formats either.
+    assert!(skip_reason("x.dat", "2 CORRECTED ACCELEROGRAM\nshort\n").contains("text file"));
+    assert!(skip_reason("x.dat", "CORRECTED ACCELEROGRAM 1\nno header\n").contains("text file"));
+    assert!(skip_reason(
+        "x.md",
+        "Corrected accelerogram (Format v01.20 with 13 text lines)\n"
+    )
+    .contains("documentation"));
+    assert!(skip_reason("x.bin", "\u{0}\u{1}\u{2}binary").contains("binary"));
+    // Products that are not acceleration series say what they are.
+    assert!(skip_reason("a_v.smc", "3 VELOCITY\n").contains("SMC velocity series"));
+    assert!(skip_reason("a_d.smc", "4 DISPLACEMENT\n").contains("SMC displacement series"));
+    assert!(skip_reason("a_f.fs1", "anything").contains("Fourier amplitude spectrum (.fs1)"));
+    assert!(skip_reason("a_r.rs2", "anything").contains("response spectrum (.rs2)"));
+    assert!(
+        skip_reason("CHAN001.V3", "Response and Fourier amplitude spectra\n")
+            .contains("CSMIP V3 spectra")
+    );
+    assert!(skip_reason(
+        "x.V2c",
+        "Corrected velocity (Format v01.20 with 13 text lines)\n"
+    )
+    .contains("COSMOS velocity series"));
+    // An uncorrected V1 beside its corrected V2 is a duplicate; alone it is read.
+    let v1 = "UNCORRECTED ACCELEROGRAM DATA\n";
+    let folder = vec![
+        "e.zip:CHAN001.V1".to_string(),
+        "e.zip:CHAN001.V2".to_string(),
+    ];
+    match readers::classify_in_folder("e.zip:CHAN001.V1", v1.as_bytes(), &folder) {
+        Sniffed::Skip(r) => assert!(r.contains("duplicate") && r.contains("CHAN001.V2"), "{r}"),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(
+        readers::classify_in_folder("e.zip:CHAN001.V1", v1.as_bytes(), &folder[..1]),
+        Sniffed::Record(Format::Dmg)
+    );
+    // Real files keep their verdict (the whole real head is a complete header).
+    for (rel, want) in [
+        ("peer-at2-records/elCentro.AT2", Format::At2),
+        ("peer-at2-records/TAK000.AT2", Format::At2),
+        ("usgs-gmprocess-format-samples/smc/0111b.smc", Format::Smc),
+        ("usgs-gmprocess-format-samples/dmg/CE58667.V2", Format::Dmg),
+        (
+            "usgs-gmprocess-format-samples/cosmos/NP8040-n.1000hyfh.HNE.01.V0c",
+            Format::Cosmos,
+        ),
+        (
+            "usgs-gmprocess-format-samples/geonet/20180212_211557_WPWS_20.V2A",
+            Format::GeoNet,
+        ),
+    ] {
+        let bytes = std::fs::read(format!("{RECORDS}/{rel}")).unwrap();
+        assert_eq!(readers::sniff("no_extension", &bytes), Some(want), "{rel}");
+        assert_eq!(readers::sniff("renamed.txt", &bytes), Some(want), "{rel}");
+    }
 }
 
 // -------------------------------------------------------------- bad input
