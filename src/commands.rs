@@ -126,6 +126,12 @@ fn render_geometry(
                 }
             );
         }
+        None if g.actions.iter().any(|a| a.action == "unresolved") => {
+            let _ = writeln!(
+                s,
+                "  building axes not stated, and not inferred: some channels are in the structure's own axes (Long/Tran, X/Y), others at azimuths (state structure.x_axis_azimuth_deg)"
+            );
+        }
         None => {
             let _ = writeln!(
                 s,

@@ -423,6 +423,9 @@ fn apply_entry(
     if let Some(u) = &entry.units {
         ch.units = u.parse::<Units>().map_err(err)?;
         ch.missing.retain(|m| m != "units");
+        // What the reader assumed about units no longer holds.
+        ch.inferred
+            .retain(|i| !i.starts_with("units=") && !i.starts_with("units "));
         ch.inferred.push(format!("units {u} from the manifest"));
     }
     if let Some(s) = entry.sensitivity {

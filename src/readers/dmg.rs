@@ -121,6 +121,11 @@ struct TextHeader {
     latitude: Option<f64>,
     longitude: Option<f64>,
     start_ns: Option<i64>,
+    /// The `Start time:` line names no time zone (read as UTC, the CSMIP
+    /// convention, and cross-checked against `record_ns`).
+    start_zone_missing: bool,
+    /// The trigger time of the `Rcrd of Thu Jul  4, 2019 10:35:07.3 PDT` line.
+    record_ns: Option<i64>,
     origin_ns: Option<i64>,
     event_name: Option<String>,
     hypocenter: Option<(f64, f64, f64)>,
@@ -172,9 +177,18 @@ fn parse_text_header(lines: &Lines, from: usize, to: usize) -> TextHeader {
         if h.start_ns.is_none() {
             for key in ["START TIME:", "TRIGGER TIME:"] {
                 if let Some(p) = upper.find(key) {
-                    h.start_ns = zoned_time(&line[p + key.len()..]);
+                    let text = &line[p + key.len()..];
+                    h.start_ns = zoned_time(text);
+                    if h.start_ns.is_none() {
+                        // `7/04/19, 17:35:07.3(*LoQ*)`: no zone stated.
+                        h.start_ns = zoneless_time_as_utc(text);
+                        h.start_zone_missing = h.start_ns.is_some();
+                    }
                 }
             }
+        }
+        if h.record_ns.is_none() && upper.trim_start().starts_with("RCRD OF") {
+            h.record_ns = record_line_time(line.trim_start()[7..].trim());
         }
         if h.origin_ns.is_none() {
             if let Some(p) = upper.find("(ORIGIN(") {
@@ -214,6 +228,39 @@ fn parse_text_header(lines: &Lines, from: usize, to: usize) -> TextHeader {
         }
     }
     h
+}
+
+/// `7/04/19, 17:35:07.3(*LoQ*)` (no zone) → epoch ns, read as UTC.
+fn zoneless_time_as_utc(s: &str) -> Option<i64> {
+    let (date, rest) = s.trim().split_once(',')?;
+    let time: String = rest
+        .trim()
+        .chars()
+        .take_while(|c| c.is_ascii_digit() || *c == ':' || *c == '.' || *c == ' ')
+        .collect();
+    textfmt::us_datetime_ns(date, &time, "UTC")
+}
+
+/// `Thu Jul  4, 2019 10:35:07.3 PDT` (after `Rcrd of`) → epoch ns.
+fn record_line_time(s: &str) -> Option<i64> {
+    const MONTHS: [&str; 12] = [
+        "JAN", "FEB", "MAR", "APR", "MAY", "JUN", "JUL", "AUG", "SEP", "OCT", "NOV", "DEC",
+    ];
+    let (before, after) = s.split_once(',')?;
+    let mut words = before.split_whitespace();
+    let _weekday = words.next()?;
+    let month_word = words.next()?.to_ascii_uppercase();
+    let month = MONTHS.iter().position(|m| month_word.starts_with(m))? + 1;
+    let day: u32 = words.next()?.parse().ok()?;
+    let mut rest = after.split_whitespace();
+    let year: i64 = rest.next()?.parse().ok()?;
+    let time = rest.next()?;
+    let zone: String = rest
+        .next()?
+        .chars()
+        .take_while(|c| c.is_ascii_alphabetic())
+        .collect();
+    textfmt::us_datetime_ns(&format!("{month}/{day}/{year}"), time, &zone)
 }
 
 /// `05/02/83, 16:42:48.2 PDT` or ` 9/30/23, 15:26: 1.0 UTC (GPS)` → epoch ns.
@@ -620,6 +667,31 @@ fn fill_channel(
         channel.missing.push("direction".into());
     }
     channel.start_ns = th.start_ns;
+    if let Some(start) = th.start_ns {
+        // Cross-check the start against the trigger time the `Rcrd of` line
+        // states with its zone: the record starts at (or shortly before) the
+        // trigger, so they agree within a minute (a time-zone slip is hours).
+        let zone = if th.start_zone_missing {
+            "no zone stated, read as UTC"
+        } else {
+            "zone as stated"
+        };
+        match th.record_ns {
+            Some(rec) if (rec - start).abs() <= 60_000_000_000 => channel.inferred.push(format!(
+                "start time ({zone}) agrees with the zoned `Rcrd of` trigger time"
+            )),
+            Some(rec) => channel.qa.push(QaFlag::Note {
+                text: format!(
+                    "start time ({zone}) differs by {:.0} s from the `Rcrd of` trigger time: one of them may be off by a time-zone offset",
+                    (rec - start) as f64 / 1e9
+                ),
+            }),
+            None if th.start_zone_missing => channel.inferred.push(
+                "start time: no zone stated, read as UTC (CSMIP convention; no other time in the header to check it against)".into(),
+            ),
+            None => {}
+        }
+    }
     if channel.start_ns.is_none() {
         channel.missing.push("start_time".into());
     }

@@ -1560,3 +1560,42 @@ fn truncated_real_files_never_panic() {
         }
     }
 }
+
+/// Ridgecrest 2019 (CSMIP 33742): `Start time:  7/04/19, 17:35:07.3(*LoQ*)`
+/// names no zone; read as UTC and confirmed by `Rcrd of Thu Jul  4, 2019
+/// 10:35:07.3 PDT` (= 17:35:07.3 UTC).
+#[test]
+fn shared_dmg_zoneless_start_time_is_cross_checked_against_the_record_line() {
+    let (records, _, _) = read_csmip_zip(
+        "cesmd-bridges-corpus/ridgecrest-ce33742/ci38443183_ce33742p.zip",
+        "",
+    );
+    assert_eq!(records.len(), 9);
+    // The free-field recorder (channels 1–3) triggered at 17:35:07.3 UTC; the
+    // bridge recorder's channels state their own start and record line.
+    let free_field = ["33742.01", "33742.02", "33742.03"];
+    for r in records
+        .iter()
+        .filter(|r| free_field.contains(&r.channel.id.as_str()))
+    {
+        assert_eq!(
+            r.channel.start_ns,
+            Some(ns(2019, 7, 4, 17, 35, 7.3)),
+            "{}",
+            r.channel.id
+        );
+    }
+    for r in &records {
+        assert!(r.channel.start_ns.is_some(), "{}", r.channel.id);
+        assert!(r
+            .channel
+            .inferred
+            .iter()
+            .any(|i| i.contains("no zone stated, read as UTC") && i.contains("agrees")));
+        assert!(!r
+            .channel
+            .qa
+            .iter()
+            .any(|q| matches!(q, QaFlag::Note { .. })));
+    }
+}
