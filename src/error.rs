@@ -127,3 +127,44 @@ impl Error {
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Longest error text printed, characters (a message quoting a hostile
+/// file's bytes must not flood the terminal).
+pub const MAX_PRINTED_ERROR_CHARS: usize = 2000;
+
+/// `text` made safe to print: control characters (NUL, escape sequences,
+/// carriage returns) escaped as `\u{..}` — a newline is kept — and the
+/// whole capped at `max` characters, saying how many were left out.
+pub fn printable(text: &str, max: usize) -> String {
+    let mut out = String::new();
+    let mut shown = 0usize;
+    let total = text.chars().count();
+    for c in text.chars() {
+        if shown >= max {
+            out.push_str(&format!(" … ({} more characters)", total - shown));
+            break;
+        }
+        if c.is_control() && c != '\n' {
+            out.extend(c.escape_unicode());
+        } else {
+            out.push(c);
+        }
+        shown += 1;
+    }
+    out
+}
+
+#[cfg(test)]
+mod printable_tests {
+    use super::printable;
+
+    #[test]
+    fn control_bytes_are_escaped_and_length_is_capped() {
+        assert_eq!(printable("a\0b\x1b[2Jc\nd", 100), "a\\u{0}b\\u{1b}[2Jc\nd");
+        let long = "x".repeat(50);
+        assert_eq!(
+            printable(&long, 10),
+            format!("{} … (40 more characters)", "x".repeat(10))
+        );
+    }
+}

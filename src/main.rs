@@ -172,7 +172,13 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("quaketwin: error: {e}");
+            eprintln!(
+                "quaketwin: error: {}",
+                quaketwin::error::printable(
+                    &e.to_string(),
+                    quaketwin::error::MAX_PRINTED_ERROR_CHARS
+                )
+            );
             ExitCode::from(e.exit_code() as u8)
         }
     }

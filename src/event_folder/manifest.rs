@@ -7,6 +7,13 @@ use serde::Deserialize;
 use crate::error::{Error, Location, Result};
 use crate::vocab::Structure;
 
+/// Smallest storey height accepted, metres (a smaller one is a unit slip or
+/// nonsense that would give absurd drift ratios).
+pub const MIN_STOREY_HEIGHT_M: f64 = 0.5;
+
+/// Origin times accepted (years), so a typo never wraps into another century.
+pub const ORIGIN_YEARS: std::ops::RangeInclusive<i64> = 1900..=2100;
+
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Manifest {
@@ -137,13 +144,27 @@ impl Manifest {
     fn validate(&self, file: &str) -> Result<()> {
         let loc = || Location::file(file);
         if let Some(s) = &self.structure {
-            if s.storey_heights_m
+            if let Some(h) = s
+                .storey_heights_m
                 .iter()
-                .any(|h| !(h.is_finite() && *h > 0.0))
+                .find(|h| !(h.is_finite() && **h >= MIN_STOREY_HEIGHT_M))
             {
                 return Err(Error::input(
                     loc(),
-                    "structure.storey_heights_m must be positive numbers",
+                    format!("structure.storey_heights_m: {h} m is not a storey height (at least {MIN_STOREY_HEIGHT_M} m)"),
+                ));
+            }
+            if !s.storey_heights_m.is_empty()
+                && !s.masses_kg.is_empty()
+                && s.storey_heights_m.len() != s.masses_kg.len()
+            {
+                return Err(Error::input(
+                    loc(),
+                    format!(
+                        "structure.masses_kg lists {} levels and structure.storey_heights_m {}: one entry per level 1..n in both",
+                        s.masses_kg.len(),
+                        s.storey_heights_m.len()
+                    ),
                 ));
             }
             if s.masses_kg.iter().any(|m| !(m.is_finite() && *m > 0.0)) {
@@ -203,6 +224,13 @@ impl Manifest {
             if let Some(s) = c.sensitivity {
                 if !(s.is_finite() && s != 0.0) {
                     return Err(at(format!("sensitivity {s} must be a non-zero number")));
+                }
+            }
+            if let Some(level) = c.level {
+                if level < 0 {
+                    return Err(at(format!(
+                        "level {level}: levels are 0 (base/ground) to n (top floor)"
+                    )));
                 }
             }
             if let Some(dip) = c.dip_deg {

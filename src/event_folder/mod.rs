@@ -229,12 +229,25 @@ pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEve
             event.name = n.clone();
         }
         if let Some(t) = &m.event.origin_time {
-            event.origin_ns = Some(crate::vocab::parse_iso8601_ns(t).ok_or_else(|| {
+            let bad = || {
                 Error::input(
                     Location::file(MANIFEST_NAME),
-                    format!("event.origin_time {t:?} is not ISO-8601 UTC"),
+                    format!(
+                        "event.origin_time {t:?} is not an ISO-8601 UTC time in the years {}–{}",
+                        manifest::ORIGIN_YEARS.start(),
+                        manifest::ORIGIN_YEARS.end()
+                    ),
                 )
-            })?);
+            };
+            let year = t
+                .trim()
+                .split('-')
+                .next()
+                .and_then(|y| y.parse::<i64>().ok());
+            if !year.is_some_and(|y| manifest::ORIGIN_YEARS.contains(&y)) {
+                return Err(bad());
+            }
+            event.origin_ns = Some(crate::vocab::parse_iso8601_ns(t).ok_or_else(bad)?);
         }
         event.magnitude = m.event.magnitude;
         event.structure = m.structure.as_ref().map(|s| s.to_structure());

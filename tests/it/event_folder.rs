@@ -639,3 +639,36 @@ fn csmip_v1_beside_its_v2_is_a_duplicate_and_alone_is_read() {
         [1., 2., 3., 4., 5., 6., 7., 8.]
     );
 }
+
+/// Issue 14 item 5: values that used to pass silently into nonsense.
+#[test]
+fn manifest_values_outside_their_physical_range_are_errors_naming_the_key() {
+    let cases: [(&str, &str); 4] = [
+        (
+            "[event]\norigin_time = \"99999-01-01T00:00:00Z\"\n",
+            "event.origin_time",
+        ),
+        (
+            "[structure]\nstorey_heights_m = [1e-300, 3.0]\n",
+            "storey_heights_m",
+        ),
+        (
+            "[structure]\nstorey_heights_m = [3.0, 3.0]\nmasses_kg = [1e5]\n",
+            "masses_kg lists 1 levels",
+        ),
+        (
+            "[[channel]]\nfile = \"a.AT2\"\nid = \"A\"\nlevel = -1\n",
+            "level -1",
+        ),
+    ];
+    for (manifest, key) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        temp_file(dir.path(), "a.AT2", AT2.as_bytes());
+        temp_file(dir.path(), "event.toml", manifest.as_bytes());
+        let e = input_error_text(event_folder::load(dir.path()).unwrap_err());
+        assert!(
+            e.contains("event.toml") && e.contains(key),
+            "{manifest}: {e}"
+        );
+    }
+}
