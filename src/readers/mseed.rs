@@ -183,7 +183,7 @@ pub(crate) fn join_segments(mut segments: Vec<Segment>) -> std::result::Result<J
 pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
     let mut src = source.clone();
     src.format = "mseed".into();
-    let data_records = parse_records(bytes, &src)?;
+    let (data_records, skipped) = parse_records(bytes, &src)?;
     // Group by channel, keeping the order of first appearance (stable output).
     let mut order: Vec<String> = Vec::new();
     let mut groups: BTreeMap<String, Vec<DataRecord>> = BTreeMap::new();
@@ -230,6 +230,24 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
         ch.channel_code = non_empty(&first.channel);
         ch.start_ns = Some(joined.start_ns);
         ch.qa = joined.qa;
+        // Records of this channel that carried no usable samples: never
+        // dropped silently (their time span shows as a gap or a late start).
+        let mine: Vec<&SkippedRecord> = skipped.iter().filter(|k| k.id == id).collect();
+        if !mine.is_empty() {
+            let shown: Vec<String> = mine
+                .iter()
+                .take(5)
+                .map(|k| format!("byte {} ({})", k.offset, k.why))
+                .collect();
+            ch.qa.push(QaFlag::Note {
+                text: format!(
+                    "{} record(s) of this channel skipped without samples: {}{}",
+                    mine.len(),
+                    shown.join(", "),
+                    if mine.len() > 5 { ", …" } else { "" }
+                ),
+            });
+        }
         ch.missing.push("sensitivity".into());
         records.push(Record::new(ch, joined.samples));
     }
@@ -318,7 +336,15 @@ fn rate_from_factor(factor: i16, multiplier: i16) -> f64 {
     }
 }
 
-fn parse_records(bytes: &[u8], src: &SourceRef) -> Result<Vec<DataRecord>> {
+/// A record read past without samples, and why.
+struct SkippedRecord {
+    id: String,
+    offset: usize,
+    why: &'static str,
+}
+
+fn parse_records(bytes: &[u8], src: &SourceRef) -> Result<(Vec<DataRecord>, Vec<SkippedRecord>)> {
+    let mut skipped = Vec::new();
     let err =
         |offset: usize, msg: String| Error::input(super::location(src).at_byte(offset as u64), msg);
     let mut out = Vec::new();
@@ -485,8 +511,21 @@ fn parse_records(bytes: &[u8], src: &SourceRef) -> Result<Vec<DataRecord>> {
         let rate = exact_rate.unwrap_or_else(|| rate_from_factor(factor, multiplier));
         let id = format!("{network}.{station}.{location}.{channel}");
         if nsamples == 0 || rate <= 0.0 || encoding == 0 {
+            // Log, detection or empty record: no samples. Noted on the
+            // channel of the same id, if it has data records.
+            skipped.push(SkippedRecord {
+                id: id.clone(),
+                offset,
+                why: if encoding == 0 {
+                    "encoding 0 (ASCII log)"
+                } else if nsamples == 0 {
+                    "0 samples"
+                } else {
+                    "sample rate 0"
+                },
+            });
             offset += record_len;
-            continue; // log, detection or empty record: no samples
+            continue;
         }
         if data_offset < FIXED_HEADER_LEN || data_offset > record_len {
             return Err(err(
@@ -529,7 +568,7 @@ fn parse_records(bytes: &[u8], src: &SourceRef) -> Result<Vec<DataRecord>> {
         });
         offset += record_len;
     }
-    Ok(out)
+    Ok((out, skipped))
 }
 
 /// Decodes a record's data section.

@@ -1027,3 +1027,57 @@ fn readers_never_panic_on_corrupted_bytes() {
         }
     }
 }
+
+/// Issue 14 item 4: a data record whose sample-rate factor, sample count or
+/// encoding was zeroed used to vanish without a word (65,588 samples instead
+/// of 66,000). Now the channel carries a QA note naming the record.
+#[test]
+fn shared_mseed_record_without_samples_is_noted_not_dropped_silently() {
+    let rel = format!("{MSEED_DIR}/NP.8040.D0.HNE.mseed");
+    let intact = bytes_of(&rel);
+    let n_intact = readers::read(
+        readers::Format::MiniSeed,
+        &intact,
+        &src(&rel),
+        &ReadOptions::default(),
+    )
+    .unwrap()
+    .records[0]
+        .samples
+        .len();
+    // Records are 512 bytes here; zero a field of the third record (byte 1024).
+    for (field, why) in [(32..34, "sample rate 0"), (30..32, "0 samples")] {
+        let mut bytes = intact.clone();
+        assert_eq!(&bytes[1024..1030], b"000003");
+        bytes[1024 + field.start..1024 + field.end].fill(0);
+        let rec = &readers::read(
+            readers::Format::MiniSeed,
+            &bytes,
+            &src(&rel),
+            &ReadOptions::default(),
+        )
+        .unwrap()
+        .records[0];
+        let note = rec
+            .channel
+            .qa
+            .iter()
+            .find_map(|q| match q {
+                QaFlag::Note { text } if text.contains("skipped without samples") => {
+                    Some(text.clone())
+                }
+                _ => None,
+            })
+            .unwrap_or_else(|| panic!("{why}: no note in {:?}", rec.channel.qa));
+        assert!(note.contains("byte 1024") && note.contains(why), "{note}");
+        // The lost span is a gap (filled and flagged), not a silent shift.
+        assert_eq!(rec.samples.len(), n_intact, "{why}");
+        assert!(
+            rec.channel
+                .qa
+                .iter()
+                .any(|q| matches!(q, QaFlag::Gap { .. })),
+            "{why}"
+        );
+    }
+}
