@@ -13,7 +13,7 @@
 use super::textfmt::{self, Layout, Lines};
 use super::{FileContents, ReadOptions};
 use crate::error::Result;
-use crate::vocab::{epoch_ns_from_civil, Channel, Direction, Record, SourceRef, Units};
+use crate::vocab::{epoch_ns_from_civil, Channel, Direction, QaFlag, Record, SourceRef, Units};
 
 const TEXT_LINES: usize = 16;
 const HEADER_LINES: usize = 10;
@@ -32,6 +32,9 @@ pub(crate) fn header_complete(lines: &[&str]) -> bool {
             .all(|l| textfmt::is_numeric_line(l))
 }
 
+/// Components in one GeoNet strong-motion file (two horizontals, vertical).
+const COMPONENTS_PER_FILE: usize = 3;
+
 pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
     let text = textfmt::decode(bytes);
     let lines = Lines::new(&text, source);
@@ -46,6 +49,18 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     }
     if contents.records.is_empty() {
         return Err(lines.err_file("no GeoNet component found (empty file)"));
+    }
+    // A V1A/V2A file carries the three components of one instrument; fewer
+    // means a file cut at a component boundary, which must not pass as whole.
+    let n = contents.records.len();
+    if n < COMPONENTS_PER_FILE {
+        for r in &mut contents.records {
+            r.channel.qa.push(QaFlag::Note {
+                text: format!(
+                    "the file holds {n} of the {COMPONENTS_PER_FILE} components a GeoNet V1A/V2A file carries (truncated at a component boundary?)"
+                ),
+            });
+        }
     }
     Ok(contents)
 }

@@ -1599,3 +1599,41 @@ fn shared_dmg_zoneless_start_time_is_cross_checked_against_the_record_line() {
             .any(|q| matches!(q, QaFlag::Note { .. })));
     }
 }
+
+/// Issue 14 item 4: a GeoNet V2A cut at a component boundary gave 1 of 3
+/// channels with no word; now each component read says how many the file holds.
+#[test]
+fn shared_geonet_file_cut_at_a_component_boundary_is_flagged() {
+    let rel = "usgs-gmprocess-format-samples/geonet/20180212_211557_WPWS_20.V2A";
+    let text = String::from_utf8(std::fs::read(format!("{RECORDS}/{rel}")).unwrap()).unwrap();
+    let first = text.lines().next().unwrap().to_string();
+    let whole = readers::read(
+        Format::GeoNet,
+        text.as_bytes(),
+        &source(rel, None, Format::GeoNet),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(whole.records.len(), 3);
+    assert!(whole.records.iter().all(|r| !r
+        .channel
+        .qa
+        .iter()
+        .any(|q| matches!(q, QaFlag::Note { .. }))));
+    // Cut before the second component's header line.
+    let second = text[first.len()..].find(&first).unwrap() + first.len();
+    let cut = &text[..second];
+    let part = readers::read(
+        Format::GeoNet,
+        cut.as_bytes(),
+        &source(rel, None, Format::GeoNet),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(part.records.len(), 1);
+    assert!(part.records[0]
+        .channel
+        .qa
+        .iter()
+        .any(|q| matches!(q, QaFlag::Note { text } if text.contains("1 of the 3 components"))));
+}
