@@ -165,6 +165,17 @@ fn read_channel(
         .filter(|&n| n >= 0)
         .ok_or_else(|| lines.err(after_reals, "cannot read the number of comment lines"))?
         as usize;
+    // The count is the header's word: check it against the lines there are
+    // before collecting them (a claimed 10¹² must not reach the allocator).
+    if n_comments >= lines.len().saturating_sub(after_reals) {
+        return Err(lines.err(
+            after_reals,
+            format!(
+                "the header announces {n_comments} comment lines; the file has {} lines after it (truncated file or corrupt count)",
+                lines.len().saturating_sub(after_reals + 1)
+            ),
+        ));
+    }
     let comments: Vec<&str> = (after_reals + 1..after_reals + 1 + n_comments)
         .map(|i| lines.get(i))
         .collect();

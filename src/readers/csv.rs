@@ -68,11 +68,12 @@ use crate::vocab::{
 /// time column may produce: 2²⁸ (2 GiB of f64).  Checked before allocating.
 pub const MAX_RESAMPLED_SAMPLES: usize = 1 << 28;
 
-/// Most samples per channel that resampling may produce per row of the file.
-/// A longer grid would be mostly interpolation across gaps (a time column
-/// jumping to 10⁶ s after 200 rows at 100 Hz asks for 10⁸ samples), which is
-/// a broken time column rather than a record; it is refused.
-pub const MAX_RESAMPLE_GROWTH: usize = 4;
+/// Most samples per channel that resampling may produce per row of the file
+/// (shared by every reader): a longer grid would be mostly interpolation
+/// across gaps (a time column jumping to 10⁶ s after 200 rows at 100 Hz asks
+/// for 10⁸ samples), which is a broken time column rather than a record.
+pub use super::resample::MAX_RESAMPLE_GROWTH;
+use super::resample::{grid_len, resample_linear};
 
 /// Unix epoch time starts here: 10⁹ s is 2001-09-09, far beyond any
 /// elapsed-time column of a sensor export.
@@ -456,11 +457,6 @@ fn epoch_unit(first: f64) -> (f64, &'static str) {
 enum TimeCells {
     Numbers(Vec<f64>),
     DateTimes(Vec<i64>, Zone),
-}
-
-/// Samples on the grid t0 + i·dt, i = 0..=floor(span/dt), as resample_linear makes it.
-fn grid_len(span: f64, dt: f64) -> f64 {
-    (span / dt + 1e-9).floor() + 1.0
 }
 
 /// Reads the selected columns of a CSV/TSV file, one record per column.
@@ -948,31 +944,6 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         records,
         ..Default::default()
     })
-}
-
-/// Linear interpolation of (t, v) onto t0 + i·dt, i = 0..=floor((t_last − t0)/dt).
-/// `t` must increase strictly.
-fn resample_linear(t: &[f64], v: &[f64], dt: f64) -> Vec<f64> {
-    let (Some(&t0), Some(&t_last)) = (t.first(), t.last()) else {
-        return Vec::new();
-    };
-    let count = ((t_last - t0) / dt + 1e-9).floor() as usize + 1;
-    let mut out = Vec::with_capacity(count);
-    let mut j = 0;
-    for i in 0..count {
-        let ti = t0 + i as f64 * dt;
-        while j + 2 < t.len() && t[j + 1] < ti {
-            j += 1;
-        }
-        let (ta, tb) = (t[j], t[(j + 1).min(t.len() - 1)]);
-        let w = if tb > ta {
-            ((ti - ta) / (tb - ta)).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        out.push(v[j] + w * (v[(j + 1).min(v.len() - 1)] - v[j]));
-    }
-    out
 }
 
 #[cfg(test)]

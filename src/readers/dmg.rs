@@ -583,7 +583,9 @@ fn read_series(
         let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
         steps.sort_by(f64::total_cmp);
         let dt = steps[steps.len() / 2];
-        let uniform: Vec<f64> = super::smc::resample_linear(&times, &accel_raw, dt)
+        let span = times[times.len() - 1] - times[0];
+        super::resample::check_grid(times.len(), span, dt).map_err(|m| lines.err_ch(i, id, m))?;
+        let uniform: Vec<f64> = super::resample::resample_linear(&times, &accel_raw, dt)
             .into_iter()
             .map(|v| v * scale)
             .collect();

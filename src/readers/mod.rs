@@ -15,6 +15,7 @@ pub mod dmg;
 pub mod geonet;
 pub mod mcap;
 pub mod mseed;
+pub mod resample;
 pub mod sac;
 pub mod smc;
 pub mod stationxml;

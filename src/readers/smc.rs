@@ -36,6 +36,7 @@
 //!   header has none), flagged `QaFlag::Resampled`, and the step is recorded
 //!   in the channel's `inferred` list.
 
+use super::resample::resample_linear;
 use super::textfmt::{self, Layout, Lines};
 use super::{FileContents, ReadOptions};
 use crate::error::Result;
@@ -245,6 +246,9 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
                 "cannot find a time step for the (time, value) pairs",
             ));
         }
+        let span = times[times.len() - 1] - times[0];
+        super::resample::check_grid(times.len(), span, dt)
+            .map_err(|m| lines.err_ch(data_start, &id, m))?;
         let uniform = resample_linear(&times, &accel, dt);
         qa.push(QaFlag::Resampled {
             from: "uneven (time,value) pairs".into(),
@@ -487,32 +491,6 @@ fn median_step(times: &[f64]) -> f64 {
     } else {
         0.5 * (d[m - 1] + d[m])
     }
-}
-
-/// Linear interpolation of `(times, values)` (times strictly increasing)
-/// onto `t0, t0 + dt, …` up to the last time.
-pub(crate) fn resample_linear(times: &[f64], values: &[f64], dt: f64) -> Vec<f64> {
-    let (Some(&t0), Some(&t_end)) = (times.first(), times.last()) else {
-        return Vec::new();
-    };
-    // Small tolerance so a grid point that lands on t_end by rounding is kept.
-    let n = ((t_end - t0) / dt + 1e-9).floor() as usize + 1;
-    let mut out = Vec::with_capacity(n);
-    let mut j = 0;
-    for k in 0..n {
-        let t = t0 + k as f64 * dt;
-        while j + 2 < times.len() && times[j + 1] < t {
-            j += 1;
-        }
-        if times.len() == 1 {
-            out.push(values[0]);
-            continue;
-        }
-        let (ta, tb) = (times[j], times[j + 1]);
-        let w = ((t - ta) / (tb - ta)).clamp(0.0, 1.0);
-        out.push(values[j] + w * (values[j + 1] - values[j]));
-    }
-    out
 }
 
 #[cfg(test)]

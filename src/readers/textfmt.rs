@@ -29,6 +29,10 @@ impl<'a> Lines<'a> {
         }
         Lines { lines, source }
     }
+    /// Characters of text in all lines (an upper bound on what a block can hold).
+    pub fn text_len(&self) -> usize {
+        self.lines.iter().map(|l| l.len() + 1).sum()
+    }
     pub fn len(&self) -> usize {
         self.lines.len()
     }
@@ -258,7 +262,11 @@ pub(crate) fn read_block(
     layout: Layout,
     channel: &str,
 ) -> Result<Block> {
-    let mut values = Vec::with_capacity(count);
+    // `count` comes from a header: reserve no more than the text can hold
+    // (a value takes at least two characters with its separator), so a
+    // header claiming 10¹² values fails at the end of the file, not in the
+    // allocator.
+    let mut values = Vec::with_capacity(count.min(lines.text_len() / 2 + 1));
     let mut i = start;
     let mut extra = 0;
     while values.len() < count {

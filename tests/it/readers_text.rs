@@ -1637,3 +1637,32 @@ fn shared_geonet_file_cut_at_a_component_boundary_is_flagged() {
         .iter()
         .any(|q| matches!(q, QaFlag::Note { text } if text.contains("1 of the 3 components"))));
 }
+
+/// Issue 14 item 6: counts read from a header are checked against the bytes
+/// there before allocating — a COSMOS comment count or point count of 10¹²
+/// and an SMC pair file with one time at 10⁹ s give clear errors, not an
+/// allocation failure.
+#[test]
+fn shared_header_counts_of_a_trillion_are_errors_not_aborts() {
+    let rel = "usgs-gmprocess-format-samples/cosmos/NP8040-n.1000hyfh.HNE.01.V0c";
+    let text = String::from_utf8(std::fs::read(format!("{RECORDS}/{rel}")).unwrap()).unwrap();
+    // The comment-count line: "   N Comment line(s) follow…".
+    let lines: Vec<&str> = text.lines().collect();
+    let k = lines
+        .iter()
+        .position(|l| l.to_ascii_lowercase().contains("comment line"))
+        .unwrap();
+    let n = lines[k].split_whitespace().next().unwrap().to_string();
+    let mut bad = lines.clone();
+    let patched = lines[k].replacen(&n, "1000000000000", 1);
+    bad[k] = &patched;
+    let e = readers::read(
+        Format::Cosmos,
+        bad.join("\n").as_bytes(),
+        &source(rel, None, Format::Cosmos),
+        &ReadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("comment lines") && e.contains(rel), "{e}");
+}
