@@ -672,3 +672,39 @@ fn manifest_values_outside_their_physical_range_are_errors_naming_the_key() {
         );
     }
 }
+
+/// Issue 11: a design file (and the twin it names) inside a zipped event is
+/// read from the zip by the test-design pipeline.
+#[test]
+fn zipped_event_reads_its_design_file_and_twin_from_the_zip() {
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("sample-records/synthetic-facade");
+    let mut members: Vec<(String, Vec<u8>)> = std::fs::read_dir(&sample)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .map(|p| {
+            (
+                p.file_name().unwrap().to_string_lossy().into_owned(),
+                std::fs::read(&p).unwrap(),
+            )
+        })
+        .collect();
+    members.sort();
+    let refs: Vec<(&str, &[u8])> = members
+        .iter()
+        .map(|(n, b)| (n.as_str(), b.as_slice()))
+        .collect();
+    let dir = tempfile::tempdir().unwrap();
+    let zip = temp_file(dir.path(), "facade.zip", &zip_bytes(&refs));
+    let pipeline = quaketwin::pipeline::PipelineFile::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/test-design.toml"),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let outcomes = quaketwin::pipeline::run(&pipeline, &zip, &out, true).unwrap();
+    let design = &outcomes.iter().find(|(n, _)| n == "design").unwrap().1;
+    assert!(
+        matches!(design, quaketwin::pipeline::StageOutcome::Ran { .. }),
+        "{design:?}"
+    );
+    assert!(out.join("actuator_layout.parquet").is_file());
+}
