@@ -78,12 +78,12 @@ pub fn collect(root: &Path, limits: &ArchiveLimits) -> Result<Vec<EventFile>> {
         paths.sort();
         for rel in paths {
             let full = root.join(&rel);
-            let bytes = std::fs::read(&full).map_err(|e| Error::io(&full, e))?;
+            let bytes = read_bounded(&full, limits)?;
             let name = rel.to_string_lossy().replace('\\', "/");
             push_file(name, None, bytes, 0, limits, &mut total, &mut out)?;
         }
-    } else {
-        let bytes = std::fs::read(root).map_err(|e| Error::io(root, e))?;
+    } else if meta.is_file() {
+        let bytes = read_bounded(root, limits)?;
         let name = root
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -95,8 +95,37 @@ pub fn collect(root: &Path, limits: &ArchiveLimits) -> Result<Vec<EventFile>> {
             ));
         }
         push_file(name, None, bytes, 0, limits, &mut total, &mut out)?;
+    } else {
+        // A FIFO would block the read forever, a device such as /dev/zero
+        // would grow without bound: only directories and regular files.
+        return Err(Error::input(
+            Location::file(root.display().to_string()),
+            "an event must be a directory or a .zip archive (this is neither a directory nor a regular file: a FIFO, socket or device is refused)",
+        ));
     }
     Ok(out)
+}
+
+/// Reads a regular file whose size is checked first against the member limit.
+fn read_bounded(path: &Path, limits: &ArchiveLimits) -> Result<Vec<u8>> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if !meta.is_file() {
+        return Err(Error::input(
+            Location::file(path.display().to_string()),
+            "not a regular file (a FIFO, socket or device is refused)",
+        ));
+    }
+    if meta.len() > limits.max_member_bytes {
+        return Err(Error::input(
+            Location::file(path.display().to_string()),
+            format!(
+                "{} bytes: larger than the {}-byte limit for one file of an event",
+                meta.len(),
+                limits.max_member_bytes
+            ),
+        ));
+    }
+    std::fs::read(path).map_err(|e| Error::io(path, e))
 }
 
 fn walk(root: &Path, dir: &Path, out: &mut Vec<std::path::PathBuf>) -> Result<()> {

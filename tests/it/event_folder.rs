@@ -708,3 +708,21 @@ fn zipped_event_reads_its_design_file_and_twin_from_the_zip() {
     );
     assert!(out.join("actuator_layout.parquet").is_file());
 }
+
+/// Issue 14 item 8: `inspect` on a FIFO or a device hung or grew without
+/// bound; only directories and regular files are events.
+#[cfg(unix)]
+#[test]
+fn an_event_that_is_a_fifo_or_device_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("event.zip");
+    let status = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    for p in [fifo.as_path(), Path::new("/dev/zero")] {
+        let e = input_error_text(event_folder::load(p).unwrap_err());
+        assert!(e.contains("regular file"), "{e}");
+    }
+}
