@@ -10,7 +10,11 @@
 
 use super::{FileContents, ReadOptions};
 use crate::error::{Error, Result};
-use crate::vocab::{parse_iso8601_ns, Direction, Record, SourceRef, Units};
+use crate::vocab::{parse_iso8601_ns, Direction, QaFlag, Record, SourceRef, Units};
+
+/// Largest InstrumentSensitivity accepted (counts per input unit); real
+/// accelerometer and seismometer gains are below 1e11.
+pub const MAX_SENSITIVITY: f64 = 1e15;
 
 /// InstrumentSensitivity of a channel: overall gain at one frequency.
 #[derive(Debug, Clone, PartialEq)]
@@ -253,7 +257,18 @@ pub fn apply(records: &mut [Record], meta: &[ChannelMetadata]) {
             Some(s),
         ) = (ch.units, &m.sensitivity)
         {
-            match counts_per_si(s) {
+            // A gain is a positive finite number of a sane size: −1, INF or
+            // 1e300 would scale the records into nonsense, so it is refused
+            // and the channel stays without sensitivity (conditioning then
+            // stops with an error naming the channel).
+            let sane = s.value.is_finite() && s.value > 0.0 && s.value < MAX_SENSITIVITY;
+            match counts_per_si(s).filter(|_| sane) {
+                None if !sane => ch.qa.push(QaFlag::Note {
+                    text: format!(
+                        "InstrumentSensitivity {} {from} refused: not a positive gain below {MAX_SENSITIVITY:e}; the channel has no sensitivity",
+                        s.value
+                    ),
+                }),
                 Some(c) => {
                     ch.units = Units::Counts {
                         counts_per_si: Some(c),

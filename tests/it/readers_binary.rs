@@ -1081,3 +1081,49 @@ fn shared_mseed_record_without_samples_is_noted_not_dropped_silently() {
         );
     }
 }
+
+/// Issue 14 item 5: a StationXML sensitivity of −1, INF or 1e300 used to be
+/// applied (PGA 5.7e5 m/s²); now it is refused with a QA note and the
+/// channel stays without sensitivity, so conditioning stops with an error
+/// naming the channel instead of scaling the record into nonsense.
+#[test]
+fn shared_stationxml_absurd_sensitivity_is_refused_not_applied() {
+    let xml = String::from_utf8(bytes_of(&format!("{MSEED_DIR}/NP.8040.xml"))).unwrap();
+    assert!(xml.contains("<Value>213180.0</Value>"));
+    for bad in ["-1", "INF", "1e300"] {
+        let patched = xml.replace("<Value>213180.0</Value>", &format!("<Value>{bad}</Value>"));
+        let meta = stationxml::parse(patched.as_bytes(), &src("NP.8040.xml")).unwrap();
+        let mut records: Vec<Record> = read_all_mseed()
+            .into_iter()
+            .filter(|r| r.channel.id == "NP.8040.D0.HNE")
+            .collect();
+        stationxml::apply(&mut records, &meta);
+        let ch = &records[0].channel;
+        assert_eq!(
+            ch.units,
+            Units::Counts {
+                counts_per_si: None
+            },
+            "{bad}"
+        );
+        assert!(
+            ch.qa
+                .iter()
+                .any(|q| matches!(q, QaFlag::Note { text } if text.contains("refused"))),
+            "{bad}: {:?}",
+            ch.qa
+        );
+        let mut event = Event {
+            name: "t".into(),
+            records,
+            ..Default::default()
+        };
+        let e = quaketwin::conditioning::condition_event(&mut event, &Default::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("NP.8040.D0.HNE") && e.contains("sensitivity"),
+            "{e}"
+        );
+    }
+}
