@@ -6,7 +6,8 @@ use std::path::Path;
 
 use crate::error::Result;
 use crate::event_folder::{self, LoadedEvent};
-use crate::pipeline::{self, PipelineFile, StageOutcome};
+use crate::pipeline::{self, StageOutcome};
+use crate::stages::{load_pipeline, parse_pipeline};
 use crate::vocab::format_epoch_ns;
 
 /// `quaketwin inspect EVENT`: a table of the channels, what was inferred and
@@ -179,7 +180,7 @@ pub fn run_pipeline(
     out: &Path,
     quiet: bool,
 ) -> Result<Vec<(String, StageOutcome)>> {
-    let p = PipelineFile::load(pipeline_path)?;
+    let p = load_pipeline(pipeline_path)?;
     pipeline::run(&p, event, out, quiet)
 }
 
@@ -195,7 +196,7 @@ pub fn ingest(
     mcap: Option<&Path>,
     quiet: bool,
 ) -> Result<Vec<(String, StageOutcome)>> {
-    let p = PipelineFile::parse(INGEST_PIPELINE, "built-in ingest pipeline")?;
+    let p = parse_pipeline(INGEST_PIPELINE, "built-in ingest pipeline")?;
     let outcomes = pipeline::run(&p, event, out, quiet)?;
     if let Some(path) = mcap {
         let (conditioned, _) =
@@ -259,7 +260,7 @@ pub fn modal(event: &Path, out: &Path, method: &str, quiet: bool) -> Result<()> 
     let text = format!(
         "{INGEST_PIPELINE}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\nmethod = {method:?}\n"
     );
-    let p = PipelineFile::parse(&text, "built-in modal pipeline")?;
+    let p = parse_pipeline(&text, "built-in modal pipeline")?;
     pipeline::run(&p, event, out, quiet).map(|_| ())
 }
 
@@ -268,7 +269,7 @@ pub fn modal(event: &Path, out: &Path, method: &str, quiet: bool) -> Result<()> 
 /// cannot be identified (the pipeline stage records the reason instead).
 pub fn hysteresis(event: &Path, out: &Path, quiet: bool) -> Result<()> {
     let text = "[pipeline]\nname = \"hysteresis\"\n[[stage]]\nname = \"ingest\"\nkind = \"ingest\"\n[[stage]]\nname = \"hysteresis\"\nkind = \"hysteresis\"\ninputs = [\"ingest\"]\n[stage.params]\nfail_on_error = true\n[[stage]]\nname = \"damage\"\nkind = \"damage\"\ninputs = [\"hysteresis\"]\n";
-    let p = PipelineFile::parse(text, "built-in hysteresis pipeline")?;
+    let p = parse_pipeline(text, "built-in hysteresis pipeline")?;
     pipeline::run(&p, event, out, quiet).map(|_| ())
 }
 
@@ -284,9 +285,7 @@ pub fn update(
         None => Default::default(),
         Some(p) => {
             let text = std::fs::read_to_string(p).map_err(|e| crate::error::Error::io(p, e))?;
-            toml::from_str(&text).map_err(|e: toml::de::Error| {
-                crate::error::Error::usage(format!("{}: {}", p.display(), e.message()))
-            })?
+            crate::stages::update::UpdateParams::from_toml(&text, &p.display().to_string())?
         }
     };
     crate::stages::update::update_from_files(twin, modes, out, &params)
@@ -385,7 +384,7 @@ pub fn run_many(
     quiet: bool,
 ) -> Result<Vec<(std::path::PathBuf, Result<()>)>> {
     use rayon::prelude::*;
-    let p = PipelineFile::load(pipeline_path)?;
+    let p = load_pipeline(pipeline_path)?;
     let results: Vec<(std::path::PathBuf, Result<()>)> = events
         .par_iter()
         .map(|e| {

@@ -9,7 +9,6 @@
 pub mod commands;
 pub mod conditioning;
 pub mod design;
-pub mod design_file;
 pub mod error;
 pub mod event_folder;
 pub mod geometry;

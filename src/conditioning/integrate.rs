@@ -24,7 +24,7 @@ use crate::error::{Error, Result};
 
 /// How integration drift is controlled.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "method", rename_all = "snake_case")]
+#[serde(tag = "method", rename_all = "snake_case", deny_unknown_fields)]
 pub enum DriftControl {
     None,
     /// Consistent polynomial baseline removal (orders of the polynomials
@@ -38,6 +38,31 @@ pub enum DriftControl {
         corner_hz: f64,
         order: usize,
     },
+}
+
+impl DriftControl {
+    /// Polynomial orders at most 10; a high-pass corner positive, order 1..=64.
+    pub fn validate(&self) -> Result<()> {
+        match *self {
+            DriftControl::None => Ok(()),
+            DriftControl::Polynomial {
+                velocity_order,
+                displacement_order,
+            } if velocity_order > 10 || displacement_order > 10 => Err(Error::usage(format!(
+                "drift control polynomial orders {velocity_order}/{displacement_order}: at most 10"
+            ))),
+            DriftControl::Polynomial { .. } => Ok(()),
+            DriftControl::Highpass { corner_hz, order } => {
+                if !(corner_hz.is_finite() && corner_hz > 0.0) || order == 0 || order > 64 {
+                    Err(Error::usage(format!(
+                        "drift control high-pass: corner {corner_hz} Hz must be positive and order {order} within 1..=64"
+                    )))
+                } else {
+                    Ok(())
+                }
+            }
+        }
+    }
 }
 
 impl Default for DriftControl {

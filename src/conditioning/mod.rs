@@ -28,7 +28,7 @@ use crate::vocab::{Event, QaFlag, Record, Units};
 
 /// Baseline removal before filtering.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "method", rename_all = "snake_case")]
+#[serde(tag = "method", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Detrend {
     None,
     Mean,
@@ -38,6 +38,7 @@ pub enum Detrend {
 
 /// Butterworth filter of the chain.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FilterSettings {
     pub order: usize,
     pub band: BandType,
@@ -52,6 +53,43 @@ fn yes() -> bool {
     true
 }
 
+impl FilterSettings {
+    /// Order 1..=64, the number of corners the band needs, each positive and
+    /// finite, two corners increasing (as `butter_sos` requires).
+    pub fn validate(&self) -> Result<()> {
+        if self.order == 0 || self.order > 64 {
+            return Err(Error::usage(format!(
+                "filter order {}: must be 1..=64",
+                self.order
+            )));
+        }
+        let expected = match self.band {
+            BandType::Lowpass | BandType::Highpass => 1,
+            BandType::Bandpass | BandType::Bandstop => 2,
+        };
+        if self.corners_hz.len() != expected {
+            return Err(Error::usage(format!(
+                "filter corners_hz: a {} filter needs {expected} corner frequency(ies), got {}",
+                self.band.name(),
+                self.corners_hz.len()
+            )));
+        }
+        if let Some(c) = self.corners_hz.iter().find(|c| !(c.is_finite() && **c > 0.0)) {
+            return Err(Error::usage(format!(
+                "filter corners_hz: {c} Hz is not a positive frequency"
+            )));
+        }
+        if expected == 2 && self.corners_hz[0] >= self.corners_hz[1] {
+            return Err(Error::usage(format!(
+                "filter corners_hz: {} corners must be increasing, got {:?}",
+                self.band.name(),
+                self.corners_hz
+            )));
+        }
+        Ok(())
+    }
+}
+
 /// The condition stage's `orientation` moved to the event manifest, so that
 /// every stage (not only those after conditioning) sees the same axes.
 fn orientation_moved<'de, D: serde::Deserializer<'de>>(
@@ -64,6 +102,7 @@ fn orientation_moved<'de, D: serde::Deserializer<'de>>(
 
 /// Integration to velocity and displacement.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
 pub struct IntegrationSettings {
     #[serde(default)]
     pub drift: DriftControl,
@@ -113,6 +152,40 @@ impl Default for ConditioningSettings {
 }
 
 impl ConditioningSettings {
+    /// Checks what can be checked before any record is read (a corner
+    /// against a record's Nyquist frequency is checked per record): usage
+    /// errors, so bad settings never pass for bad data.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(r) = self.resample_hz {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(Error::usage(format!(
+                    "resample_hz = {r}: must be a positive rate"
+                )));
+            }
+        }
+        if let Some(t) = self.taper_fraction {
+            if !(0.0..=0.5).contains(&t) {
+                return Err(Error::usage(format!(
+                    "taper_fraction = {t}: must be within [0, 0.5] of the record at each end"
+                )));
+            }
+        }
+        if let Detrend::Polynomial { order } = self.detrend {
+            if order > 10 {
+                return Err(Error::usage(format!(
+                    "detrend polynomial order {order}: at most 10 (higher orders fit the signal, not the baseline)"
+                )));
+            }
+        }
+        if let Some(f) = &self.filter {
+            f.validate()?;
+        }
+        if let Some(i) = &self.integration {
+            i.drift.validate()?;
+        }
+        Ok(())
+    }
+
     /// Minimal processing for the nonlinear (Bouc-Wen) stage, METHODS §1:
     /// SI units, mean removal and drift-controlled integration only (no
     /// taper, no band-pass: they distort hysteresis loops).

@@ -8,7 +8,7 @@ use crate::vocab::QaFlag;
 
 /// Thresholds of the quality checks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct QaSettings {
     /// Shortest run of samples at the record's extreme value that counts as clipping.
     pub clip_min_run: usize,

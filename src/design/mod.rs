@@ -24,8 +24,10 @@
 //!   NRMSE, weight max|x − μ|, master (bool); the overall WNRMSE in the metadata.
 
 pub mod craig_bampton;
+pub mod file;
 pub mod interface;
 pub mod layout;
+pub mod motion;
 pub mod partition;
 pub mod plan;
 pub mod pod;

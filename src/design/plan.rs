@@ -1,6 +1,6 @@
 //! The whole test design, from a twin, a PS node set and a base motion to an actuator layout,
 //! a validated reduction and a hybrid prototype (METHODS §5–6; thesis ch. 5–7). I/O free: the
-//! design file, the event and the output tables live at the edges (`design_file`, the `design`
+//! design file, the event and the output tables live at the edges (`design::file`, the `design`
 //! stage, `sinks::design_tables`).
 //!
 //! Steps:

@@ -228,7 +228,8 @@ impl DirectionRecords {
 }
 
 /// Drift control applied when this stage integrates velocities itself.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum VelocityDrift {
     /// Plain trapezoidal integration from rest (synthetic or already-corrected data).
     #[default]
@@ -538,7 +539,8 @@ impl DirectionKinematics {
 }
 
 /// Which version of the basis functions (Table 15, step A.a.i).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum BasisForm {
     /// Eq. 27–30: restoring force against time integrals of the rates.
     Integral,

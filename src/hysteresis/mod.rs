@@ -42,9 +42,11 @@
 
 pub mod basis;
 pub mod damage;
+pub mod event;
 pub mod forward;
 pub mod ground_motion;
 pub mod identify;
+pub mod mass_resolution;
 pub mod reduced_mass;
 pub mod solve;
 pub mod stft;
@@ -54,6 +56,8 @@ pub use basis::{
     BaseRecord, BasisForm, DirectionKinematics, DirectionRecords, DofParameters, FloorRecord,
     StiffnessPattern, VelocityDrift,
 };
+pub use event::{auto_directions, identify_event, DirectionOutcome, DirectionSpec, EventSettings};
+pub use mass_resolution::{MassResolution, ReducedMassRecord};
 pub use damage::{damage_index, damage_index_of_chain, DamageSeries};
 pub use forward::{BoucWenChain, ChainResponse};
 pub use ground_motion::{synthetic_ground_motion, GroundMotionSpec, SplitMix64};

@@ -2,8 +2,10 @@
 //! intensity, significant duration D5–95, CAV, damped response spectra and
 //! inter-storey drift ratios. Inputs in SI (m/s², m/s, m); no I/O.
 
+pub mod drift;
 pub mod spectra;
 
+pub use drift::{storey_drift, DriftRow};
 pub use spectra::{default_periods, response_spectrum, sdof_response, ResponseSpectrum};
 
 use serde::{Deserialize, Serialize};
@@ -132,11 +134,30 @@ pub fn interstorey_drifts(levels: &[&[f64]], storey_heights_m: &[f64]) -> Result
 
 /// Settings of `strong_motion_metrics`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct MetricsSettings {
     pub damping: f64,
     /// Oscillator periods, s (T = 0 is added in front).
     pub periods_s: Vec<f64>,
+}
+
+impl MetricsSettings {
+    /// Checks the settings before any record is read: damping in [0, 1),
+    /// periods positive and finite.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.damping >= 0.0 && self.damping < 1.0) {
+            return Err(crate::error::Error::usage(format!(
+                "damping = {}: must be a fraction of critical in [0, 1)",
+                self.damping
+            )));
+        }
+        if let Some(t) = self.periods_s.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
+            return Err(crate::error::Error::usage(format!(
+                "periods_s contains {t}: periods must be positive seconds"
+            )));
+        }
+        Ok(())
+    }
 }
 
 impl Default for MetricsSettings {

@@ -1,17 +1,41 @@
 //! Pipeline files (`pipelines/*.toml`): named stages of known kinds, their
 //! parameters and the stages whose outputs they read.  A user contract,
 //! documented in docs/pipelines.md.
+//!
+//! Reading a pipeline file builds it: every stage's `params` are
+//! deserialized into the stage kind's typed parameters there and then, so a
+//! misspelt key or a value of the wrong type is a usage error (exit 2) that
+//! names the file, the line and the key before any event data is read; and
+//! every product a stage needs is routed to the one declared input that
+//! provides it.
 
 use serde::Deserialize;
+use toml::de::{DeTable, DeValue, ValueDeserializer};
 
+use super::stage::{ProductKind, Stage, StageKind};
 use crate::error::{Error, Result};
 
+/// The declaration of one stage, as written in the pipeline file.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct PipelineFile {
-    pub pipeline: PipelineSection,
-    #[serde(rename = "stage")]
-    pub stages: Vec<StageDecl>,
+pub struct StageDecl {
+    /// Unique name within the pipeline.
+    pub name: String,
+    /// Stage kind (`ingest`, `condition`, `metrics`, …: the catalog handed to the parser).
+    pub kind: String,
+    /// Names of earlier stages whose outputs this stage reads.
+    #[serde(default)]
+    pub inputs: Vec<String>,
+    /// Kind-specific parameters, as written (the typed form lives in the built stage).
+    #[serde(default)]
+    pub params: toml::Table,
+    /// A stage may be switched off without deleting it.
+    #[serde(default = "yes")]
+    pub enabled: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -23,95 +47,224 @@ pub struct PipelineSection {
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct StageDecl {
-    /// Unique name within the pipeline.
-    pub name: String,
-    /// Stage kind from the registry (`ingest`, `condition`, `metrics`, …).
-    pub kind: String,
-    /// Names of earlier stages whose outputs this stage reads.
-    #[serde(default)]
-    pub inputs: Vec<String>,
-    /// Kind-specific parameters (checked by the stage).
-    #[serde(default = "empty_table")]
-    pub params: toml::Table,
-    /// A stage may be switched off without deleting it.
-    #[serde(default = "yes")]
-    pub enabled: bool,
+struct PipelineDoc {
+    pipeline: PipelineSection,
+    #[serde(rename = "stage", default)]
+    stages: Vec<StageDecl>,
 }
 
-fn empty_table() -> toml::Table {
-    toml::Table::new()
-}
-fn yes() -> bool {
-    true
+/// One stage of a built pipeline: its declaration, its kind, the stage with
+/// typed parameters, and where each product it needs comes from.
+pub struct PlannedStage {
+    pub decl: StageDecl,
+    pub kind: &'static StageKind,
+    pub stage: Box<dyn Stage>,
+    /// (product, index of the earlier stage that provides it).
+    pub routes: Vec<(ProductKind, usize)>,
 }
 
-impl PipelineFile {
-    pub fn parse(text: &str, file: &str) -> Result<PipelineFile> {
-        let p: PipelineFile = toml::from_str(text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
-            Error::usage(format!(
-                "{file}{}: invalid pipeline file: {}",
-                line.map(|l| format!(" line {l}")).unwrap_or_default(),
-                e.message()
-            ))
-        })?;
-        p.validate(file)?;
-        Ok(p)
+/// A pipeline read from its file: stages built, products routed.
+pub struct Pipeline {
+    pub pipeline: PipelineSection,
+    pub stages: Vec<PlannedStage>,
+}
+
+impl std::fmt::Debug for Pipeline {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Pipeline")
+            .field("pipeline", &self.pipeline)
+            .field("stages", &self.stages.iter().map(|s| &s.decl).collect::<Vec<_>>())
+            .finish()
     }
+}
 
-    pub fn load(path: &std::path::Path) -> Result<PipelineFile> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Self::parse(&text, &path.display().to_string())
+/// Line (1-based) of byte offset `at` in `text`.
+fn line_of(text: &str, at: usize) -> usize {
+    text[..at.min(text.len())].matches('\n').count() + 1
+}
+
+fn toml_error(file: &str, text: &str, e: &toml::de::Error, what: &str) -> Error {
+    let line = e
+        .span()
+        .map(|s| format!(" line {}", line_of(text, s.start)))
+        .unwrap_or_default();
+    Error::usage(format!("{file}{line}: {what}: {}", e.message()))
+}
+
+/// The `params` value of stage `index` of the document, with its spans.
+fn params_value<'i>(
+    root: &toml::Spanned<DeTable<'i>>,
+    index: usize,
+) -> Option<toml::Spanned<DeValue<'i>>> {
+    let DeValue::Array(stages) = root.get_ref().get("stage")?.get_ref() else {
+        return None;
+    };
+    let DeValue::Table(stage) = stages.get(index)?.get_ref() else {
+        return None;
+    };
+    stage.get("params").cloned()
+}
+
+/// Deserializes typed parameters `T` from the `params` of stage `index` of
+/// the pipeline text; errors name the file and the line of the offending key
+/// or value.  A stage without `params` gets `T` from an empty table.
+pub fn typed_params<T: serde::de::DeserializeOwned>(
+    text: &str,
+    file: &str,
+    index: usize,
+    decl: &StageDecl,
+) -> Result<T> {
+    let what = format!("stage {:?} ({}): bad params", decl.name, decl.kind);
+    let root = DeTable::parse(text).map_err(|e| toml_error(file, text, &e, &what))?;
+    match params_value(&root, index) {
+        Some(v) => T::deserialize(ValueDeserializer::from(v))
+            .map_err(|e| toml_error(file, text, &e, &what)),
+        None => T::deserialize(ValueDeserializer::parse("{}").map_err(|e| {
+            Error::usage(format!("{what}: {}", e.message()))
+        })?)
+        .map_err(|e| Error::usage(format!("{file}: {what}: {}", e.message()))),
     }
+}
 
-    fn validate(&self, file: &str) -> Result<()> {
-        let mut seen: Vec<&str> = Vec::new();
-        for s in &self.stages {
-            if seen.contains(&s.name.as_str()) {
-                return Err(Error::usage(format!(
-                    "{file}: stage name {:?} is used twice",
-                    s.name
-                )));
-            }
-            if !super::registry::KINDS.contains(&s.kind.as_str()) {
-                return Err(Error::usage(format!(
-                    "{file}: stage {:?} has unknown kind {:?} (known: {})",
-                    s.name,
-                    s.kind,
-                    super::registry::KINDS.join(", ")
-                )));
-            }
-            for i in &s.inputs {
-                if !seen.contains(&i.as_str()) {
-                    return Err(Error::usage(format!(
-                        "{file}: stage {:?} reads {:?}, which is not an earlier stage",
-                        s.name, i
-                    )));
-                }
-            }
-            seen.push(&s.name);
-        }
-        if self.stages.is_empty() {
+impl Pipeline {
+    /// Reads and builds a pipeline with the stage kinds of `catalog`.
+    pub fn parse(text: &str, file: &str, catalog: &'static [StageKind]) -> Result<Pipeline> {
+        let doc: PipelineDoc = toml::from_str(text)
+            .map_err(|e| toml_error(file, text, &e, "invalid pipeline file"))?;
+        if doc.stages.is_empty() {
             return Err(Error::usage(format!("{file}: no [[stage]] declared")));
         }
-        Ok(())
+        let mut stages: Vec<PlannedStage> = Vec::with_capacity(doc.stages.len());
+        for (index, decl) in doc.stages.into_iter().enumerate() {
+            if stages.iter().any(|s| s.decl.name == decl.name) {
+                return Err(Error::usage(format!(
+                    "{file}: stage name {:?} is used twice",
+                    decl.name
+                )));
+            }
+            let Some(kind) = catalog.iter().find(|k| k.kind == decl.kind) else {
+                let known: Vec<&str> = catalog.iter().map(|k| k.kind).collect();
+                return Err(Error::usage(format!(
+                    "{file}: stage {:?} has unknown kind {:?} (known: {})",
+                    decl.name,
+                    decl.kind,
+                    known.join(", ")
+                )));
+            };
+            let mut inputs = Vec::with_capacity(decl.inputs.len());
+            for i in &decl.inputs {
+                match stages.iter().position(|s| &s.decl.name == i) {
+                    Some(j) => inputs.push(j),
+                    None => {
+                        return Err(Error::usage(format!(
+                            "{file}: stage {:?} reads {:?}, which is not an earlier stage",
+                            decl.name, i
+                        )))
+                    }
+                }
+            }
+            let routes = route(file, &decl, kind, &inputs, &stages)?;
+            let stage = (kind.build)(&StageSource {
+                text,
+                file,
+                index,
+                decl: &decl,
+            })?;
+            stages.push(PlannedStage {
+                decl,
+                kind,
+                stage,
+                routes,
+            });
+        }
+        Ok(Pipeline {
+            pipeline: doc.pipeline,
+            stages,
+        })
+    }
+
+    /// Reads and builds the pipeline file at `path`.
+    pub fn load(path: &std::path::Path, catalog: &'static [StageKind]) -> Result<Pipeline> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::parse(&text, &path.display().to_string(), catalog)
     }
 }
 
-/// Reads a typed parameter set from a stage's `params` table, refusing
-/// unknown keys (the parameter structs use `deny_unknown_fields`).
-pub fn params<T: serde::de::DeserializeOwned>(stage: &StageDecl) -> Result<T> {
-    toml::Value::Table(stage.params.clone())
-        .try_into()
-        .map_err(|e: toml::de::Error| {
-            Error::usage(format!(
-                "stage {:?} ({}): bad params: {}",
-                stage.name,
-                stage.kind,
-                e.message()
-            ))
-        })
+/// For each product the stage's kind needs, the one declared input that
+/// provides it (usage error when none or several do).
+fn route(
+    file: &str,
+    decl: &StageDecl,
+    kind: &StageKind,
+    inputs: &[usize],
+    earlier: &[PlannedStage],
+) -> Result<Vec<(ProductKind, usize)>> {
+    let mut routes = Vec::new();
+    for &need in kind.needs {
+        let providers: Vec<usize> = inputs
+            .iter()
+            .copied()
+            .filter(|&j| earlier[j].kind.provides == Some(need))
+            .collect();
+        match providers.as_slice() {
+            [j] => routes.push((need, *j)),
+            [] => {
+                return Err(Error::usage(format!(
+                    "{file}: stage {:?} ({}) needs {}: list the stage that provides it in its `inputs` (a `{}` stage)",
+                    decl.name,
+                    decl.kind,
+                    need.describe(),
+                    need.provider_kind()
+                )))
+            }
+            _ => {
+                let names: Vec<&str> = providers
+                    .iter()
+                    .map(|&j| earlier[j].decl.name.as_str())
+                    .collect();
+                return Err(Error::usage(format!(
+                    "{file}: stage {:?} ({}) has several inputs providing {}: {}; keep one",
+                    decl.name,
+                    decl.kind,
+                    need.describe(),
+                    names.join(", ")
+                )));
+            }
+        }
+    }
+    Ok(routes)
+}
+
+/// What a stage kind's builder is given: its declaration and where it sits
+/// in the pipeline text (for the line numbers of parameter errors).
+pub struct StageSource<'a> {
+    text: &'a str,
+    file: &'a str,
+    index: usize,
+    pub decl: &'a StageDecl,
+}
+
+impl StageSource<'_> {
+    /// The stage's typed parameters (unknown keys and wrong types refused
+    /// with file and line).
+    pub fn params<T: serde::de::DeserializeOwned>(&self) -> Result<T> {
+        typed_params(self.text, self.file, self.index, self.decl)
+    }
+    /// The pipeline file's name, for messages.
+    pub fn file(&self) -> &str {
+        self.file
+    }
+    /// A usage error for parameters that parse but make no sense, naming
+    /// the file and stage (and the line of the stage's `params`).
+    pub fn invalid(&self, e: impl std::fmt::Display) -> Error {
+        let line = DeTable::parse(self.text)
+            .ok()
+            .and_then(|root| params_value(&root, self.index))
+            .map(|v| format!(" line {}", line_of(self.text, v.span().start)))
+            .unwrap_or_default();
+        Error::usage(format!(
+            "{}{line}: stage {:?} ({}): bad params: {e}",
+            self.file, self.decl.name, self.decl.kind
+        ))
+    }
 }

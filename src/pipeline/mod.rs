@@ -19,16 +19,18 @@
 //!   removed and rebuilt.
 
 pub mod config;
+pub mod context;
 pub mod fingerprint;
 pub mod lock;
 pub mod manifest;
-pub mod registry;
+pub mod stage;
 
 use std::path::Path;
 use std::time::Instant;
 
-pub use config::{params, PipelineFile, StageDecl};
-pub use registry::RunContext;
+pub use config::{Pipeline, PlannedStage, StageDecl, StageSource};
+pub use context::RunContext;
+pub use stage::{Product, ProductKind, Stage, StageKind};
 
 use crate::error::{Error, Result};
 use fingerprint::Fnv64;
@@ -148,14 +150,14 @@ fn take_legacy_stamps(out: &Path) -> Result<Vec<String>> {
 
 /// Puts `rec` into the manifest in place of the record of the same stage,
 /// keeping the records in pipeline order.
-fn set_record(m: &mut RunManifest, rec: StageRecord, pipeline: &PipelineFile) {
+fn set_record(m: &mut RunManifest, rec: StageRecord, pipeline: &Pipeline) {
     m.stages.retain(|r| r.name != rec.name);
     m.stages.push(rec);
     let pos = |name: &str| {
         pipeline
             .stages
             .iter()
-            .position(|s| s.name == name)
+            .position(|s| s.decl.name == name)
             .unwrap_or(usize::MAX)
     };
     m.stages.sort_by_key(|r| pos(&r.name));
@@ -182,23 +184,24 @@ fn hash_record(h: &mut Fnv64, r: Option<&StageRecord>) {
 /// outside the event folder, and the fingerprints and output hashes of the
 /// stages it reads (for the report: of every earlier stage).
 fn stage_fingerprint(
-    stage: &StageDecl,
+    planned: &PlannedStage,
     index: usize,
     event_fp: &str,
     ctx: &mut RunContext,
     current: &RunManifest,
-    pipeline: &PipelineFile,
+    pipeline: &Pipeline,
 ) -> Result<String> {
+    let stage = &planned.decl;
     let mut h = Fnv64::default();
     h.write_str(env!("CARGO_PKG_VERSION"))
         .write_str(&stage.kind)
         .write_str(&stage.name);
     h.write_str(&toml::to_string(&stage.params).unwrap_or_default());
     h.write_str(event_fp);
-    h.write_str(&registry::extra_fingerprint(stage, ctx)?);
-    if registry::reads_all_earlier(&stage.kind) {
+    h.write_str(&planned.stage.extra_fingerprint(ctx)?);
+    if planned.kind.reads_all_earlier {
         for s in &pipeline.stages[..index] {
-            hash_record(&mut h, current.stage(&s.name));
+            hash_record(&mut h, current.stage(&s.decl.name));
         }
     } else {
         for i in &stage.inputs {
@@ -212,7 +215,7 @@ fn stage_fingerprint(
 /// Returns the outcome of every stage, in order.  Holds the directory's
 /// lock for the whole run; keeps the run manifest `out/run.json`.
 pub fn run(
-    pipeline: &PipelineFile,
+    pipeline: &Pipeline,
     event_path: &Path,
     out: &Path,
     quiet: bool,
@@ -239,7 +242,7 @@ pub fn run(
 /// event (see the module doc) and returns the manifest to continue from.
 fn clean_out_dir(
     out: &Path,
-    pipeline: &PipelineFile,
+    pipeline: &Pipeline,
     event: &EventIdentity,
 ) -> Result<RunManifest> {
     let swept = crate::sinks::atomic::sweep_temp_files(out)?;
@@ -271,8 +274,7 @@ fn clean_out_dir(
             let files = pipeline
                 .stages
                 .iter()
-                .filter_map(|s| registry::outputs(s).ok())
-                .flatten()
+                .flat_map(|s| s.stage.outputs())
                 .collect();
             groups.push((
                 format!(
@@ -293,7 +295,7 @@ fn clean_out_dir(
         }
         Ok(Some(old)) => {
             for r in old.stages {
-                if pipeline.stages.iter().any(|s| s.name == r.name) {
+                if pipeline.stages.iter().any(|s| s.decl.name == r.name) {
                     current.stages.push(r);
                 } else {
                     let what = if r.kind == "extra" {
@@ -329,7 +331,7 @@ fn clean_out_dir(
 fn retire(
     out: &Path,
     current: &mut RunManifest,
-    pipeline: &PipelineFile,
+    pipeline: &Pipeline,
     stage: &StageDecl,
     state: StageState,
     reason: Option<String>,
@@ -367,15 +369,14 @@ fn retire(
 }
 
 fn run_locked(
-    pipeline: &PipelineFile,
+    pipeline: &Pipeline,
     event_path: &Path,
     event: &EventIdentity,
     out: &Path,
     quiet: bool,
 ) -> Result<Vec<(String, StageOutcome)>> {
     let mut current = clean_out_dir(out, pipeline, event)?;
-    let mut ctx = RunContext::new(event_path, out, quiet);
-    ctx.stage_decls = pipeline.stages.clone();
+    let mut ctx = RunContext::new(pipeline, event_path, out, quiet);
     let mut outcomes = Vec::new();
     // One bar over the stages; indicatif hides it when stderr is not a terminal.
     let bar = if quiet {
@@ -404,9 +405,32 @@ fn run_locked(
     result.map(|()| outcomes)
 }
 
+/// Why a stage cannot run because a product it needs comes from a stage
+/// that did not run (disabled or not applicable).
+fn missing_input(
+    planned: &PlannedStage,
+    pipeline: &Pipeline,
+    outcomes: &[(String, StageOutcome)],
+) -> Option<String> {
+    planned.routes.iter().find_map(|&(product, from)| {
+        let provider = &pipeline.stages[from].decl.name;
+        match &outcomes.get(from)?.1 {
+            StageOutcome::Disabled => Some(format!(
+                "it needs {} from stage {provider:?}, which is disabled",
+                product.describe()
+            )),
+            StageOutcome::NotApplicable(why) => Some(format!(
+                "it needs {} from stage {provider:?}, which does not apply ({why})",
+                product.describe()
+            )),
+            _ => None,
+        }
+    })
+}
+
 #[allow(clippy::too_many_arguments)]
 fn run_stages(
-    pipeline: &PipelineFile,
+    pipeline: &Pipeline,
     event: &EventIdentity,
     out: &Path,
     quiet: bool,
@@ -421,7 +445,9 @@ fn run_stages(
         }
     };
     let name = &pipeline.pipeline.name;
-    for (index, stage) in pipeline.stages.iter().enumerate() {
+    for (index, planned) in pipeline.stages.iter().enumerate() {
+        let stage = &planned.decl;
+        ctx.enter(index);
         bar.set_message(stage.name.clone());
         if !stage.enabled {
             retire(out, current, pipeline, stage, StageState::Disabled, None)?;
@@ -429,7 +455,11 @@ fn run_stages(
             outcomes.push((stage.name.clone(), StageOutcome::Disabled));
             continue;
         }
-        if let Some(why) = registry::not_applicable(stage, ctx)? {
+        let not_applicable = match missing_input(planned, pipeline, outcomes) {
+            Some(why) => Some(why),
+            None => planned.stage.not_applicable(ctx)?,
+        };
+        if let Some(why) = not_applicable {
             log(format!("[{name}] {:<12} not applicable: {why}", stage.name));
             retire(
                 out,
@@ -443,7 +473,7 @@ fn run_stages(
             outcomes.push((stage.name.clone(), StageOutcome::NotApplicable(why)));
             continue;
         }
-        let outputs = registry::outputs(stage)?;
+        let outputs = planned.stage.outputs();
         for o in &outputs {
             if !is_plain_name(o) {
                 return Err(Error::usage(format!(
@@ -454,7 +484,7 @@ fn run_stages(
             // A link, directory, device or FIFO at an output path: refused before any work.
             crate::sinks::atomic::check_replaceable(&out.join(o))?;
         }
-        let fp = stage_fingerprint(stage, index, &event.fingerprint, ctx, current, pipeline)?;
+        let fp = stage_fingerprint(planned, index, &event.fingerprint, ctx, current, pipeline)?;
         let previous = current.stage(&stage.name).cloned();
         let mut damaged = Vec::new();
         let up_to_date = match &previous {
@@ -476,7 +506,6 @@ fn run_stages(
         if up_to_date {
             log(format!("[{name}] {:<12} up to date, skipped", stage.name));
             bar.inc(1);
-            ctx.mark_skipped(&stage.name);
             outcomes.push((stage.name.clone(), StageOutcome::Skipped));
             continue;
         }
@@ -518,11 +547,12 @@ fn run_stages(
             "[{name}] {:<12} running ({})",
             stage.name, stage.kind
         ));
-        registry::run_stage(stage, ctx).map_err(|e| match e {
+        let product = planned.stage.run(ctx).map_err(|e| match e {
             Error::Usage(m) => Error::Usage(format!("stage {:?}: {m}", stage.name)),
             Error::Numerical(m) => Error::Numerical(format!("stage {:?}: {m}", stage.name)),
             other => other,
         })?;
+        ctx.set_product(product);
         let records = outputs
             .iter()
             .map(|o| manifest::record_output(out, o))

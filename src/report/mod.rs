@@ -201,10 +201,13 @@ pub fn render_report(dir: &Path, settings: &ReportSettings) -> Result<String> {
     Ok(sections::page(dir, settings))
 }
 
+/// The report's file name in the output directory.
+pub const REPORT_FILE: &str = "report.html";
+
 /// Writes `dir/report.html` atomically and returns its path.
 pub fn write_report(dir: &Path, settings: &ReportSettings) -> Result<PathBuf> {
     let page = render_report(dir, settings)?;
-    let path = dir.join("report.html");
+    let path = dir.join(REPORT_FILE);
     crate::sinks::parquet::write_bytes_atomically(&path, page.as_bytes())?;
     Ok(path)
 }

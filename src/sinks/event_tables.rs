@@ -13,7 +13,7 @@ use arrow_array::{Array, Float64Array, StringArray};
 use super::parquet::{write_parquet, ReadTable, TableBuilder};
 use crate::conditioning::Motion;
 use crate::error::{Error, Result};
-use crate::metrics::StrongMotionMetrics;
+use crate::metrics::{DriftRow, StrongMotionMetrics};
 use crate::vocab::{Channel, Direction, Event, ProcessingHistory, Record};
 
 pub const SCHEMA_KEY: &str = "quaketwin.schema";
@@ -260,68 +260,6 @@ pub fn write_spectra(path: &Path, event: &Event, metrics: &[StrongMotionMetrics]
     let mut meta = event_metadata(event);
     meta.push((SCHEMA_KEY.into(), "spectra".into()));
     write_parquet(path, &[batch], &meta)
-}
-
-/// One storey's peak drift in one direction.
-#[derive(Debug, Clone, PartialEq)]
-pub struct DriftRow {
-    pub direction: String,
-    /// Upper level of the storey (storey L joins levels L−1 and L).
-    pub storey: i32,
-    pub lower_channel: String,
-    pub upper_channel: String,
-    pub storey_height_m: f64,
-    pub peak_drift_ratio: f64,
-}
-
-/// Peak inter-storey drift ratios: channels grouped by direction, ordered by
-/// level; consecutive levels with known storey heights form a storey.
-pub fn drift_rows(event: &Event, motions: &[Motion]) -> Result<Vec<DriftRow>> {
-    let Some(structure) = &event.structure else {
-        return Ok(Vec::new());
-    };
-    let heights = &structure.storey_heights_m;
-    if heights.is_empty() {
-        return Ok(Vec::new());
-    }
-    // One motion per level and direction: the rigid-floor combination where
-    // a level has several channels (geometry::floor).
-    let selection = crate::geometry::one_record_per_level(&event.records);
-    let mut by_dir: std::collections::BTreeMap<String, Vec<(i32, &Record, &Motion)>> =
-        Default::default();
-    for (&(axis, level), r) in &selection.records {
-        if let Some(m) = motions.iter().find(|m| m.channel_id == r.channel.id) {
-            by_dir
-                .entry(format!("{axis:?}"))
-                .or_default()
-                .push((level, *r, m));
-        }
-    }
-    let mut rows = Vec::new();
-    for (dir, mut list) in by_dir {
-        list.sort_by_key(|(l, _, _)| *l);
-        for w in list.windows(2) {
-            let (l0, r0, m0) = &w[0];
-            let (l1, r1, m1) = &w[1];
-            if *l1 != l0 + 1 || *l1 < 1 || (*l1 as usize) > heights.len() {
-                continue;
-            }
-            if m0.displacement.len() != m1.displacement.len() || (m0.dt - m1.dt).abs() > 1e-12 {
-                continue; // not on a common time base: alignment was not configured
-            }
-            let h = heights[*l1 as usize - 1];
-            let ratio = crate::metrics::interstorey_drift(&m0.displacement, &m1.displacement, h)?;
-            rows.push(DriftRow {
-                direction: dir.clone(),
-                storey: *l1,
-                lower_channel: r0.channel.id.clone(),
-                upper_channel: r1.channel.id.clone(),
-                storey_height_m: h,
-                peak_drift_ratio: ratio,
-            });
-        }
-    }
-    Ok(rows)
 }
 
 /// `drift.parquet`.

@@ -7,22 +7,7 @@ use std::path::Path;
 
 use super::parquet::{write_parquet, TableBuilder};
 use crate::error::Result;
-use crate::hysteresis::DirectionIdentification;
-
-/// Outcome of one direction: identified, or why not.
-pub enum DirectionOutcome {
-    Identified(Box<DirectionIdentification>),
-    NotIdentifiable { direction: String, reason: String },
-}
-
-impl DirectionOutcome {
-    pub fn direction(&self) -> &str {
-        match self {
-            DirectionOutcome::Identified(d) => &d.direction,
-            DirectionOutcome::NotIdentifiable { direction, .. } => direction,
-        }
-    }
-}
+pub use crate::hysteresis::DirectionOutcome;
 
 fn meta(schema: &str, extra: &[(String, String)]) -> Vec<(String, String)> {
     let mut m = vec![("quaketwin.schema".to_string(), schema.to_string())];

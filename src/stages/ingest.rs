@@ -1,12 +1,51 @@
 //! `ingest`: read the event folder and write `event.json`, the inventory of
 //! what was read, inferred and missing.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::event_folder::LoadedEvent;
-use crate::pipeline::{RunContext, StageDecl};
+use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::vocab::{format_epoch_ns, Channel, Structure};
+
+pub const KIND: StageKind = StageKind {
+    kind: "ingest",
+    needs: &[],
+    provides: Some(ProductKind::Inventory),
+    reads_all_earlier: false,
+    build,
+};
+
+/// The inventory file.
+pub const EVENT_JSON: &str = "event.json";
+
+/// The stage takes no parameters: channel metadata belongs in event.toml.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct IngestParams {}
+
+fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
+    src.params::<IngestParams>().map_err(|e| {
+        Error::usage(format!(
+            "{e} (the ingest stage takes no params: set channel metadata in event.toml)"
+        ))
+    })?;
+    Ok(Box::new(Ingest))
+}
+
+struct Ingest;
+
+impl Stage for Ingest {
+    fn outputs(&self) -> Vec<String> {
+        vec![EVENT_JSON.into()]
+    }
+    fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
+        let path = ctx.out_dir.join(EVENT_JSON);
+        let json = inventory_json(ctx.loaded_event()?)?;
+        crate::sinks::parquet::write_bytes_atomically(&path, &json)?;
+        Ok(None)
+    }
+}
 
 #[derive(Serialize)]
 struct FileJson<'a> {
@@ -68,15 +107,4 @@ pub fn inventory_json(loaded: &LoadedEvent) -> Result<Vec<u8>> {
     };
     serde_json::to_vec_pretty(&doc)
         .map_err(|err| Error::numerical(format!("serialising the inventory: {err}")))
-}
-
-pub fn run(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
-    if !stage.params.is_empty() {
-        return Err(Error::usage(
-            "the ingest stage takes no params (set channel metadata in event.toml)",
-        ));
-    }
-    let path = ctx.out_dir.join("event.json");
-    let json = inventory_json(ctx.loaded_event()?)?;
-    crate::sinks::parquet::write_bytes_atomically(&path, &json)
 }

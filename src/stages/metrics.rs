@@ -3,22 +3,49 @@
 
 use rayon::prelude::*;
 
+use super::condition::Conditioned;
 use crate::error::Result;
-use crate::metrics::{strong_motion_metrics, MetricsSettings};
-use crate::pipeline::{params, RunContext, StageDecl};
+use crate::metrics::{storey_drift, strong_motion_metrics, MetricsSettings};
+use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::event_tables;
 
-pub fn run(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
-    let settings: MetricsSettings = params(stage)?;
-    let out = ctx.out_dir.clone();
-    let (event, motions) = ctx.conditioned_event()?;
-    let metrics = motions
-        .par_iter()
-        .map(|m| strong_motion_metrics(m, &settings))
-        .collect::<Result<Vec<_>>>()?;
-    let drift = event_tables::drift_rows(event, motions)?;
-    event_tables::write_channels(&out.join("channels.parquet"), event, &metrics)?;
-    event_tables::write_spectra(&out.join("spectra.parquet"), event, &metrics)?;
-    event_tables::write_drift(&out.join("drift.parquet"), event, &drift)?;
-    Ok(())
+pub const KIND: StageKind = StageKind {
+    kind: "metrics",
+    needs: &[ProductKind::ConditionedEvent],
+    provides: Some(ProductKind::Metrics),
+    reads_all_earlier: false,
+    build,
+};
+
+pub const CHANNELS_FILE: &str = "channels.parquet";
+pub const SPECTRA_FILE: &str = "spectra.parquet";
+pub const DRIFT_FILE: &str = "drift.parquet";
+
+fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
+    let settings: MetricsSettings = src.params()?;
+    settings.validate().map_err(|e| src.invalid(e))?;
+    Ok(Box::new(Metrics { settings }))
+}
+
+struct Metrics {
+    settings: MetricsSettings,
+}
+
+impl Stage for Metrics {
+    fn outputs(&self) -> Vec<String> {
+        vec![CHANNELS_FILE.into(), SPECTRA_FILE.into(), DRIFT_FILE.into()]
+    }
+    fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
+        let out = ctx.out_dir.clone();
+        let Conditioned { event, motions } = ctx.input(ProductKind::ConditionedEvent)?;
+        let metrics = motions
+            .par_iter()
+            .map(|m| strong_motion_metrics(m, &self.settings))
+            .collect::<Result<Vec<_>>>()?;
+        let drift = storey_drift(event, motions)?;
+        event_tables::write_channels(&out.join(CHANNELS_FILE), event, &metrics)?;
+        event_tables::write_spectra(&out.join(SPECTRA_FILE), event, &metrics)?;
+        event_tables::write_drift(&out.join(DRIFT_FILE), event, &drift)?;
+        Ok(None)
+    }
 }

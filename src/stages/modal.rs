@@ -10,9 +10,42 @@ use crate::error::{Error, Result};
 use crate::modal::{
     frequency_shifts, identify_event, spectral_overlay, Method, ModalResult, ModalSettings,
 };
-use crate::pipeline::{params, RunContext, StageDecl};
+use super::condition::Conditioned;
+use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::modal_tables as tables;
 use crate::vocab::{Event, Role};
+
+pub const KIND: StageKind = StageKind {
+    kind: "modal",
+    needs: &[ProductKind::ConditionedEvent],
+    provides: Some(ProductKind::Modes),
+    reads_all_earlier: false,
+    build,
+};
+
+pub const STABILIZATION_FILE: &str = "stabilization.parquet";
+pub const MODES_FILE: &str = "modes.parquet";
+pub const SPECTRUM_FILE: &str = "modal_spectrum.parquet";
+pub const SHIFTS_FILE: &str = "frequency_shifts.parquet";
+
+/// Identification method of the stage: `auto` picks input–output when the
+/// event has base channels, else SSI-COV.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MethodChoice {
+    Auto,
+    #[serde(alias = "cov")]
+    SsiCov,
+    #[serde(alias = "data")]
+    SsiData,
+    #[serde(alias = "n4sid", alias = "moesp")]
+    Io,
+}
+
+/// The product: where the identified modes are (a later stage reads the file).
+pub struct ModesFile {
+    pub path: PathBuf,
+}
 
 /// Parameters of the `modal` stage (docs/pipelines.md).
 #[derive(Debug, Clone, Deserialize)]
@@ -20,7 +53,7 @@ use crate::vocab::{Event, Role};
 pub struct ModalParams {
     /// `auto` (input–output when the event has base channels, else SSI-COV),
     /// `ssi-cov`, `ssi-data` or `io`.
-    pub method: String,
+    pub method: MethodChoice,
     /// Model orders swept: [first, last, step] (thesis: 2 to 42 step 2).
     pub orders: [usize; 3],
     /// Block rows; none = automatic.
@@ -45,7 +78,7 @@ impl Default for ModalParams {
     fn default() -> Self {
         let f = crate::modal::PhysicalFilters::default();
         ModalParams {
-            method: "auto".into(),
+            method: MethodChoice::Auto,
             orders: [2, 42, 2],
             block_rows: None,
             damping_min: f.damping_min,
@@ -61,26 +94,41 @@ impl Default for ModalParams {
 }
 
 impl ModalParams {
-    /// The modal settings for `event` (method `auto` resolved from its channels).
-    pub fn settings_for(&self, event: &Event) -> Result<ModalSettings> {
-        let method = match self.method.as_str() {
-            "auto" => {
-                if event.records.iter().any(|r| r.channel.role == Role::Input) {
-                    Method::Io
-                } else {
-                    Method::SsiCov
-                }
-            }
-            m => Method::from_name(m).ok_or_else(|| {
-                Error::usage(format!("method {m:?}: use auto, ssi-cov, ssi-data or io"))
-            })?,
-        };
+    /// Checks the parameters before any record is read.
+    pub fn validate(&self) -> Result<()> {
         let [first, last, step] = self.orders;
         if first == 0 || step == 0 || last < first {
             return Err(Error::usage(
                 "orders must be [first, last, step] with 0 < first ≤ last and step > 0",
             ));
         }
+        if !(self.damping_min >= 0.0 && self.damping_max > self.damping_min) {
+            return Err(Error::usage(
+                "damping window must satisfy 0 ≤ damping_min < damping_max",
+            ));
+        }
+        if self.psd_segment < 8 {
+            return Err(Error::usage("psd_segment must be at least 8 samples"));
+        }
+        Ok(())
+    }
+
+    /// The modal settings for `event` (method `auto` resolved from its channels).
+    pub fn settings_for(&self, event: &Event) -> Result<ModalSettings> {
+        let method = match self.method {
+            MethodChoice::Auto => {
+                if event.records.iter().any(|r| r.channel.role == Role::Input) {
+                    Method::Io
+                } else {
+                    Method::SsiCov
+                }
+            }
+            MethodChoice::SsiCov => Method::SsiCov,
+            MethodChoice::SsiData => Method::SsiData,
+            MethodChoice::Io => Method::Io,
+        };
+        self.validate()?;
+        let [first, last, step] = self.orders;
         let mut s = ModalSettings {
             method,
             block_rows: self.block_rows,
@@ -102,8 +150,8 @@ pub fn identify_and_write(event: &Event, p: &ModalParams, out: &Path) -> Result<
     let settings = p.settings_for(event)?;
     let settings_json = serde_json::to_string(&settings).unwrap_or_default();
     let result = identify_event(event, &settings)?;
-    tables::write_stabilization(&out.join("stabilization.parquet"), &result, &settings_json)?;
-    tables::write_modes(&out.join("modes.parquet"), &result, &settings_json)?;
+    tables::write_stabilization(&out.join(STABILIZATION_FILE), &result, &settings_json)?;
+    tables::write_modes(&out.join(MODES_FILE), &result, &settings_json)?;
     let outputs: Vec<Vec<f64>> = result
         .output_ids
         .iter()
@@ -115,7 +163,7 @@ pub fn identify_and_write(event: &Event, p: &ModalParams, out: &Path) -> Result<
         .unwrap_or(result.dt);
     let overlay = spectral_overlay(&outputs, dt, p.psd_segment).ok();
     tables::write_spectrum(
-        &out.join("modal_spectrum.parquet"),
+        &out.join(SPECTRUM_FILE),
         &result,
         overlay.as_ref(),
         &settings_json,
@@ -133,7 +181,7 @@ pub fn identify_and_write(event: &Event, p: &ModalParams, out: &Path) -> Result<
         }
         let shifts = frequency_shifts(&ref_modes, &result.modes, 0.8);
         tables::write_shifts(
-            &out.join("frequency_shifts.parquet"),
+            &out.join(SHIFTS_FILE),
             &shifts,
             &reference.display().to_string(),
             &event.name,
@@ -142,12 +190,34 @@ pub fn identify_and_write(event: &Event, p: &ModalParams, out: &Path) -> Result<
     Ok(result)
 }
 
-pub fn run(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
-    let p: ModalParams = params(stage)?;
-    let out = ctx.out_dir.clone();
-    let (event, _) = ctx.conditioned_event()?;
-    identify_and_write(event, &p, &out)?;
-    Ok(())
+fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
+    let params: ModalParams = src.params()?;
+    params.validate().map_err(|e| src.invalid(e))?;
+    Ok(Box::new(Modal { params }))
+}
+
+struct Modal {
+    params: ModalParams,
+}
+
+impl Stage for Modal {
+    fn outputs(&self) -> Vec<String> {
+        outputs(&self.params)
+    }
+    fn not_applicable(&self, ctx: &mut RunContext) -> Result<Option<String>> {
+        Ok(not_applicable(&ctx.loaded_event()?.event))
+    }
+    fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
+        let out = ctx.out_dir.clone();
+        let Conditioned { event, .. } = ctx.input(ProductKind::ConditionedEvent)?;
+        identify_and_write(event, &self.params, &out)?;
+        self.restore(ctx)
+    }
+    fn restore(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
+        Ok(Some(Box::new(ModesFile {
+            path: ctx.out_dir.join(MODES_FILE),
+        })))
+    }
 }
 
 /// Output files of the stage (the shifts file only with `reference_modes`).
@@ -166,12 +236,12 @@ pub fn not_applicable(event: &Event) -> Option<String> {
 
 pub fn outputs(p: &ModalParams) -> Vec<String> {
     let mut v = vec![
-        "stabilization.parquet".to_string(),
-        "modes.parquet".into(),
-        "modal_spectrum.parquet".into(),
+        STABILIZATION_FILE.to_string(),
+        MODES_FILE.into(),
+        SPECTRUM_FILE.into(),
     ];
     if p.reference_modes.is_some() {
-        v.push("frequency_shifts.parquet".into());
+        v.push(SHIFTS_FILE.into());
     }
     v
 }

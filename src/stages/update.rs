@@ -7,16 +7,23 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::pipeline::{params, RunContext, StageDecl};
+use super::modal::ModesFile;
+use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::parquet::write_bytes_atomically;
 use crate::sinks::twin_tables::{read_measured_modes, write_twin_modes, write_twin_update};
-use crate::twin::ensemble::{run_ensemble, EnsembleOptions, Selection};
-use crate::twin::objective::{compare_modes, ModalObjective, ObjectiveOptions};
-use crate::twin::optimisers::{
-    Bounds, GeneticAlgorithm, Optimiser, ParticleSwarm, PatternSearch, QuasiNewton,
-    SimulatedAnnealing,
+use crate::twin::ensemble::{EnsembleOptions, Selection};
+use crate::twin::load_twin;
+use crate::twin::objective::ObjectiveOptions;
+use crate::twin::optimisers::{Optimiser, SolverName};
+use crate::twin::update::{update_twin_with, StartPoint};
+
+pub const KIND: StageKind = StageKind {
+    kind: "update",
+    needs: &[ProductKind::Modes],
+    provides: Some(ProductKind::UpdatedTwin),
+    reads_all_earlier: false,
+    build,
 };
-use crate::twin::{load_twin, updated_twin_toml};
 
 /// File names of the stage's outputs.
 pub const TWIN_UPDATE_FILE: &str = "twin_update.parquet";
@@ -29,7 +36,7 @@ pub const UPDATED_TWIN_FILE: &str = "twin_updated.toml";
 pub struct UpdateParams {
     /// Candidate solvers: `ga`, `pso`, `sa`, `ps` (pattern search), `qn` (quasi-Newton),
     /// each with its default settings. Default: all five (the thesis's four plus `qn`).
-    pub solvers: Vec<String>,
+    pub solvers: Vec<SolverName>,
     /// Seed of every random draw (same seed → same result).
     pub seed: u64,
     /// Upper limit on ensemble rounds (Table 1).
@@ -38,9 +45,9 @@ pub struct UpdateParams {
     /// squared, is below this.
     pub tolerance: f64,
     /// `first` (first-ranked candidate, default) or `mrr` (mean-reciprocal-rank mean).
-    pub selection: String,
+    pub selection: Selection,
     /// Start point: `twin` (each parameter's `start`, default) or `mid` (middle of the bounds).
-    pub start: String,
+    pub start: StartPoint,
     /// Model modes computed beyond the number of measured modes, as pairing candidates.
     pub extra_model_modes: usize,
 }
@@ -49,63 +56,59 @@ impl Default for UpdateParams {
     fn default() -> Self {
         let e = EnsembleOptions::default();
         UpdateParams {
-            solvers: ["ga", "pso", "sa", "ps", "qn"]
-                .into_iter()
-                .map(String::from)
-                .collect(),
+            solvers: SolverName::ALL.to_vec(),
             seed: e.seed,
             max_rounds: e.max_rounds,
             tolerance: e.variance_tolerance,
-            selection: "first".into(),
-            start: "twin".into(),
+            selection: Selection::FirstRanked,
+            start: StartPoint::Twin,
             extra_model_modes: ObjectiveOptions::default().extra_model_modes,
         }
     }
 }
 
 impl UpdateParams {
-    /// The candidate solvers named in `solvers` (usage error for unknown or repeated names).
+    /// Reads a settings file of `quaketwin update` (the stage's params as a
+    /// TOML document); errors name the file and line.
+    pub fn from_toml(text: &str, file: &str) -> Result<UpdateParams> {
+        let params: UpdateParams = toml::from_str(text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| format!(" line {}", text[..s.start].matches('\n').count() + 1))
+                .unwrap_or_default();
+            Error::usage(format!("{file}{line}: {}", e.message()))
+        })?;
+        params
+            .validate()
+            .map_err(|e| Error::usage(format!("{file}: {e}")))?;
+        Ok(params)
+    }
+
+    /// Checks the parameters before any file is read: solvers listed once
+    /// each and at least one, rounds and tolerance positive.
+    pub fn validate(&self) -> Result<()> {
+        self.build_solvers()?;
+        self.ensemble_options()?;
+        Ok(())
+    }
+
+    /// The candidate solvers named in `solvers` (usage error for an empty list or repeated names).
     pub fn build_solvers(&self) -> Result<Vec<Box<dyn Optimiser>>> {
         if self.solvers.is_empty() {
             return Err(Error::usage("update: `solvers` is empty"));
         }
-        let mut out: Vec<Box<dyn Optimiser>> = Vec::new();
-        let mut seen = Vec::new();
-        for name in &self.solvers {
-            let key = name.to_ascii_lowercase();
-            let solver: Box<dyn Optimiser> = match key.as_str() {
-                "ga" | "genetic_algorithm" => Box::new(GeneticAlgorithm::default()),
-                "pso" | "particle_swarm" => Box::new(ParticleSwarm::default()),
-                "sa" | "simulated_annealing" => Box::new(SimulatedAnnealing::default()),
-                "ps" | "pattern_search" => Box::new(PatternSearch::default()),
-                "qn" | "quasi_newton" => Box::new(QuasiNewton::default()),
-                _ => {
-                    return Err(Error::usage(format!(
-                        "update: unknown solver {name:?} (ga, pso, sa, ps, qn)"
-                    )))
-                }
-            };
-            if seen.contains(&solver.name().to_string()) {
+        for (i, name) in self.solvers.iter().enumerate() {
+            if self.solvers[..i].contains(name) {
                 return Err(Error::usage(format!(
                     "update: solver {name:?} is listed twice"
                 )));
             }
-            seen.push(solver.name().to_string());
-            out.push(solver);
         }
-        Ok(out)
+        Ok(self.solvers.iter().map(|s| s.build()).collect())
     }
 
     pub fn ensemble_options(&self) -> Result<EnsembleOptions> {
-        let selection = match self.selection.as_str() {
-            "first" => Selection::FirstRanked,
-            "mrr" => Selection::MeanReciprocalRank,
-            s => {
-                return Err(Error::usage(format!(
-                    "update: selection {s:?} must be \"first\" or \"mrr\""
-                )))
-            }
-        };
+        let selection = self.selection;
         if self.max_rounds == 0 {
             return Err(Error::usage("update: max_rounds must be at least 1"));
         }
@@ -157,50 +160,19 @@ pub fn update_from_files(
     let options = params.ensemble_options()?;
     let twin = load_twin(twin_path)?;
     let modes_file = read_measured_modes(modes_path)?;
-    let system = &twin.system;
-    if system.parameters.is_empty() {
-        return Err(Error::input(
-            crate::error::Location::file(twin.source.clone()),
-            "the twin has no [[parameters]] to update",
-        ));
-    }
-    let start = match params.start.as_str() {
-        "twin" => system.start_values(),
-        "mid" => system.mid_bounds(),
-        s => {
-            return Err(Error::usage(format!(
-                "update: start {s:?} must be \"twin\" or \"mid\""
-            )))
-        }
-    };
-    system.check_parameters(&start)?;
-    let objective = ModalObjective::new(
-        system,
+    let outcome = update_twin_with(
+        &twin,
         modes_file.measured.clone(),
         ObjectiveOptions {
             extra_model_modes: params.extra_model_modes,
         },
+        &options,
+        &solvers,
+        params.start,
     )?;
-    let bounds = Bounds::new(system.lower_bounds(), system.upper_bounds());
-    let before = objective.evaluate(&start);
-    if !before.objective.is_finite() {
-        return Err(Error::numerical(format!(
-            "{}: the model's modes could not be computed at the start values",
-            twin.source
-        )));
-    }
-    let result = run_ensemble(&objective, &bounds, &start, &solvers, &options)?;
-    let after = objective.evaluate(&result.parameters);
-    let cmp_before = compare_modes(&before.pairs);
-    let cmp_after = compare_modes(&after.pairs);
-    let names: Vec<String> = system.parameters.iter().map(|p| p.name.clone()).collect();
-    let values: Vec<(String, f64)> = names
-        .iter()
-        .cloned()
-        .zip(result.parameters.iter().copied())
-        .collect();
-    let toml_text = updated_twin_toml(&twin.file, &values)?;
-
+    let (cmp_before, cmp_after, result) =
+        (&outcome.modes_before, &outcome.modes, &outcome.ensemble);
+    let names = outcome.parameter_names.clone();
     let settings = serde_json::to_string(params).unwrap_or_default();
     let inputs = serde_json::json!({
         "twin": twin_path.display().to_string(),
@@ -214,21 +186,21 @@ pub fn update_from_files(
     let update_path = out_dir.join(TWIN_UPDATE_FILE);
     let modes_path_out = out_dir.join(TWIN_MODES_FILE);
     let twin_out = out_dir.join(UPDATED_TWIN_FILE);
-    write_twin_update(&update_path, &names, &result, &meta)?;
+    write_twin_update(&update_path, &names, result, &meta)?;
     write_twin_modes(
         &modes_path_out,
         &modes_file.mode_numbers,
-        &cmp_before,
-        &cmp_after,
+        cmp_before,
+        cmp_after,
         &meta,
     )?;
-    write_bytes_atomically(&twin_out, toml_text.as_bytes())?;
+    write_bytes_atomically(&twin_out, outcome.updated_twin_toml.as_bytes())?;
     Ok(UpdateSummary {
         parameter_names: names,
-        start_values: start,
+        start_values: outcome.start_values.clone(),
         updated_values: result.parameters.clone(),
-        objective_initial: before.objective,
-        objective_updated: after.objective,
+        objective_initial: outcome.objective_initial,
+        objective_updated: outcome.objective_updated,
         frequency_error_initial: cmp_before.frequency_error,
         frequency_error_updated: cmp_after.frequency_error,
         shape_error_initial: cmp_before.shape_error,
@@ -242,25 +214,48 @@ pub fn update_from_files(
     })
 }
 
-/// Pipeline stage: the twin named by the event's `structure.twin` (relative to the event
-/// folder, or a member of a zipped event) against `modes.parquet` in the output folder. An event without a twin is a usage
-/// error; the registry decides whether to skip the stage instead.
-pub fn run(stage: &StageDecl, ctx: &mut RunContext) -> Result<()> {
-    let p: UpdateParams = params(stage)?;
-    let twin = ctx
+fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
+    let params: UpdateParams = src.params()?;
+    params.validate().map_err(|e| src.invalid(e))?;
+    Ok(Box::new(Update { params }))
+}
+
+struct Update {
+    params: UpdateParams,
+}
+
+/// The twin the event names (`structure.twin` in event.toml), if any.
+fn event_twin(ctx: &mut RunContext) -> Result<Option<String>> {
+    Ok(ctx
         .loaded_event()?
         .event
         .structure
         .as_ref()
-        .and_then(|s| s.twin.clone())
-        .ok_or_else(|| {
-            Error::usage(format!(
-                "stage {:?} (update): the event names no digital twin (structure.twin)",
-                stage.name
-            ))
+        .and_then(|s| s.twin.clone()))
+}
+
+impl Stage for Update {
+    fn outputs(&self) -> Vec<String> {
+        vec![
+            TWIN_UPDATE_FILE.into(),
+            TWIN_MODES_FILE.into(),
+            UPDATED_TWIN_FILE.into(),
+        ]
+    }
+    fn not_applicable(&self, ctx: &mut RunContext) -> Result<Option<String>> {
+        Ok(event_twin(ctx)?
+            .is_none()
+            .then(|| "the event names no twin (structure.twin in event.toml)".to_string()))
+    }
+    /// The twin named by the event's `structure.twin` (relative to the event folder, or a
+    /// member of a zipped event) against the modes of the stage's modal input.
+    fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
+        let twin = event_twin(ctx)?.ok_or_else(|| {
+            Error::usage("the event names no digital twin (structure.twin)")
         })?;
-    let twin_path = ctx.referenced.resolve(&twin, "structure.twin")?;
-    let modes_path = ctx.out_dir.join("modes.parquet");
-    update_from_files(&twin_path, &modes_path, &ctx.out_dir, &p)?;
-    Ok(())
+        let twin_path = ctx.referenced.resolve(&twin, "structure.twin")?;
+        let modes_path = ctx.input::<ModesFile>(ProductKind::Modes)?.path.clone();
+        update_from_files(&twin_path, &modes_path, &ctx.out_dir, &self.params)?;
+        Ok(None)
+    }
 }

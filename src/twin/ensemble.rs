@@ -43,12 +43,15 @@ impl UpdateProblem for ModalObjective<'_> {
     }
 }
 
-/// How the new parameter values are formed from the selected ranking.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// How the new parameter values are formed from the selected ranking
+/// (settings files: `first`, `mrr`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Selection {
     /// The parameters of the first-ranked candidate.
+    #[serde(rename = "first")]
     FirstRanked,
     /// Σ_r (1/r) x_(r) / Σ_r (1/r) over the ranking positions r.
+    #[serde(rename = "mrr")]
     MeanReciprocalRank,
 }
 

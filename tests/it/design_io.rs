@@ -5,11 +5,13 @@ use std::path::{Path, PathBuf};
 
 use arrow_array::{BooleanArray, Float64Array, Int64Array, StringArray, UInt32Array};
 use quaketwin::design::plan::DesignSettings;
-use quaketwin::design_file::{load_design, parse_design, MotionSource};
-use quaketwin::pipeline::{self, PipelineFile, StageOutcome};
+use quaketwin::design::file::{load_design, parse_design, MotionSource};
+use quaketwin::pipeline::{self, StageOutcome};
+use quaketwin::stages::parse_pipeline;
 use quaketwin::sinks::design_tables::{DESIGN_FILES, WNRMSE_KEY};
 use quaketwin::sinks::parquet::ReadTable;
-use quaketwin::stages::design::{base_motion_from_file, design_from_file, twin_axis_of};
+use quaketwin::design::motion::{base_motion_from_file, twin_axis_of};
+use quaketwin::stages::design::design_from_file;
 use quaketwin::synth_facade::{facade_twin_toml, write_facade_sample, FACADE_FOLDER};
 use quaketwin::twin::parse_twin;
 use quaketwin::vocab::{Axis, Direction};
@@ -647,7 +649,7 @@ fn test_design_pipeline_runs_and_tracks_the_design_file() {
         "/pipelines/test-design.toml"
     ))
     .unwrap();
-    let p = PipelineFile::parse(&text, "test-design.toml").unwrap();
+    let p = parse_pipeline(&text, "test-design.toml").unwrap();
     let out = ws.path().join("run");
     let outcomes = pipeline::run(&p, &event, &out, true).unwrap();
     assert!(
@@ -689,7 +691,7 @@ fn test_design_pipeline_runs_and_tracks_the_design_file() {
         "design = \"design.toml\"",
         &format!("design = {:?}", outside.display().to_string()),
     );
-    let p2 = PipelineFile::parse(&text2, "test-design.toml").unwrap();
+    let p2 = parse_pipeline(&text2, "test-design.toml").unwrap();
     let out2 = ws.path().join("run2");
     pipeline::run(&p2, &event, &out2, true).unwrap();
     assert_eq!(
@@ -773,7 +775,7 @@ fn design_stage_is_not_applicable_without_base_channel() {
         "design = \"design.toml\"",
         &format!("design = {:?}", design.display().to_string()),
     );
-    let p = PipelineFile::parse(&text, "test-design.toml").unwrap();
+    let p = parse_pipeline(&text, "test-design.toml").unwrap();
     let outcomes = pipeline::run(&p, &event, &ws.path().join("out"), true).unwrap();
     match stage(&outcomes, "design") {
         StageOutcome::NotApplicable(why) => assert!(why.contains("no base channel"), "{why}"),

@@ -175,7 +175,8 @@ fn yielding_sample_bouc_wen_and_damage_match_the_truth() {
 /// the earthquake, pairs its modes within 1 % in frequency.
 #[test]
 fn frequency_shifts_against_a_reference_event() {
-    use quaketwin::pipeline::{self, PipelineFile};
+    use quaketwin::pipeline;
+    use quaketwin::stages::parse_pipeline;
     let first = tempfile::tempdir().unwrap();
     run("synthetic-4storey-quake", first.path());
     let reference = first.path().join("modes.parquet");
@@ -187,7 +188,7 @@ fn frequency_shifts_against_a_reference_event() {
         quaketwin::commands::INGEST_PIPELINE,
         reference.display().to_string()
     );
-    let p = PipelineFile::parse(&text, "t.toml").unwrap();
+    let p = parse_pipeline(&text, "t.toml").unwrap();
     let second = tempfile::tempdir().unwrap();
     pipeline::run(
         &p,

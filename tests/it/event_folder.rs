@@ -426,7 +426,7 @@ fn folder_without_manifest_still_gives_a_report() {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("sample-records/synthetic-4storey-quake");
     std::fs::copy(sample.join("base_X.AT2"), ev.join("a.AT2")).unwrap();
     std::fs::copy(sample.join("base_Y.AT2"), ev.join("b.AT2")).unwrap();
-    let pipeline = quaketwin::pipeline::PipelineFile::load(
+    let pipeline = quaketwin::stages::load_pipeline(
         &Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/post-earthquake.toml"),
     )
     .unwrap();
@@ -695,7 +695,7 @@ fn zipped_event_reads_its_design_file_and_twin_from_the_zip() {
         .collect();
     let dir = tempfile::tempdir().unwrap();
     let zip = temp_file(dir.path(), "facade.zip", &zip_bytes(&refs));
-    let pipeline = quaketwin::pipeline::PipelineFile::load(
+    let pipeline = quaketwin::stages::load_pipeline(
         &Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/test-design.toml"),
     )
     .unwrap();

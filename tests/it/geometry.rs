@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 
 use quaketwin::event_folder;
 use quaketwin::geometry::{apply_building_geometry, one_record_per_level, AxesSource};
-use quaketwin::pipeline::{self, PipelineFile, StageOutcome};
+use quaketwin::pipeline::{self, StageOutcome};
+use quaketwin::stages::parse_pipeline;
 use quaketwin::stages::hysteresis::auto_directions;
 use quaketwin::vocab::{Axis, Channel, Direction, Event, QaFlag, Record, Role, SourceRef, Units};
 
@@ -155,7 +156,7 @@ fn stated_axes_flip_sensors_onto_the_same_event_written_in_xy() {
         .any(|s| s.step == "building_axes"));
 
     // Every stage's output: the same numbers, directions named X and Y only.
-    let p = PipelineFile::parse(PIPELINE, "geometry-check").unwrap();
+    let p = parse_pipeline(PIPELINE, "geometry-check").unwrap();
     let out_r = tmp.path().join("out-rotated");
     let out_x = tmp.path().join("out-xy");
     for (event, out) in [
@@ -367,10 +368,7 @@ kind = "condition"
 [stage.params]
 orientation = { x_azimuth_deg = 171.0 }
 "#;
-    let p = PipelineFile::parse(text, "old.toml").unwrap();
-    let err =
-        quaketwin::pipeline::params::<quaketwin::conditioning::ConditioningSettings>(&p.stages[0])
-            .unwrap_err()
-            .to_string();
+    // Refused when the pipeline file is read (typed params), before any data.
+    let err = parse_pipeline(text, "old.toml").unwrap_err().to_string();
     assert!(err.contains("x_axis_azimuth_deg"), "{err}");
 }

@@ -1042,7 +1042,7 @@ fn endpoint_ramp_does_not_bias_the_noise_free_yielding_sample() {
         .collect();
     let iota_true = truth["final_damage_index"].as_float().unwrap();
     let params = HysteresisParams {
-        velocity_drift: "endpoint_ramp".into(),
+        velocity_drift: quaketwin::hysteresis::VelocityDrift::EndpointRamp,
         instantaneous: false,
         ..HysteresisParams::default()
     };

@@ -19,7 +19,7 @@ fn params(spec: DirectionSpec) -> HysteresisParams {
             integration: None,
             ..ConditioningSettings::minimal()
         }),
-        velocity_drift: "endpoint_ramp".into(),
+        velocity_drift: quaketwin::hysteresis::VelocityDrift::EndpointRamp,
         instantaneous: true,
         directions: Some(vec![spec]),
         ..HysteresisParams::default()

@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use quaketwin::pipeline::manifest::{self, StageState};
-use quaketwin::pipeline::{self, PipelineFile, StageOutcome};
+use quaketwin::pipeline::{self, StageOutcome};
+use quaketwin::stages::parse_pipeline;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -24,17 +25,17 @@ fn exe() -> &'static str {
 const INGEST: &str = "[pipeline]\nname = \"t\"\n[[stage]]\nname = \"ingest\"\nkind = \"ingest\"\n[[stage]]\nname = \"condition\"\nkind = \"condition\"\ninputs = [\"ingest\"]\n";
 
 /// ingest → condition → modal → update (two quick solvers, one round) → report.
-fn twin_pipeline() -> PipelineFile {
+fn twin_pipeline() -> quaketwin::pipeline::Pipeline {
     let text = format!(
         "{INGEST}[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n\
          [[stage]]\nname = \"update\"\nkind = \"update\"\ninputs = [\"modal\"]\n[stage.params]\nsolvers = [\"ps\", \"qn\"]\nmax_rounds = 1\n\
          [[stage]]\nname = \"report\"\nkind = \"report\"\ninputs = [\"modal\", \"update\"]\n"
     );
-    PipelineFile::parse(&text, "twin.toml").unwrap()
+    parse_pipeline(&text, "twin.toml").unwrap()
 }
 
-fn ingest_pipeline() -> PipelineFile {
-    PipelineFile::parse(INGEST, "ingest.toml").unwrap()
+fn ingest_pipeline() -> quaketwin::pipeline::Pipeline {
+    parse_pipeline(INGEST, "ingest.toml").unwrap()
 }
 
 fn section<'a>(html: &'a str, id: &str) -> &'a str {
@@ -121,7 +122,7 @@ fn a_second_event_removes_the_first_events_results_and_the_report_ignores_them()
 fn the_report_shows_only_files_the_run_manifest_lists() {
     let out = tempfile::tempdir().unwrap();
     let d = out.path();
-    let p = PipelineFile::parse(
+    let p = parse_pipeline(
         &format!(
             "{INGEST}[[stage]]\nname = \"report\"\nkind = \"report\"\ninputs = [\"condition\"]\n"
         ),
@@ -133,7 +134,7 @@ fn the_report_shows_only_files_the_run_manifest_lists() {
     let metrics = format!(
         "{INGEST}[[stage]]\nname = \"metrics\"\nkind = \"metrics\"\ninputs = [\"condition\"]\n"
     );
-    let m = PipelineFile::parse(&metrics, "m.toml").unwrap();
+    let m = parse_pipeline(&metrics, "m.toml").unwrap();
     pipeline::run(&m, &event("synthetic-2storey-yielding"), other.path(), true).unwrap();
     std::fs::copy(
         other.path().join("channels.parquet"),
@@ -273,7 +274,7 @@ fn damaged_outputs_are_rebuilt_on_re_run() {
     let text = format!(
         "{INGEST}[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n"
     );
-    let p = PipelineFile::parse(&text, "m.toml").unwrap();
+    let p = parse_pipeline(&text, "m.toml").unwrap();
     let ev = event("synthetic-4storey-ambient");
     pipeline::run(&p, &ev, d, true).unwrap();
     let samples = std::fs::read(d.join("samples.parquet")).unwrap();

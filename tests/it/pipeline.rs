@@ -4,7 +4,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use quaketwin::pipeline::{self, PipelineFile, StageOutcome};
+use quaketwin::pipeline::{self, StageOutcome};
+use quaketwin::stages::parse_pipeline;
 
 fn sample_event() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("sample-records/synthetic-4storey-quake")
@@ -19,7 +20,7 @@ fn pipeline_text(taper: f64) -> String {
 #[test]
 fn stages_write_outputs_skip_when_up_to_date_and_rerun_on_new_params() {
     let out = tempfile::tempdir().unwrap();
-    let p = PipelineFile::parse(&pipeline_text(0.05), "t.toml").unwrap();
+    let p = parse_pipeline(&pipeline_text(0.05), "t.toml").unwrap();
     let first = pipeline::run(&p, &sample_event(), out.path(), true).unwrap();
     assert!(
         first
@@ -42,7 +43,7 @@ fn stages_write_outputs_skip_when_up_to_date_and_rerun_on_new_params() {
         "{second:?}"
     );
     // A changed parameter re-runs that stage and what reads it, not what precedes it.
-    let p2 = PipelineFile::parse(&pipeline_text(0.02), "t.toml").unwrap();
+    let p2 = parse_pipeline(&pipeline_text(0.02), "t.toml").unwrap();
     let third = pipeline::run(&p2, &sample_event(), out.path(), true).unwrap();
     assert_eq!(third[0].1, StageOutcome::Skipped);
     assert!(matches!(third[1].1, StageOutcome::Ran { .. }));
@@ -59,24 +60,21 @@ fn stages_write_outputs_skip_when_up_to_date_and_rerun_on_new_params() {
 #[test]
 fn pipeline_file_errors_are_usage_errors() {
     let bad_kind = "[pipeline]\nname = \"t\"\n[[stage]]\nname = \"x\"\nkind = \"nope\"\n";
-    let e = PipelineFile::parse(bad_kind, "p.toml").unwrap_err();
+    let e = parse_pipeline(bad_kind, "p.toml").unwrap_err();
     assert_eq!(e.exit_code(), 2);
     assert!(e.to_string().contains("nope"));
     let bad_input = "[pipeline]\nname = \"t\"\n[[stage]]\nname = \"c\"\nkind = \"condition\"\ninputs = [\"later\"]\n";
-    assert!(PipelineFile::parse(bad_input, "p.toml")
+    assert!(parse_pipeline(bad_input, "p.toml")
         .unwrap_err()
         .to_string()
         .contains("later"));
     let bad_param =
         pipeline_text(0.05).replace("taper_fraction = 0.05", "taper_fraction = \"lots\"");
-    let p = PipelineFile::parse(&bad_param, "p.toml").unwrap();
-    let out = tempfile::tempdir().unwrap();
-    let e = pipeline::run(&p, &sample_event(), out.path(), true).unwrap_err();
+    // Typed params are read with the pipeline file: refused before any data is read.
+    let e = parse_pipeline(&bad_param, "p.toml").unwrap_err();
     assert_eq!(e.exit_code(), 2, "{e}");
     assert!(e.to_string().contains("condition"), "{e}");
-    // The failed stage left the earlier stage's output intact and wrote nothing of its own.
-    assert!(out.path().join("event.json").exists());
-    assert!(!out.path().join("samples.parquet").exists());
+    assert!(e.to_string().contains("p.toml line 11"), "{e}");
 }
 
 #[test]

@@ -12,10 +12,10 @@ use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 
 use quaketwin::error::Error;
 use quaketwin::event_folder::LoadedEvent;
-use quaketwin::pipeline::{RunContext, StageDecl};
+use quaketwin::pipeline::RunContext;
 use quaketwin::sinks::parquet::{write_parquet, TableBuilder};
 use quaketwin::sinks::twin_tables::{read_measured_modes, real_shape, OUTPUT_CHANNELS_KEY};
-use quaketwin::stages::update::{self, update_from_files, UpdateParams};
+use quaketwin::stages::update::{update_from_files, UpdateParams};
 use quaketwin::twin::benchmark::{thesis_cantilever_toml, TRUE_MODULI};
 use quaketwin::twin::load_twin;
 use quaketwin::vocab::{Event, Structure};
@@ -302,7 +302,7 @@ fn update_from_files_recovers_the_benchmark_moduli() {
 
 fn quick_params() -> UpdateParams {
     UpdateParams {
-        solvers: vec!["ps".into()],
+        solvers: vec![quaketwin::twin::optimisers::SolverName::PatternSearch],
         max_rounds: 1,
         ..Default::default()
     }
@@ -378,48 +378,46 @@ fn bad_settings_are_usage_errors() {
     let modes = dir.path().join("modes.parquet");
     let (freqs, shapes) = true_modes(&twin, &["top", "h1"], 2);
     write_modes(&modes, &["top", "h1"], &freqs, &shapes, 0.0);
-    for p in [
-        UpdateParams {
-            selection: "best".into(),
-            ..quick_params()
-        },
-        UpdateParams {
-            solvers: vec!["newton".into()],
-            ..quick_params()
-        },
-        UpdateParams {
-            solvers: vec!["ps".into(), "PS".into()],
-            ..quick_params()
-        },
-        UpdateParams {
-            max_rounds: 0,
-            ..quick_params()
-        },
-        UpdateParams {
-            start: "random".into(),
-            ..quick_params()
-        },
+    // Names the settings do not know are refused when the settings are read;
+    // values they parse but that make no sense, before any file is read.
+    for text in [
+        "selection = \"best\"",
+        "solvers = [\"newton\"]",
+        "solvers = [\"ps\", \"pattern_search\"]",
+        "solvers = []",
+        "max_rounds = 0",
+        "start = \"random\"",
+        "tolerance = -1.0",
     ] {
-        let out = dir.path().join("out");
-        let e = update_from_files(&twin, &modes, &out, &p).unwrap_err();
-        assert!(matches!(e, Error::Usage(_)), "{p:?}: {e:?}");
-        assert!(!out.exists());
+        let e = UpdateParams::from_toml(text, "settings.toml").unwrap_err();
+        assert!(matches!(e, Error::Usage(_)), "{text}: {e:?}");
+        assert!(e.to_string().contains("settings.toml"), "{text}: {e}");
     }
+    let out = dir.path().join("out");
+    let p = UpdateParams {
+        max_rounds: 0,
+        ..quick_params()
+    };
+    let e = update_from_files(&twin, &modes, &out, &p).unwrap_err();
+    assert!(matches!(e, Error::Usage(_)), "{p:?}: {e:?}");
+    assert!(!out.exists());
 }
 
-fn update_stage(params: &str) -> StageDecl {
-    StageDecl {
-        name: "update".into(),
-        kind: "update".into(),
-        inputs: vec![],
-        params: toml::from_str(params).unwrap(),
-        enabled: true,
-    }
+/// ingest → condition → modal → update, with `params` for the update stage.
+fn update_pipeline(params: &str) -> quaketwin::Result<quaketwin::pipeline::Pipeline> {
+    quaketwin::stages::parse_pipeline(
+        &format!(
+            "[pipeline]\nname = \"t\"\n[[stage]]\nname = \"ingest\"\nkind = \"ingest\"\n\
+             [[stage]]\nname = \"condition\"\nkind = \"condition\"\ninputs = [\"ingest\"]\n\
+             [[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n\
+             [[stage]]\nname = \"update\"\nkind = \"update\"\ninputs = [\"modal\"]\n[stage.params]\n{params}\n"
+        ),
+        "t.toml",
+    )
 }
 
-fn context(event_dir: &Path, out_dir: &Path, twin: Option<&str>) -> RunContext {
-    let mut ctx = RunContext::new(event_dir, out_dir, true);
-    ctx.loaded = Some(LoadedEvent {
+fn loaded_event(twin: Option<&str>) -> LoadedEvent {
+    LoadedEvent {
         event: Event {
             name: "test".into(),
             structure: Some(Structure {
@@ -432,8 +430,7 @@ fn context(event_dir: &Path, out_dir: &Path, twin: Option<&str>) -> RunContext {
         file_spectra: vec![],
         manifest: None,
         geometry: Default::default(),
-    });
-    ctx
+    }
 }
 
 #[test]
@@ -454,12 +451,11 @@ fn pipeline_stage_reads_the_event_twin_and_modes_parquet() {
         0.0,
     );
 
-    let mut ctx = context(&event_dir, &out, Some("model/twin.toml"));
-    update::run(
-        &update_stage("solvers = [\"ps\"]\nmax_rounds = 1\nseed = 3"),
-        &mut ctx,
-    )
-    .unwrap();
+    // The modal stage did not run here: its modes are restored from its output.
+    let p = update_pipeline("solvers = [\"ps\"]\nmax_rounds = 1\nseed = 3").unwrap();
+    let mut ctx = RunContext::new(&p, &event_dir, &out, true)
+        .with_loaded_event(loaded_event(Some("model/twin.toml")));
+    ctx.run_stage(3).unwrap();
     for f in [
         "twin_update.parquet",
         "twin_modes.parquet",
@@ -470,11 +466,12 @@ fn pipeline_stage_reads_the_event_twin_and_modes_parquet() {
     let (batches, _) = read_table(&out.join("twin_update.parquet"));
     assert_eq!(batches.iter().map(|b| b.num_rows()).sum::<usize>(), 1);
 
-    // Unknown param → usage error; no twin named → usage error.
-    let e = update::run(&update_stage("solver = [\"ps\"]"), &mut ctx).unwrap_err();
+    // Unknown param → usage error when the pipeline is read; no twin named → usage error.
+    let e = update_pipeline("solver = [\"ps\"]").unwrap_err();
     assert!(matches!(e, Error::Usage(_)), "{e:?}");
-    let mut ctx = context(&event_dir, &out, None);
-    let e = update::run(&update_stage(""), &mut ctx).unwrap_err();
+    let p = update_pipeline("").unwrap();
+    let mut ctx = RunContext::new(&p, &event_dir, &out, true).with_loaded_event(loaded_event(None));
+    let e = ctx.run_stage(3).unwrap_err();
     assert!(
         matches!(e, Error::Usage(ref m) if m.contains("twin")),
         "{e:?}"

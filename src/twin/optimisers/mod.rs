@@ -133,6 +133,42 @@ pub fn thesis_solvers() -> Vec<Box<dyn Optimiser>> {
 }
 
 /// The default ensemble: the thesis's four solvers plus the quasi-Newton refiner.
+/// A candidate solver of the ensemble by name (settings files), each with its default settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum SolverName {
+    #[serde(rename = "ga", alias = "genetic_algorithm")]
+    GeneticAlgorithm,
+    #[serde(rename = "pso", alias = "particle_swarm")]
+    ParticleSwarm,
+    #[serde(rename = "sa", alias = "simulated_annealing")]
+    SimulatedAnnealing,
+    #[serde(rename = "ps", alias = "pattern_search")]
+    PatternSearch,
+    #[serde(rename = "qn", alias = "quasi_newton")]
+    QuasiNewton,
+}
+
+impl SolverName {
+    /// The thesis's four solvers and quasi-Newton, in `default_solvers` order.
+    pub const ALL: [SolverName; 5] = [
+        SolverName::GeneticAlgorithm,
+        SolverName::ParticleSwarm,
+        SolverName::SimulatedAnnealing,
+        SolverName::PatternSearch,
+        SolverName::QuasiNewton,
+    ];
+    /// The solver with its default settings.
+    pub fn build(self) -> Box<dyn Optimiser> {
+        match self {
+            SolverName::GeneticAlgorithm => Box::new(GeneticAlgorithm::default()),
+            SolverName::ParticleSwarm => Box::new(ParticleSwarm::default()),
+            SolverName::SimulatedAnnealing => Box::new(SimulatedAnnealing::default()),
+            SolverName::PatternSearch => Box::new(PatternSearch::default()),
+            SolverName::QuasiNewton => Box::new(QuasiNewton::default()),
+        }
+    }
+}
+
 pub fn default_solvers() -> Vec<Box<dyn Optimiser>> {
     let mut s = thesis_solvers();
     s.push(Box::new(QuasiNewton::default()));
