@@ -28,5 +28,6 @@ mod readers_binary;
 mod readers_csv;
 mod readers_text;
 mod report;
+mod stage_params;
 mod twin;
 mod twin_update_io;
