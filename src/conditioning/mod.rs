@@ -108,45 +108,135 @@ pub struct IntegrationSettings {
     pub drift: DriftControl,
 }
 
-/// The conditioning chain; defaults are METHODS §1: SI units, mean removal,
-/// 5 % cosine taper (at each end), 4th-order Butterworth band-pass
-/// 0.5–20 Hz zero-phase, integration with drift control. Resampling,
-/// alignment are off unless configured. Orientation is not a conditioning
-/// step: the building geometry is applied once at ingest (`geometry`).
+/// One conditioning step, as declared in a `steps` list (the way gmprocess
+/// and ObsPy declare processing): applied in the order listed, after the
+/// QA checks and the conversion to SI units that always come first.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(tag = "step", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Step {
+    /// Resample every record to a common rate, Hz (anti-aliased, polyphase).
+    Resample { rate_hz: f64 },
+    /// Trim records to their common time window (needs equal rates).
+    Align,
+    /// Baseline removal: `method = "mean" | "linear" | "polynomial"` (+ `order`).
+    Detrend(Detrend),
+    /// Cosine (Tukey) taper of `fraction` of the record at each end.
+    Taper { fraction: f64 },
+    /// Butterworth filter (zero-phase `sosfiltfilt` by default).
+    Filter(FilterSettings),
+    /// Integration to velocity and displacement with drift control (last step).
+    Integrate(IntegrationSettings),
+}
+
+impl Step {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Step::Resample { .. } => "resample",
+            Step::Align => "align",
+            Step::Detrend(_) => "detrend",
+            Step::Taper { .. } => "taper",
+            Step::Filter(_) => "filter",
+            Step::Integrate(_) => "integrate",
+        }
+    }
+}
+
+/// The conditioning of a `condition` stage: QA thresholds and the ordered
+/// steps.  Defaults are METHODS §1: mean removal, 5 % cosine taper at each
+/// end, 4th-order Butterworth band-pass 0.5–20 Hz zero-phase, integration
+/// with polynomial drift control.  Orientation is not a conditioning step:
+/// the building geometry is applied once at ingest (`geometry`).
+///
+/// Written either as `steps = [ { step = "detrend", method = "mean" }, … ]`
+/// or, as before the step list, with the keys `detrend`, `taper_fraction`,
+/// `filter`, `integration`, `resample_hz`, `align` (each absent key taking
+/// its default); both read into the same list.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "ConditioningFile")]
 pub struct ConditioningSettings {
     pub qa: QaSettings,
-    /// Common sampling rate, Hz (None = keep each record's rate).
-    pub resample_hz: Option<f64>,
-    /// Trim records to their common time window (needs equal rates).
-    pub align: bool,
+    pub steps: Vec<Step>,
+}
+
+/// The `condition` params as written (both forms).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ConditioningFile {
+    #[serde(default)]
+    qa: QaSettings,
+    steps: Option<Vec<Step>>,
+    resample_hz: Option<f64>,
+    align: Option<bool>,
     /// Refused with a message saying where the building axes are stated now.
-    #[serde(skip_serializing, deserialize_with = "orientation_moved")]
-    pub orientation: Option<()>,
-    pub detrend: Detrend,
-    /// Fraction of the record tapered at each end (None = no taper).
-    pub taper_fraction: Option<f64>,
-    pub filter: Option<FilterSettings>,
-    pub integration: Option<IntegrationSettings>,
+    #[serde(default, deserialize_with = "orientation_moved")]
+    #[allow(dead_code)] // only its error is used
+    orientation: Option<()>,
+    detrend: Option<Detrend>,
+    taper_fraction: Option<f64>,
+    filter: Option<FilterSettings>,
+    integration: Option<IntegrationSettings>,
+}
+
+impl TryFrom<ConditioningFile> for ConditioningSettings {
+    type Error = String;
+    fn try_from(f: ConditioningFile) -> std::result::Result<Self, String> {
+        let keyed = f.resample_hz.is_some()
+            || f.align.is_some()
+            || f.detrend.is_some()
+            || f.taper_fraction.is_some()
+            || f.filter.is_some()
+            || f.integration.is_some();
+        if let Some(steps) = f.steps {
+            if keyed {
+                return Err("give the conditioning either as `steps` or with the keys detrend/taper_fraction/filter/integration/resample_hz/align, not both".into());
+            }
+            return Ok(ConditioningSettings { qa: f.qa, steps });
+        }
+        let d = ConditioningSettings::default();
+        let default_step = |name: &str| d.steps.iter().find(|s| s.name() == name).cloned();
+        let mut steps = Vec::new();
+        if let Some(rate_hz) = f.resample_hz {
+            steps.push(Step::Resample { rate_hz });
+        }
+        if f.align == Some(true) {
+            steps.push(Step::Align);
+        }
+        match f.detrend {
+            Some(Detrend::None) => {}
+            Some(m) => steps.push(Step::Detrend(m)),
+            None => steps.extend(default_step("detrend")),
+        }
+        match f.taper_fraction {
+            Some(fraction) => steps.push(Step::Taper { fraction }),
+            None => steps.extend(default_step("taper")),
+        }
+        match f.filter {
+            Some(filter) => steps.push(Step::Filter(filter)),
+            None => steps.extend(default_step("filter")),
+        }
+        match f.integration {
+            Some(i) => steps.push(Step::Integrate(i)),
+            None => steps.extend(default_step("integrate")),
+        }
+        Ok(ConditioningSettings { qa: f.qa, steps })
+    }
 }
 
 impl Default for ConditioningSettings {
     fn default() -> Self {
         ConditioningSettings {
             qa: QaSettings::default(),
-            resample_hz: None,
-            align: false,
-            orientation: None,
-            detrend: Detrend::Mean,
-            taper_fraction: Some(0.05),
-            filter: Some(FilterSettings {
-                order: 4,
-                band: BandType::Bandpass,
-                corners_hz: vec![0.5, 20.0],
-                zero_phase: true,
-            }),
-            integration: Some(IntegrationSettings::default()),
+            steps: vec![
+                Step::Detrend(Detrend::Mean),
+                Step::Taper { fraction: 0.05 },
+                Step::Filter(FilterSettings {
+                    order: 4,
+                    band: BandType::Bandpass,
+                    corners_hz: vec![0.5, 20.0],
+                    zero_phase: true,
+                }),
+                Step::Integrate(IntegrationSettings::default()),
+            ],
         }
     }
 }
@@ -156,32 +246,32 @@ impl ConditioningSettings {
     /// against a record's Nyquist frequency is checked per record): usage
     /// errors, so bad settings never pass for bad data.
     pub fn validate(&self) -> Result<()> {
-        if let Some(r) = self.resample_hz {
-            if !(r.is_finite() && r > 0.0) {
-                return Err(Error::usage(format!(
-                    "resample_hz = {r}: must be a positive rate"
-                )));
+        let last = self.steps.len().saturating_sub(1);
+        for (i, step) in self.steps.iter().enumerate() {
+            let at = |m: String| Error::usage(format!("conditioning step {} ({}): {m}", i + 1, step.name()));
+            match step {
+                Step::Resample { rate_hz } if !(rate_hz.is_finite() && *rate_hz > 0.0) => {
+                    return Err(at(format!("rate_hz = {rate_hz}: must be a positive rate")))
+                }
+                Step::Taper { fraction } if !(0.0..=0.5).contains(fraction) => {
+                    return Err(at(format!(
+                        "fraction = {fraction}: must be within [0, 0.5] of the record at each end"
+                    )))
+                }
+                Step::Detrend(Detrend::Polynomial { order }) if *order > 10 => {
+                    return Err(at(format!(
+                        "polynomial order {order}: at most 10 (higher orders fit the signal, not the baseline)"
+                    )))
+                }
+                Step::Filter(f) => f.validate().map_err(|e| at(e.to_string()))?,
+                Step::Integrate(integration) => {
+                    integration.drift.validate().map_err(|e| at(e.to_string()))?;
+                    if i != last {
+                        return Err(at("integration must be the last step".into()));
+                    }
+                }
+                _ => {}
             }
-        }
-        if let Some(t) = self.taper_fraction {
-            if !(0.0..=0.5).contains(&t) {
-                return Err(Error::usage(format!(
-                    "taper_fraction = {t}: must be within [0, 0.5] of the record at each end"
-                )));
-            }
-        }
-        if let Detrend::Polynomial { order } = self.detrend {
-            if order > 10 {
-                return Err(Error::usage(format!(
-                    "detrend polynomial order {order}: at most 10 (higher orders fit the signal, not the baseline)"
-                )));
-            }
-        }
-        if let Some(f) = &self.filter {
-            f.validate()?;
-        }
-        if let Some(i) = &self.integration {
-            i.drift.validate()?;
         }
         Ok(())
     }
@@ -191,16 +281,22 @@ impl ConditioningSettings {
     /// taper, no band-pass: they distort hysteresis loops).
     pub fn minimal() -> Self {
         ConditioningSettings {
-            taper_fraction: None,
-            filter: None,
-            integration: Some(IntegrationSettings {
-                drift: DriftControl::Polynomial {
-                    velocity_order: 1,
-                    displacement_order: 2,
-                },
-            }),
-            ..ConditioningSettings::default()
+            qa: QaSettings::default(),
+            steps: vec![
+                Step::Detrend(Detrend::Mean),
+                Step::Integrate(IntegrationSettings {
+                    drift: DriftControl::Polynomial {
+                        velocity_order: 1,
+                        displacement_order: 2,
+                    },
+                }),
+            ],
         }
+    }
+
+    /// The first step named `name`, if declared.
+    pub fn step(&self, name: &str) -> Option<&Step> {
+        self.steps.iter().find(|s| s.name() == name)
     }
 }
 
@@ -311,131 +407,152 @@ pub fn condition_event_with_motion(
     event
         .history
         .push("units_to_si", json!({ "channels": factors }));
-    let is_acc = |r: &Record| r.channel.units.is_acceleration();
-    // 4. Resampling.
-    if let Some(target) = settings.resample_hz {
-        let mut changed = Vec::new();
-        for r in event.records.iter_mut() {
-            if r.channel.sampling_rate_hz != target {
-                let from = r.channel.sampling_rate_hz;
-                r.samples =
-                    resample_to_rate(&r.samples, from, target).map_err(|e| in_record(r, e))?;
-                r.channel.sampling_rate_hz = target;
-                r.channel.qa.push(QaFlag::Resampled {
-                    from: format!("{from} Hz"),
-                });
-                changed.push(r.channel.id.clone());
+    // 4. The declared steps, in order.
+    let mut motions = Vec::new();
+    for step in &settings.steps {
+        match step {
+            Step::Resample { rate_hz } => resample_step(event, *rate_hz)?,
+            Step::Align => {
+                let a = align_records(&mut event.records)?;
+                event
+                    .history
+                    .push("align", serde_json::to_value(&a).unwrap_or_default());
             }
+            Step::Detrend(method) => detrend_step(event, method)?,
+            Step::Taper { fraction } => {
+                for r in event.records.iter_mut().filter(|r| is_acceleration(r)) {
+                    cosine_taper(&mut r.samples, *fraction)?;
+                }
+                let ids = acceleration_ids(event);
+                event.history.push_for(
+                    "taper",
+                    ids,
+                    json!({ "window": "cosine (Tukey)", "fraction_each_end": fraction }),
+                );
+            }
+            Step::Filter(f) => filter_step(event, f)?,
+            Step::Integrate(integration) => motions = integrate_step(event, integration)?,
         }
-        event.history.push_for(
-            "resample",
-            changed,
-            json!({ "target_hz": target, "method": "rational polyphase, Kaiser-windowed sinc (beta 5, 20*max(up,down)+1 taps), cut-off at the lower Nyquist" }),
-        );
     }
-    // 5. Alignment.
-    if settings.align {
-        let a = align_records(&mut event.records)?;
-        event
-            .history
-            .push("align", serde_json::to_value(&a).unwrap_or_default());
-    }
-    let acc_ids: Vec<String> = event
+    Ok(motions)
+}
+
+fn is_acceleration(r: &Record) -> bool {
+    r.channel.units.is_acceleration()
+}
+
+fn acceleration_ids(event: &Event) -> Vec<String> {
+    event
         .records
         .iter()
-        .filter(|r| is_acc(r))
+        .filter(|r| is_acceleration(r))
         .map(|r| r.channel.id.clone())
-        .collect();
-    // 7. Detrend.
-    if settings.detrend != Detrend::None {
-        for r in event.records.iter_mut().filter(|r| is_acc(r)) {
-            let result = match settings.detrend {
-                Detrend::None => Ok(()),
-                Detrend::Mean => {
-                    remove_mean(&mut r.samples);
-                    Ok(())
-                }
-                Detrend::Linear => remove_linear_trend(&mut r.samples).map(|_| ()),
-                Detrend::Polynomial { order } => {
-                    remove_polynomial(&mut r.samples, order).map(|_| ())
-                }
-            };
-            result.map_err(|e| in_record(r, e))?;
+        .collect()
+}
+
+/// Every record (all units) to `target` Hz; records already there are left alone.
+fn resample_step(event: &mut Event, target: f64) -> Result<()> {
+    let mut changed = Vec::new();
+    for r in event.records.iter_mut() {
+        if r.channel.sampling_rate_hz != target {
+            let from = r.channel.sampling_rate_hz;
+            r.samples = resample_to_rate(&r.samples, from, target).map_err(|e| in_record(r, e))?;
+            r.channel.sampling_rate_hz = target;
+            r.channel.qa.push(QaFlag::Resampled {
+                from: format!("{from} Hz"),
+            });
+            changed.push(r.channel.id.clone());
         }
-        event.history.push_for(
-            "detrend",
-            acc_ids.clone(),
-            serde_json::to_value(&settings.detrend).unwrap_or_default(),
-        );
     }
-    // 8. Taper.
-    if let Some(fraction) = settings.taper_fraction {
-        for r in event.records.iter_mut().filter(|r| is_acc(r)) {
-            cosine_taper(&mut r.samples, fraction)?;
-        }
-        event.history.push_for(
-            "taper",
-            acc_ids.clone(),
-            json!({ "window": "cosine (Tukey)", "fraction_each_end": fraction }),
-        );
+    event.history.push_for(
+        "resample",
+        changed,
+        json!({ "target_hz": target, "method": "rational polyphase, Kaiser-windowed sinc (beta 5, 20*max(up,down)+1 taps), cut-off at the lower Nyquist" }),
+    );
+    Ok(())
+}
+
+fn detrend_step(event: &mut Event, method: &Detrend) -> Result<()> {
+    if *method == Detrend::None {
+        return Ok(());
     }
-    // 9. Filter (channels in parallel).
-    if let Some(f) = &settings.filter {
-        let results: Vec<Result<()>> = event
-            .records
-            .par_iter_mut()
-            .filter(|r| is_acc(r))
-            .map(|r| {
-                let sos = butter_sos(f.order, f.band, &f.corners_hz, r.channel.sampling_rate_hz)
-                    .map_err(|e| in_record(r, e))?;
-                r.samples = if f.zero_phase {
-                    sosfiltfilt(&sos, &r.samples)
-                } else {
-                    sosfilt(&sos, &r.samples)
-                }
-                .map_err(|e| in_record(r, e))?;
+    for r in event.records.iter_mut().filter(|r| is_acceleration(r)) {
+        let result = match method {
+            Detrend::None => Ok(()),
+            Detrend::Mean => {
+                remove_mean(&mut r.samples);
                 Ok(())
-            })
-            .collect();
-        results.into_iter().collect::<Result<Vec<()>>>()?;
-        event.history.push_for(
-            "filter",
-            acc_ids.clone(),
-            json!({
-                "design": "butterworth (scipy.signal.butter, output='sos')",
-                "order": f.order,
-                "band": f.band,
-                "corners_hz": f.corners_hz,
-                "zero_phase": f.zero_phase,
-                "edge_handling": if f.zero_phase { "odd extension, padlen = 3*(2*n_sections+1), sosfilt_zi initial conditions (scipy sosfiltfilt)" } else { "causal, zero initial state" },
-            }),
-        );
+            }
+            Detrend::Linear => remove_linear_trend(&mut r.samples).map(|_| ()),
+            Detrend::Polynomial { order } => remove_polynomial(&mut r.samples, *order).map(|_| ()),
+        };
+        result.map_err(|e| in_record(r, e))?;
     }
-    // 10. Integration.
-    let mut motions = Vec::new();
-    if let Some(integration) = &settings.integration {
-        let results: Vec<Result<Motion>> = event
-            .records
-            .par_iter_mut()
-            .filter(|r| is_acc(r))
-            .map(|r| {
-                let m = integrate_motion(
-                    &r.channel.id,
-                    &r.samples,
-                    r.channel.dt(),
-                    &integration.drift,
-                )
+    let ids = acceleration_ids(event);
+    event.history.push_for(
+        "detrend",
+        ids,
+        serde_json::to_value(method).unwrap_or_default(),
+    );
+    Ok(())
+}
+
+/// Butterworth filter of every acceleration record (channels in parallel).
+fn filter_step(event: &mut Event, f: &FilterSettings) -> Result<()> {
+    let results: Vec<Result<()>> = event
+        .records
+        .par_iter_mut()
+        .filter(|r| is_acceleration(r))
+        .map(|r| {
+            let sos = butter_sos(f.order, f.band, &f.corners_hz, r.channel.sampling_rate_hz)
                 .map_err(|e| in_record(r, e))?;
-                r.samples.clone_from(&m.acceleration);
-                Ok(m)
-            })
-            .collect();
-        motions = results.into_iter().collect::<Result<Vec<Motion>>>()?;
-        event.history.push_for(
-            "integrate",
-            acc_ids,
-            json!({ "rule": "cumulative trapezoid from rest", "drift_control": integration.drift }),
-        );
-    }
+            r.samples = if f.zero_phase {
+                sosfiltfilt(&sos, &r.samples)
+            } else {
+                sosfilt(&sos, &r.samples)
+            }
+            .map_err(|e| in_record(r, e))?;
+            Ok(())
+        })
+        .collect();
+    results.into_iter().collect::<Result<Vec<()>>>()?;
+    let ids = acceleration_ids(event);
+    event.history.push_for(
+        "filter",
+        ids,
+        json!({
+            "design": "butterworth (scipy.signal.butter, output='sos')",
+            "order": f.order,
+            "band": f.band,
+            "corners_hz": f.corners_hz,
+            "zero_phase": f.zero_phase,
+            "edge_handling": if f.zero_phase { "odd extension, padlen = 3*(2*n_sections+1), sosfilt_zi initial conditions (scipy sosfiltfilt)" } else { "causal, zero initial state" },
+        }),
+    );
+    Ok(())
+}
+
+/// Acceleration, velocity and displacement of every acceleration record
+/// (with polynomial drift control the records take the consistently
+/// corrected acceleration).
+fn integrate_step(event: &mut Event, integration: &IntegrationSettings) -> Result<Vec<Motion>> {
+    let results: Vec<Result<Motion>> = event
+        .records
+        .par_iter_mut()
+        .filter(|r| is_acceleration(r))
+        .map(|r| {
+            let m = integrate_motion(&r.channel.id, &r.samples, r.channel.dt(), &integration.drift)
+                .map_err(|e| in_record(r, e))?;
+            r.samples.clone_from(&m.acceleration);
+            Ok(m)
+        })
+        .collect();
+    let motions = results.into_iter().collect::<Result<Vec<Motion>>>()?;
+    let ids = acceleration_ids(event);
+    event.history.push_for(
+        "integrate",
+        ids,
+        json!({ "rule": "cumulative trapezoid from rest", "drift_control": integration.drift }),
+    );
     Ok(motions)
 }

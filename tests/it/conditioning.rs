@@ -5,7 +5,7 @@
 use quaketwin::conditioning::{
     self, align_records, butter_sos, cosine_taper, cumulative_trapezoid, integrate_motion, qa,
     remove_linear_trend, remove_polynomial, resample_to_rate, sosfiltfilt, sosfiltfilt_channels,
-    BandType, ConditioningSettings, DriftControl,
+    BandType, ConditioningSettings, DriftControl, Step,
 };
 use quaketwin::geometry::{normalise_orientation, OrientationSettings};
 use quaketwin::vocab::{Axis, Channel, Direction, Event, QaFlag, Record, SourceRef, Units};
@@ -270,19 +270,62 @@ fn units_conversion_and_history_of_default_chain() {
 fn settings_deserialize_with_defaults_and_minimal_has_no_filter() {
     let s: ConditioningSettings = serde_json::from_str("{}").unwrap();
     assert_eq!(s, ConditioningSettings::default());
-    let f = s.filter.as_ref().unwrap();
+    let Some(Step::Filter(f)) = s.step("filter") else {
+        panic!("default filter")
+    };
     assert_eq!(
         (f.order, f.band, f.corners_hz.clone(), f.zero_phase),
         (4, BandType::Bandpass, vec![0.5, 20.0], true)
     );
-    assert_eq!(s.taper_fraction, Some(0.05));
+    assert_eq!(s.step("taper"), Some(&Step::Taper { fraction: 0.05 }));
     let s: ConditioningSettings = toml::from_str(
         "taper_fraction = 0.1\n[filter]\norder = 2\nband = \"highpass\"\ncorners_hz = [0.1]\n",
     )
     .unwrap();
-    assert_eq!(s.filter.unwrap().order, 2);
+    let Some(Step::Filter(f)) = s.step("filter") else {
+        panic!("filter")
+    };
+    assert_eq!(f.order, 2);
     let m = ConditioningSettings::minimal();
-    assert!(m.filter.is_none() && m.taper_fraction.is_none() && m.integration.is_some());
+    assert!(m.step("filter").is_none() && m.step("taper").is_none() && m.step("integrate").is_some());
+}
+
+#[test]
+fn steps_list_reads_in_order_and_equals_the_keyed_form() {
+    let listed: ConditioningSettings = toml::from_str(
+        r#"steps = [
+  { step = "detrend", method = "mean" },
+  { step = "taper", fraction = 0.05 },
+  { step = "filter", order = 4, band = "bandpass", corners_hz = [0.5, 20.0], zero_phase = true },
+  { step = "integrate", drift = { method = "polynomial", velocity_order = 1, displacement_order = 2 } },
+]"#,
+    )
+    .unwrap();
+    assert_eq!(listed, ConditioningSettings::default());
+    // Another order is another chain: a filter before the taper.
+    let swapped: ConditioningSettings = toml::from_str(
+        "steps = [{ step = \"filter\", order = 2, band = \"highpass\", corners_hz = [0.1] }, { step = \"taper\", fraction = 0.1 }]",
+    )
+    .unwrap();
+    let names: Vec<&str> = swapped.steps.iter().map(|s| s.name()).collect();
+    assert_eq!(names, ["filter", "taper"]);
+    // No steps: QA and SI units only.
+    let none: ConditioningSettings = toml::from_str("steps = []").unwrap();
+    assert!(none.steps.is_empty());
+    // Both forms at once, an unknown step, a step key misspelt: refused.
+    for bad in [
+        "steps = []\ntaper_fraction = 0.1",
+        "steps = [{ step = \"smooth\" }]",
+        "steps = [{ step = \"taper\", fracton = 0.1 }]",
+    ] {
+        assert!(toml::from_str::<ConditioningSettings>(bad).is_err(), "{bad}");
+    }
+    // Integration must come last.
+    let late: ConditioningSettings = toml::from_str(
+        "steps = [{ step = \"integrate\" }, { step = \"taper\", fraction = 0.1 }]",
+    )
+    .unwrap();
+    assert!(late.validate().unwrap_err().to_string().contains("last step"));
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! The Bouc-Wen stage on real records (read in place from ../shared/records;
 //! nothing is copied). See each folder's PROVENANCE.md.
 
-use quaketwin::conditioning::ConditioningSettings;
+use quaketwin::conditioning::{ConditioningSettings, Detrend, Step};
 use quaketwin::sinks::hysteresis_tables::DirectionOutcome;
 use quaketwin::stages::hysteresis::{identify_event_at, DirectionSpec, HysteresisParams};
 
@@ -16,7 +16,7 @@ fn records(folder: &str) -> std::path::PathBuf {
 fn params(spec: DirectionSpec) -> HysteresisParams {
     HysteresisParams {
         conditioning: Some(ConditioningSettings {
-            integration: None,
+            steps: vec![Step::Detrend(Detrend::Mean)],
             ..ConditioningSettings::minimal()
         }),
         velocity_drift: quaketwin::hysteresis::VelocityDrift::EndpointRamp,

@@ -9,6 +9,8 @@
 
 mod common;
 
+mod architecture;
+
 mod conditioning;
 mod dataset;
 mod design;
