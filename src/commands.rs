@@ -268,7 +268,10 @@ pub fn modal(event: &Path, out: &Path, method: &str, quiet: bool) -> Result<()> 
 /// index on the records as recorded (SI units only).  Fails when a direction
 /// cannot be identified (the pipeline stage records the reason instead).
 pub fn hysteresis(event: &Path, out: &Path, quiet: bool) -> Result<()> {
-    let text = "[pipeline]\nname = \"hysteresis\"\n[[stage]]\nname = \"ingest\"\nkind = \"ingest\"\n[[stage]]\nname = \"hysteresis\"\nkind = \"hysteresis\"\ninputs = [\"ingest\"]\n[stage.params]\nfail_on_error = true\n[[stage]]\nname = \"damage\"\nkind = \"damage\"\ninputs = [\"hysteresis\"]\n";
+    let text = "[pipeline]\nname = \"hysteresis\"\n[[stage]]\nname = \"ingest\"\nkind = \"ingest\"\n\
+                [[stage]]\nname = \"as-recorded\"\nkind = \"condition\"\ninputs = [\"ingest\"]\n[stage.params]\nsteps = []\nsamples_file = \"samples_as_recorded.parquet\"\n\
+                [[stage]]\nname = \"hysteresis\"\nkind = \"hysteresis\"\ninputs = [\"as-recorded\"]\n[stage.params]\nfail_on_error = true\n\
+                [[stage]]\nname = \"damage\"\nkind = \"damage\"\ninputs = [\"hysteresis\"]\n";
     let p = parse_pipeline(text, "built-in hysteresis pipeline")?;
     pipeline::run(&p, event, out, quiet).map(|_| ())
 }

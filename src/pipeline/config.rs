@@ -177,6 +177,7 @@ impl Pipeline {
                 routes,
             });
         }
+        check_outputs(file, &stages)?;
         Ok(Pipeline {
             pipeline: doc.pipeline,
             stages,
@@ -188,6 +189,30 @@ impl Pipeline {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         Self::parse(&text, &path.display().to_string(), catalog)
     }
+}
+
+/// Every output file has one stage that writes it, and is a plain file name
+/// inside the output directory.
+fn check_outputs(file: &str, stages: &[PlannedStage]) -> Result<()> {
+    let mut seen: Vec<(String, &str)> = Vec::new();
+    for s in stages {
+        for o in s.stage.outputs() {
+            if !super::is_plain_name(&o) {
+                return Err(Error::usage(format!(
+                    "{file}: stage {:?}: output {o:?} is not a plain file name inside the output directory",
+                    s.decl.name
+                )));
+            }
+            if let Some((_, other)) = seen.iter().find(|(f, _)| *f == o) {
+                return Err(Error::usage(format!(
+                    "{file}: stages {other:?} and {:?} would both write {o}; give one of them another file name",
+                    s.decl.name
+                )));
+            }
+            seen.push((o, &s.decl.name));
+        }
+    }
+    Ok(())
 }
 
 /// For each product the stage's kind needs, the one declared input that
@@ -250,6 +275,38 @@ impl StageSource<'_> {
     pub fn params<T: serde::de::DeserializeOwned>(&self) -> Result<T> {
         typed_params(self.text, self.file, self.index, self.decl)
     }
+    /// Two typed views of the params: `K` from the keys listed in `keys`
+    /// (the stage's own, e.g. an output file name) and `T` from all the
+    /// others (a settings struct shared with library callers).  Both refuse
+    /// unknown keys with file and line.
+    pub fn params_split<T, K>(&self, keys: &[&str]) -> Result<(T, K)>
+    where
+        T: serde::de::DeserializeOwned,
+        K: serde::de::DeserializeOwned,
+    {
+        let what = format!("stage {:?} ({}): bad params", self.decl.name, self.decl.kind);
+        let (file, text) = (self.file, self.text);
+        let root = DeTable::parse(text).map_err(|e| toml_error(file, text, &e, &what))?;
+        let Some(value) = params_value(&root, self.index) else {
+            return Ok((self.params()?, self.params()?));
+        };
+        let DeValue::Table(table) = value.get_ref() else {
+            return Ok((self.params()?, self.params()?));
+        };
+        let part = |own: bool| {
+            let mut t = DeTable::new();
+            for (k, v) in table.iter() {
+                if keys.contains(&k.get_ref().as_ref()) == own {
+                    t.insert(k.clone(), v.clone());
+                }
+            }
+            ValueDeserializer::from(toml::Spanned::new(value.span(), DeValue::Table(t)))
+        };
+        let rest = T::deserialize(part(false)).map_err(|e| toml_error(file, text, &e, &what))?;
+        let own = K::deserialize(part(true)).map_err(|e| toml_error(file, text, &e, &what))?;
+        Ok((rest, own))
+    }
+
     /// The pipeline file's name, for messages.
     pub fn file(&self) -> &str {
         self.file

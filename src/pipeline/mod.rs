@@ -60,7 +60,7 @@ const LEGACY_STAMP_DIR: &str = ".quaketwin";
 /// Whether `name` is a plain file name directly inside the output directory
 /// (no separator, not `.`/`..`, not hidden: hidden names are quaketwin's own
 /// lock and temporary files).
-fn is_plain_name(name: &str) -> bool {
+pub(crate) fn is_plain_name(name: &str) -> bool {
     let p = Path::new(name);
     let mut c = p.components();
     matches!(

@@ -3,6 +3,8 @@
 //! METHODS §1) → `samples.parquet`.
 
 use crate::conditioning::{condition_event_with_motion, ConditioningSettings, Motion};
+use serde::Deserialize;
+
 use crate::error::Result;
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::event_tables;
@@ -16,8 +18,17 @@ pub const KIND: StageKind = StageKind {
     build,
 };
 
-/// The conditioned records file.
+/// The conditioned records file (default; `samples_file` names another, so
+/// that two condition stages — e.g. the band-passed records for modal
+/// identification and the records as recorded for Bouc-Wen — can coexist).
 pub const SAMPLES_FILE: &str = "samples.parquet";
+
+/// The stage's own params beside the conditioning settings.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OutputParams {
+    samples_file: Option<String>,
+}
 
 /// The product: the conditioned event and, per acceleration channel, its
 /// acceleration, velocity and displacement.
@@ -27,27 +38,38 @@ pub struct Conditioned {
 }
 
 fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
-    let settings: ConditioningSettings = src.params()?;
+    let (settings, output): (ConditioningSettings, OutputParams) =
+        src.params_split(&["samples_file"])?;
     settings.validate().map_err(|e| src.invalid(e))?;
-    Ok(Box::new(Condition { settings }))
+    let samples_file = output.samples_file.unwrap_or_else(|| SAMPLES_FILE.into());
+    if !samples_file.ends_with(".parquet") {
+        return Err(src.invalid(format!(
+            "samples_file {samples_file:?} must be a .parquet file name"
+        )));
+    }
+    Ok(Box::new(Condition {
+        settings,
+        samples_file,
+    }))
 }
 
 struct Condition {
     settings: ConditioningSettings,
+    samples_file: String,
 }
 
 impl Stage for Condition {
     fn outputs(&self) -> Vec<String> {
-        vec![SAMPLES_FILE.into()]
+        vec![self.samples_file.clone()]
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let mut event = ctx.loaded_event()?.event.clone();
         let motions = condition_event_with_motion(&mut event, &self.settings)?;
-        event_tables::write_samples(&ctx.out_dir.join(SAMPLES_FILE), &event, &motions)?;
+        event_tables::write_samples(&ctx.out_dir.join(&self.samples_file), &event, &motions)?;
         Ok(Some(Box::new(Conditioned { event, motions })))
     }
     fn restore(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
-        let (event, motions) = event_tables::read_samples(&ctx.out_dir.join(SAMPLES_FILE))?;
+        let (event, motions) = event_tables::read_samples(&ctx.out_dir.join(&self.samples_file))?;
         Ok(Some(Box::new(Conditioned { event, motions })))
     }
 }

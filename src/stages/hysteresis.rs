@@ -2,16 +2,17 @@
 //! horizontal direction (METHODS §4; numerical work in `crate::hysteresis`)
 //! and the damage index ι(t).
 //!
-//! Processing is explicit: by default the records go in as recorded (units
-//! converted to SI only; the identification integrates velocities itself with
-//! the configured drift control).  A `conditioning` table in the params
-//! applies a conditioning chain first and is recorded in the outputs.
+//! Processing is explicit and declared in the pipeline: the stage reads the
+//! conditioned event of its `condition` input — in pipelines/post-earthquake.toml
+//! a condition stage with no steps (QA and SI units only: band-pass filtering
+//! biases N towards 1 and γ towards −β, METHODS §1); the identification
+//! integrates velocities itself with the configured drift control.
 
 use std::path::Path;
 
 use serde::Deserialize;
 
-use crate::conditioning::{condition_event, ConditioningSettings};
+use super::condition::Conditioned;
 use crate::error::{Error, Result};
 pub use crate::hysteresis::{auto_directions, DirectionSpec, MassResolution, ReducedMassRecord};
 use crate::hysteresis::{
@@ -23,7 +24,7 @@ use crate::vocab::Event;
 
 pub const KIND: StageKind = StageKind {
     kind: "hysteresis",
-    needs: &[],
+    needs: &[ProductKind::ConditionedEvent],
     provides: Some(ProductKind::Hysteresis),
     reads_all_earlier: false,
     build,
@@ -66,9 +67,6 @@ pub struct HysteresisParams {
     pub velocity_drift: VelocityDrift,
     /// Grid step of σ in the reduced-mass search of Eq. 35–36 (≤ 0.001).
     pub reduced_mass_step: f64,
-    /// Optional conditioning before identification (none by default: band-pass
-    /// filtering biases N towards 1 and γ towards −β, METHODS §1).
-    pub conditioning: Option<ConditioningSettings>,
     /// Explicit directions; default: one per horizontal direction that has a
     /// level-0 input channel and floors at levels 1..D.
     pub directions: Option<Vec<DirectionSpec>>,
@@ -91,7 +89,6 @@ impl Default for HysteresisParams {
             instantaneous: true,
             velocity_drift: VelocityDrift::None,
             reduced_mass_step: 0.001,
-            conditioning: None,
             directions: None,
             output_decimation: 1,
             fail_on_error: false,
@@ -127,17 +124,13 @@ impl HysteresisParams {
                 "reduced_mass_step must be in (0, 0.001] (Eq. 35–36 search resolution)",
             ));
         }
-        if let Some(c) = &self.conditioning {
-            c.validate()?;
-        }
         Ok(s)
     }
 }
 
 /// Runs the identification on `event` (loaded from `event_dir`, against which
-/// the manifest's twin path is resolved) for every direction, after the
-/// params' optional conditioning; returns the outcomes and, per direction
-/// with resolvable masses, which masses were used.
+/// the manifest's twin path is resolved) for every direction; returns the
+/// outcomes and, per direction with resolvable masses, which masses were used.
 pub fn identify_event_at(
     event: &Event,
     event_dir: Option<&Path>,
@@ -149,14 +142,7 @@ pub fn identify_event_at(
         directions: p.directions.clone(),
         fail_on_error: p.fail_on_error,
     };
-    match &p.conditioning {
-        Some(c) => {
-            let mut event = event.clone();
-            condition_event(&mut event, c)?;
-            identify_event(&event, event_dir, &settings)
-        }
-        None => identify_event(event, event_dir, &settings),
-    }
+    identify_event(event, event_dir, &settings)
 }
 
 /// Writes the three identification tables.
@@ -170,7 +156,6 @@ pub fn write_identification(
         "form": p.form, "band_low_hz": p.band_low_hz, "exponent_min": p.exponent_min,
         "exponent_max": p.exponent_max, "exponent_resolution": p.exponent_resolution,
         "velocity_drift": p.velocity_drift, "reduced_mass_step": p.reduced_mass_step,
-        "conditioning": p.conditioning,
     });
     let processing: serde_json::Map<String, serde_json::Value> = outcomes
         .iter()
@@ -215,7 +200,8 @@ struct Hysteresis {
 impl Hysteresis {
     fn identify(&self, ctx: &mut RunContext) -> Result<(Vec<DirectionOutcome>, Vec<MassResolution>)> {
         let event_dir = ctx.event_path.clone();
-        identify_event_at(&ctx.loaded_event()?.event, Some(&event_dir), &self.params)
+        let Conditioned { event, .. } = ctx.input(ProductKind::ConditionedEvent)?;
+        identify_event_at(event, Some(&event_dir), &self.params)
     }
 }
 

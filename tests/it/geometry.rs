@@ -116,9 +116,17 @@ kind = "modal"
 inputs = ["condition"]
 
 [[stage]]
+name = "as-recorded"
+kind = "condition"
+inputs = ["ingest"]
+[stage.params]
+steps = []
+samples_file = "samples_as_recorded.parquet"
+
+[[stage]]
 name = "hysteresis"
 kind = "hysteresis"
-inputs = ["ingest"]
+inputs = ["as-recorded"]
 [stage.params]
 exponent_resolution = 0.01
 "#;

@@ -13,7 +13,7 @@ fn pipeline_with(broken: &str, bad_line: &str) -> (String, usize) {
         ("condition", "condition", "\"ingest\""),
         ("metrics", "metrics", "\"condition\""),
         ("modal", "modal", "\"condition\""),
-        ("hysteresis", "hysteresis", "\"ingest\""),
+        ("hysteresis", "hysteresis", "\"condition\""),
         ("damage", "damage", "\"hysteresis\""),
         ("update", "update", "\"modal\""),
         ("design", "design", "\"condition\""),
