@@ -117,6 +117,33 @@ impl Error {
             message: message.into(),
         }
     }
+    /// A copy of this error for a second place that reports it (a twin that
+    /// failed to load, reported once per direction that needed it): same
+    /// kind, same message, same exit code.  An I/O error keeps its path and
+    /// kind of failure (`std::io::Error` itself cannot be cloned).
+    pub fn duplicate(&self) -> Error {
+        match self {
+            Error::Input { location, message } => Error::Input {
+                location: location.clone(),
+                message: message.clone(),
+            },
+            Error::Usage(m) => Error::Usage(m.clone()),
+            Error::NotIdentifiable { stage, message } => Error::NotIdentifiable {
+                stage: stage.clone(),
+                message: message.clone(),
+            },
+            Error::Io { path, source } => Error::Io {
+                path: path.clone(),
+                source: std::io::Error::new(source.kind(), source.to_string()),
+            },
+            Error::Numerical(m) => Error::Numerical(m.clone()),
+            Error::Output { path, message } => Error::Output {
+                path: path.clone(),
+                message: message.clone(),
+            },
+        }
+    }
+
     /// Process exit code: 1 for bad input or failed processing, 2 for usage errors.
     pub fn exit_code(&self) -> i32 {
         match self {

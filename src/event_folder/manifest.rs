@@ -5,7 +5,8 @@
 use serde::Deserialize;
 
 use crate::error::{Error, Location, Result};
-use crate::vocab::Structure;
+use crate::readers::Format;
+use crate::vocab::{Direction, Role, Structure, Units};
 
 /// Smallest storey height accepted, metres (a smaller one is a unit slip or
 /// nonsense that would give absurd drift ratios).
@@ -83,12 +84,93 @@ impl ColumnRef {
     }
 }
 
-/// Direction as the manifest states it: `"X"`, `"Y"`, `"Z"`, `"UP"` or an azimuth number.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+/// Direction as the manifest writes it: `"X"`, `"Y"`, `"Z"`, `"UP"` or an azimuth number.
+#[derive(Deserialize)]
 #[serde(untagged)]
-pub enum DirectionEntry {
+enum DirectionValue {
     Azimuth(f64),
     Label(String),
+}
+
+/// A channel direction, parsed when the manifest is read.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(try_from = "DirectionValue")]
+pub struct DirectionEntry(pub Direction);
+
+impl TryFrom<DirectionValue> for DirectionEntry {
+    type Error = String;
+    fn try_from(v: DirectionValue) -> std::result::Result<Self, String> {
+        match v {
+            DirectionValue::Azimuth(a) if a.is_finite() => {
+                Ok(DirectionEntry(Direction::Azimuth(a.rem_euclid(360.0))))
+            }
+            DirectionValue::Azimuth(a) => Err(format!("direction {a} is not a finite azimuth")),
+            DirectionValue::Label(d) => Direction::parse(&d)
+                .map(DirectionEntry)
+                .ok_or_else(|| format!("direction {d:?} is not X, Y, Z, UP or an azimuth")),
+        }
+    }
+}
+
+/// Units as the manifest writes them, parsed when it is read (the spelling
+/// is kept for the inventory's "inferred" note).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(try_from = "String")]
+pub struct UnitsEntry {
+    pub units: Units,
+    pub written: String,
+}
+
+impl TryFrom<String> for UnitsEntry {
+    type Error = String;
+    fn try_from(written: String) -> std::result::Result<Self, String> {
+        Ok(UnitsEntry {
+            units: written.parse::<Units>()?,
+            written,
+        })
+    }
+}
+
+/// A reader named by the manifest, checked when it is read.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(try_from = "String")]
+pub struct FormatEntry(pub Format);
+
+impl TryFrom<String> for FormatEntry {
+    type Error = String;
+    fn try_from(f: String) -> std::result::Result<Self, String> {
+        Format::from_name(&f)
+            .map(FormatEntry)
+            .ok_or_else(|| format!("unknown format {f:?}"))
+    }
+}
+
+/// A channel's role as the manifest may state it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(try_from = "String")]
+pub enum RoleEntry {
+    Input,
+    Output,
+}
+
+impl TryFrom<String> for RoleEntry {
+    type Error = String;
+    fn try_from(r: String) -> std::result::Result<Self, String> {
+        match r.as_str() {
+            "input" => Ok(RoleEntry::Input),
+            "output" => Ok(RoleEntry::Output),
+            _ => Err(format!("role {r:?} must be \"input\" or \"output\"")),
+        }
+    }
+}
+
+impl RoleEntry {
+    pub fn role(self) -> Role {
+        match self {
+            RoleEntry::Input => Role::Input,
+            RoleEntry::Output => Role::Output,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Default, Deserialize)]
@@ -102,15 +184,15 @@ pub struct ChannelEntry {
     pub id: Option<String>,
     pub level: Option<i32>,
     pub direction: Option<DirectionEntry>,
-    pub role: Option<String>,
-    pub units: Option<String>,
+    pub role: Option<RoleEntry>,
+    pub units: Option<UnitsEntry>,
     /// Counts per m/s² when `units = "counts"`.
     pub sensitivity: Option<f64>,
     pub sampling_rate_hz: Option<f64>,
     /// Time column for CSV files.
     pub time_column: Option<String>,
     /// Force a reader (`cosmos`, `dmg`, `smc`, `at2`, `mseed`, `sac`, `geonet`, `csv`, `mcap`).
-    pub format: Option<String>,
+    pub format: Option<FormatEntry>,
     /// FE node of the twin.
     pub node: Option<String>,
     pub elevation_m: Option<f64>,
@@ -126,6 +208,28 @@ pub struct ChannelEntry {
     pub reversed: bool,
 }
 
+/// The `id` of the `[[channel]]` entry that holds byte `at` of the manifest
+/// text, if it has one (so an error in a channel's values names the channel).
+fn channel_id_at(text: &str, at: usize) -> Option<String> {
+    let before = &text[..at.min(text.len())];
+    let index = before
+        .lines()
+        .filter(|l| l.trim().replace(' ', "") == "[[channel]]")
+        .count()
+        .checked_sub(1)?;
+    let root = toml::de::DeTable::parse(text).ok()?;
+    let toml::de::DeValue::Array(channels) = root.get_ref().get("channel")?.get_ref() else {
+        return None;
+    };
+    let toml::de::DeValue::Table(entry) = channels.get(index)?.get_ref() else {
+        return None;
+    };
+    match entry.get("id")?.get_ref() {
+        toml::de::DeValue::String(id) => Some(id.to_string()),
+        _ => None,
+    }
+}
+
 impl Manifest {
     /// Parses manifest text; errors name the manifest file and line.
     pub fn parse(text: &str, file: &str) -> Result<Manifest> {
@@ -135,6 +239,9 @@ impl Manifest {
                 .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
             let mut loc = Location::file(file);
             loc.line = line;
+            if let Some(id) = e.span().and_then(|s| channel_id_at(text, s.start)) {
+                loc = loc.with_channel(id);
+            }
             Error::input(loc, format!("invalid event manifest: {}", e.message()))
         })?;
         m.validate(file)?;
@@ -208,14 +315,6 @@ impl Manifest {
                     return Err(at(format!("channel id {id:?} is used twice")));
                 }
             }
-            if let Some(r) = &c.role {
-                if !matches!(r.as_str(), "input" | "output") {
-                    return Err(at(format!("role {r:?} must be \"input\" or \"output\"")));
-                }
-            }
-            if let Some(u) = &c.units {
-                u.parse::<crate::vocab::Units>().map_err(at)?;
-            }
             if let Some(fs) = c.sampling_rate_hz {
                 if !(fs.is_finite() && fs > 0.0) {
                     return Err(at(format!("sampling_rate_hz {fs} must be positive")));
@@ -243,18 +342,6 @@ impl Manifest {
                     return Err(at(
                         "position_m must be two finite numbers [x, y] in metres".into()
                     ));
-                }
-            }
-            if let Some(DirectionEntry::Label(d)) = &c.direction {
-                if crate::vocab::Direction::parse(d).is_none() {
-                    return Err(at(format!(
-                        "direction {d:?} is not X, Y, Z, UP or an azimuth"
-                    )));
-                }
-            }
-            if let Some(f) = &c.format {
-                if crate::readers::Format::from_name(f).is_none() {
-                    return Err(at(format!("unknown format {f:?}")));
                 }
             }
         }

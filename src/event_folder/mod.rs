@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 pub use archive::{collect, ArchiveLimits, EventFile};
-pub use manifest::{ChannelEntry, ColumnRef, DirectionEntry, Manifest};
+pub use manifest::{ChannelEntry, ColumnRef, DirectionEntry, FormatEntry, Manifest, RoleEntry, UnitsEntry};
 pub use referenced::{ReferencedFiles, MAX_REFERENCED_BYTES};
 
 use crate::error::{Error, Location, Result};
@@ -101,9 +101,8 @@ pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEve
                     ),
                 ));
             };
-            let format = match entries.iter().find_map(|e| e.format.as_deref()) {
-                Some(f) => Format::from_name(f)
-                    .ok_or_else(|| Error::usage(format!("unknown format {f}")))?,
+            let format = match entries.iter().find_map(|e| e.format) {
+                Some(f) => f.0,
                 None => match readers::classify(file.base_name(), &file.bytes) {
                     readers::Sniffed::Record(f) => f,
                     readers::Sniffed::Skip(reason) => {
@@ -403,13 +402,8 @@ fn apply_entry(
     if let Some(level) = entry.level {
         ch.level = Some(level);
     }
-    if let Some(d) = &entry.direction {
-        ch.direction = Some(match d {
-            DirectionEntry::Azimuth(a) => Direction::Azimuth(a.rem_euclid(360.0)),
-            DirectionEntry::Label(s) => {
-                Direction::parse(s).ok_or_else(|| err(format!("bad direction {s:?}")))?
-            }
-        });
+    if let Some(d) = entry.direction {
+        ch.direction = Some(d.0);
     }
     if let Some(dip) = entry.dip_deg {
         ch.dip_deg = Some(dip);
@@ -426,15 +420,11 @@ fn apply_entry(
     if let Some(p) = entry.position_m {
         ch.position_m = Some(p);
     }
-    if let Some(r) = &entry.role {
-        ch.role = if r == "input" {
-            Role::Input
-        } else {
-            Role::Output
-        };
+    if let Some(r) = entry.role {
+        ch.role = r.role();
     }
-    if let Some(u) = &entry.units {
-        ch.units = u.parse::<Units>().map_err(err)?;
+    if let Some(UnitsEntry { units, written: u }) = &entry.units {
+        ch.units = *units;
         ch.missing.retain(|m| m != "units");
         // What the reader assumed about units no longer holds.
         ch.inferred

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
-use super::mass_resolution::{err_clone, resolve_masses, MassResolution};
+use super::mass_resolution::{resolve_masses, MassResolution};
 use super::{identify_direction, DirectionIdentification, DirectionRecords, IdentifySettings};
 use crate::error::{Error, Result};
 use crate::vocab::{Axis, Event, Role};
@@ -133,7 +133,7 @@ pub fn identify_event(
             .zip(masses.par_iter())
             .map(|(spec, mass)| {
                 let floors: Vec<&str> = spec.floors.iter().map(|s| s.as_str()).collect();
-                let r = mass.as_ref().map_err(err_clone).and_then(|mass| {
+                let r = mass.as_ref().map_err(Error::duplicate).and_then(|mass| {
                     DirectionRecords::from_event(
                         event,
                         &spec.direction,

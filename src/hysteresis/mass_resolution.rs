@@ -98,13 +98,6 @@ fn manifest_location(event_dir: Option<&Path>) -> Location {
     })
 }
 
-pub(crate) fn err_clone(e: &Error) -> Error {
-    match e {
-        Error::Input { location, message } => Error::input((**location).clone(), message.clone()),
-        other => Error::usage(other.to_string()),
-    }
-}
-
 /// Storey masses of levels 1..=top from the manifest (when it lists enough)
 /// or the twin. `channel` names the first floor channel in errors.
 fn storey_masses(
@@ -153,7 +146,7 @@ fn storey_masses(
             }
             Ok((masses[..top].to_vec(), format!("twin {}", twin.source)))
         }
-        Some(Err(e)) => Err(err_clone(e)),
+        Some(Err(e)) => Err(e.duplicate()),
         None => Err(Error::input(
             manifest_location(twins.event_dir).with_channel(channel.to_string()),
             format!(
@@ -294,7 +287,7 @@ pub fn resolve_masses(
                 let spec = &specs[pending[k].0];
                 let twin = match twins.twin() {
                     Some(Ok(t)) => t,
-                    Some(Err(e)) => return Err(err_clone(e)),
+                    Some(Err(e)) => return Err(e.duplicate()),
                     None => return Err(Error::usage("twin vanished")),
                 };
                 let dimension = twin
@@ -320,7 +313,7 @@ pub fn resolve_masses(
             .collect();
         let result = targets
             .iter()
-            .map(|t| t.as_ref().map(|t| *t).map_err(err_clone))
+            .map(|t| t.as_ref().map(|t| *t).map_err(Error::duplicate))
             .collect::<Result<Vec<_>>>()
             .and_then(|t| reduced_lumped_masses(instrumented, m_u, &t, step).map(|r| (r, t)));
         let directions: Vec<String> = group
@@ -349,7 +342,7 @@ pub fn resolve_masses(
                         omega_fe_rad_s: t[j].omega_fe,
                     }),
                 }),
-                Err(e) => Err(err_clone(e)),
+                Err(e) => Err(e.duplicate()),
             };
         }
     }
