@@ -338,6 +338,44 @@ pub fn base_motion_from_file(
     )
 }
 
+/// The design's base motion and, with `[snapshots] source = "records"`, the recorded
+/// response: from `event` (conditioned, with its name for messages) when the motion comes
+/// from an event — its `channels`, `axis`, `scale` and `duration_s` apply — or from the
+/// design's ground-motion file.
+pub fn design_inputs(
+    design: &LoadedDesign,
+    event: Option<(&Event, &str)>,
+) -> Result<(BaseMotion, Option<RecordedResponse>)> {
+    let model = design.model()?;
+    match (&design.motion.source, event) {
+        (MotionSource::Event { channels, axes, .. }, Some((event, origin))) => {
+            let motion = base_motion_from_event(
+                event,
+                origin,
+                channels,
+                axes,
+                &design.motion,
+                model,
+                &design.source,
+            )?;
+            let recorded = if design.snapshots_from_records {
+                Some(recorded_response_from_event(event, origin, design, &motion)?)
+            } else {
+                None
+            };
+            Ok((motion, recorded))
+        }
+        (MotionSource::Event { .. }, None) => Err(Error::usage(format!(
+            "{}: the motion comes from an event and no event was given",
+            design.source
+        ))),
+        (MotionSource::File { .. }, _) => Ok((
+            base_motion_from_file(&design.motion, model, &design.source)?,
+            None,
+        )),
+    }
+}
+
 /// Snapshot source (b): the event's records at PS nodes. Channels are mapped to twin DoFs by
 /// the twin's `[[sensors]]` (node and DoF); each PS translation DoF's absolute acceleration
 /// minus the base motion along the same axis is integrated twice with polynomial drift

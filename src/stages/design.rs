@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use super::condition::Conditioned;
 use crate::conditioning::{condition_event_with_motion, ConditioningSettings};
 use crate::design::file::{load_design, settings_json, LoadedDesign, MotionSource};
-use crate::design::motion::{base_motion_from_event, base_motion_from_file, recorded_response_from_event};
+use crate::design::motion::design_inputs;
 use crate::design::plan::{design_hybrid_test_with, BaseMotion, TestDesign};
 use crate::design::recorded::RecordedResponse;
 use crate::error::Result;
@@ -71,41 +71,17 @@ pub fn load_motion(design: &LoadedDesign) -> Result<BaseMotion> {
     Ok(load_inputs(design)?.0)
 }
 
-/// The base motion and, with `[snapshots] source = "records"`, the recorded response.
+/// The base motion and, with `[snapshots] source = "records"`, the recorded response; an
+/// event-sourced motion reads the design file's event folder, conditioned with the
+/// METHODS §1 chain.
 pub fn load_inputs(design: &LoadedDesign) -> Result<(BaseMotion, Option<RecordedResponse>)> {
-    let model = design.model()?;
     match &design.motion.source {
-        MotionSource::Event {
-            folder,
-            channels,
-            axes,
-        } => {
-            let loaded = crate::event_folder::load(folder)?;
-            let mut event = loaded.event;
+        MotionSource::Event { folder, .. } => {
+            let mut event = crate::event_folder::load(folder)?.event;
             condition_event_with_motion(&mut event, &ConditioningSettings::default())?;
-            let origin = folder.display().to_string();
-            let motion = base_motion_from_event(
-                &event,
-                &origin,
-                channels,
-                axes,
-                &design.motion,
-                model,
-                &design.source,
-            )?;
-            let recorded = if design.snapshots_from_records {
-                Some(recorded_response_from_event(
-                    &event, &origin, design, &motion,
-                )?)
-            } else {
-                None
-            };
-            Ok((motion, recorded))
+            design_inputs(design, Some((&event, &folder.display().to_string())))
         }
-        MotionSource::File { .. } => Ok((
-            base_motion_from_file(&design.motion, model, &design.source)?,
-            None,
-        )),
+        MotionSource::File { .. } => design_inputs(design, None),
     }
 }
 
@@ -248,31 +224,13 @@ impl Stage for Design {
     /// and `duration_s` apply); a file-sourced motion is the file.
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let design = load_design(&self.design_path(ctx)?)?;
-        let model = design.model()?;
         let (motion, recorded) = match &design.motion.source {
-            MotionSource::Event { channels, axes, .. } => {
+            MotionSource::Event { .. } => {
                 let origin = ctx.event_path.display().to_string();
                 let Conditioned { event, .. } = ctx.input(ProductKind::ConditionedEvent)?;
-                let motion = base_motion_from_event(
-                    event,
-                    &origin,
-                    channels,
-                    axes,
-                    &design.motion,
-                    model,
-                    &design.source,
-                )?;
-                let recorded = if design.snapshots_from_records {
-                    Some(recorded_response_from_event(event, &origin, &design, &motion)?)
-                } else {
-                    None
-                };
-                (motion, recorded)
+                design_inputs(&design, Some((event, &origin)))?
             }
-            MotionSource::File { .. } => (
-                base_motion_from_file(&design.motion, model, &design.source)?,
-                None,
-            ),
+            MotionSource::File { .. } => design_inputs(&design, None)?,
         };
         let summary = run_design(&design, &motion, recorded.as_ref(), &ctx.out_dir)?;
         if !ctx.quiet {

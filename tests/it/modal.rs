@@ -17,11 +17,6 @@ fn five_storey() -> ShearBuilding {
     }
 }
 
-/// Same building, public for the benchmark-style exploration.
-pub fn five_storey_pub() -> ShearBuilding {
-    five_storey()
-}
-
 struct Accuracy {
     max_rel_freq: f64,
     max_abs_damping: f64,
