@@ -5,8 +5,9 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use quaketwin::modal::{identify, Method, ModalInput, ModalSettings};
+use quaketwin::rng::Rng;
 use quaketwin::synth::{
-    add_measurement_noise, synthetic_ground_motion, GroundMotionParams, Rng, ShearBuilding,
+    add_measurement_noise, synthetic_ground_motion, GroundMotionParams, ShearBuilding,
 };
 use std::hint::black_box;
 

@@ -7,8 +7,9 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use quaketwin::rng::Rng;
 use quaketwin::synth::{
-    add_measurement_noise, synthetic_ground_motion, GroundMotionParams, Rng, ShearBuilding,
+    add_measurement_noise, synthetic_ground_motion, GroundMotionParams, ShearBuilding,
 };
 
 fn write_event(dir: &Path) {

@@ -19,6 +19,7 @@ pub mod modal;
 pub mod pipeline;
 pub mod readers;
 pub mod report;
+pub mod rng;
 pub mod sinks;
 pub mod stages;
 pub mod synth;

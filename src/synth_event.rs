@@ -7,9 +7,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::rng::Rng;
 use crate::sinks::parquet::write_bytes_atomically;
 use crate::synth::{
-    add_measurement_noise, synthetic_ground_motion, BuildingModes, GroundMotionParams, Rng,
+    add_measurement_noise, synthetic_ground_motion, BuildingModes, GroundMotionParams,
     ShearBuilding,
 };
 use crate::vocab::STANDARD_GRAVITY;

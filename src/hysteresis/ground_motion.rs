@@ -4,41 +4,12 @@
 //! low-pass roll-off, then multiplied by a Jennings-type envelope (quadratic
 //! rise, strong-motion plateau, exponential decay) and scaled to a target PGA.
 //!
-//! The PRNG is SplitMix64 written here (the project keeps randomness seeded and
+//! The PRNG is `crate::rng::SplitMix64` (the project keeps randomness seeded and
 //! dependency-free); Gaussian deviates come from the Box–Muller transform.
 
 use crate::error::{Error, Result};
+use crate::rng::SplitMix64;
 use realfft::RealFftPlanner;
-
-/// SplitMix64 (Steele, Lea & Flood 2014): tiny, fast, passes BigCrush when used
-/// as a stream; enough for test signals.
-#[derive(Debug, Clone)]
-pub struct SplitMix64 {
-    state: u64,
-}
-
-impl SplitMix64 {
-    pub fn new(seed: u64) -> Self {
-        SplitMix64 { state: seed }
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in (0, 1] (53 random bits, never 0 so that ln is finite).
-    pub fn next_open01(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 1.0) / (1u64 << 53) as f64
-    }
-    /// Standard normal deviate (Box–Muller, cosine branch).
-    pub fn next_gaussian(&mut self) -> f64 {
-        let u1 = self.next_open01();
-        let u2 = self.next_open01();
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-    }
-}
 
 /// Settings of the synthetic accelerogram; every field is stated in the tests.
 #[derive(Debug, Clone, PartialEq)]

@@ -56,7 +56,7 @@ pub use basis::{
 };
 pub use damage::{damage_index, damage_index_of_chain, DamageSeries};
 pub use forward::{BoucWenChain, ChainResponse};
-pub use ground_motion::{synthetic_ground_motion, GroundMotionSpec, SplitMix64};
+pub use ground_motion::{synthetic_ground_motion, GroundMotionSpec};
 pub use identify::{
     identify_direction, identify_directions, identify_kinematics, DirectionIdentification,
     DofIdentification, FitSeries, IdentifySettings, InstantaneousEstimate, ParameterStability,

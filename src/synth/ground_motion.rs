@@ -12,8 +12,9 @@
 //! that the peak is at ε t_n and the envelope has fallen to η at t_n.
 //! Both filters use the exact zero-order-hold oscillator step of `super::sdof_zoh`.
 
-use super::{sdof_zoh, Rng};
+use super::sdof_zoh;
 use crate::error::{Error, Result};
+use crate::rng::Rng;
 
 /// Settings of the synthetic ground motion.
 #[derive(Debug, Clone, PartialEq)]

@@ -18,10 +18,9 @@
 //! All numerical code here is free of I/O.
 
 pub mod ground_motion;
-pub mod rng;
 
+use crate::rng::Rng;
 pub use ground_motion::{synthetic_ground_motion, GroundMotionParams};
-pub use rng::Rng;
 
 use crate::error::{Error, Result};
 use crate::vocab::{Channel, Record, Role, SourceRef, Units};

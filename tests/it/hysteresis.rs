@@ -10,6 +10,7 @@ use std::sync::OnceLock;
 use quaketwin::hysteresis::basis::{cumulative_cubic, DofProblem};
 use quaketwin::hysteresis::stft::{frame_products, FrameRepresentation, FrameTransformer};
 use quaketwin::hysteresis::*;
+use quaketwin::rng::SplitMix64;
 use quaketwin::vocab::ProcessingHistory;
 use quaketwin::Error;
 

@@ -2,8 +2,9 @@
 //! real records.  Accuracy figures are printed (run with `--nocapture`).
 
 use quaketwin::modal::{self, identify, Method, ModalInput, ModalSettings, Mode};
+use quaketwin::rng::Rng;
 use quaketwin::synth::{
-    add_measurement_noise, synthetic_ground_motion, BuildingModes, GroundMotionParams, Rng,
+    add_measurement_noise, synthetic_ground_motion, BuildingModes, GroundMotionParams,
     ShearBuilding,
 };
 
