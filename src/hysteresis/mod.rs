@@ -2,7 +2,6 @@
 //! seismic damage index (METHODS.md §4, thesis Ch. 4). I/O free.
 //!
 //! - [`forward`]: the in-series degrading Bouc-Wen shear chain (Eq. 21–23), RK4.
-//! - [`ground_motion`]: seeded synthetic accelerograms for test events.
 //! - [`stft`]: Hamming STFT layout and the integrated products of Eq. 15/20
 //!   (Parseval time-domain form and explicit FFT form).
 //! - [`solve`]: bounded least squares under Eq. 47.
@@ -43,7 +42,6 @@
 pub mod basis;
 pub mod damage;
 pub mod forward;
-pub mod ground_motion;
 pub mod identify;
 pub mod reduced_mass;
 pub mod solve;
@@ -56,7 +54,6 @@ pub use basis::{
 };
 pub use damage::{damage_index, damage_index_of_chain, DamageSeries};
 pub use forward::{BoucWenChain, ChainResponse};
-pub use ground_motion::{synthetic_ground_motion, GroundMotionSpec};
 pub use identify::{
     identify_direction, identify_directions, identify_kinematics, DirectionIdentification,
     DofIdentification, FitSeries, IdentifySettings, InstantaneousEstimate, ParameterStability,

@@ -20,7 +20,9 @@
 pub mod ground_motion;
 
 use crate::rng::Rng;
-pub use ground_motion::{synthetic_ground_motion, GroundMotionParams};
+pub use ground_motion::{
+    synthetic_ground_motion, Envelope, GroundMotionSpec, Sampling, Shaping, WhiteNoise,
+};
 
 use crate::error::{Error, Result};
 use crate::vocab::{Channel, Record, Role, SourceRef, Units};

@@ -11,6 +11,7 @@ use quaketwin::hysteresis::basis::{cumulative_cubic, DofProblem};
 use quaketwin::hysteresis::stft::{frame_products, FrameRepresentation, FrameTransformer};
 use quaketwin::hysteresis::*;
 use quaketwin::rng::SplitMix64;
+use quaketwin::synth::{synthetic_ground_motion, GroundMotionSpec};
 use quaketwin::vocab::ProcessingHistory;
 use quaketwin::Error;
 
