@@ -23,8 +23,6 @@ pub mod rng;
 pub mod sinks;
 pub mod stages;
 pub mod synth;
-pub mod synth_event;
-pub mod synth_facade;
 pub mod twin;
 pub mod vocab;
 

@@ -15,8 +15,11 @@
 //! x[k+1] = e^{A Δt} x[k] + A⁻¹(e^{A Δt} − I) B p[k] with the closed-form
 //! exponential of an under-damped oscillator.  For inputs held constant over
 //! each sample step this is exact (no integration error).
-//! All numerical code here is free of I/O.
+//! The numerical code of this file and of [`ground_motion`] is free of I/O;
+//! [`event`] and [`facade`] write the bundled sample events (`quaketwin synth`).
 
+pub mod event;
+pub mod facade;
 pub mod ground_motion;
 
 use crate::rng::Rng;
