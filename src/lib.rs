@@ -16,6 +16,7 @@ pub mod geometry;
 pub mod hysteresis;
 pub mod metrics;
 pub mod modal;
+pub mod numeric;
 pub mod pipeline;
 pub mod readers;
 pub mod report;
