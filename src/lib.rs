@@ -23,6 +23,7 @@ pub mod report;
 pub mod rng;
 pub mod sinks;
 pub mod stages;
+pub mod stats;
 pub mod synth;
 pub mod twin;
 pub mod vocab;

@@ -7,8 +7,10 @@
 //! - [`solve`]: bounded least squares under Eq. 47.
 //! - [`basis`]: records → relative kinematics, forces (Eq. 46), energies,
 //!   basis functions (integral form Eq. 27–30, jerk form A7–A10).
-//! - [`identify`]: DoF-by-DoF identification from the top (Table 15), N search,
-//!   scalar and instantaneous estimates, stability, non-identifiability checks.
+//! - [`identify`]: DoF-by-DoF identification from the top (Table 15), with
+//!   [`settings`], [`dof`] (one DoF: scalar estimate, non-identifiability
+//!   checks), the N search (`exponent_search`), [`instantaneous`] estimates
+//!   and their stability, and the F-test of [`significance`].
 //! - [`damage`]: ι(t), ω_s(t), c_s(t) (Eq. 32–34).
 //! - [`reduced_mass`]: reduced lumped masses (Eq. 35–36).
 //! - [`storey_masses`]: storey masses and Eq. 35–36 targets from the twin.
@@ -41,9 +43,14 @@
 
 pub mod basis;
 pub mod damage;
+pub mod dof;
+mod exponent_search;
 pub mod forward;
 pub mod identify;
+pub mod instantaneous;
 pub mod reduced_mass;
+pub mod settings;
+pub mod significance;
 pub mod solve;
 pub mod stft;
 pub mod storey_masses;
@@ -53,14 +60,16 @@ pub use basis::{
     StiffnessPattern, VelocityDrift,
 };
 pub use damage::{damage_index, damage_index_of_chain, DamageSeries};
+pub use dof::{DofIdentification, FitSeries};
 pub use forward::{BoucWenChain, ChainResponse};
 pub use identify::{
     identify_direction, identify_directions, identify_kinematics, DirectionIdentification,
-    DofIdentification, FitSeries, IdentifySettings, InstantaneousEstimate, ParameterStability,
-    Significance,
 };
+pub use instantaneous::{InstantaneousEstimate, ParameterStability};
 pub use reduced_mass::{
     first_pulsation_2dof, reduced_lumped_masses, ReducedMassTarget, ReducedMasses,
 };
+pub use settings::IdentifySettings;
+pub use significance::Significance;
 pub use solve::{bounded_lsq_columns, bounded_lsq_gram, BoundedSolution};
 pub use stft::{hamming_symmetric, FrequencyBand, StftLayout, Transform};
