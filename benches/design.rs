@@ -9,7 +9,7 @@ use std::path::Path;
 
 use quaketwin::design::plan::{design_hybrid_test, BaseComponent, BaseMotion, DesignSettings};
 use quaketwin::readers::{at2, ReadOptions};
-use quaketwin::synth_facade::{facade_node_id, facade_twin_toml};
+use quaketwin::synth::facade::{facade_node_id, facade_twin_toml};
 use quaketwin::twin::parse_twin;
 use quaketwin::vocab::SourceRef;
 

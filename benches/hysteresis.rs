@@ -9,6 +9,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use quaketwin::hysteresis::*;
+use quaketwin::synth::{synthetic_ground_motion, GroundMotionSpec};
 use quaketwin::vocab::ProcessingHistory;
 
 fn direction(label: &str, seed: u64) -> DirectionRecords {

@@ -5,8 +5,9 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use quaketwin::modal::{identify, Method, ModalInput, ModalSettings};
+use quaketwin::rng::Rng;
 use quaketwin::synth::{
-    add_measurement_noise, synthetic_ground_motion, GroundMotionParams, Rng, ShearBuilding,
+    add_measurement_noise, synthetic_ground_motion, GroundMotionSpec, ShearBuilding,
 };
 use std::hint::black_box;
 
@@ -36,16 +37,18 @@ fn ambient() -> ModalInput {
 }
 
 fn earthquake() -> ModalInput {
-    let params = GroundMotionParams {
+    let params = GroundMotionSpec {
         seed: 7,
         ground_frequency_hz: 4.0,
         ..Default::default()
     };
     let ag = synthetic_ground_motion(&params).unwrap();
-    let r = five_storey().simulate_base_motion(&ag, params.dt).unwrap();
+    let r = five_storey()
+        .simulate_base_motion(&ag, params.dt())
+        .unwrap();
     let mut rng = Rng::new(99);
     ModalInput {
-        dt: params.dt,
+        dt: params.dt(),
         output_ids: (1..=5).map(|i| format!("L{i}")).collect(),
         outputs: r
             .absolute_acceleration

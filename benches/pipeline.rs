@@ -7,8 +7,9 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use quaketwin::rng::Rng;
 use quaketwin::synth::{
-    add_measurement_noise, synthetic_ground_motion, GroundMotionParams, Rng, ShearBuilding,
+    add_measurement_noise, synthetic_ground_motion, GroundMotionSpec, Sampling, ShearBuilding,
 };
 
 fn write_event(dir: &Path) {
@@ -25,9 +26,9 @@ fn write_event(dir: &Path) {
     );
     for (i, dir_name) in ["X", "Y"].iter().enumerate() {
         let b = ShearBuilding::uniform(9, 4e5, 1.2e9 + 2e8 * i as f64, 0.02);
-        let gm = GroundMotionParams {
+        let gm = GroundMotionSpec {
             duration_s: 60.0,
-            dt,
+            sampling: Sampling::IntervalS(dt),
             seed: 3 + i as u64,
             ..Default::default()
         };

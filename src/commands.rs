@@ -246,12 +246,12 @@ pub fn report(dir: &Path, settings: Option<&Path>) -> Result<std::path::PathBuf>
 
 /// `quaketwin synth --out DIR`: writes the sample events.
 pub fn synth(out: &Path, seed: u64) -> Result<Vec<std::path::PathBuf>> {
-    let settings = crate::synth_event::SynthSettings {
+    let settings = crate::synth::event::SynthSettings {
         seed,
         ..Default::default()
     };
-    let mut written = crate::synth_event::write_sample_events(out, &settings)?;
-    written.push(crate::synth_facade::write_facade_sample(out, seed)?);
+    let mut written = crate::synth::event::write_sample_events(out, &settings)?;
+    written.push(crate::synth::facade::write_facade_sample(out, seed)?);
     Ok(written)
 }
 

@@ -15,14 +15,15 @@ pub mod geometry;
 pub mod hysteresis;
 pub mod metrics;
 pub mod modal;
+pub mod numeric;
 pub mod pipeline;
 pub mod readers;
 pub mod report;
+pub mod rng;
 pub mod sinks;
 pub mod stages;
+pub mod stats;
 pub mod synth;
-pub mod synth_event;
-pub mod synth_facade;
 pub mod twin;
 pub mod vocab;
 

@@ -21,6 +21,7 @@ use super::baseline::{evaluate_polynomial_with_derivatives, fit_polynomial};
 use super::butterworth::{butter_sos, BandType};
 use super::sosfilt::sosfiltfilt;
 use crate::error::{Error, Result};
+use crate::numeric::cumulative_trapezoid;
 
 /// How integration drift is controlled.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -84,23 +85,6 @@ pub struct Motion {
     pub acceleration: Vec<f64>,
     pub velocity: Vec<f64>,
     pub displacement: Vec<f64>,
-}
-
-/// Cumulative trapezoid integral from zero: y[0] = 0,
-/// y[i] = y[i−1] + dt (x[i−1] + x[i]) / 2.
-pub fn cumulative_trapezoid(data: &[f64], dt: f64) -> Vec<f64> {
-    let mut out = Vec::with_capacity(data.len());
-    let mut acc = 0.0;
-    if let Some(&first) = data.first() {
-        out.push(0.0);
-        let mut prev = first;
-        for &x in &data[1..] {
-            acc += 0.5 * dt * (prev + x);
-            out.push(acc);
-            prev = x;
-        }
-    }
-    out
 }
 
 /// Removes a least-squares polynomial of `order` from `target` and its

@@ -14,7 +14,7 @@ pub mod sosfilt;
 
 pub use baseline::{cosine_taper, remove_linear_trend, remove_mean, remove_polynomial};
 pub use butterworth::{butter_sos, BandType, Section};
-pub use integrate::{cumulative_trapezoid, integrate_motion, DriftControl, Motion};
+pub use integrate::{integrate_motion, DriftControl, Motion};
 pub use qa::{quality_flags, QaSettings};
 pub use resample::{align_records, resample_to_rate, Alignment};
 pub use sosfilt::{sosfilt, sosfilt_zi, sosfiltfilt, sosfiltfilt_channels, sosfiltfilt_padlen};

@@ -4,22 +4,10 @@
 //! (Eq. 27–30) and in the jerk form (Appendix, Eq. A7–A10).
 
 use crate::error::{Error, Location, Result};
+use crate::numeric::cumulative_trapezoid;
 use crate::vocab::{Event, ProcessingHistory, Record};
 
 use super::forward::packed_upper_index;
-
-/// Cumulative trapezoidal integral from 0 (value 0 at the first sample).
-pub fn cumulative_trapezoid(x: &[f64], dt: f64) -> Vec<f64> {
-    let mut out = Vec::with_capacity(x.len());
-    let mut acc = 0.0;
-    for (k, value) in x.iter().enumerate() {
-        if k > 0 {
-            acc += 0.5 * dt * (x[k - 1] + value);
-        }
-        out.push(acc);
-    }
-    out
-}
 
 /// Cumulative integral from 0 with the four-point (cubic) rule: interval
 /// [k, k+1] gets Δt/24 (−x[k−1] + 13x[k] + 13x[k+1] − x[k+2]) (one-sided cubic

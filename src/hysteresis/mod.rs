@@ -2,14 +2,15 @@
 //! seismic damage index (METHODS.md §4, thesis Ch. 4). I/O free.
 //!
 //! - [`forward`]: the in-series degrading Bouc-Wen shear chain (Eq. 21–23), RK4.
-//! - [`ground_motion`]: seeded synthetic accelerograms for test events.
 //! - [`stft`]: Hamming STFT layout and the integrated products of Eq. 15/20
 //!   (Parseval time-domain form and explicit FFT form).
 //! - [`solve`]: bounded least squares under Eq. 47.
 //! - [`basis`]: records → relative kinematics, forces (Eq. 46), energies,
 //!   basis functions (integral form Eq. 27–30, jerk form A7–A10).
-//! - [`identify`]: DoF-by-DoF identification from the top (Table 15), N search,
-//!   scalar and instantaneous estimates, stability, non-identifiability checks.
+//! - [`identify`]: DoF-by-DoF identification from the top (Table 15), with
+//!   [`settings`], [`dof`] (one DoF: scalar estimate, non-identifiability
+//!   checks), the N search (`exponent_search`), [`instantaneous`] estimates
+//!   and their stability, and the F-test of [`significance`].
 //! - [`damage`]: ι(t), ω_s(t), c_s(t) (Eq. 32–34).
 //! - [`reduced_mass`]: reduced lumped masses (Eq. 35–36).
 //! - [`storey_masses`]: storey masses and Eq. 35–36 targets from the twin.
@@ -42,12 +43,16 @@
 
 pub mod basis;
 pub mod damage;
+pub mod dof;
 pub mod event;
+mod exponent_search;
 pub mod forward;
-pub mod ground_motion;
 pub mod identify;
+pub mod instantaneous;
 pub mod mass_resolution;
 pub mod reduced_mass;
+pub mod settings;
+pub mod significance;
 pub mod solve;
 pub mod stft;
 pub mod storey_masses;
@@ -59,15 +64,16 @@ pub use basis::{
 pub use event::{auto_directions, identify_event, DirectionOutcome, DirectionSpec, EventSettings};
 pub use mass_resolution::{MassResolution, ReducedMassRecord};
 pub use damage::{damage_index, damage_index_of_chain, DamageSeries};
+pub use dof::{DofIdentification, FitSeries};
 pub use forward::{BoucWenChain, ChainResponse};
-pub use ground_motion::{synthetic_ground_motion, GroundMotionSpec, SplitMix64};
 pub use identify::{
     identify_direction, identify_directions, identify_kinematics, DirectionIdentification,
-    DofIdentification, FitSeries, IdentifySettings, InstantaneousEstimate, ParameterStability,
-    Significance,
 };
+pub use instantaneous::{InstantaneousEstimate, ParameterStability};
 pub use reduced_mass::{
     first_pulsation_2dof, reduced_lumped_masses, ReducedMassTarget, ReducedMasses,
 };
+pub use settings::IdentifySettings;
+pub use significance::Significance;
 pub use solve::{bounded_lsq_columns, bounded_lsq_gram, BoundedSolution};
 pub use stft::{hamming_symmetric, FrequencyBand, StftLayout, Transform};

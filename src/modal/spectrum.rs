@@ -95,7 +95,7 @@ mod tests {
     fn sine_shows_as_first_singular_value_peak_and_white_noise_level_is_right() {
         let dt = 0.01;
         let n = 20_000;
-        let mut rng = crate::synth::Rng::new(11);
+        let mut rng = crate::rng::Rng::new(11);
         let a: Vec<f64> = (0..n)
             .map(|i| (std::f64::consts::TAU * 7.0 * i as f64 * dt).sin() + 0.1 * rng.normal())
             .collect();

@@ -27,7 +27,7 @@
 //! is a `QaFlag::Note` (the header value is kept).
 
 use super::textfmt::{self, Layout, Lines};
-use super::{FileContents, ReadOptions};
+use super::{EventHints, FileContents, ReadOptions};
 use crate::error::Result;
 use crate::vocab::{
     epoch_ns_from_ordinal, format_epoch_ns, parse_iso8601_ns, Channel, Direction, QaFlag, Record,
@@ -40,23 +40,7 @@ use crate::vocab::{
 const START_TOLERANCE_NS: i64 = 5_000_000;
 
 pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
-    let text = textfmt::decode(bytes);
-    let lines = Lines::new(&text, source);
-    let mut contents = FileContents::default();
-    let mut b = 0;
-    let mut blocks = 0;
-    while b < lines.len() {
-        if lines.get(b).trim().is_empty() {
-            b += 1;
-            continue;
-        }
-        b = read_channel(&lines, b, source, &mut contents)?;
-        blocks += 1;
-    }
-    if blocks == 0 {
-        return Err(lines.err_file("empty COSMOS file"));
-    }
-    Ok(contents)
+    textfmt::read_channel_blocks(bytes, source, "empty COSMOS file", read_channel)
 }
 
 /// A numeric header block announced by a line such as
@@ -96,12 +80,123 @@ fn header_block(lines: &Lines, at: usize, what: &str) -> Result<(Vec<f64>, usize
     Ok((block.values, block.next_line))
 }
 
+/// Reads the channel block starting at 0-based line `b`: text header, integer and real
+/// headers, comments, data header and samples; an acceleration channel becomes a record.
+/// Returns the line after the block.
 fn read_channel(
     lines: &Lines,
     b: usize,
     source: &SourceRef,
     contents: &mut FileContents,
 ) -> Result<usize> {
+    let n_text = text_header_length(lines, b)?;
+    let text_line = |k: usize| lines.get(b + k);
+    let header = numeric_header(lines, b, n_text)?;
+    // Line of the integer header's first values, named by header-value errors.
+    let header_values_at = b + n_text + 1;
+    let (comments, data_head_at) = comment_lines(lines, header.next_line)?;
+    let (npts, layout) = data_header(lines, data_head_at)?;
+    let data_head = lines.get(data_head_at);
+
+    let identity = Identity::read(&comments, text_line(4));
+    let chan_line = ChannelLine::read(text_line(8), &header);
+    let units = units(lines, &header, data_head_at, header_values_at)?;
+    let rate = 1.0 / sampling_interval(lines, &header, data_head, npts, header_values_at)?;
+
+    let mut inferred = Vec::new();
+    let (direction, code_orientation) = direction(
+        &header,
+        chan_line.orientation_text.as_deref(),
+        identity.scnl_channel.as_deref(),
+        &mut inferred,
+    );
+    let channel_code = channel_code(rate, direction, code_orientation);
+    if let (Some(c), Some(s)) = (&channel_code, &identity.scnl_channel) {
+        if c != s {
+            inferred.push(format!("channel_code={c} from orientation and {rate} Hz (gmprocess convention); the SCNL comment says {s}"));
+        }
+    }
+
+    let location_code = identity
+        .scnl_location
+        .clone()
+        .or_else(|| header.int_at(55).map(|l| format!("{l:02}")))
+        .or_else(|| chan_line.sta_chan.map(|c| format!("{c:02}")));
+    let id = channel_id(
+        &identity,
+        location_code.as_deref(),
+        channel_code.as_deref(),
+        source,
+    );
+
+    let (values, next) = samples(lines, data_head_at, npts, layout, &id)?;
+
+    // Only acceleration channels become records.
+    if !is_acceleration(&header, data_head, &units) {
+        return Ok(next);
+    }
+
+    let units = calibrate_counts(units, &header, &mut inferred);
+    let mut channel = Channel::new(id, units, rate, source.clone());
+    channel.network = identity.network;
+    channel.station = identity.station;
+    channel.location_code = location_code;
+    channel.channel_code = channel_code;
+    channel.location_text = chan_line.location_text.or(identity.station_name);
+    channel.direction = direction;
+    if direction.is_none() {
+        channel.missing.push("direction".into());
+    }
+    channel.elevation_m = header.real_at(2);
+    set_start_time(&mut channel, &header, text_line(7));
+    channel.inferred = inferred;
+    contents.records.push(Record::new(channel, values));
+
+    if contents.event.name.is_none() {
+        fill_event(&mut contents.event, &header, text_line);
+    }
+    Ok(next)
+}
+
+/// Channel id `network.station.location.channel`: "--" for an unknown network or location,
+/// the file stem for an unknown station, the SCNL channel (else "CH") without a channel code.
+fn channel_id(
+    identity: &Identity,
+    location_code: Option<&str>,
+    channel_code: Option<&str>,
+    source: &SourceRef,
+) -> String {
+    format!(
+        "{}.{}.{}.{}",
+        identity.network.as_deref().unwrap_or("--"),
+        identity
+            .station
+            .clone()
+            .unwrap_or_else(|| super::at2::file_stem(source)),
+        location_code.unwrap_or("--"),
+        channel_code
+            .map(str::to_string)
+            .or_else(|| identity.scnl_channel.clone())
+            .unwrap_or_else(|| "CH".into())
+    )
+}
+
+/// Data type integer [1] (1 acceleration, 2 velocity, 3 displacement), else the data
+/// header's words; and units of acceleration.
+fn is_acceleration(header: &NumericHeader, data_head: &str, units: &Units) -> bool {
+    let data_type = header.int_at(1);
+    let head_lower = data_head.to_ascii_lowercase();
+    let is_accel = match data_type {
+        Some(1) => true,
+        Some(_) => false,
+        None => head_lower.contains("accel"),
+    };
+    is_accel && units.is_acceleration()
+}
+
+/// Length of the text header from the block's first line "… (Format v01.20 with 13 text
+/// lines)" (13 when unstated or outside 3..=100); the file must hold the whole text header.
+fn text_header_length(lines: &Lines, b: usize) -> Result<usize> {
     let first = lines.get(b);
     let lower = first.to_ascii_lowercase();
     let Some(p) = lower.find("(format v") else {
@@ -118,9 +213,44 @@ fn read_channel(
             "file ends inside the COSMOS text header (truncated file?)",
         ));
     }
-    let text_line = |k: usize| lines.get(b + k);
-    // Last text line: "Values used when parameter or data value is unknown/unspecified:   -999, -999.00".
-    let unknown_line = text_line(n_text - 1);
+    Ok(n_text)
+}
+
+/// The integer and real headers of a channel with the codes its text header gives for
+/// unknown values.
+struct NumericHeader {
+    ints: Vec<f64>,
+    reals: Vec<f64>,
+    int_unknown: f64,
+    real_unknown: f64,
+    /// 0-based line after the real header.
+    next_line: usize,
+}
+
+impl NumericHeader {
+    /// Integer header value `k` (0-based), `None` when it holds the unknown code.
+    fn int_at(&self, k: usize) -> Option<i64> {
+        self.ints
+            .get(k)
+            .copied()
+            .filter(|&v| v != self.int_unknown)
+            .map(|v| v as i64)
+    }
+
+    /// Real header value `k` (0-based), `None` when it holds the unknown code.
+    fn real_at(&self, k: usize) -> Option<f64> {
+        self.reals
+            .get(k)
+            .copied()
+            .filter(|&v| (v - self.real_unknown).abs() > 1e-9)
+    }
+}
+
+/// The unknown-value codes from the last text line ("Values used when parameter or data
+/// value is unknown/unspecified:   -999, -999.00"; −999 when absent), then the integer and
+/// real header blocks that follow the `n_text` text lines.
+fn numeric_header(lines: &Lines, b: usize, n_text: usize) -> Result<NumericHeader> {
+    let unknown_line = lines.get(b + n_text - 1);
     let unknowns: Vec<f64> = unknown_line
         .split(':')
         .nth(1)
@@ -135,24 +265,22 @@ fn read_channel(
 
     let (ints, after_ints) = header_block(lines, b + n_text, "Integer-header")?;
     let (reals, after_reals) = header_block(lines, after_ints, "Real-header")?;
-    let int_at = |k: usize| {
-        ints.get(k)
-            .copied()
-            .filter(|&v| v != int_unknown)
-            .map(|v| v as i64)
-    };
-    let real_at = |k: usize| {
-        reals
-            .get(k)
-            .copied()
-            .filter(|&v| (v - real_unknown).abs() > 1e-9)
-    };
+    Ok(NumericHeader {
+        ints,
+        reals,
+        int_unknown,
+        real_unknown,
+        next_line: after_reals,
+    })
+}
 
-    // Comments.
-    let comment_head = lines.get(after_reals);
+/// The "N Comment line(s) follow" line at `at` and the comment lines after it; returns
+/// them and the 0-based line of the data header.
+fn comment_lines<'a>(lines: &Lines<'a>, at: usize) -> Result<(Vec<&'a str>, usize)> {
+    let comment_head = lines.get(at);
     if !comment_head.to_ascii_lowercase().contains("comment") {
         return Err(lines.err(
-            after_reals,
+            at,
             format!(
                 "expected the \"N Comment line(s) follow\" line, found {:?}",
                 comment_head.trim()
@@ -163,39 +291,42 @@ fn read_channel(
         .first()
         .and_then(|t| textfmt::parse_int(t))
         .filter(|&n| n >= 0)
-        .ok_or_else(|| lines.err(after_reals, "cannot read the number of comment lines"))?
+        .ok_or_else(|| lines.err(at, "cannot read the number of comment lines"))?
         as usize;
     // The count is the header's word: check it against the lines there are
     // before collecting them (a claimed 10¹² must not reach the allocator).
-    if n_comments >= lines.len().saturating_sub(after_reals) {
+    if n_comments >= lines.len().saturating_sub(at) {
         return Err(lines.err(
-            after_reals,
+            at,
             format!(
                 "the header announces {n_comments} comment lines; the file has {} lines after it (truncated file or corrupt count)",
-                lines.len().saturating_sub(after_reals + 1)
+                lines.len().saturating_sub(at + 1)
             ),
         ));
     }
-    let comments: Vec<&str> = (after_reals + 1..after_reals + 1 + n_comments)
+    let comments: Vec<&str> = (at + 1..at + 1 + n_comments)
         .map(|i| lines.get(i))
         .collect();
-    let data_head_at = after_reals + 1 + n_comments;
-    if !lines.exists(data_head_at) {
+    Ok((comments, at + 1 + n_comments))
+}
+
+/// Data header at `at`: "   42000 raw accel.   pts, approx  210 secs, units=
+/// counts(50),Format=(1I8)": the number of points and the Fortran layout of the samples.
+fn data_header(lines: &Lines, at: usize) -> Result<(usize, Layout)> {
+    if !lines.exists(at) {
         return Err(lines.err(
             lines.len().saturating_sub(1),
             "file ends before the data block (truncated file?)",
         ));
     }
-
-    // Data header: "   42000 raw accel.   pts, approx  210 secs, units= counts(50),Format=(1I8)".
-    let data_head = lines.get(data_head_at);
+    let data_head = lines.get(at);
     let npts = textfmt::split_free(data_head)
         .first()
         .and_then(|t| textfmt::parse_int(t))
         .filter(|&n| n > 0)
         .ok_or_else(|| {
             lines.err(
-                data_head_at,
+                at,
                 format!(
                     "cannot read the number of points from {:?}",
                     data_head.trim()
@@ -208,84 +339,130 @@ fn read_channel(
         .and_then(|p| Layout::from_fortran(&data_head[p + "format=".len()..]))
         .ok_or_else(|| {
             lines.err(
-                data_head_at,
+                at,
                 format!(
                     "no Fortran Format=(…) on the data header {:?}",
                     data_head.trim()
                 ),
             )
         })?;
+    Ok((npts, layout))
+}
 
-    // Identity: "Code:NP-8040" on the station line, or the <SCNL> comment.
-    let scnl = comments.iter().find_map(|c| {
-        c.find("<SCNL>").map(|p| {
-            c[p + 6..]
+/// Station identity: the `<SCNL>` comment (station.channel.network.location), else
+/// "Code:NP-8040" on the station line, which also names the station.
+struct Identity {
+    station: Option<String>,
+    network: Option<String>,
+    scnl_channel: Option<String>,
+    scnl_location: Option<String>,
+    station_name: Option<String>,
+}
+
+impl Identity {
+    fn read(comments: &[&str], station_line: &str) -> Identity {
+        let scnl = comments.iter().find_map(|c| {
+            c.find("<SCNL>").map(|p| {
+                c[p + 6..]
+                    .split_whitespace()
+                    .next()
+                    .unwrap_or("")
+                    .to_string()
+            })
+        });
+        let (mut station, mut network, mut scnl_channel, mut scnl_location) =
+            (None, None, None, None);
+        if let Some(s) = &scnl {
+            // station.channel.network.location
+            let parts: Vec<&str> = s.split('.').collect();
+            if parts.len() == 4 {
+                station = Some(parts[0].to_string());
+                scnl_channel = Some(parts[1].to_string());
+                network = Some(parts[2].to_string());
+                scnl_location = Some(parts[3].to_string()).filter(|l| !l.is_empty() && l != "--");
+            }
+        }
+        if let Some(p) = station_line.find("Code:") {
+            let code = station_line[p + 5..]
                 .split_whitespace()
                 .next()
-                .unwrap_or("")
-                .to_string()
-        })
-    });
-    let (mut station, mut network, mut scnl_channel, mut scnl_location) = (None, None, None, None);
-    if let Some(s) = &scnl {
-        // station.channel.network.location
-        let parts: Vec<&str> = s.split('.').collect();
-        if parts.len() == 4 {
-            station = Some(parts[0].to_string());
-            scnl_channel = Some(parts[1].to_string());
-            network = Some(parts[2].to_string());
-            scnl_location = Some(parts[3].to_string()).filter(|l| !l.is_empty() && l != "--");
+                .unwrap_or("");
+            if let Some((net, sta)) = code.split_once('-') {
+                network.get_or_insert_with(|| net.to_string());
+                station.get_or_insert_with(|| sta.to_string());
+            }
+        }
+        let station_name = station_line
+            .find("Code:")
+            .map(|p| {
+                station_line[p..]
+                    .split_whitespace()
+                    .skip(2)
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            })
+            .filter(|s| !s.is_empty());
+        Identity {
+            station,
+            network,
+            scnl_channel,
+            scnl_location,
+            station_name,
         }
     }
-    let station_line = text_line(4);
-    if let Some(p) = station_line.find("Code:") {
-        let code = station_line[p + 5..]
-            .split_whitespace()
-            .next()
-            .unwrap_or("");
-        if let Some((net, sta)) = code.split_once('-') {
-            network.get_or_insert_with(|| net.to_string());
-            station.get_or_insert_with(|| sta.to_string());
+}
+
+/// The text header's channel line "Sta Chan   1: 90 Deg (Rcrdr Chan  ?) Location:Basement
+/// NW corner".
+struct ChannelLine {
+    /// Station channel number (else integer header [49]).
+    sta_chan: Option<i64>,
+    orientation_text: Option<String>,
+    location_text: Option<String>,
+}
+
+impl ChannelLine {
+    fn read(chan_line: &str, header: &NumericHeader) -> ChannelLine {
+        let sta_chan = textfmt::number_after(chan_line, "Sta Chan")
+            .map(|v| v as i64)
+            .or_else(|| header.int_at(49));
+        let orientation_text = chan_line
+            .find(':')
+            .map(|p| {
+                chan_line[p + 1..]
+                    .split('(')
+                    .next()
+                    .unwrap_or("")
+                    .trim()
+                    .to_string()
+            })
+            .filter(|s| !s.is_empty());
+        let location_text = chan_line
+            .find("Location:")
+            .map(|p| chan_line[p + 9..].trim().to_string())
+            .filter(|s| !s.is_empty());
+        ChannelLine {
+            sta_chan,
+            orientation_text,
+            location_text,
         }
     }
-    let station_name = station_line
-        .find("Code:")
-        .map(|p| {
-            station_line[p..]
-                .split_whitespace()
-                .skip(2)
-                .collect::<Vec<_>>()
-                .join(" ")
-        })
-        .filter(|s| !s.is_empty());
+}
 
-    // "Sta Chan   1: 90 Deg (Rcrdr Chan  ?) Location:Basement NW corner"
-    let chan_line = text_line(8);
-    let sta_chan = textfmt::number_after(chan_line, "Sta Chan")
-        .map(|v| v as i64)
-        .or_else(|| int_at(49));
-    let orientation_text = chan_line
-        .find(':')
-        .map(|p| {
-            chan_line[p + 1..]
-                .split('(')
-                .next()
-                .unwrap_or("")
-                .trim()
-                .to_string()
-        })
-        .filter(|s| !s.is_empty());
-    let location_text = chan_line
-        .find("Location:")
-        .map(|p| chan_line[p + 9..].trim().to_string())
-        .filter(|s| !s.is_empty());
-
-    // Units: integer header [2], cross-checked with the data header's words.
+/// Units: integer header [2], cross-checked with the data header's `units=` word (a
+/// contradiction is an error).
+fn units(
+    lines: &Lines,
+    header: &NumericHeader,
+    data_head_at: usize,
+    header_values_at: usize,
+) -> Result<Units> {
+    let data_head = lines.get(data_head_at);
     let units_text = data_head.to_ascii_lowercase().find("units=").map(|p| {
         let rest = &data_head[p + 6..];
         rest.split(',').next().unwrap_or("").trim().to_string()
     });
-    let units = match int_at(2) {
+    let units = match header.int_at(2) {
         Some(50) => Units::Counts {
             counts_per_si: None,
         },
@@ -295,7 +472,7 @@ fn read_channel(
         Some(6) => Units::Cm,
         Some(code) => {
             return Err(lines.err(
-                b + n_text + 1,
+                header_values_at,
                 format!(
                     "COSMOS physical-units code {code} ({}) is not a units quaketwin reads",
                     units_text.clone().unwrap_or_default()
@@ -323,27 +500,48 @@ fn read_channel(
             }
         }
     }
+    Ok(units)
+}
 
-    // Sampling interval: real [61] in ms.
-    let dt = real_at(61)
+/// Sampling interval (s): real [61] in ms, else the data header's "approx N secs" over the
+/// point count.
+fn sampling_interval(
+    lines: &Lines,
+    header: &NumericHeader,
+    data_head: &str,
+    npts: usize,
+    header_values_at: usize,
+) -> Result<f64> {
+    let dt = header
+        .real_at(61)
         .map(|ms| ms / 1000.0)
         .filter(|d| *d > 0.0)
         .or_else(|| {
             let secs = textfmt::number_after(data_head, "approx")?;
             (secs > 0.0).then(|| secs / npts as f64)
         });
-    let dt = dt.ok_or_else(|| {
+    dt.ok_or_else(|| {
         lines.err(
-            b + n_text + 1,
+            header_values_at,
             "no sampling interval (real header value 62)",
         )
-    })?;
-    let rate = 1.0 / dt;
+    })
+}
 
-    // Direction.
-    let direction_code = int_at(53).filter(|&a| (1..=360).contains(&a) || a >= 400);
+/// Direction: orientation code [53] (azimuth 1–360, 400 up … 700 H1), else the relative
+/// orientation [54] from the reference azimuth [19]/[20], else the orientation text, else
+/// the SCNL channel code's last letter (each inference said in `inferred`).  Also returns
+/// the orientation digit ('1'/'2') of an H1/H2-style code when no direction is known.
+fn direction(
+    header: &NumericHeader,
+    orientation_text: Option<&str>,
+    scnl_channel: Option<&str>,
+    inferred: &mut Vec<String>,
+) -> (Option<Direction>, Option<char>) {
+    let direction_code = header
+        .int_at(53)
+        .filter(|&a| (1..=360).contains(&a) || a >= 400);
     let mut direction = None;
-    let mut inferred = Vec::new();
     let mut code_orientation: Option<char> = None;
     match direction_code {
         Some(a) if (1..=360).contains(&a) => {
@@ -353,17 +551,18 @@ fn read_channel(
         Some(401) => direction = Some(Direction::Down),
         Some(_) => {} // Radial/transverse/longitudinal/H1/H2/other: no azimuth.
         None => {
-            let reference = int_at(19).or_else(|| int_at(20));
-            if let (Some(rel), Some(reference)) =
-                (int_at(54).filter(|a| (0..=360).contains(a)), reference)
-            {
+            let reference = header.int_at(19).or_else(|| header.int_at(20));
+            if let (Some(rel), Some(reference)) = (
+                header.int_at(54).filter(|a| (0..=360).contains(a)),
+                reference,
+            ) {
                 direction = Some(Direction::Azimuth(
                     ((rel + reference) as f64).rem_euclid(360.0),
                 ));
                 inferred.push(format!("direction = {rel} deg from the reference azimuth {reference} deg (header values 55, 20/21)"));
-            } else if let Some(d) = orientation_text.as_deref().and_then(Direction::parse) {
+            } else if let Some(d) = orientation_text.and_then(Direction::parse) {
                 direction = Some(d);
-            } else if let Some(last) = scnl_channel.as_deref().and_then(|c| c.chars().last()) {
+            } else if let Some(last) = scnl_channel.and_then(|c| c.chars().last()) {
                 direction = match last {
                     'Z' => Some(Direction::Up),
                     'N' => Some(Direction::Azimuth(0.0)),
@@ -373,7 +572,7 @@ fn read_channel(
                 if direction.is_some() {
                     inferred.push(format!(
                         "direction from the SCNL channel code {:?} (orientation code missing)",
-                        scnl_channel.as_deref().unwrap_or("")
+                        scnl_channel.unwrap_or("")
                     ));
                 }
             }
@@ -386,8 +585,16 @@ fn read_channel(
             _ => None,
         };
     }
-    // SEED-style code as gmprocess builds it: band from the rate, N for an
-    // accelerometer, then Z / 1 (north-ish) / 2 (east-ish).
+    (direction, code_orientation)
+}
+
+/// SEED-style code as gmprocess builds it: band from the rate, N for an
+/// accelerometer, then Z / 1 (north-ish) / 2 (east-ish).
+fn channel_code(
+    rate: f64,
+    direction: Option<Direction>,
+    code_orientation: Option<char>,
+) -> Option<String> {
     let band = if rate >= 80.0 {
         'H'
     } else if rate >= 10.0 {
@@ -408,34 +615,24 @@ fn read_channel(
         ),
         _ => code_orientation,
     };
-    let channel_code = orient.map(|o| format!("{band}N{o}"));
-    if let (Some(c), Some(s)) = (&channel_code, &scnl_channel) {
-        if c != s {
-            inferred.push(format!("channel_code={c} from orientation and {rate} Hz (gmprocess convention); the SCNL comment says {s}"));
-        }
-    }
+    orient.map(|o| format!("{band}N{o}"))
+}
 
-    let location_code = scnl_location
-        .or_else(|| int_at(55).map(|l| format!("{l:02}")))
-        .or_else(|| sta_chan.map(|c| format!("{c:02}")));
-    let id = format!(
-        "{}.{}.{}.{}",
-        network.as_deref().unwrap_or("--"),
-        station
-            .clone()
-            .unwrap_or_else(|| super::at2::file_stem(source)),
-        location_code.as_deref().unwrap_or("--"),
-        channel_code
-            .clone()
-            .or_else(|| scnl_channel.clone())
-            .unwrap_or_else(|| "CH".into())
-    );
-
-    let block = textfmt::read_block(lines, data_head_at + 1, npts, layout, &id)?;
+/// The `npts` samples after the data header at `data_head_at`, and the 0-based line after
+/// the channel (past blank lines and an `End-of-data` line).  More values than declared, on
+/// the last data line or after it, is an error naming the channel.
+fn samples(
+    lines: &Lines,
+    data_head_at: usize,
+    npts: usize,
+    layout: Layout,
+    id: &str,
+) -> Result<(Vec<f64>, usize)> {
+    let block = textfmt::read_block(lines, data_head_at + 1, npts, layout, id)?;
     if block.extra_on_last_line > 0 {
         return Err(lines.err_ch(
             block.next_line - 1,
-            &id,
+            id,
             format!("more values than the {npts} points the data header declares"),
         ));
     }
@@ -448,7 +645,7 @@ fn read_channel(
         if textfmt::is_numeric_line(l) {
             return Err(lines.err_ch(
                 next,
-                &id,
+                id,
                 format!("more values than the {npts} points the data header declares"),
             ));
         }
@@ -456,24 +653,17 @@ fn read_channel(
             next += 1;
         }
     }
+    Ok((block.values, next))
+}
 
-    // Only acceleration channels become records.
-    let data_type = int_at(1);
-    let head_lower = data_head.to_ascii_lowercase();
-    let is_accel = match data_type {
-        Some(1) => true,
-        Some(_) => false,
-        None => head_lower.contains("accel"),
-    };
-    if !is_accel || !units.is_acceleration() {
-        return Ok(next);
-    }
-
+/// Counts with a known scale: counts → m/s² = LSB (µV/count, real [21]) / sensitivity (V/g,
+/// real [41]) / gain (real [46], 1 when unknown) × g, said in `inferred`.
+fn calibrate_counts(units: Units, header: &NumericHeader, inferred: &mut Vec<String>) -> Units {
     let mut units = units;
     if let Units::Counts { .. } = units {
         // counts → m/s²: LSB (µV/count) / sensitivity (V/g) / gain × g.
-        if let (Some(lsb_uv), Some(v_per_g)) = (real_at(21), real_at(41)) {
-            let gain = real_at(46).filter(|g| *g > 0.0).unwrap_or(1.0);
+        if let (Some(lsb_uv), Some(v_per_g)) = (header.real_at(21), header.real_at(41)) {
+            let gain = header.real_at(46).filter(|g| *g > 0.0).unwrap_or(1.0);
             let si_per_count = lsb_uv * 1e-6 / v_per_g / gain * STANDARD_GRAVITY;
             if si_per_count > 0.0 && si_per_count.is_finite() {
                 units = Units::Counts {
@@ -486,19 +676,19 @@ fn read_channel(
             }
         }
     }
+    units
+}
 
-    let mut channel = Channel::new(id, units, rate, source.clone());
-    channel.network = network;
-    channel.station = station;
-    channel.location_code = location_code;
-    channel.channel_code = channel_code;
-    channel.location_text = location_text.or(station_name);
-    channel.direction = direction;
-    if direction.is_none() {
-        channel.missing.push("direction".into());
-    }
-    channel.elevation_m = real_at(2);
-    let header_start = match (int_at(39), int_at(40), int_at(43), int_at(44)) {
+/// Record start from the integer/real header (year [39], day of year [40], hour [43],
+/// minute [44], second real [29]), cross-checked with the text line `Rcrd start time: …
+/// UTC`; the text's time is used only when the header has none.
+fn set_start_time(channel: &mut Channel, header: &NumericHeader, start_line: &str) {
+    let header_start = match (
+        header.int_at(39),
+        header.int_at(40),
+        header.int_at(43),
+        header.int_at(44),
+    ) {
         (Some(y), Some(doy), Some(h), Some(m))
             if (1..=366).contains(&doy) && (0..24).contains(&h) && (0..60).contains(&m) =>
         {
@@ -507,12 +697,12 @@ fn read_channel(
                 doy as u32,
                 h as u32,
                 m as u32,
-                real_at(29).unwrap_or(0.0),
+                header.real_at(29).unwrap_or(0.0),
             )
         }
         _ => None,
     };
-    let text_start = text_time(text_line(7), "Rcrd start time:");
+    let text_start = text_time(start_line, "Rcrd start time:");
     // The header states the start twice; a disagreement is flagged, not
     // silently resolved (the text prints milliseconds, hence the tolerance).
     if let (Some(h), Some(t)) = (header_start, text_start) {
@@ -531,30 +721,35 @@ fn read_channel(
     if channel.start_ns.is_none() {
         channel.missing.push("start_time".into());
     }
-    channel.inferred = inferred;
-    contents.records.push(Record::new(channel, block.values));
+}
 
-    if contents.event.name.is_none() {
-        // "Record of Point MacKenzie Earthquake of Fri Nov 30, 2018 17:29 UTC"
-        let l = text_line(1);
-        contents.event.name = l
-            .find("Record of ")
-            .map(|p| &l[p + 10..])
-            .map(|r| {
-                r.rfind(" of ")
-                    .map(|q| &r[..q])
-                    .unwrap_or(r)
-                    .trim()
-                    .to_string()
-            })
-            .filter(|s| !s.is_empty());
-        contents.event.origin_ns = text_time(text_line(3), "Origin:");
-        contents.event.magnitude = real_at(12);
-        if let (Some(lat), Some(lon), Some(depth_km)) = (real_at(9), real_at(10), real_at(11)) {
-            contents.event.hypocenter = Some((lat, lon, depth_km));
-        }
+/// Event name (text line 1), origin (text line 3), magnitude (real [12]) and hypocentre
+/// (reals [9..11]) from the first acceleration channel.
+fn fill_event<'a>(
+    event: &mut EventHints,
+    header: &NumericHeader,
+    text_line: impl Fn(usize) -> &'a str,
+) {
+    // "Record of Point MacKenzie Earthquake of Fri Nov 30, 2018 17:29 UTC"
+    let l = text_line(1);
+    event.name = l
+        .find("Record of ")
+        .map(|p| &l[p + 10..])
+        .map(|r| {
+            r.rfind(" of ")
+                .map(|q| &r[..q])
+                .unwrap_or(r)
+                .trim()
+                .to_string()
+        })
+        .filter(|s| !s.is_empty());
+    event.origin_ns = text_time(text_line(3), "Origin:");
+    event.magnitude = header.real_at(12);
+    if let (Some(lat), Some(lon), Some(depth_km)) =
+        (header.real_at(9), header.real_at(10), header.real_at(11))
+    {
+        event.hypocenter = Some((lat, lon, depth_km));
     }
-    Ok(next)
 }
 
 /// `Origin: 2018/11/30 17:29:29    UTC` → epoch ns (UTC only).

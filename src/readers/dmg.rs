@@ -53,23 +53,7 @@ enum Volume {
 }
 
 pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
-    let text = textfmt::decode(bytes);
-    let lines = Lines::new(&text, source);
-    let mut contents = FileContents::default();
-    let mut b = 0;
-    let mut blocks = 0;
-    while b < lines.len() {
-        if lines.get(b).trim().is_empty() {
-            b += 1;
-            continue;
-        }
-        b = read_channel(&lines, b, source, &mut contents)?;
-        blocks += 1;
-    }
-    if blocks == 0 {
-        return Err(lines.err_file("empty CSMIP/DMG file"));
-    }
-    Ok(contents)
+    textfmt::read_channel_blocks(bytes, source, "empty CSMIP/DMG file", read_channel)
 }
 
 fn volume_of(line: &str) -> Option<Volume> {

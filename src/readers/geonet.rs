@@ -36,20 +36,13 @@ pub(crate) fn header_complete(lines: &[&str]) -> bool {
 const COMPONENTS_PER_FILE: usize = 3;
 
 pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
-    let text = textfmt::decode(bytes);
-    let lines = Lines::new(&text, source);
-    let mut contents = FileContents::default();
-    let mut b = 0;
-    while b < lines.len() {
-        if lines.get(b).trim().is_empty() {
-            b += 1;
-            continue;
-        }
-        b = read_component(&lines, b, source, &mut contents)?;
-    }
-    if contents.records.is_empty() {
-        return Err(lines.err_file("no GeoNet component found (empty file)"));
-    }
+    // Every component read adds one record, so "no block" is "no component".
+    let mut contents = textfmt::read_channel_blocks(
+        bytes,
+        source,
+        "no GeoNet component found (empty file)",
+        read_component,
+    )?;
     // A V1A/V2A file carries the three components of one instrument; fewer
     // means a file cut at a component boundary, which must not pass as whole.
     let n = contents.records.len();

@@ -7,6 +7,7 @@
 //! edit descriptors such as `8F10.5` applied to lines that may be truncated
 //! or padded); no crate reads Fortran formatted records from memory.
 
+use super::FileContents;
 use crate::error::{Error, Location, Result};
 use crate::vocab::{epoch_ns_from_civil, SourceRef, Units};
 
@@ -61,6 +62,39 @@ impl<'a> Lines<'a> {
     pub fn err_file(&self, message: impl Into<String>) -> Error {
         Error::input(self.location(), message)
     }
+}
+
+/// Reader of the channel block that starts at a 0-based line: adds what it reads to the
+/// contents and returns the 0-based line after the block.
+pub(crate) type ChannelBlockReader =
+    fn(&Lines, usize, &SourceRef, &mut FileContents) -> Result<usize>;
+
+/// Reads a text file made of consecutive channel blocks (COSMOS, CSMIP/DMG, GeoNet): blank
+/// lines between blocks are skipped and `read_channel` reads each block.  A file without any
+/// block is the error `empty_message`, naming the file.
+pub(crate) fn read_channel_blocks(
+    bytes: &[u8],
+    source: &SourceRef,
+    empty_message: &str,
+    read_channel: ChannelBlockReader,
+) -> Result<FileContents> {
+    let text = decode(bytes);
+    let lines = Lines::new(&text, source);
+    let mut contents = FileContents::default();
+    let mut b = 0;
+    let mut blocks = 0;
+    while b < lines.len() {
+        if lines.get(b).trim().is_empty() {
+            b += 1;
+            continue;
+        }
+        b = read_channel(&lines, b, source, &mut contents)?;
+        blocks += 1;
+    }
+    if blocks == 0 {
+        return Err(lines.err_file(empty_message));
+    }
+    Ok(contents)
 }
 
 /// Decodes file bytes as text: UTF-8 when valid, otherwise Latin-1 (old

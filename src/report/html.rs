@@ -169,9 +169,7 @@ pub fn table(id: Option<&str>, headers: &[String], rows: &[Vec<Cell>]) -> String
 /// Every column of a table (in file order), at most `max_rows` rows.
 pub fn whole_table(t: &Table, max_rows: usize) -> String {
     let headers: Vec<String> = t.names.clone();
-    let rows: Vec<Vec<Cell>> = (0..t.rows.min(max_rows))
-        .map(|r| t.names.iter().map(|c| Cell::of(t, c, r)).collect())
-        .collect();
+    let rows = cells(t, &t.names, max_rows);
     let mut s = format!(
         "<div class=\"scroll\">{}</div>",
         table(None, &headers, &rows)
@@ -184,6 +182,13 @@ pub fn whole_table(t: &Table, max_rows: usize) -> String {
         )));
     }
     s
+}
+
+/// Cells of the first `max_rows` rows of `t` in the columns `cols`.
+pub fn cells(t: &Table, cols: &[String], max_rows: usize) -> Vec<Vec<Cell>> {
+    (0..t.rows.min(max_rows))
+        .map(|r| cols.iter().map(|c| Cell::of(t, c, r)).collect())
+        .collect()
 }
 
 pub fn note(text: &str) -> String {
@@ -208,18 +213,24 @@ pub fn unreadable(file: &str, error: &str) -> String {
     )
 }
 
+/// The note "<file>: expected column(s) not present: …", or nothing when every
+/// `expected` column is there.
+pub fn missing_columns_note(t: &Table, expected: &[&str]) -> String {
+    let missing = t.missing(expected);
+    if missing.is_empty() {
+        return String::new();
+    }
+    note(&format!(
+        "{}: expected column(s) not present: {}.",
+        t.file_name(),
+        missing.join(", ")
+    ))
+}
+
 /// Lists expected-but-missing and unknown columns of a table, if any.
 pub fn column_notes(t: &Table, expected: &[&str]) -> String {
-    let missing = t.missing(expected);
     let unknown = t.unknown(expected);
-    let mut s = String::new();
-    if !missing.is_empty() {
-        s.push_str(&note(&format!(
-            "{}: expected column(s) not present: {}.",
-            t.file_name(),
-            missing.join(", ")
-        )));
-    }
+    let mut s = missing_columns_note(t, expected);
     if !unknown.is_empty() {
         s.push_str(&note(&format!(
             "{}: further column(s): {}.",

@@ -60,6 +60,16 @@ pub enum IotaStatistic {
     Peak,
 }
 
+impl IotaStatistic {
+    /// "final" or "peak", as the report's notes and criteria name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            IotaStatistic::Final => "final",
+            IotaStatistic::Peak => "peak",
+        }
+    }
+}
+
 /// Settings of the report (TOML/JSON with defaults for every field).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]

@@ -4,15 +4,12 @@
 //! Craig–Bampton prototype (`prototype_stiffness.mtx`, `prototype_mass.mtx`, symmetric) and of
 //! the PS basis u_PS = T q (`ps_basis.mtx`, general). Every file is written atomically.
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use faer::MatRef;
-
-use super::parquet::{write_bytes_atomically, write_parquet, TableBuilder};
+use super::parquet::{write_parquet, TableBuilder};
 use crate::design::plan::TestDesign;
 use crate::error::Result;
-use crate::twin::matrix_market::format_matrix_market_symmetric;
+use crate::twin::matrix_market::{write_matrix_market_general, write_matrix_market_symmetric};
 use crate::twin::model::Model;
 use crate::twin::sparse::CscMatrix;
 
@@ -251,31 +248,6 @@ pub fn write_hybrid_prototype(path: &Path, d: &TestDesign, p: &DesignProvenance)
     write_parquet(path, &[batch], &m)
 }
 
-/// Matrix Market text of a dense rectangular matrix (`coordinate real general`, exact zeros
-/// left out, column-major order, 17 significant digits), with `comments` as `%` lines after
-/// the banner.
-pub fn format_matrix_market_general(a: MatRef<'_, f64>, comments: &[String]) -> String {
-    let mut entries = Vec::new();
-    for c in 0..a.ncols() {
-        for r in 0..a.nrows() {
-            let v = a[(r, c)];
-            if v != 0.0 {
-                entries.push((r, c, v));
-            }
-        }
-    }
-    let mut s = String::with_capacity(entries.len() * 44 + 64 * (comments.len() + 2));
-    s.push_str("%%MatrixMarket matrix coordinate real general\n");
-    for line in comments {
-        let _ = writeln!(s, "% {line}");
-    }
-    let _ = writeln!(s, "{} {} {}", a.nrows(), a.ncols(), entries.len());
-    for (r, c, v) in entries {
-        let _ = writeln!(s, "{} {} {:.17e}", r + 1, c + 1, v);
-    }
-    s
-}
-
 /// Writes all design outputs into `out_dir`; returns the paths written (order of
 /// [`DESIGN_FILES`]).
 pub fn write_design(
@@ -291,13 +263,13 @@ pub fn write_design(
     write_interface_refinement(&path(INTERFACE_REFINEMENT_FILE), d, p)?;
     write_hybrid_prototype(&path(HYBRID_PROTOTYPE_FILE), d, p)?;
     let proto = &d.hybrid.prototype;
-    write_bytes_atomically(
+    write_matrix_market_symmetric(
+        &CscMatrix::from_dense(proto.stiffness.as_ref()),
         &path(PROTOTYPE_STIFFNESS_FILE),
-        format_matrix_market_symmetric(&CscMatrix::from_dense(proto.stiffness.as_ref())).as_bytes(),
     )?;
-    write_bytes_atomically(
+    write_matrix_market_symmetric(
+        &CscMatrix::from_dense(proto.mass.as_ref()),
         &path(PROTOTYPE_MASS_FILE),
-        format_matrix_market_symmetric(&CscMatrix::from_dense(proto.mass.as_ref())).as_bytes(),
     )?;
     // u_PS = G T q: the interface kinematics G applied to the Guyan + rigid-body basis T.
     let basis = &d.interface.map * &d.basis.transformation;
@@ -326,9 +298,6 @@ pub fn write_design(
         let (id, dof) = dof_of(model, d, r);
         comments.push(format!("row {}: node {id} {dof}", r + 1));
     }
-    write_bytes_atomically(
-        &path(PS_BASIS_FILE),
-        format_matrix_market_general(basis.as_ref(), &comments).as_bytes(),
-    )?;
+    write_matrix_market_general(basis.as_ref(), &comments, &path(PS_BASIS_FILE))?;
     Ok(DESIGN_FILES.iter().map(|f| path(f)).collect())
 }

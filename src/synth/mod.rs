@@ -15,13 +15,17 @@
 //! x[k+1] = e^{A Δt} x[k] + A⁻¹(e^{A Δt} − I) B p[k] with the closed-form
 //! exponential of an under-damped oscillator.  For inputs held constant over
 //! each sample step this is exact (no integration error).
-//! All numerical code here is free of I/O.
+//! The numerical code of this file and of [`ground_motion`] is free of I/O;
+//! [`event`] and [`facade`] write the bundled sample events (`quaketwin synth`).
 
+pub mod event;
+pub mod facade;
 pub mod ground_motion;
-pub mod rng;
 
-pub use ground_motion::{synthetic_ground_motion, GroundMotionParams};
-pub use rng::Rng;
+use crate::rng::Rng;
+pub use ground_motion::{
+    synthetic_ground_motion, Envelope, GroundMotionSpec, Sampling, Shaping, WhiteNoise,
+};
 
 use crate::error::{Error, Result};
 use crate::vocab::{Channel, Record, Role, SourceRef, Units};

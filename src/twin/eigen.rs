@@ -16,8 +16,8 @@ use faer::linalg::triangular_solve::{
 };
 use faer::{Mat, MatRef, Par, Side};
 
-use super::rng::Rng;
 use super::sparse::CscMatrix;
+use crate::rng::Rng;
 
 /// Eigen-pairs, ascending in ω².
 #[derive(Debug, Clone)]

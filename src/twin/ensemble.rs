@@ -13,8 +13,8 @@ use rayon::prelude::*;
 use super::objective::{normalised_scatter, ModalObjective};
 use super::optimisers::{Bounds, Optimiser};
 use super::plackett_luce::{best_ranking, scores, RankingMethod};
-use super::rng::Rng;
 use crate::error::Error;
+use crate::rng::Rng;
 use crate::Result;
 
 /// What the ensemble needs from a calibration problem.

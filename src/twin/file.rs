@@ -302,7 +302,9 @@ fn validate_parameters(source: &str, defs: &[ParameterDef]) -> Result<()> {
     Ok(())
 }
 
-/// Validate every cross-reference and build the model.
+/// Validate every cross-reference and build the model (checked in file order: dimension,
+/// materials, sections, nodes, elements, supports, masses, springs, rigid links,
+/// parameters, sensors, gravity).
 pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
     let dimension = match file.twin.dimension {
         2 => Dimension::Two,
@@ -314,7 +316,71 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
             ))
         }
     };
-    let nd = dimension.dofs_per_node();
+    let (materials, material_index) = build_materials(file, source)?;
+    let (sections, section_index) = build_sections(file, source)?;
+    let (nodes, refs) = build_nodes(file, dimension, source)?;
+    let (elements, groups) =
+        build_elements(file, &refs, &material_index, &section_index, &sections)?;
+    let supports = build_supports(file, &refs)?;
+    let masses = build_masses(file, &refs)?;
+    let (springs, sets) = build_springs(file, &refs)?;
+    let rigid_links = build_rigid_links(file, &refs)?;
+    let parameters = build_parameters(file, source, &groups, &sets)?;
+    let sensors = build_sensors(file, &refs)?;
+    let gravity = gravity_of(file, dimension, source)?;
+    Ok(Model {
+        name: file.twin.name.clone(),
+        source: source.to_string(),
+        dimension,
+        nodes,
+        materials,
+        sections,
+        elements,
+        supports,
+        masses,
+        springs,
+        rigid_links,
+        parameters,
+        sensors,
+        gravity,
+    })
+}
+
+/// What the node and DoF references of a twin file resolve against.
+struct Refs<'a> {
+    source: &'a str,
+    dimension: Dimension,
+    node_index: HashMap<i64, usize>,
+}
+
+impl Refs<'_> {
+    /// Index of node `id`; `what` names the referring item in the error.
+    fn node(&self, id: i64, what: &str) -> Result<usize> {
+        self.node_index
+            .get(&id)
+            .copied()
+            .ok_or_else(|| err(self.source, format!("{what}: node {id} does not exist")))
+    }
+
+    /// Index of the DoF called `name` (ux, uy, …) in this dimension.
+    fn dof(&self, name: &str, what: &str) -> Result<usize> {
+        self.dimension.dof_index(name).ok_or_else(|| {
+            err(
+                self.source,
+                format!(
+                    "{what}: DoF '{name}' is not one of {:?}",
+                    self.dimension.dof_names()
+                ),
+            )
+        })
+    }
+}
+
+/// `[[materials]]`: unique names, E > 0, ρ ≥ 0, ν in (−1, 0.5); with the name → index map.
+fn build_materials(
+    file: &TwinFile,
+    source: &str,
+) -> Result<(Vec<Material>, HashMap<String, usize>)> {
     let mut materials = Vec::new();
     let mut material_index = HashMap::new();
     for m in &file.materials {
@@ -344,6 +410,11 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
             density: m.rho,
         });
     }
+    Ok((materials, material_index))
+}
+
+/// `[[sections]]`: unique names, shear factor (default 5/6) > 0; with the name → index map.
+fn build_sections(file: &TwinFile, source: &str) -> Result<(Vec<Section>, HashMap<String, usize>)> {
     let mut sections = Vec::new();
     let mut section_index = HashMap::new();
     for s in &file.sections {
@@ -369,6 +440,16 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
             thickness: s.thickness.unwrap_or(0.0),
         });
     }
+    Ok((sections, section_index))
+}
+
+/// `[mesh] nodes`: rows [id, x, y(, z)] with integer, unique ids and finite coordinates;
+/// with the references that resolve node ids and DoF names.
+fn build_nodes<'a>(
+    file: &TwinFile,
+    dimension: Dimension,
+    source: &'a str,
+) -> Result<(Vec<Node>, Refs<'a>)> {
     let mesh = file
         .mesh
         .as_ref()
@@ -407,41 +488,33 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
             coords: [row[1], row[2], z],
         });
     }
-    let find_node = |id: i64, what: &str| -> Result<usize> {
-        node_index
-            .get(&id)
-            .copied()
-            .ok_or_else(|| err(source, format!("{what}: node {id} does not exist")))
-    };
+    Ok((
+        nodes,
+        Refs {
+            source,
+            dimension,
+            node_index,
+        },
+    ))
+}
+
+/// `[[elements]]` blocks: known type of the twin's dimension, existing material and section
+/// (with the properties the type needs), connectivity of existing nodes, unique element ids;
+/// with the element groups.
+fn build_elements(
+    file: &TwinFile,
+    refs: &Refs,
+    material_index: &HashMap<String, usize>,
+    section_index: &HashMap<String, usize>,
+    sections: &[Section],
+) -> Result<(Vec<Element>, HashSet<String>)> {
+    let source = refs.source;
     let mut elements = Vec::new();
     let mut element_ids = HashSet::new();
     let mut groups = HashSet::new();
     for (b, block) in file.elements.iter().enumerate() {
         let what = format!("elements[{b}] (group {})", block.group);
-        let kind = ElementKind::parse(&block.kind).ok_or_else(|| {
-            err(
-                source,
-                format!(
-                    "{what}: unknown element type '{}' (known: beam2d, beam3d, q4, shell4)",
-                    block.kind
-                ),
-            )
-        })?;
-        if kind.dimension() != dimension {
-            return Err(err(
-                source,
-                format!(
-                    "{what}: element type {} needs a {}D model, the twin is {}D",
-                    kind.name(),
-                    if kind.dimension() == Dimension::Two {
-                        2
-                    } else {
-                        3
-                    },
-                    file.twin.dimension
-                ),
-            ));
-        }
+        let kind = element_kind(file, block, &what, refs)?;
         let material = *material_index.get(&block.material).ok_or_else(|| {
             err(
                 source,
@@ -454,30 +527,7 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
                 format!("{what}: section '{}' does not exist", block.section),
             )
         })?;
-        let sec = &sections[section];
-        match kind {
-            ElementKind::Beam2d => {
-                check_positive(source, &format!("section {}: A", sec.name), sec.area)?;
-                check_positive(source, &format!("section {}: Iz", sec.name), sec.iz)?;
-            }
-            ElementKind::Beam3d => {
-                for (n, v) in [
-                    ("A", sec.area),
-                    ("Iy", sec.iy),
-                    ("Iz", sec.iz),
-                    ("J", sec.torsion),
-                ] {
-                    check_positive(source, &format!("section {}: {n}", sec.name), v)?;
-                }
-            }
-            ElementKind::Q4 | ElementKind::Shell4 => {
-                check_positive(
-                    source,
-                    &format!("section {}: thickness", sec.name),
-                    sec.thickness,
-                )?;
-            }
-        }
+        check_section_for(kind, &sections[section], source)?;
         groups.insert(block.group.clone());
         for row in &block.connectivity {
             if row.len() != kind.node_count() + 1 {
@@ -496,7 +546,7 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
             }
             let mut en = Vec::with_capacity(kind.node_count());
             for &nid in &row[1..] {
-                en.push(find_node(nid, &format!("element {id}"))?);
+                en.push(refs.node(nid, &format!("element {id}"))?);
             }
             elements.push(Element {
                 id,
@@ -509,33 +559,98 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
             });
         }
     }
-    let parse_dof = |name: &str, what: &str| -> Result<usize> {
-        dimension.dof_index(name).ok_or_else(|| {
-            err(
+    Ok((elements, groups))
+}
+
+/// Element type of a block: known, and of the twin's dimension.
+fn element_kind(
+    file: &TwinFile,
+    block: &ElementBlockDef,
+    what: &str,
+    refs: &Refs,
+) -> Result<ElementKind> {
+    let (source, dimension) = (refs.source, refs.dimension);
+    let kind = ElementKind::parse(&block.kind).ok_or_else(|| {
+        err(
+            source,
+            format!(
+                "{what}: unknown element type '{}' (known: beam2d, beam3d, q4, shell4)",
+                block.kind
+            ),
+        )
+    })?;
+    if kind.dimension() != dimension {
+        return Err(err(
+            source,
+            format!(
+                "{what}: element type {} needs a {}D model, the twin is {}D",
+                kind.name(),
+                if kind.dimension() == Dimension::Two {
+                    2
+                } else {
+                    3
+                },
+                file.twin.dimension
+            ),
+        ));
+    }
+    Ok(kind)
+}
+
+/// The section properties an element type needs must be positive.
+fn check_section_for(kind: ElementKind, sec: &Section, source: &str) -> Result<()> {
+    match kind {
+        ElementKind::Beam2d => {
+            check_positive(source, &format!("section {}: A", sec.name), sec.area)?;
+            check_positive(source, &format!("section {}: Iz", sec.name), sec.iz)?;
+        }
+        ElementKind::Beam3d => {
+            for (n, v) in [
+                ("A", sec.area),
+                ("Iy", sec.iy),
+                ("Iz", sec.iz),
+                ("J", sec.torsion),
+            ] {
+                check_positive(source, &format!("section {}: {n}", sec.name), v)?;
+            }
+        }
+        ElementKind::Q4 | ElementKind::Shell4 => {
+            check_positive(
                 source,
-                format!(
-                    "{what}: DoF '{name}' is not one of {:?}",
-                    dimension.dof_names()
-                ),
-            )
-        })
-    };
+                &format!("section {}: thickness", sec.name),
+                sec.thickness,
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// `[[supports]]`: (node, DoF) pairs fixed to zero ("all" = every DoF of the node).
+fn build_supports(file: &TwinFile, refs: &Refs) -> Result<Vec<(usize, usize)>> {
+    let nd = refs.dimension.dofs_per_node();
     let mut supports = Vec::new();
     for (i, s) in file.supports.iter().enumerate() {
         for &nid in &s.nodes {
-            let node = find_node(nid, &format!("supports[{i}]"))?;
+            let node = refs.node(nid, &format!("supports[{i}]"))?;
             for d in &s.dofs {
                 if d.eq_ignore_ascii_case("all") {
                     supports.extend((0..nd).map(|k| (node, k)));
                 } else {
-                    supports.push((node, parse_dof(d, &format!("supports[{i}]"))?));
+                    supports.push((node, refs.dof(d, &format!("supports[{i}]"))?));
                 }
             }
         }
     }
+    Ok(supports)
+}
+
+/// `[[masses]]`: lumped mass on the translations, optional rotational inertias, all ≥ 0.
+fn build_masses(file: &TwinFile, refs: &Refs) -> Result<Vec<LumpedMass>> {
+    let (source, dimension) = (refs.source, refs.dimension);
+    let nd = dimension.dofs_per_node();
     let mut masses = Vec::new();
     for (i, m) in file.masses.iter().enumerate() {
-        let node = find_node(m.node, &format!("masses[{i}]"))?;
+        let node = refs.node(m.node, &format!("masses[{i}]"))?;
         let mut values = vec![0.0; nd];
         let trans = if dimension == Dimension::Two { 2 } else { 3 };
         let inertia = m.inertia.clone().unwrap_or_default();
@@ -562,12 +677,19 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
         }
         masses.push(LumpedMass { node, values });
     }
+    Ok(masses)
+}
+
+/// `[[springs]]`: grounded (`nodes`) and two-node (`pairs`) springs, k ≥ 0, numbered in
+/// file order; with the spring sets.
+fn build_springs(file: &TwinFile, refs: &Refs) -> Result<(Vec<Spring>, HashSet<String>)> {
+    let source = refs.source;
     let mut springs = Vec::new();
     let mut sets = HashSet::new();
     let mut spring_id = 0i64;
     for (i, s) in file.springs.iter().enumerate() {
         let what = format!("springs[{i}] (set {})", s.set);
-        let dof = parse_dof(&s.dof, &what)?;
+        let dof = refs.dof(&s.dof, &what)?;
         if !(s.k.is_finite() && s.k >= 0.0) {
             return Err(err(source, format!("{what}: k must be ≥ 0, is {}", s.k)));
         }
@@ -576,7 +698,7 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
             spring_id += 1;
             springs.push(Spring {
                 id: spring_id,
-                node: find_node(nid, &what)?,
+                node: refs.node(nid, &what)?,
                 node2: None,
                 dof,
                 stiffness: s.k,
@@ -587,21 +709,27 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
             spring_id += 1;
             springs.push(Spring {
                 id: spring_id,
-                node: find_node(a, &what)?,
-                node2: Some(find_node(b, &what)?),
+                node: refs.node(a, &what)?,
+                node2: Some(refs.node(b, &what)?),
                 dof,
                 stiffness: s.k,
                 set: s.set.clone(),
             });
         }
     }
+    Ok((springs, sets))
+}
+
+/// `[[rigid_links]]`: existing master and slave nodes, no node its own master.
+fn build_rigid_links(file: &TwinFile, refs: &Refs) -> Result<Vec<RigidLink>> {
+    let source = refs.source;
     let mut rigid_links = Vec::new();
     for (i, r) in file.rigid_links.iter().enumerate() {
         let what = format!("rigid_links[{i}]");
-        let master = find_node(r.master, &what)?;
+        let master = refs.node(r.master, &what)?;
         let mut slaves = Vec::new();
         for &s in &r.slaves {
-            let idx = find_node(s, &what)?;
+            let idx = refs.node(s, &what)?;
             if idx == master {
                 return Err(err(source, format!("{what}: node {s} is its own master")));
             }
@@ -609,6 +737,17 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
         }
         rigid_links.push(RigidLink { master, slaves });
     }
+    Ok(rigid_links)
+}
+
+/// `[[parameters]]`: valid bounds and start, targets (element groups, or spring sets for
+/// spring stiffness) that exist, no target set by two parameters.
+fn build_parameters(
+    file: &TwinFile,
+    source: &str,
+    groups: &HashSet<String>,
+    sets: &HashSet<String>,
+) -> Result<Vec<Parameter>> {
     validate_parameters(source, &file.parameters)?;
     let mut claimed: HashMap<(ParameterKind, String), String> = HashMap::new();
     let mut parameters = Vec::new();
@@ -671,6 +810,12 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
             start: p.start,
         });
     }
+    Ok(parameters)
+}
+
+/// `[[sensors]]`: each channel mapped once, to an existing node and DoF.
+fn build_sensors(file: &TwinFile, refs: &Refs) -> Result<Vec<Sensor>> {
+    let source = refs.source;
     let mut sensors = Vec::new();
     let mut channels = HashSet::new();
     for s in &file.sensors {
@@ -684,13 +829,18 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
                 format!("{what}: a mesh twin needs node and dof"),
             ));
         };
-        let node = find_node(nid, &what)?;
+        let node = refs.node(nid, &what)?;
         sensors.push(Sensor {
             channel: s.channel.clone(),
             node,
-            dof: parse_dof(dof, &what)?,
+            dof: refs.dof(dof, &what)?,
         });
     }
+    Ok(sensors)
+}
+
+/// `[twin] gravity` (2 or 3 components), default −9.81 m/s² along y (2D) or z (3D).
+fn gravity_of(file: &TwinFile, dimension: Dimension, source: &str) -> Result<[f64; 3]> {
     let gravity = match &file.twin.gravity {
         None => {
             if dimension == Dimension::Two {
@@ -710,22 +860,7 @@ pub fn build_model(file: &TwinFile, source: &str) -> Result<Model> {
             ))
         }
     };
-    Ok(Model {
-        name: file.twin.name.clone(),
-        source: source.to_string(),
-        dimension,
-        nodes,
-        materials,
-        sections,
-        elements,
-        supports,
-        masses,
-        springs,
-        rigid_links,
-        parameters,
-        sensors,
-        gravity,
-    })
+    Ok(gravity)
 }
 
 /// Matrix Market twin: K(θ) = K0 + Σ θ_g K_g, M(θ) = M0 + Σ θ_g M_g.

@@ -1,10 +1,17 @@
 //! Matrix Market (coordinate, real, general or symmetric) reading and writing, so models
-//! assembled by other FE codes can be brought in as K(θ) = K0 + Σ θ_g K_g (see `file`).
+//! assembled by other FE codes can be brought in as K(θ) = K0 + Σ θ_g K_g (see `file`), and
+//! the one writer of every `.mtx` output (the test design's prototype and PS basis).
 //! Hand-written: the format is a few lines of text and no maintained crate reads it into
 //! faer 0.24.
 
+use std::fmt::Write as _;
+use std::path::Path;
+
+use faer::MatRef;
+
 use super::sparse::CscMatrix;
 use crate::error::{Error, Location};
+use crate::sinks::atomic::write_bytes_atomically;
 use crate::Result;
 
 /// Parse Matrix Market text. `source` names the file in errors. Indices are 1-based in the
@@ -114,9 +121,30 @@ pub fn parse_matrix_market(text: &str, source: &str) -> Result<CscMatrix> {
     Ok(CscMatrix::from_triplets(n, &triplets))
 }
 
-pub fn read_matrix_market(path: &std::path::Path) -> Result<CscMatrix> {
+pub fn read_matrix_market(path: &Path) -> Result<CscMatrix> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     parse_matrix_market(&text, &path.display().to_string())
+}
+
+/// Matrix Market coordinate text: the banner of `symmetry`, `comments` as `% ` lines after
+/// it, the size line and the 1-based entries with 17 significant digits (exact round trip).
+fn format_coordinate(
+    symmetry: &str,
+    rows: usize,
+    cols: usize,
+    comments: &[String],
+    entries: &[(usize, usize, f64)],
+) -> String {
+    let mut s = String::with_capacity(entries.len() * 44 + 64 * (comments.len() + 2));
+    let _ = writeln!(s, "%%MatrixMarket matrix coordinate real {symmetry}");
+    for line in comments {
+        let _ = writeln!(s, "% {line}");
+    }
+    let _ = writeln!(s, "{rows} {cols} {}", entries.len());
+    for &(r, c, v) in entries {
+        let _ = writeln!(s, "{} {} {:.17e}", r + 1, c + 1, v);
+    }
+    s
 }
 
 /// Matrix Market text of a symmetric matrix (lower triangle, `symmetric`), values with 17
@@ -131,15 +159,62 @@ pub fn format_matrix_market_symmetric(a: &CscMatrix) -> String {
             }
         }
     }
-    let mut s = String::with_capacity(entries.len() * 40 + 64);
-    s.push_str("%%MatrixMarket matrix coordinate real symmetric\n");
-    s.push_str(&format!("{} {} {}\n", a.n, a.n, entries.len()));
-    for (r, c, v) in entries {
-        s.push_str(&format!("{} {} {:.17e}\n", r + 1, c + 1, v));
-    }
-    s
+    format_coordinate("symmetric", a.n, a.n, &[], &entries)
 }
 
-pub fn write_matrix_market_symmetric(a: &CscMatrix, path: &std::path::Path) -> Result<()> {
-    crate::sinks::atomic::write_bytes_atomically(path, format_matrix_market_symmetric(a).as_bytes())
+pub fn write_matrix_market_symmetric(a: &CscMatrix, path: &Path) -> Result<()> {
+    write_bytes_atomically(path, format_matrix_market_symmetric(a).as_bytes())
+}
+
+/// Matrix Market text of a dense rectangular matrix (`coordinate real general`, exact zeros
+/// left out, column-major order, 17 significant digits), with `comments` as `%` lines after
+/// the banner.
+pub fn format_matrix_market_general(a: MatRef<'_, f64>, comments: &[String]) -> String {
+    let mut entries = Vec::new();
+    for c in 0..a.ncols() {
+        for r in 0..a.nrows() {
+            let v = a[(r, c)];
+            if v != 0.0 {
+                entries.push((r, c, v));
+            }
+        }
+    }
+    format_coordinate("general", a.nrows(), a.ncols(), comments, &entries)
+}
+
+pub fn write_matrix_market_general(
+    a: MatRef<'_, f64>,
+    comments: &[String],
+    path: &Path,
+) -> Result<()> {
+    write_bytes_atomically(path, format_matrix_market_general(a, comments).as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn both_writers_keep_their_exact_text_and_read_back() {
+        let mut a = faer::Mat::<f64>::zeros(2, 2);
+        a[(0, 0)] = 2.0;
+        a[(1, 0)] = -0.5;
+        a[(0, 1)] = -0.5;
+        let general = format_matrix_market_general(a.as_ref(), &["note".to_string()]);
+        assert_eq!(
+            general,
+            "%%MatrixMarket matrix coordinate real general\n% note\n2 2 3\n\
+             1 1 2.00000000000000000e0\n2 1 -5.00000000000000000e-1\n1 2 -5.00000000000000000e-1\n"
+        );
+        let symmetric = format_matrix_market_symmetric(&CscMatrix::from_dense(a.as_ref()));
+        assert_eq!(
+            symmetric,
+            "%%MatrixMarket matrix coordinate real symmetric\n2 2 2\n\
+             1 1 2.00000000000000000e0\n2 1 -5.00000000000000000e-1\n"
+        );
+        for text in [general, symmetric] {
+            let back = parse_matrix_market(&text, "m.mtx").unwrap();
+            assert_eq!(back.to_dense()[(1, 0)], -0.5);
+        }
+    }
 }

@@ -20,7 +20,6 @@ pub mod newmark;
 pub mod objective;
 pub mod optimisers;
 pub mod plackett_luce;
-pub mod rng;
 pub mod sparse;
 pub mod statics;
 pub mod tridiagonal;

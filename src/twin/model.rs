@@ -227,24 +227,4 @@ impl Model {
     pub fn start_values(&self) -> Vec<f64> {
         self.parameters.iter().map(|p| p.start).collect()
     }
-    /// Check a parameter vector against the bounds (Error::Usage naming the parameter).
-    pub fn check_parameters(&self, theta: &[f64]) -> crate::Result<()> {
-        if theta.len() != self.parameters.len() {
-            return Err(Error::usage(format!(
-                "{}: {} parameter values given, the twin has {}",
-                self.source,
-                theta.len(),
-                self.parameters.len()
-            )));
-        }
-        for (p, v) in self.parameters.iter().zip(theta) {
-            if !(v.is_finite() && *v >= p.lower && *v <= p.upper) {
-                return Err(Error::usage(format!(
-                    "{}: parameter {} = {v} is outside its bounds [{}, {}]",
-                    self.source, p.name, p.lower, p.upper
-                )));
-            }
-        }
-        Ok(())
-    }
 }

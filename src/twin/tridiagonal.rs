@@ -106,7 +106,7 @@ mod tests {
 
     #[test]
     fn matches_faer_on_a_random_tridiagonal() {
-        let mut rng = crate::twin::rng::Rng::new(3);
+        let mut rng = crate::rng::Rng::new(3);
         let n = 17;
         let d: Vec<f64> = (0..n).map(|_| rng.uniform_in(-2.0, 2.0)).collect();
         let o: Vec<f64> = (0..n - 1).map(|_| rng.uniform_in(-1.0, 1.0)).collect();

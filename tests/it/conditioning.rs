@@ -3,11 +3,12 @@
 //! and closed-form checks of the other steps.
 
 use quaketwin::conditioning::{
-    self, align_records, butter_sos, cosine_taper, cumulative_trapezoid, integrate_motion, qa,
-    remove_linear_trend, remove_polynomial, resample_to_rate, sosfiltfilt, sosfiltfilt_channels,
-    BandType, ConditioningSettings, DriftControl, Step,
+    self, align_records, butter_sos, cosine_taper, integrate_motion, qa, remove_linear_trend,
+    remove_polynomial, resample_to_rate, sosfiltfilt, sosfiltfilt_channels, BandType,
+    ConditioningSettings, DriftControl, Step,
 };
 use quaketwin::geometry::{normalise_orientation, OrientationSettings};
+use quaketwin::numeric::cumulative_trapezoid;
 use quaketwin::vocab::{Axis, Channel, Direction, Event, QaFlag, Record, SourceRef, Units};
 use quaketwin::Error;
 

@@ -12,7 +12,7 @@ use quaketwin::sinks::design_tables::{DESIGN_FILES, WNRMSE_KEY};
 use quaketwin::sinks::parquet::ReadTable;
 use quaketwin::design::motion::{base_motion_from_file, twin_axis_of};
 use quaketwin::stages::design::design_from_file;
-use quaketwin::synth_facade::{facade_twin_toml, write_facade_sample, FACADE_FOLDER};
+use quaketwin::synth::facade::{facade_twin_toml, write_facade_sample, FACADE_FOLDER};
 use quaketwin::twin::parse_twin;
 use quaketwin::vocab::{Axis, Direction};
 
@@ -234,7 +234,7 @@ fn box_selecting_no_node_and_empty_set_are_errors() {
 
 #[test]
 fn parse_accepts_the_sample_design_file() {
-    let text = quaketwin::synth_facade::facade_design_toml();
+    let text = quaketwin::synth::facade::facade_design_toml();
     let doc = parse_design(&text, "design.toml").unwrap();
     assert_eq!(doc.design.get_ref().twin.get_ref(), "facade.toml");
 }

@@ -10,6 +10,8 @@ use std::sync::OnceLock;
 use quaketwin::hysteresis::basis::{cumulative_cubic, DofProblem};
 use quaketwin::hysteresis::stft::{frame_products, FrameRepresentation, FrameTransformer};
 use quaketwin::hysteresis::*;
+use quaketwin::rng::SplitMix64;
+use quaketwin::synth::{synthetic_ground_motion, GroundMotionSpec};
 use quaketwin::vocab::ProcessingHistory;
 use quaketwin::Error;
 
@@ -1073,7 +1075,7 @@ fn endpoint_ramp_does_not_bias_the_noise_free_yielding_sample() {
 /// The F distribution's survival function against tabulated critical values.
 #[test]
 fn f_survival_matches_tables() {
-    use quaketwin::hysteresis::identify::f_survival;
+    use quaketwin::stats::f_survival;
     // F_{0.05}(3, 50) = 2.790, F_{0.01}(3, 50) = 4.199, F_{0.001}(3, 20) = 8.098.
     for (f, d1, d2, p) in [
         (2.790, 3.0, 50.0, 0.05),

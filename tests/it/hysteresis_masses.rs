@@ -11,6 +11,7 @@ use std::sync::OnceLock;
 use quaketwin::hysteresis::*;
 use quaketwin::sinks::hysteresis_tables::DirectionOutcome;
 use quaketwin::stages::hysteresis::{identify_event_at, HysteresisParams};
+use quaketwin::synth::{synthetic_ground_motion, GroundMotionSpec};
 use quaketwin::vocab::{
     Axis, Channel, Direction, Event, Record, Role, SourceRef, Structure, Units,
 };

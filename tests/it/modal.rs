@@ -2,9 +2,9 @@
 //! real records.  Accuracy figures are printed (run with `--nocapture`).
 
 use quaketwin::modal::{self, identify, Method, ModalInput, ModalSettings, Mode};
+use quaketwin::rng::Rng;
 use quaketwin::synth::{
-    add_measurement_noise, synthetic_ground_motion, BuildingModes, GroundMotionParams, Rng,
-    ShearBuilding,
+    add_measurement_noise, synthetic_ground_motion, BuildingModes, GroundMotionSpec, ShearBuilding,
 };
 
 /// The 5-storey test building: f ≈ 2.0–12.4 Hz (T₁ ≈ 0.5 s, typical of five
@@ -164,13 +164,13 @@ pub fn earthquake_input_seeded(seed: u64) -> ModalInput {
     let building = five_storey();
     // Kanai–Tajimi soil frequency of a rock site (4 Hz), so that the base
     // motion carries energy up to the fifth mode (12.4 Hz).
-    let params = GroundMotionParams {
+    let params = GroundMotionSpec {
         seed,
         ground_frequency_hz: 4.0,
         ..Default::default()
     };
     let ag = synthetic_ground_motion(&params).unwrap();
-    let response = building.simulate_base_motion(&ag, params.dt).unwrap();
+    let response = building.simulate_base_motion(&ag, params.dt()).unwrap();
     let mut rng = Rng::new(seed + 92);
     let outputs = response
         .absolute_acceleration
@@ -179,7 +179,7 @@ pub fn earthquake_input_seeded(seed: u64) -> ModalInput {
         .collect();
     let base = add_measurement_noise(&response.base_acceleration, 30.0, &mut rng);
     ModalInput {
-        dt: params.dt,
+        dt: params.dt(),
         output_ids: (1..=5).map(|i| format!("L{i}")).collect(),
         outputs,
         input_ids: vec!["L0".into()],

@@ -1,10 +1,10 @@
 //! Plackett–Luce rank aggregation (Eq. 1–2) and scores (Eq. 4) against hand-computed values.
 
+use quaketwin::rng::Rng;
 use quaketwin::twin::plackett_luce::{
     best_ranking, best_ranking_dp, best_ranking_exhaustive, best_ranking_local, log_probability,
     probability, scores, RankingMethod,
 };
-use quaketwin::twin::rng::Rng;
 
 /// One voter, weights (0.5, 0.3, 0.2): P(0,1,2) = 0.5/1 · 0.3/0.5 · 0.2/0.2 = 0.3 and
 /// P(2,1,0) = 0.2/1 · 0.3/0.8 · 0.5/0.5 = 0.075; the best ranking sorts by weight.

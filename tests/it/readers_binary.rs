@@ -8,6 +8,7 @@ use std::path::Path;
 
 use quaketwin::error::Error;
 use quaketwin::readers::{self, mcap as mcap_reader, stationxml, FileContents, ReadOptions};
+use quaketwin::rng::SplitMix64;
 use quaketwin::sinks::mcap_writer::{self, McapWriteOptions};
 use quaketwin::vocab::{parse_iso8601_ns, Direction, Event, QaFlag, Record, SourceRef, Units};
 
@@ -969,19 +970,9 @@ fn sniff_binary_formats_by_content() {
     assert_eq!(readers::sniff("notes.bin", &[b'x'; 1000]), None);
 }
 
-/// SplitMix64: small seeded generator for the corruption test (deterministic).
-struct SplitMix64(u64);
-impl SplitMix64 {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
+/// Index below `n` (modulo reduction) from the corruption test's seeded stream.
+fn below(rng: &mut SplitMix64, n: usize) -> usize {
+    (rng.next_u64() % n as u64) as usize
 }
 
 /// Corrupted and truncated inputs give `Ok` or `Err`, never a panic.
@@ -1011,16 +1002,16 @@ fn readers_never_panic_on_corrupted_bytes() {
         (readers::Format::Csv, &csv),
         (readers::Format::Mcap, &mcap_bytes),
     ];
-    let mut rng = SplitMix64(20240601);
+    let mut rng = SplitMix64::new(20240601);
     for (format, original) in cases {
         for trial in 0..600 {
             let mut b = original.to_vec();
             if trial % 3 == 0 {
-                b.truncate(rng.below(b.len()));
+                b.truncate(below(&mut rng, b.len()));
             } else {
-                for _ in 0..1 + rng.below(8) {
-                    let i = rng.below(b.len());
-                    b[i] = rng.next() as u8;
+                for _ in 0..1 + below(&mut rng, 8) {
+                    let i = below(&mut rng, b.len());
+                    b[i] = rng.next_u64() as u8;
                 }
             }
             let _ = readers::read(format, &b, &src("corrupt"), &ReadOptions::default());

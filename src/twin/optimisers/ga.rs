@@ -3,7 +3,7 @@
 //! is one individual of the first generation.
 
 use super::{argmin, evaluate_batch, Bounds, Objective, OptimResult, Optimiser};
-use crate::twin::rng::Rng;
+use crate::rng::Rng;
 
 #[derive(Debug, Clone)]
 pub struct GeneticAlgorithm {
@@ -99,7 +99,7 @@ impl Optimiser for GeneticAlgorithm {
                 }
                 for v in child.iter_mut() {
                     if rng.uniform() < 1.0 / dim.max(1) as f64 {
-                        *v += sigma * rng.normal();
+                        *v += sigma * rng.normal_uncached();
                     }
                     *v = v.clamp(0.0, 1.0);
                 }

@@ -3,7 +3,7 @@
 //! absorbing walls. The seed point, when given, is particle 0 (at rest).
 
 use super::{argmin, evaluate_batch, Bounds, Objective, OptimResult, Optimiser};
-use crate::twin::rng::Rng;
+use crate::rng::Rng;
 
 #[derive(Debug, Clone)]
 pub struct ParticleSwarm {

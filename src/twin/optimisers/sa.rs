@@ -5,7 +5,7 @@
 //! (the batch size is fixed, so the result does not depend on the thread count).
 
 use super::{evaluate_batch, Bounds, Objective, OptimResult, Optimiser};
-use crate::twin::rng::Rng;
+use crate::rng::Rng;
 
 #[derive(Debug, Clone)]
 pub struct SimulatedAnnealing {
@@ -65,7 +65,7 @@ impl Optimiser for SimulatedAnnealing {
             let proposals: Vec<Vec<f64>> = (0..self.batch.max(1))
                 .map(|_| {
                     cur.iter()
-                        .map(|c| (c + step * rng.normal()).clamp(0.0, 1.0))
+                        .map(|c| (c + step * rng.normal_uncached()).clamp(0.0, 1.0))
                         .collect()
                 })
                 .collect();

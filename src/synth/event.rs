@@ -7,9 +7,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::rng::Rng;
 use crate::sinks::parquet::write_bytes_atomically;
 use crate::synth::{
-    add_measurement_noise, synthetic_ground_motion, BuildingModes, GroundMotionParams, Rng,
+    add_measurement_noise, synthetic_ground_motion, BuildingModes, GroundMotionSpec, Sampling,
     ShearBuilding,
 };
 use crate::vocab::STANDARD_GRAVITY;
@@ -259,12 +260,12 @@ pub fn write_sample_events(
     let _ = writeln!(manifest, "storey_heights_m = {:?}", STOREY_HEIGHTS_M);
     let _ = writeln!(manifest, "masses_kg = {:?}", buildings[0].1.masses_kg);
     for (i, (dir, b)) in buildings.iter().enumerate() {
-        let gm = GroundMotionParams {
+        let gm = GroundMotionSpec {
             duration_s: settings.quake_duration_s,
-            dt,
+            sampling: Sampling::IntervalS(dt),
             pga_m_per_s2: settings.quake_pga_m_s2 * if i == 0 { 1.0 } else { 0.8 },
             seed: settings.seed.wrapping_add(101 + i as u64),
-            ..GroundMotionParams::default()
+            ..GroundMotionSpec::default()
         };
         // Pre-event memory as real recorders keep it: the building at rest
         // for `quake_pre_event_s` (noise only), so SNR checks have a window.
@@ -379,10 +380,8 @@ pub fn write_sample_events(
 /// 1000 Hz (RK4, 4 sub-steps) and recorded at 250 Hz (the thesis's rate),
 /// noise-free.  Truth: every model parameter and the final damage index.
 pub fn write_yielding_event(out: &Path, settings: &SynthSettings) -> Result<std::path::PathBuf> {
-    use crate::hysteresis::{
-        damage_index_of_chain, synthetic_ground_motion as bw_ground_motion, BoucWenChain,
-        GroundMotionSpec,
-    };
+    use crate::hysteresis::{damage_index_of_chain, BoucWenChain};
+    use crate::synth::{synthetic_ground_motion, GroundMotionSpec};
     let dir = out.join("synthetic-2storey-yielding");
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let masses = vec![1e5, 1e5];
@@ -398,7 +397,7 @@ pub fn write_yielding_event(out: &Path, settings: &SynthSettings) -> Result<std:
         exponent.clone(),
     )?;
     let spec = GroundMotionSpec::strong_50s(settings.seed.wrapping_add(7), 1000.0, 3.5);
-    let ground = bw_ground_motion(&spec)?;
+    let ground = synthetic_ground_motion(&spec)?;
     let fine = chain.simulate(&ground, 1000.0, 4)?;
     let step = 4; // 1000 Hz → 250 Hz
     let rec = fine.subsample(step);

@@ -1,0 +1,36 @@
+//! Signal primitives shared by the method modules (conditioning, hysteresis):
+//! small pure functions on sampled series, no I/O.
+
+/// Cumulative trapezoid integral from zero: y[0] = 0,
+/// y[i] = y[i−1] + dt (x[i−1] + x[i]) / 2, evaluated as `0.5 * dt * (x[i−1] + x[i])`
+/// (the rounding every caller's results were computed with).  Empty in, empty out.
+pub fn cumulative_trapezoid(data: &[f64], dt: f64) -> Vec<f64> {
+    let mut out = Vec::with_capacity(data.len());
+    let mut acc = 0.0;
+    if let Some(&first) = data.first() {
+        out.push(0.0);
+        let mut prev = first;
+        for &x in &data[1..] {
+            acc += 0.5 * dt * (prev + x);
+            out.push(acc);
+            prev = x;
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trapezoid_starts_at_zero_and_is_exact_for_a_line() {
+        assert!(cumulative_trapezoid(&[], 0.1).is_empty());
+        assert_eq!(cumulative_trapezoid(&[3.0], 0.1), vec![0.0]);
+        // ∫₀ᵗ 2s ds = t² at t = 0, 0.5, 1.
+        assert_eq!(
+            cumulative_trapezoid(&[0.0, 1.0, 2.0], 0.5),
+            vec![0.0, 0.25, 1.0]
+        );
+    }
+}

@@ -1,0 +1,232 @@
+//! Section 9, damage index ι(t) (damage.parquet): ratings per direction, ι(t)
+//! and natural-frequency ratio charts.
+
+use std::collections::BTreeMap;
+
+use super::{figure, rating_cell, require, rows_points, Loaded};
+use crate::report::format_number;
+use crate::report::html::{column_notes, note, table, Cell};
+use crate::report::plot::{self, Chart, Mark, RefLine, Series};
+use crate::report::table::Table;
+use crate::report::{Assessment, IotaStatistic, ReportSettings};
+
+/// Columns damage.parquet may hold besides the wide layout's `omega_ratio_<mode>`.
+const KNOWN_COLUMNS: [&str; 7] = [
+    "direction",
+    "t_s",
+    "iota",
+    "mode",
+    "omega_rad_s",
+    "omega_ratio",
+    "participation",
+];
+
+pub(super) fn damage_section(
+    damage: &Loaded,
+    settings: &ReportSettings,
+    out: &mut Vec<Assessment>,
+) -> String {
+    let mut body = String::new();
+    let Some(t) = require(damage, "damage.parquet", &mut body) else {
+        return body;
+    };
+    // Two layouts: long (one row per direction, time and `mode`, with
+    // `omega_ratio`) or wide (`omega_ratio_<mode>` columns).
+    let long = t.has("mode") && t.number("mode").is_some();
+    let ratio_cols = frequency_ratio_columns(t, long);
+    let mut all_known: Vec<&str> = KNOWN_COLUMNS.to_vec();
+    all_known.extend(ratio_cols.iter().map(|s| s.as_str()));
+    body.push_str(&column_notes(t, &all_known));
+    if t.number("t_s").is_none() || t.number("iota").is_none() {
+        return body;
+    }
+    let th = settings.iota;
+    body.push_str(&note(&format!(
+        "Rating of the {} value of ι(t): GREEN < {} ≤ YELLOW < {} ≤ RED.",
+        settings.iota_statistic.name(),
+        format_number(th.yellow),
+        format_number(th.red)
+    )));
+    let mut rows_html = Vec::new();
+    let mut figures = String::new();
+    for (gi, (key, rows)) in direction_groups(t).iter().enumerate() {
+        let dir = key.join("");
+        let modes = if long {
+            mode_groups(t, rows)
+        } else {
+            Vec::new()
+        };
+        // In the long layout ι repeats on every mode's row: take one mode's rows.
+        let iota_rows: &[usize] = modes.first().map(|g| g.1.as_slice()).unwrap_or(rows);
+        let pts = rows_points(t, iota_rows, "t_s", "iota");
+        rows_html.push(rate_direction(&dir, &pts, settings, out));
+        figures.push_str(&iota_figure(&dir, &pts, gi, settings));
+        let ratios: Vec<(String, Vec<(f64, f64)>)> = if long && t.has("omega_ratio") {
+            modes
+                .iter()
+                .map(|(label, r)| (label.clone(), rows_points(t, r, "t_s", "omega_ratio")))
+                .collect()
+        } else {
+            ratio_cols
+                .iter()
+                .map(|c| (c.clone(), rows_points(t, rows, "t_s", c)))
+                .collect()
+        };
+        figures.push_str(&ratio_figure(&dir, ratios, settings));
+    }
+    if let Some(steps) = t.metadata.get("quaketwin.indefinite_steps") {
+        body.push_str(&note(&format!(
+            "Time steps where K(t) lost positive definiteness (damage.parquet metadata): {steps}."
+        )));
+    }
+    body.push_str(&table(
+        Some("damage-table"),
+        &["direction", "final ι", "peak ι", "rating"].map(String::from),
+        &rows_html,
+    ));
+    body.push_str(&format!("<div class=\"grid2\">{figures}</div>"));
+    body.push_str(&note(
+        "ι(t) includes recoverable energy and can oscillate during shaking (METHODS.md §4); the final value is the post-event state.",
+    ));
+    body
+}
+
+/// Numeric `omega_ratio…` columns: the wide layout's `omega_ratio_<mode>` (in the
+/// long layout the single `omega_ratio` column is charted per mode instead).
+fn frequency_ratio_columns(t: &Table, long: bool) -> Vec<String> {
+    t.names
+        .iter()
+        .filter(|n| n.starts_with("omega_ratio") && t.number(n).is_some())
+        .filter(|n| !long || n.as_str() != "omega_ratio")
+        .cloned()
+        .collect()
+}
+
+/// Rows per direction (file order), or all rows as direction "—" without a
+/// `direction` column.
+fn direction_groups(t: &Table) -> Vec<(Vec<String>, Vec<usize>)> {
+    let keys: Vec<&str> = if t.has("direction") {
+        vec!["direction"]
+    } else {
+        vec![]
+    };
+    if keys.is_empty() {
+        vec![(vec!["—".to_string()], (0..t.rows).collect::<Vec<_>>())]
+    } else {
+        t.groups(&keys)
+    }
+}
+
+/// The long layout's `rows` of one direction grouped by mode ("mode k", ascending k).
+fn mode_groups(t: &Table, rows: &[usize]) -> Vec<(String, Vec<usize>)> {
+    let mut m: BTreeMap<i64, Vec<usize>> = BTreeMap::new();
+    let modes = t.number("mode").unwrap_or(&[]);
+    for &r in rows {
+        if let Some(Some(k)) = modes.get(r) {
+            m.entry(*k as i64).or_default().push(r);
+        }
+    }
+    m.into_iter()
+        .map(|(k, v)| (format!("mode {k}"), v))
+        .collect()
+}
+
+/// The damage table's row of one direction (final ι, peak ι, rating of the chosen
+/// statistic); a rated value is added to the assessments.
+fn rate_direction(
+    dir: &str,
+    pts: &[(f64, f64)],
+    settings: &ReportSettings,
+    out: &mut Vec<Assessment>,
+) -> Vec<Cell> {
+    let stat = settings.iota_statistic;
+    // Final = value at the latest time; peak = maximum over time.
+    let final_v = pts.iter().max_by(|a, b| a.0.total_cmp(&b.0)).map(|p| p.1);
+    let peak_v = pts
+        .iter()
+        .map(|p| p.1)
+        .filter(|v| v.is_finite())
+        .reduce(f64::max);
+    let rated = match stat {
+        IotaStatistic::Final => final_v,
+        IotaStatistic::Peak => peak_v,
+    };
+    let rating = rated.and_then(|v| settings.iota.rate(v));
+    if let (Some(v), Some(rating)) = (rated, rating) {
+        out.push(Assessment {
+            criterion: format!("damage index ι ({})", stat.name()),
+            subject: format!("direction {dir}"),
+            value: v,
+            rating,
+            source: "damage.parquet".into(),
+        });
+    }
+    vec![
+        Cell::text(dir),
+        Cell::number(final_v),
+        Cell::number(peak_v),
+        rating_cell(rating),
+    ]
+}
+
+/// Chart of ι(t) of one direction with the rating thresholds (preceded by a note
+/// when ι has no finite value).
+fn iota_figure(dir: &str, pts: &[(f64, f64)], colour: usize, settings: &ReportSettings) -> String {
+    let th = settings.iota;
+    let mut html = String::new();
+    if !pts.iter().any(|p| p.1.is_finite()) {
+        html.push_str(&note(&format!(
+            "ι(t), direction {dir}: no finite value in damage.parquet — not rated."
+        )));
+    }
+    let mut chart = Chart::new(560, 280, "t (s)", "ι");
+    chart.series.push(Series::new(
+        format!("ι(t), direction {dir}"),
+        plot::decimate_min_max(pts, settings.max_points_per_trace),
+        colour % 7,
+        Mark::Line,
+    ));
+    chart.ref_lines.push(RefLine {
+        at: th.yellow,
+        horizontal: true,
+        colour: 4,
+    });
+    chart.ref_lines.push(RefLine {
+        at: th.red,
+        horizontal: true,
+        colour: 1,
+    });
+    html.push_str(&figure(
+        plot::render(&chart),
+        &format!("Damage index ι(t), direction {dir}; dashed: yellow (orange) and red (vermillion) thresholds"),
+        "",
+    ));
+    html
+}
+
+/// Chart of the natural-frequency ratios ω(t)/ω(0) of one direction (nothing without
+/// ratio series).
+fn ratio_figure(
+    dir: &str,
+    ratios: Vec<(String, Vec<(f64, f64)>)>,
+    settings: &ReportSettings,
+) -> String {
+    if ratios.is_empty() {
+        return String::new();
+    }
+    let mut chart = Chart::new(560, 280, "t (s)", "ω(t)/ω(0)");
+    for (i, (label, pts)) in ratios.into_iter().enumerate() {
+        chart.series.push(Series::new(
+            label,
+            plot::decimate_min_max(&pts, settings.max_points_per_trace),
+            i,
+            Mark::Line,
+        ));
+    }
+    let legend = plot::legend(&chart.series);
+    figure(
+        plot::render(&chart),
+        &format!("Natural-frequency ratios, direction {dir}"),
+        &legend,
+    )
+}

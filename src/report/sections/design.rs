@@ -1,0 +1,160 @@
+//! Section 11, hybrid-test design: key facts from the design tables and their
+//! metadata, the interface-refinement trade-off, POD energies and the tables.
+
+use std::path::Path;
+
+use serde_json::Value;
+
+use super::{figure, generic, load, Loaded};
+use crate::report::html::escape;
+use crate::report::plot::{self, Chart, Mark, Series};
+use crate::report::ReportSettings;
+
+pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
+    let mut body = String::new();
+    // Key facts from the tables and their metadata (docs/test-design.md).
+    let pod = load(dir, "pod.parquet", None);
+    let layout = load(dir, "actuator_layout.parquet", None);
+    let validation = load(dir, "reduction_validation.parquet", None);
+    let hybrid = load(dir, "hybrid_prototype.parquet", None);
+    let refinement = load(dir, "interface_refinement.parquet", None);
+    let meta = |l: &Loaded, key: &str| -> String {
+        match l {
+            Loaded::Ok(t) => t.metadata.get(key).cloned().unwrap_or_else(|| "—".into()),
+            _ => "—".into(),
+        }
+    };
+    let mut facts: Vec<(String, String)> = Vec::new();
+    if let Loaded::Ok(t) = &pod {
+        let retained = meta(&pod, "quaketwin.retained_poms");
+        let energy = t
+            .number("cumulative_energy")
+            .and_then(|c| {
+                retained
+                    .parse::<usize>()
+                    .ok()
+                    .and_then(|k| c.get(k.checked_sub(1)?).copied().flatten())
+            })
+            .map(|e| format!("{:.4} %", 100.0 * e))
+            .unwrap_or_else(|| "—".into());
+        facts.push(("Snapshots".into(), meta(&pod, "quaketwin.snapshot_source")));
+        facts.push(("Base motion".into(), meta(&pod, "quaketwin.motion")));
+        facts.push((
+            "Retained POMs (energy)".into(),
+            format!("{retained} ({energy})"),
+        ));
+        if let Some(mac) = t.metadata.get("quaketwin.pom_mac_with_twin") {
+            let first: Vec<String> = serde_json::from_str::<Vec<f64>>(mac)
+                .unwrap_or_default()
+                .iter()
+                .take(3)
+                .map(|v| format!("{v:.3}"))
+                .collect();
+            facts.push(("MAC of recorded vs twin POMs 1–3".into(), first.join(", ")));
+        }
+    }
+    if let Loaded::Ok(t) = &layout {
+        let control = t.text("control_mode").unwrap_or(&[]);
+        let force = control
+            .iter()
+            .filter(|c| c.as_deref() == Some("force"))
+            .count();
+        facts.push((
+            "Actuators".into(),
+            format!(
+                "{} ({} displacement-, {force} force-controlled)",
+                t.rows,
+                t.rows - force
+            ),
+        ));
+    }
+    if let Loaded::Ok(_) = &validation {
+        facts.push(("Reduced vs full twin at the PS (WNRMSE)".into(), {
+            let fmt = |k: &str| {
+                meta(&validation, k)
+                    .parse::<f64>()
+                    .map(|v| format!("{v:.2e}"))
+                    .unwrap_or_else(|_| "—".into())
+            };
+            format!(
+                "deformation {}, total displacement {}",
+                fmt("quaketwin.wnrmse"),
+                fmt("quaketwin.wnrmse_total")
+            )
+        }));
+    }
+    if let Loaded::Ok(_) = &hybrid {
+        let rec: Option<Value> =
+            serde_json::from_str(&meta(&hybrid, "quaketwin.recommendation")).ok();
+        let num = |k: &str| rec.as_ref().and_then(|r| r.get(k)).and_then(Value::as_f64);
+        let text = match (num("ns_modes"), num("time_scale"), num("bandwidth_hz"), num("highest_frequency_hz")) {
+            (Some(n), Some(l), Some(b), Some(top)) => format!(
+                "Craig–Bampton prototype with {n} NS modes (highest frequency {top:.1} Hz); time scale λ = {l}: hybrid bandwidth {b:.3} Hz"
+            ),
+            _ => "—".into(),
+        };
+        facts.push(("Hybrid recommendation".into(), text));
+    }
+    if !facts.is_empty() {
+        let mut dl = String::from("<dl class=\"facts\">");
+        for (k, v) in &facts {
+            dl.push_str(&format!("<dt>{}</dt><dd>{}</dd>", escape(k), escape(v)));
+        }
+        dl.push_str("</dl>");
+        body.push_str(&dl);
+    }
+    // The trade-off of the interface refinement: accuracy against actuators.
+    if let Loaded::Ok(t) = &refinement {
+        if let (Some(act), Some(def), Some(tot)) = (
+            t.number("actuators"),
+            t.number("wnrmse_deformation"),
+            t.number("wnrmse_total"),
+        ) {
+            let pts = |y: &[Option<f64>]| -> Vec<(f64, f64)> {
+                act.iter()
+                    .zip(y)
+                    .filter_map(|(a, y)| Some((((*a)?), (*y)?)))
+                    .collect()
+            };
+            let mut chart = Chart::new(520, 260, "actuators", "WNRMSE");
+            chart
+                .series
+                .push(Series::new("deformation", pts(def), 0, Mark::LinePoints));
+            chart.series.push(Series::new(
+                "total displacement",
+                pts(tot),
+                1,
+                Mark::LinePoints,
+            ));
+            let legend = plot::legend(&chart.series);
+            body.push_str(&figure(
+                plot::render(&chart),
+                "Interface refinement: reduced-twin WNRMSE against the number of actuators (interface_refinement.parquet)",
+                &legend,
+            ));
+        }
+    }
+    // POD energy per mode.
+    if let Loaded::Ok(t) = &pod {
+        if let Some(v) = t.number("energy_fraction") {
+            let pts: Vec<(f64, f64)> = v
+                .iter()
+                .enumerate()
+                .filter_map(|(i, x)| x.map(|x| ((i + 1) as f64, x)))
+                .collect();
+            let mut chart = Chart::new(520, 260, "POM", "energy fraction");
+            chart
+                .series
+                .push(Series::new("energy fraction", pts, 0, Mark::LinePoints));
+            body.push_str(&figure(
+                plot::render(&chart),
+                "POD: energy fraction per POM (pod.parquet)",
+                "",
+            ));
+        }
+    }
+    generic(dir, "actuator_layout.parquet", settings, &mut body);
+    generic(dir, "hybrid_prototype.parquet", settings, &mut body);
+    generic(dir, "pod.parquet", settings, &mut body);
+    body
+}

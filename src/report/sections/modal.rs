@@ -1,0 +1,159 @@
+//! Section 7, modal identification: stabilisation diagram, identified modes and
+//! the frequency shift against a reference event.
+
+use std::path::Path;
+
+use super::{figure, known_columns_first, load, require, Loaded};
+use crate::report::html::{cells, column_notes, missing_columns_note, table};
+use crate::report::plot::{self, Chart, Mark, RefLine, Series};
+use crate::report::ReportSettings;
+
+pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
+    let mut body = String::new();
+    let stab = load(dir, "stabilization.parquet", None);
+    let modes = load(dir, "modes.parquet", None);
+    let shifts = load(dir, "frequency_shifts.parquet", None);
+    let mode_freqs: Vec<f64> = match &modes {
+        Loaded::Ok(m) => m
+            .number("frequency_hz")
+            .map(|v| v.iter().flatten().copied().collect())
+            .unwrap_or_default(),
+        _ => Vec::new(),
+    };
+
+    body.push_str("<h3>Stabilisation diagram</h3>");
+    if let Some(t) = require(&stab, "stabilization.parquet", &mut body) {
+        let known = [
+            "order",
+            "frequency_hz",
+            "damping_ratio",
+            "stable_frequency",
+            "stable_damping",
+            "stable_shape",
+            "physical",
+            "mode",
+        ];
+        body.push_str(&column_notes(t, &known));
+        if t.has("order") && t.has("frequency_hz") {
+            let flag = |name: &str, r: usize| {
+                t.boolean(name)
+                    .and_then(|v| v.get(r).copied().flatten())
+                    .unwrap_or(false)
+            };
+            let has_physical = t.has("physical");
+            // Categories, worst first; a pole falls in the first that applies.
+            let mut cats: [Vec<(f64, f64)>; 4] = Default::default();
+            let (Some(fcol), Some(ocol)) = (t.number("frequency_hz"), t.number("order")) else {
+                return body;
+            };
+            for r in 0..t.rows {
+                let (Some(f), Some(o)) = (
+                    fcol.get(r).copied().flatten(),
+                    ocol.get(r).copied().flatten(),
+                ) else {
+                    continue;
+                };
+                let physical = !has_physical || flag("physical", r);
+                let idx = if !physical {
+                    3
+                } else if flag("stable_frequency", r)
+                    && flag("stable_damping", r)
+                    && flag("stable_shape", r)
+                {
+                    0
+                } else if flag("stable_frequency", r) {
+                    1
+                } else {
+                    2
+                };
+                cats[idx].push((f, o));
+            }
+            let labels = [
+                (
+                    "stable in frequency, damping and shape",
+                    Mark::FilledCircle,
+                    0,
+                ),
+                ("stable in frequency only", Mark::HollowCircle, 2),
+                ("new or unstable", Mark::Cross, 4),
+                ("non-physical (filtered out)", Mark::Triangle, 6),
+            ];
+            let mut chart = Chart::new(900, 380, "frequency (Hz)", "model order");
+            for (i, pts) in cats.into_iter().enumerate() {
+                let (label, mark, colour) = labels[i];
+                chart.series.push(Series::new(
+                    format!("{label} ({})", pts.len()),
+                    pts,
+                    colour,
+                    mark,
+                ));
+            }
+            for f in &mode_freqs {
+                chart.ref_lines.push(RefLine {
+                    at: *f,
+                    horizontal: false,
+                    colour: 1,
+                });
+            }
+            let mut legend_series = chart.series.clone();
+            if !mode_freqs.is_empty() {
+                legend_series.push(Series::new(
+                    "identified mode (modes.parquet)",
+                    vec![],
+                    1,
+                    Mark::Dashed,
+                ));
+            }
+            body.push_str(&figure(
+                plot::render(&chart),
+                &format!("Stabilisation diagram: {} poles", t.rows),
+                &plot::legend(&legend_series),
+            ));
+        }
+    }
+
+    body.push_str("<h3>Identified modes</h3>");
+    if let Some(t) = require(&modes, "modes.parquet", &mut body) {
+        let known = [
+            "mode",
+            "frequency_hz",
+            "frequency_std_hz",
+            "damping_ratio",
+            "damping_std",
+            "mpc",
+            "mpd_deg",
+            "pole_count",
+        ];
+        body.push_str(&missing_columns_note(t, &known));
+        let cols = known_columns_first(t, &known);
+        let rows = cells(t, &cols, settings.max_table_rows);
+        body.push_str(&format!(
+            "<div class=\"scroll\">{}</div>",
+            table(Some("modes-table"), &cols, &rows)
+        ));
+    }
+
+    body.push_str("<h3>Frequency shift against a reference event</h3>");
+    match &shifts {
+        Loaded::Absent(_) => body.push_str(&format!(
+            "<p class=\"absent\">Output absent: <code>frequency_shifts.parquet</code> (written by the modal stage only when a previous event of the same structure is given).</p>"
+        )),
+        _ => {
+            if let Some(t) = require(&shifts, "frequency_shifts.parquet", &mut body) {
+                let known = [
+                    "reference_mode",
+                    "other_mode",
+                    "frequency_reference_hz",
+                    "frequency_other_hz",
+                    "relative_shift",
+                    "mac",
+                ];
+                body.push_str(&column_notes(t, &known));
+                let cols = known_columns_first(t, &known);
+                let rows = cells(t, &cols, settings.max_table_rows);
+                body.push_str(&table(Some("shifts-table"), &cols, &rows));
+            }
+        }
+    }
+    body
+}
