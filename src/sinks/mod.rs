@@ -5,6 +5,7 @@ pub mod atomic;
 pub mod design_tables;
 pub mod event_tables;
 pub mod hysteresis_tables;
+pub mod matrix_market;
 pub mod mcap_writer;
 pub mod modal_tables;
 pub mod parquet;

@@ -983,9 +983,3 @@ pub fn updated_twin_toml(file: &TwinFile, values: &[(String, f64)]) -> Result<St
     }
     toml::to_string(&out).map_err(|e| Error::usage(format!("serialising the updated twin: {e}")))
 }
-
-/// Write the updated twin file.
-pub fn write_updated_twin(file: &TwinFile, values: &[(String, f64)], path: &Path) -> Result<()> {
-    let text = updated_twin_toml(file, values)?;
-    crate::sinks::atomic::write_bytes_atomically(path, text.as_bytes())
-}

@@ -11,7 +11,6 @@ use faer::MatRef;
 
 use super::sparse::CscMatrix;
 use crate::error::{Error, Location};
-use crate::sinks::atomic::write_bytes_atomically;
 use crate::Result;
 
 /// Parse Matrix Market text. `source` names the file in errors. Indices are 1-based in the
@@ -162,10 +161,6 @@ pub fn format_matrix_market_symmetric(a: &CscMatrix) -> String {
     format_coordinate("symmetric", a.n, a.n, &[], &entries)
 }
 
-pub fn write_matrix_market_symmetric(a: &CscMatrix, path: &Path) -> Result<()> {
-    write_bytes_atomically(path, format_matrix_market_symmetric(a).as_bytes())
-}
-
 /// Matrix Market text of a dense rectangular matrix (`coordinate real general`, exact zeros
 /// left out, column-major order, 17 significant digits), with `comments` as `%` lines after
 /// the banner.
@@ -180,14 +175,6 @@ pub fn format_matrix_market_general(a: MatRef<'_, f64>, comments: &[String]) -> 
         }
     }
     format_coordinate("general", a.nrows(), a.ncols(), comments, &entries)
-}
-
-pub fn write_matrix_market_general(
-    a: MatRef<'_, f64>,
-    comments: &[String],
-    path: &Path,
-) -> Result<()> {
-    write_bytes_atomically(path, format_matrix_market_general(a, comments).as_bytes())
 }
 
 #[cfg(test)]

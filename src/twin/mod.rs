@@ -27,5 +27,5 @@ pub mod update;
 
 pub use assembly::{assemble, DofMap, ParameterInfo, SensorDof, TwinSystem};
 pub use eigen::{dense_modes, lanczos_modes, LanczosOptions, Modes};
-pub use file::{load_twin, parse_twin, updated_twin_toml, write_updated_twin, Twin, TwinFile};
+pub use file::{load_twin, parse_twin, updated_twin_toml, Twin, TwinFile};
 pub use model::{Dimension, ElementKind, Model, ParameterKind};

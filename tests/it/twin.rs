@@ -913,7 +913,8 @@ fn update_twin_returns_outputs_and_an_updated_file() {
 /// back as a [matrices] twin give the same frequencies for any θ.
 #[test]
 fn matrix_market_twin_reproduces_the_mesh_twin() {
-    use quaketwin::twin::matrix_market::{parse_matrix_market, write_matrix_market_symmetric};
+    use quaketwin::sinks::matrix_market::write_matrix_market_symmetric;
+    use quaketwin::twin::matrix_market::parse_matrix_market;
     use quaketwin::twin::sparse::CscMatrix;
     let mesh = twin(&thesis_cantilever_toml([5.05e9; 3]));
     let sys = &mesh.system;
