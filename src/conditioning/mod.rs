@@ -74,7 +74,11 @@ impl FilterSettings {
                 self.corners_hz.len()
             )));
         }
-        if let Some(c) = self.corners_hz.iter().find(|c| !(c.is_finite() && **c > 0.0)) {
+        if let Some(c) = self
+            .corners_hz
+            .iter()
+            .find(|c| !(c.is_finite() && **c > 0.0))
+        {
             return Err(Error::usage(format!(
                 "filter corners_hz: {c} Hz is not a positive frequency"
             )));
@@ -248,7 +252,13 @@ impl ConditioningSettings {
     pub fn validate(&self) -> Result<()> {
         let last = self.steps.len().saturating_sub(1);
         for (i, step) in self.steps.iter().enumerate() {
-            let at = |m: String| Error::usage(format!("conditioning step {} ({}): {m}", i + 1, step.name()));
+            let at = |m: String| {
+                Error::usage(format!(
+                    "conditioning step {} ({}): {m}",
+                    i + 1,
+                    step.name()
+                ))
+            };
             match step {
                 Step::Resample { rate_hz } if !(rate_hz.is_finite() && *rate_hz > 0.0) => {
                     return Err(at(format!("rate_hz = {rate_hz}: must be a positive rate")))
@@ -541,8 +551,13 @@ fn integrate_step(event: &mut Event, integration: &IntegrationSettings) -> Resul
         .par_iter_mut()
         .filter(|r| is_acceleration(r))
         .map(|r| {
-            let m = integrate_motion(&r.channel.id, &r.samples, r.channel.dt(), &integration.drift)
-                .map_err(|e| in_record(r, e))?;
+            let m = integrate_motion(
+                &r.channel.id,
+                &r.samples,
+                r.channel.dt(),
+                &integration.drift,
+            )
+            .map_err(|e| in_record(r, e))?;
             r.samples.clone_from(&m.acceleration);
             Ok(m)
         })

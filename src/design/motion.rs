@@ -359,7 +359,9 @@ pub fn design_inputs(
                 &design.source,
             )?;
             let recorded = if design.snapshots_from_records {
-                Some(recorded_response_from_event(event, origin, design, &motion)?)
+                Some(recorded_response_from_event(
+                    event, origin, design, &motion,
+                )?)
             } else {
                 None
             };
@@ -477,4 +479,3 @@ pub fn recorded_response_from_event(
         source: format!("event {origin}, channels {}", used.join(", ")),
     })
 }
-

@@ -11,7 +11,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 pub use archive::{collect, ArchiveLimits, EventFile};
-pub use manifest::{ChannelEntry, ColumnRef, DirectionEntry, FormatEntry, Manifest, RoleEntry, UnitsEntry};
+pub use manifest::{
+    ChannelEntry, ColumnRef, DirectionEntry, FormatEntry, Manifest, RoleEntry, UnitsEntry,
+};
 pub use referenced::{ReferencedFiles, MAX_REFERENCED_BYTES};
 
 use crate::error::{Error, Location, Result};

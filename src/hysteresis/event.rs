@@ -188,4 +188,3 @@ pub fn identify_event(
     let resolved: Vec<MassResolution> = masses.into_iter().filter_map(|m| m.ok()).collect();
     Ok((outcomes, resolved))
 }
-

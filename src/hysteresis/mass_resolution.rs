@@ -348,4 +348,3 @@ pub fn resolve_masses(
     }
     out
 }
-

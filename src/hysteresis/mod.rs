@@ -61,15 +61,15 @@ pub use basis::{
     BaseRecord, BasisForm, DirectionKinematics, DirectionRecords, DofParameters, FloorRecord,
     StiffnessPattern, VelocityDrift,
 };
-pub use event::{auto_directions, identify_event, DirectionOutcome, DirectionSpec, EventSettings};
-pub use mass_resolution::{MassResolution, ReducedMassRecord};
 pub use damage::{damage_index, damage_index_of_chain, DamageSeries};
 pub use dof::{DofIdentification, FitSeries};
+pub use event::{auto_directions, identify_event, DirectionOutcome, DirectionSpec, EventSettings};
 pub use forward::{BoucWenChain, ChainResponse};
 pub use identify::{
     identify_direction, identify_directions, identify_kinematics, DirectionIdentification,
 };
 pub use instantaneous::{InstantaneousEstimate, ParameterStability};
+pub use mass_resolution::{MassResolution, ReducedMassRecord};
 pub use reduced_mass::{
     first_pulsation_2dof, reduced_lumped_masses, ReducedMassTarget, ReducedMasses,
 };

@@ -66,4 +66,3 @@ pub fn storey_drift(event: &Event, motions: &[Motion]) -> Result<Vec<DriftRow>> 
     }
     Ok(rows)
 }
-

@@ -151,7 +151,11 @@ impl MetricsSettings {
                 self.damping
             )));
         }
-        if let Some(t) = self.periods_s.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
+        if let Some(t) = self
+            .periods_s
+            .iter()
+            .find(|t| !(t.is_finite() && **t > 0.0))
+        {
             return Err(crate::error::Error::usage(format!(
                 "periods_s contains {t}: periods must be positive seconds"
             )));

@@ -73,7 +73,10 @@ impl std::fmt::Debug for Pipeline {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Pipeline")
             .field("pipeline", &self.pipeline)
-            .field("stages", &self.stages.iter().map(|s| &s.decl).collect::<Vec<_>>())
+            .field(
+                "stages",
+                &self.stages.iter().map(|s| &s.decl).collect::<Vec<_>>(),
+            )
             .finish()
     }
 }
@@ -119,9 +122,10 @@ pub fn typed_params<T: serde::de::DeserializeOwned>(
     match params_value(&root, index) {
         Some(v) => T::deserialize(ValueDeserializer::from(v))
             .map_err(|e| toml_error(file, text, &e, &what)),
-        None => T::deserialize(ValueDeserializer::parse("{}").map_err(|e| {
-            Error::usage(format!("{what}: {}", e.message()))
-        })?)
+        None => T::deserialize(
+            ValueDeserializer::parse("{}")
+                .map_err(|e| Error::usage(format!("{what}: {}", e.message())))?,
+        )
         .map_err(|e| Error::usage(format!("{file}: {what}: {}", e.message()))),
     }
 }
@@ -284,7 +288,10 @@ impl StageSource<'_> {
         T: serde::de::DeserializeOwned,
         K: serde::de::DeserializeOwned,
     {
-        let what = format!("stage {:?} ({}): bad params", self.decl.name, self.decl.kind);
+        let what = format!(
+            "stage {:?} ({}): bad params",
+            self.decl.name, self.decl.kind
+        );
         let (file, text) = (self.file, self.text);
         let root = DeTable::parse(text).map_err(|e| toml_error(file, text, &e, &what))?;
         let Some(value) = params_value(&root, self.index) else {

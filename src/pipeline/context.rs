@@ -48,9 +48,10 @@ impl<'p> RunContext<'p> {
     /// `run` does those) and keeps its product for later stages.
     pub fn run_stage(&mut self, index: usize) -> Result<()> {
         let pipeline = self.pipeline;
-        let stage = pipeline.stages.get(index).ok_or_else(|| {
-            Error::usage(format!("the pipeline has no stage number {index}"))
-        })?;
+        let stage = pipeline
+            .stages
+            .get(index)
+            .ok_or_else(|| Error::usage(format!("the pipeline has no stage number {index}")))?;
         self.enter(index);
         let product = stage.stage.run(self)?;
         self.set_product(product);

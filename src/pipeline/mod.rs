@@ -240,11 +240,7 @@ pub fn run(
 
 /// Brings the directory to a state holding only trusted results of this
 /// event (see the module doc) and returns the manifest to continue from.
-fn clean_out_dir(
-    out: &Path,
-    pipeline: &Pipeline,
-    event: &EventIdentity,
-) -> Result<RunManifest> {
+fn clean_out_dir(out: &Path, pipeline: &Pipeline, event: &EventIdentity) -> Result<RunManifest> {
     let swept = crate::sinks::atomic::sweep_temp_files(out)?;
     if !swept.is_empty() {
         note(&format!(

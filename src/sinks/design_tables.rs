@@ -6,10 +6,10 @@
 
 use std::path::{Path, PathBuf};
 
+use super::matrix_market::{write_matrix_market_general, write_matrix_market_symmetric};
 use super::parquet::{write_parquet, TableBuilder};
 use crate::design::plan::TestDesign;
 use crate::error::Result;
-use super::matrix_market::{write_matrix_market_general, write_matrix_market_symmetric};
 use crate::twin::model::Model;
 use crate::twin::sparse::CscMatrix;
 

@@ -17,6 +17,10 @@ pub fn write_matrix_market_symmetric(a: &CscMatrix, path: &Path) -> Result<()> {
 }
 
 /// A dense matrix (`coordinate real general`) with `comments` after the banner.
-pub fn write_matrix_market_general(a: MatRef<'_, f64>, comments: &[String], path: &Path) -> Result<()> {
+pub fn write_matrix_market_general(
+    a: MatRef<'_, f64>,
+    comments: &[String],
+    path: &Path,
+) -> Result<()> {
     write_bytes_atomically(path, format_matrix_market_general(a, comments).as_bytes())
 }

@@ -180,11 +180,7 @@ pub fn write_identification(
     ];
     tables::write_bouc_wen(&dir.join(BOUC_WEN_FILE), outcomes, &meta)?;
     tables::write_instantaneous(&dir.join(INSTANTANEOUS_FILE), outcomes)?;
-    tables::write_fit(
-        &dir.join(FIT_FILE),
-        outcomes,
-        p.output_decimation,
-    )
+    tables::write_fit(&dir.join(FIT_FILE), outcomes, p.output_decimation)
 }
 
 fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
@@ -198,7 +194,10 @@ struct Hysteresis {
 }
 
 impl Hysteresis {
-    fn identify(&self, ctx: &mut RunContext) -> Result<(Vec<DirectionOutcome>, Vec<MassResolution>)> {
+    fn identify(
+        &self,
+        ctx: &mut RunContext,
+    ) -> Result<(Vec<DirectionOutcome>, Vec<MassResolution>)> {
         let event_dir = ctx.event_path.clone();
         let Conditioned { event, .. } = ctx.input(ProductKind::ConditionedEvent)?;
         identify_event_at(event, Some(&event_dir), &self.params)

@@ -6,11 +6,11 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use super::condition::Conditioned;
 use crate::error::{Error, Result};
 use crate::modal::{
     frequency_shifts, identify_event, spectral_overlay, Method, ModalResult, ModalSettings,
 };
-use super::condition::Conditioned;
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::modal_tables as tables;
 use crate::vocab::{Event, Role};

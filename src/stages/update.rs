@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
 use super::modal::ModesFile;
+use crate::error::{Error, Result};
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::parquet::write_bytes_atomically;
 use crate::sinks::twin_tables::{read_measured_modes, write_twin_modes, write_twin_update};
@@ -250,9 +250,8 @@ impl Stage for Update {
     /// The twin named by the event's `structure.twin` (relative to the event folder, or a
     /// member of a zipped event) against the modes of the stage's modal input.
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
-        let twin = event_twin(ctx)?.ok_or_else(|| {
-            Error::usage("the event names no digital twin (structure.twin)")
-        })?;
+        let twin = event_twin(ctx)?
+            .ok_or_else(|| Error::usage("the event names no digital twin (structure.twin)"))?;
         let twin_path = ctx.referenced.resolve(&twin, "structure.twin")?;
         let modes_path = ctx.input::<ModesFile>(ProductKind::Modes)?.path.clone();
         update_from_files(&twin_path, &modes_path, &ctx.out_dir, &self.params)?;

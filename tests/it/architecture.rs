@@ -130,10 +130,17 @@ fn the_module_graph_has_no_cycle() {
         panic!("module cycle: {}", cycle.join(" → "));
     }
     // The runner knows stages only through its trait and the catalog it is handed.
-    assert!(!graph["pipeline"].contains("stages"), "{:?}", graph["pipeline"]);
+    assert!(
+        !graph["pipeline"].contains("stages"),
+        "{:?}",
+        graph["pipeline"]
+    );
     // The bottom of the house depends on nothing above it.
     for low in ["vocab", "error"] {
-        let above: Vec<&String> = graph[low].iter().filter(|d| *d != "vocab" && *d != "error").collect();
+        let above: Vec<&String> = graph[low]
+            .iter()
+            .filter(|d| *d != "vocab" && *d != "error")
+            .collect();
         assert!(above.is_empty(), "{low} depends on {above:?}");
     }
 }

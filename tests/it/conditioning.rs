@@ -288,7 +288,9 @@ fn settings_deserialize_with_defaults_and_minimal_has_no_filter() {
     };
     assert_eq!(f.order, 2);
     let m = ConditioningSettings::minimal();
-    assert!(m.step("filter").is_none() && m.step("taper").is_none() && m.step("integrate").is_some());
+    assert!(
+        m.step("filter").is_none() && m.step("taper").is_none() && m.step("integrate").is_some()
+    );
 }
 
 #[test]
@@ -319,14 +321,20 @@ fn steps_list_reads_in_order_and_equals_the_keyed_form() {
         "steps = [{ step = \"smooth\" }]",
         "steps = [{ step = \"taper\", fracton = 0.1 }]",
     ] {
-        assert!(toml::from_str::<ConditioningSettings>(bad).is_err(), "{bad}");
+        assert!(
+            toml::from_str::<ConditioningSettings>(bad).is_err(),
+            "{bad}"
+        );
     }
     // Integration must come last.
-    let late: ConditioningSettings = toml::from_str(
-        "steps = [{ step = \"integrate\" }, { step = \"taper\", fraction = 0.1 }]",
-    )
-    .unwrap();
-    assert!(late.validate().unwrap_err().to_string().contains("last step"));
+    let late: ConditioningSettings =
+        toml::from_str("steps = [{ step = \"integrate\" }, { step = \"taper\", fraction = 0.1 }]")
+            .unwrap();
+    assert!(late
+        .validate()
+        .unwrap_err()
+        .to_string()
+        .contains("last step"));
 }
 
 #[test]

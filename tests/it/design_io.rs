@@ -4,14 +4,14 @@
 use std::path::{Path, PathBuf};
 
 use arrow_array::{BooleanArray, Float64Array, Int64Array, StringArray, UInt32Array};
-use quaketwin::design::plan::DesignSettings;
 use quaketwin::design::file::{load_design, parse_design, MotionSource};
+use quaketwin::design::motion::{base_motion_from_file, twin_axis_of};
+use quaketwin::design::plan::DesignSettings;
 use quaketwin::pipeline::{self, StageOutcome};
-use quaketwin::stages::parse_pipeline;
 use quaketwin::sinks::design_tables::{DESIGN_FILES, WNRMSE_KEY};
 use quaketwin::sinks::parquet::ReadTable;
-use quaketwin::design::motion::{base_motion_from_file, twin_axis_of};
 use quaketwin::stages::design::design_from_file;
+use quaketwin::stages::parse_pipeline;
 use quaketwin::synth::facade::{facade_twin_toml, write_facade_sample, FACADE_FOLDER};
 use quaketwin::twin::parse_twin;
 use quaketwin::vocab::{Axis, Direction};

@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 use quaketwin::event_folder;
 use quaketwin::geometry::{apply_building_geometry, one_record_per_level, AxesSource};
 use quaketwin::pipeline::{self, StageOutcome};
-use quaketwin::stages::parse_pipeline;
 use quaketwin::stages::hysteresis::auto_directions;
+use quaketwin::stages::parse_pipeline;
 use quaketwin::vocab::{Axis, Channel, Direction, Event, QaFlag, Record, Role, SourceRef, Units};
 
 use super::common::{column_f64, column_str};

@@ -92,7 +92,8 @@ fn shake_table_linear_steel_model_is_not_identifiable() {
         floors: vec![id_of("1st Floor"), id_of("2nd Floor"), id_of("3rd Floor")],
         masses_kg: Some(vec![0.142; 3]),
     };
-    let (outcomes, _) = identify_event_at(&mean_removed(&event), Some(&dir), &params(spec)).unwrap();
+    let (outcomes, _) =
+        identify_event_at(&mean_removed(&event), Some(&dir), &params(spec)).unwrap();
     eprintln!("{}", describe(&outcomes[0]));
     assert!(
         matches!(&outcomes[0], DirectionOutcome::NotIdentifiable { reason, .. } if reason.contains("not identifiable")),

@@ -112,12 +112,21 @@ fn nested_typo_and_wrong_enum_value_are_refused_with_their_line() {
         "filter = { order = 4, band = \"bandpass\", corner_hz = [0.5, 20.0] }",
     );
     let msg = parse_pipeline(&text, "typo.toml").unwrap_err().to_string();
-    assert!(msg.contains("corner_hz") && msg.contains(&format!("line {line}")), "{msg}");
+    assert!(
+        msg.contains("corner_hz") && msg.contains(&format!("line {line}")),
+        "{msg}"
+    );
     let (text, line) = pipeline_with("hysteresis", "form = \"jerky\"");
     let msg = parse_pipeline(&text, "typo.toml").unwrap_err().to_string();
-    assert!(msg.contains("jerky") && msg.contains(&format!("line {line}")), "{msg}");
+    assert!(
+        msg.contains("jerky") && msg.contains(&format!("line {line}")),
+        "{msg}"
+    );
     // Values that parse but make no sense are settings errors too, not bad data.
-    let (text, _) = pipeline_with("condition", "filter = { order = 0, band = \"lowpass\", corners_hz = [5.0] }");
+    let (text, _) = pipeline_with(
+        "condition",
+        "filter = { order = 0, band = \"lowpass\", corners_hz = [5.0] }",
+    );
     let e = parse_pipeline(&text, "typo.toml").unwrap_err();
     assert_eq!(e.exit_code(), 2);
     assert!(e.to_string().contains("order 0"), "{e}");
@@ -130,7 +139,10 @@ fn a_product_without_a_provider_among_the_inputs_is_refused() {
     let e = parse_pipeline(text, "t.toml").unwrap_err();
     assert_eq!(e.exit_code(), 2);
     let msg = e.to_string();
-    assert!(msg.contains("conditioned records") && msg.contains("condition"), "{msg}");
+    assert!(
+        msg.contains("conditioned records") && msg.contains("condition"),
+        "{msg}"
+    );
 }
 
 #[test]
