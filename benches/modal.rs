@@ -57,7 +57,7 @@ fn earthquake() -> ModalInput {
             .collect(),
         input_ids: vec!["L0".into()],
         inputs: vec![add_measurement_noise(&r.base_acceleration, 30.0, &mut rng)],
-        locations: Vec::new(),
+        ..Default::default()
     }
 }
 

@@ -255,10 +255,83 @@ pub fn synth(out: &Path, seed: u64) -> Result<Vec<std::path::PathBuf>> {
     Ok(written)
 }
 
-/// `quaketwin modal EVENT --out DIR [--method M]`: ingest + condition + modal.
-pub fn modal(event: &Path, out: &Path, method: &str, quiet: bool) -> Result<()> {
+/// Flags of `quaketwin modal` as typed (parsed and checked by [`modal`]).
+#[derive(Debug, Clone, Default)]
+pub struct ModalFlags {
+    pub method: String,
+    pub band: Option<String>,
+    pub decimate: Option<String>,
+    pub block_rows: Option<String>,
+    pub orders: Option<String>,
+    pub inputs: Option<String>,
+}
+
+fn numbers<T: std::str::FromStr>(flag: &str, text: &str, counts: &[usize]) -> Result<Vec<T>> {
+    let bad = || {
+        crate::error::Error::usage(format!(
+            "--{flag} {text:?}: expected {} comma-separated number(s)",
+            counts
+                .iter()
+                .map(|c| c.to_string())
+                .collect::<Vec<_>>()
+                .join(" or ")
+        ))
+    };
+    let v: Vec<T> = text
+        .split(',')
+        .map(|x| x.trim().parse::<T>().map_err(|_| bad()))
+        .collect::<Result<_>>()?;
+    if counts.contains(&v.len()) {
+        Ok(v)
+    } else {
+        Err(bad())
+    }
+}
+
+impl ModalFlags {
+    /// The `[stage.params]` lines of the modal stage; bad values are usage
+    /// errors (exit 2) before any record is read.
+    pub fn params_toml(&self) -> Result<String> {
+        let mut t = format!("method = {:?}\n", self.method);
+        if let Some(b) = &self.band {
+            let v: Vec<f64> = numbers("band", b, &[2])?;
+            t += &format!("band_hz = [{:?}, {:?}]\n", v[0], v[1]);
+        }
+        if let Some(d) = &self.decimate {
+            let v: Vec<usize> = numbers("decimate", d, &[1])?;
+            t += &format!("decimation = {}\n", v[0]);
+        }
+        if let Some(p) = &self.block_rows {
+            let v: Vec<usize> = numbers("block-rows", p, &[1])?;
+            t += &format!("block_rows = {}\n", v[0]);
+        }
+        if let Some(o) = &self.orders {
+            let v: Vec<usize> = numbers("orders", o, &[2, 3])?;
+            t += &format!(
+                "orders = [{}, {}, {}]\n",
+                v[0],
+                v[1],
+                v.get(2).copied().unwrap_or(2)
+            );
+        }
+        if let Some(i) = &self.inputs {
+            let ids: Vec<String> = i
+                .split(',')
+                .map(|x| x.trim().to_string())
+                .filter(|x| !x.is_empty())
+                .collect();
+            t += &format!("inputs = {ids:?}\n");
+        }
+        Ok(t)
+    }
+}
+
+/// `quaketwin modal EVENT --out DIR [--method M] [--band LO,HI] [--decimate N]
+/// [--block-rows N] [--orders MIN,MAX] [--inputs ID,…]`: ingest + condition + modal.
+pub fn modal(event: &Path, out: &Path, flags: &ModalFlags, quiet: bool) -> Result<()> {
     let text = format!(
-        "{INGEST_PIPELINE}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\nmethod = {method:?}\n"
+        "{INGEST_PIPELINE}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\n{}",
+        flags.params_toml()?
     );
     let p = parse_pipeline(&text, "built-in modal pipeline")?;
     pipeline::run(&p, event, out, quiet).map(|_| ())

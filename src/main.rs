@@ -69,6 +69,21 @@ enum Command {
         /// auto (input–output when base channels exist), ssi-cov, ssi-data or io.
         #[arg(long, default_value = "auto")]
         method: String,
+        /// Band of interest LO,HI in Hz (default: from the structure, else 0.2,20).
+        #[arg(long)]
+        band: Option<String>,
+        /// Decimation factor (default: automatic, ≈ 4 × the band's top).
+        #[arg(long)]
+        decimate: Option<String>,
+        /// Block rows (default: automatic).
+        #[arg(long)]
+        block_rows: Option<String>,
+        /// Model orders MIN,MAX[,STEP] (default: 2 to what the data support).
+        #[arg(long)]
+        orders: Option<String>,
+        /// Input channel ids ID,ID,… for io (default: horizontal base channels).
+        #[arg(long)]
+        inputs: Option<String>,
     },
     /// Bouc-Wen identification and damage index (bouc_wen.parquet, damage.parquet…).
     Hysteresis {
@@ -132,8 +147,25 @@ fn main() -> ExitCode {
                     eprintln!("wrote {}", p.display());
                 }
             }),
-        Command::Modal { event, out, method } => {
-            quaketwin::commands::modal(event, out, method, cli.quiet)
+        Command::Modal {
+            event,
+            out,
+            method,
+            band,
+            decimate,
+            block_rows,
+            orders,
+            inputs,
+        } => {
+            let flags = quaketwin::commands::ModalFlags {
+                method: method.clone(),
+                band: band.clone(),
+                decimate: decimate.clone(),
+                block_rows: block_rows.clone(),
+                orders: orders.clone(),
+                inputs: inputs.clone(),
+            };
+            quaketwin::commands::modal(event, out, &flags, cli.quiet)
         }
         Command::Hysteresis { event, out } => {
             quaketwin::commands::hysteresis(event, out, cli.quiet)

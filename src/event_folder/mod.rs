@@ -487,16 +487,59 @@ fn make_ids_unique(records: &mut [Record]) {
     }
 }
 
-/// Words in a sensor's location text that mark ground/base sensors.
-const GROUND_WORDS: [&str; 7] = [
+/// Phrases in a sensor's location text (CSMIP/COSMOS `Location:`) that mark
+/// ground or base sensors (role input), checked before the structural words
+/// so that "Column at Grnd Level" or "Ground Floor" are base sensors.
+const GROUND_WORDS: [&str; 12] = [
     "FREE FIELD",
+    "FREEFIELD",
     "FREE-FIELD",
     "GROUND",
+    "GRND",
     "BASEMENT",
     "BASE OF",
+    "BOTTOM OF",
     "FOOTING",
     "EMBANKMENT",
+    "FOUNDATION",
+    "PILE CAP",
 ];
+
+/// Words that mark a structural response sensor (role output): deck, roof,
+/// floors and levels of buildings, column tops, girders, spans.
+const STRUCTURE_WORDS: [&str; 11] = [
+    "DECK",
+    "ROOF",
+    "FLOOR",
+    "LEVEL",
+    "STORY",
+    "STOREY",
+    "TOP OF",
+    "GIRDER",
+    "SPAN",
+    "PENTHOUSE",
+    "ATTIC",
+];
+
+/// Role read from a sensor's location text, with the word that decided it;
+/// `None` when the text names neither ground nor structure.  Public so the
+/// modal stage can tell free-field sensors from base sensors.
+pub fn role_from_location_text(text: &str) -> Option<(Role, &'static str)> {
+    let t = text.to_ascii_uppercase();
+    if let Some(w) = GROUND_WORDS.iter().find(|w| t.contains(*w)) {
+        return Some((Role::Input, w));
+    }
+    STRUCTURE_WORDS
+        .iter()
+        .find(|w| t.contains(*w))
+        .map(|w| (Role::Output, *w))
+}
+
+/// Whether a location text names a free-field sensor (ground away from the structure).
+pub fn is_free_field(text: &str) -> bool {
+    let t = text.to_ascii_uppercase();
+    GROUND_WORDS[..3].iter().any(|w| t.contains(*w))
+}
 
 /// Fills role from level, guesses base sensors from location text (saying
 /// so), and lists what later stages will miss.
@@ -514,15 +557,19 @@ fn infer_and_report_missing(event: &mut Event, has_manifest: bool) {
                     ch.inferred.push(format!("role=output from level {l}"));
                 }
                 _ => {
-                    let text = ch
-                        .location_text
-                        .clone()
-                        .unwrap_or_default()
-                        .to_ascii_uppercase();
-                    if let Some(w) = GROUND_WORDS.iter().find(|w| text.contains(*w)) {
-                        ch.role = Role::Input;
-                        ch.inferred
-                            .push(format!("role=input from location text containing {w:?}"));
+                    let text = ch.location_text.clone().unwrap_or_default();
+                    if let Some((role, w)) = role_from_location_text(&text) {
+                        ch.role = role;
+                        let what = match role {
+                            Role::Input if is_free_field(&text) => "free-field ground sensor",
+                            Role::Input => "base/ground sensor",
+                            _ => "structural response",
+                        };
+                        ch.inferred.push(format!(
+                            "role={} ({what}) from location text {:?} containing {w:?}; state `role` in event.toml to override",
+                            role.name(),
+                            text.trim()
+                        ));
                     }
                 }
             }

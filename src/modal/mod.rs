@@ -31,6 +31,7 @@
 //!   `damping_other`; metadata: the two event names.
 
 pub mod compare;
+pub mod direction;
 pub mod hankel;
 pub mod poles;
 pub mod preprocess;
@@ -41,7 +42,7 @@ pub mod ssi;
 pub use compare::{frequency_shifts, mac_matrix, pair_modes, FrequencyShift, ModePair};
 pub use poles::{mac, mpc_mpd, Pole, StabilityTolerances};
 pub use preprocess::Preprocessing;
-pub use selection::{ClusterSettings, Mode, PhysicalFilters};
+pub use selection::{Mode, PhysicalFilters, RejectedColumn, Selection, SelectionSettings};
 pub use spectrum::{spectral_overlay, SpectralOverlay};
 
 use crate::error::{Error, Location, Result};
@@ -77,23 +78,45 @@ impl Method {
     }
 }
 
+/// Default band of interest when neither the settings nor the structure
+/// say otherwise, Hz (issue 13).
+pub const DEFAULT_BAND_HZ: [f64; 2] = [0.2, 20.0];
+/// Automatic decimation keeps the sampling rate at least this multiple of
+/// the top of the band (issue 13: ≈ 4–5 ×).
+pub const SAMPLES_PER_TOP_PERIOD: f64 = 4.0;
+/// Automatic block rows: at most this many rows in the matrix factorised
+/// (p·l for SSI-COV, p·(r + l) for SSI-DATA, 2p·(m + l) input–output), which
+/// bounds the cost of the one factorisation.
+pub const MAX_FACTORISED_ROWS: usize = 1000;
+/// Automatic model orders: 2, 4, … up to this, or what the subspace supports.
+pub const MAX_AUTO_ORDER: usize = 60;
+
 /// All settings of the modal stage (serialisable into the output metadata).
+/// `None` fields are resolved from the record by [`plan`] (issue 13).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ModalSettings {
     pub method: Method,
-    /// Block rows p (past = future horizon).  `None` = automatic:
-    /// max(30, ⌈n_max / min(l, r)⌉ + 2).
+    /// Band of interest [lo, hi], Hz; `None` = [`DEFAULT_BAND_HZ`] (the modal
+    /// stage derives it from the structure when the manifest gives storeys).
+    /// Sets the automatic decimation, block rows and the poles' band filter.
+    #[serde(default)]
+    pub band_hz: Option<[f64; 2]>,
+    /// Block rows p (past = future horizon).  `None` = automatic: half a
+    /// period of the band's low end, bounded by the data (enough Hankel
+    /// columns) and by [`MAX_FACTORISED_ROWS`], never below what the highest
+    /// order needs when the data allow it.
     pub block_rows: Option<usize>,
-    /// Model orders to sweep (default 2, 4, …, 42).
-    pub orders: Vec<usize>,
+    /// Model orders to sweep; `None` = 2, 4, … up to [`MAX_AUTO_ORDER`] or
+    /// the subspace dimension.
+    pub orders: Option<Vec<usize>>,
     /// Reference output channels (indices into the outputs) for SSI-COV/DATA;
     /// `None` = all outputs.
     pub reference_channels: Option<Vec<usize>>,
     pub preprocessing: Preprocessing,
     pub stability: StabilityTolerances,
     pub filters: PhysicalFilters,
-    pub clustering: ClusterSettings,
-    /// Manual override: pick these frequencies (Hz) instead of clustering.
+    pub selection: SelectionSettings,
+    /// Manual override: pick these frequencies (Hz) instead of the automatic selection.
     pub manual_frequencies_hz: Option<Vec<f64>>,
     /// Relative half-width of the manual pick window (default 5 %).
     pub manual_band: f64,
@@ -103,13 +126,14 @@ impl Default for ModalSettings {
     fn default() -> Self {
         ModalSettings {
             method: Method::SsiCov,
+            band_hz: None,
             block_rows: None,
-            orders: (2..=42).step_by(2).collect(),
+            orders: None,
             reference_channels: None,
             preprocessing: Preprocessing::default(),
             stability: StabilityTolerances::default(),
             filters: PhysicalFilters::default(),
-            clustering: ClusterSettings::default(),
+            selection: SelectionSettings::default(),
             manual_frequencies_hz: None,
             manual_band: 0.05,
         }
@@ -129,6 +153,11 @@ pub struct ModalInput {
     /// Where each channel came from (same order as ids: outputs then inputs),
     /// used to name channels in errors; may be empty.
     pub locations: Vec<Location>,
+    /// Direction label of each output (`X`, `Y`, [`direction::VERTICAL`], an
+    /// azimuth label, empty = unknown); may be empty.  Gives the modes' labels.
+    pub output_directions: Vec<String>,
+    /// Level (or location group) of each output, for the torsion label; may be empty.
+    pub output_groups: Vec<String>,
 }
 
 /// Everything the modal stage found.
@@ -136,10 +165,16 @@ pub struct ModalInput {
 pub struct ModalResult {
     pub method: Method,
     pub block_rows: usize,
+    /// Band of interest used, Hz.
+    pub band_hz: [f64; 2],
+    /// Decimation factor applied.
+    pub decimation: usize,
     /// Sampling interval after pre-processing, s.
     pub dt: f64,
     pub output_ids: Vec<String>,
     pub input_ids: Vec<String>,
+    /// Direction label per output channel (empty entries = unknown).
+    pub output_directions: Vec<String>,
     /// Orders actually realised (those above the subspace dimension are skipped).
     pub orders: Vec<usize>,
     /// Singular values of the factorised matrix (order-selection plot).
@@ -148,9 +183,15 @@ pub struct ModalResult {
     pub poles: Vec<Pole>,
     /// Selected modes, ascending frequency.
     pub modes: Vec<Mode>,
+    /// Pole columns that looked physical but were not promoted, and why.
+    pub rejected: Vec<RejectedColumn>,
     /// Pre-processing applied, in order.
     pub preprocessing: Vec<ProcessingStep>,
+    /// How the settings were resolved and what was left out.
     pub notes: Vec<String>,
+    /// Why no mode, or fewer modes than the stable columns suggest, were
+    /// selected (empty when nothing is wrong).
+    pub warnings: Vec<String>,
 }
 
 fn channel_location(input: &ModalInput, index: usize, id: &str) -> Location {
@@ -227,20 +268,287 @@ fn validate(input: &ModalInput, method: Method) -> Result<()> {
     Ok(())
 }
 
+/// Band of interest from a structure's height (issue 13), when the manifest
+/// gives storey heights: fundamental period T₁ ≈ 0.0488·H^0.75 s (H in m; the
+/// approximate-period formula of ASCE 7-16 Eq. 12.8-7, C_t = 0.0488 in SI,
+/// x = 0.75), band [f₁/4, 6 f₁] within [0.2, 20] Hz: room for the first two or
+/// three modes per direction and torsion even when T₁ is off by a factor 2.
+pub fn band_for_structure(structure: &crate::vocab::Structure) -> Option<[f64; 2]> {
+    let height: f64 = structure.storey_heights_m.iter().sum();
+    if !(height.is_finite() && height > 0.0) {
+        return None;
+    }
+    let f1 = 1.0 / (0.0488 * height.powf(0.75));
+    let lo = (f1 / 4.0).clamp(DEFAULT_BAND_HZ[0], DEFAULT_BAND_HZ[1] / 2.0);
+    let hi = (6.0 * f1).clamp(2.0 * lo, DEFAULT_BAND_HZ[1]);
+    Some([lo, hi])
+}
+
+/// The settings resolved for one record (issue 13): what [`identify`] will do.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    /// Band of interest, Hz (clipped to the anti-alias pass band).
+    pub band_hz: [f64; 2],
+    pub decimation: usize,
+    pub block_rows: usize,
+    pub orders: Vec<usize>,
+    /// Samples per channel after decimation.
+    pub samples: usize,
+    /// How each value was chosen.
+    pub notes: Vec<String>,
+}
+
+/// Rows of the factorised matrix per block row, and the fewest samples
+/// `p` block rows need (enough Hankel columns for a well-posed LQ).
+fn rows_and_samples_needed(
+    method: Method,
+    l: usize,
+    r: usize,
+    m: usize,
+    p: usize,
+) -> (usize, usize) {
+    match method {
+        Method::SsiCov => (l, 12 * p),
+        Method::SsiData => (r + l, 2 * p + (2 * p * (r + l)).max(10 * p)),
+        Method::Io => (2 * (m + l), 2 * p + (4 * p * (m + l)).max(10 * p)),
+    }
+}
+
+/// Resolves band, decimation, block rows and orders for `input` (issue 13).
+/// Bad explicit settings are usage errors; the automatic values never
+/// refuse a record that a smaller value would accept.
+pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
+    let mut notes = Vec::new();
+    let fs0 = 1.0 / input.dt;
+    let n0 = input.outputs.first().map_or(0, |s| s.len());
+    let [lo, hi] = settings.band_hz.unwrap_or(DEFAULT_BAND_HZ);
+    if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) {
+        return Err(Error::usage(format!(
+            "modal: band [{lo}, {hi}] Hz must satisfy 0 < low < high"
+        )));
+    }
+    // The anti-alias filter passes 80 % of the Nyquist frequency.
+    let top = 0.4 * fs0;
+    if lo >= top {
+        return Err(Error::usage(format!(
+            "modal: band low end {lo} Hz is above the usable band of a {fs0} Hz record (< {top} Hz)"
+        )));
+    }
+    let hi = if hi > top {
+        notes.push(format!(
+            "band top {hi} Hz above 80 % of the record's Nyquist frequency: {top} Hz used"
+        ));
+        top
+    } else {
+        hi
+    };
+    let decimation = match settings.preprocessing.decimation {
+        Some(0) => return Err(Error::usage("modal: decimation must be at least 1")),
+        Some(d) => d,
+        None => {
+            let d = ((fs0 / (SAMPLES_PER_TOP_PERIOD * hi)).floor() as usize).max(1);
+            notes.push(format!(
+                "decimation {d} (automatic: sampling rate {:.4} Hz ≥ {SAMPLES_PER_TOP_PERIOD} × band top {hi} Hz)",
+                fs0 / d as f64
+            ));
+            d
+        }
+    };
+    let fs = fs0 / decimation as f64;
+    let hi = if hi > 0.4 * fs {
+        notes.push(format!(
+            "band top lowered to {} Hz: 80 % of the Nyquist frequency after decimation by {decimation}",
+            0.4 * fs
+        ));
+        0.4 * fs
+    } else {
+        hi
+    };
+    if lo >= hi {
+        return Err(Error::usage(format!(
+            "modal: decimation {decimation} leaves no band: low end {lo} Hz ≥ usable top {hi} Hz"
+        )));
+    }
+    let n = n0.div_ceil(decimation);
+    let l = input.outputs.len();
+    let m = if settings.method == Method::Io {
+        input.inputs.len()
+    } else {
+        0
+    };
+    let r = settings
+        .reference_channels
+        .as_ref()
+        .map_or(l, |refs| refs.len());
+    let columns_per_block = match settings.method {
+        Method::Io => l,
+        _ => l.min(r),
+    }
+    .max(1);
+    let explicit_orders = match &settings.orders {
+        Some(o) => {
+            let mut o: Vec<usize> = o.iter().copied().filter(|&k| k > 0).collect();
+            o.sort_unstable();
+            o.dedup();
+            if o.is_empty() {
+                return Err(Error::usage("modal: no model order to sweep"));
+            }
+            Some(o)
+        }
+        None => None,
+    };
+    let needed = |p: usize| rows_and_samples_needed(settings.method, l, r, m, p);
+    let block_rows = match settings.block_rows {
+        Some(p) if p < 2 => return Err(Error::usage("modal: block rows must be at least 2")),
+        Some(p) => {
+            let need = needed(p).1;
+            if n < need {
+                return Err(Error::input(
+                    channel_location(input, 0, input.output_ids.first().map_or("", |s| s.as_str())),
+                    format!(
+                        "too few samples for {p} block rows: {n} after decimation by {decimation}, need at least {need}; give fewer block rows or leave them automatic"
+                    ),
+                ));
+            }
+            p
+        }
+        None => {
+            // Half a period of the band's low end …
+            let p_band = (fs / (2.0 * lo)).ceil() as usize;
+            // … enough for the highest order asked …
+            let want_order = explicit_orders
+                .as_ref()
+                .and_then(|o| o.last().copied())
+                .unwrap_or(0);
+            let p_order = want_order.div_ceil(columns_per_block) + 2;
+            // … bounded by the cost and by the data.
+            let p_cost = (MAX_FACTORISED_ROWS / needed(1).0.max(1)).max(3);
+            let p_data = (2..=p_band.max(p_order).max(3))
+                .take_while(|&p| needed(p).1 <= n)
+                .last()
+                .unwrap_or(0);
+            if p_data < 2 {
+                return Err(Error::input(
+                    channel_location(input, 0, input.output_ids.first().map_or("", |s| s.as_str())),
+                    format!(
+                        "record too short for subspace identification: {n} samples after decimation by {decimation} ({} s)",
+                        n as f64 / fs
+                    ),
+                ));
+            }
+            let p = p_band.max(p_order).min(p_cost).min(p_data).max(2);
+            notes.push(format!(
+                "block rows {p} (automatic: half a period of {lo} Hz = {p_band}, highest order needs {p_order}, cost bound {p_cost}, data bound {p_data})"
+            ));
+            p
+        }
+    };
+    let supported = (block_rows - 1) * columns_per_block;
+    let orders = match explicit_orders {
+        Some(o) => o,
+        None => {
+            let top = MAX_AUTO_ORDER.min(supported - supported % 2).max(2);
+            notes.push(format!(
+                "model orders 2–{top} step 2 (automatic: at most {MAX_AUTO_ORDER}, subspace supports {supported})"
+            ));
+            (2..=top).step_by(2).collect()
+        }
+    };
+    Ok(Plan {
+        band_hz: [lo, hi],
+        decimation,
+        block_rows,
+        orders,
+        samples: n,
+        notes,
+    })
+}
+
+/// Why no mode, or fewer than the columns suggest, was selected.
+fn selection_warnings(
+    poles: &[Pole],
+    selection: &Selection,
+    filters: &PhysicalFilters,
+    band: [f64; 2],
+) -> Vec<String> {
+    let mut warnings = Vec::new();
+    let listed: Vec<String> = selection
+        .rejected
+        .iter()
+        .filter(|c| c.poles >= 4)
+        .take(6)
+        .map(|c| {
+            format!(
+                "{:.3} Hz (ζ {:.1} %, orders {}–{}, {} poles): {}",
+                c.frequency_hz,
+                100.0 * c.damping_ratio,
+                c.order_min,
+                c.order_max,
+                c.poles,
+                c.reason
+            )
+        })
+        .collect();
+    if selection.modes.is_empty() {
+        let in_band = poles
+            .iter()
+            .filter(|p| p.frequency_hz >= band[0] && p.frequency_hz <= band[1])
+            .count();
+        let physical = poles.iter().filter(|p| p.physical).count();
+        let why = if in_band == 0 {
+            format!("no pole in the band {:.3}–{:.3} Hz", band[0], band[1])
+        } else if physical == 0 {
+            let mut z: Vec<f64> = poles
+                .iter()
+                .filter(|p| p.frequency_hz >= band[0] && p.frequency_hz <= band[1])
+                .map(|p| p.damping_ratio)
+                .collect();
+            z.sort_by(f64::total_cmp);
+            format!(
+                "none of the {in_band} poles in the band passes the physical filters (damping {:.1}–{:.1} %, MPC ≥ {}, MPD ≤ {}°; median damping of the poles {:.1} %)",
+                100.0 * filters.damping_min,
+                100.0 * filters.damping_max,
+                filters.mpc_min,
+                filters.mpd_max_deg,
+                100.0 * z[z.len() / 2]
+            )
+        } else if listed.is_empty() {
+            format!(
+                "no pole column is stable over consecutive orders ({physical} physical poles scattered): the record may be too short or too weakly excited in {:.3}–{:.3} Hz",
+                band[0], band[1]
+            )
+        } else {
+            format!("stable columns were not promoted: {}", listed.join("; "))
+        };
+        warnings.push(format!("no mode selected: {why}"));
+    } else if !listed.is_empty() {
+        warnings.push(format!(
+            "{} mode(s) selected; stable columns not promoted: {}",
+            selection.modes.len(),
+            listed.join("; ")
+        ));
+    }
+    warnings
+}
+
 /// Runs the identification on plain signals.
 pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalResult> {
     validate(input, settings.method)?;
+    let plan = plan(input, settings)?;
     // Pre-processing on outputs and inputs together (same filter for both).
     let mut all: Vec<Vec<f64>> = input.outputs.clone();
     let use_inputs = settings.method == Method::Io;
     if use_inputs {
         all.extend(input.inputs.iter().cloned());
     }
-    let (processed, dt, steps) = preprocess::apply(&all, input.dt, &settings.preprocessing);
+    let pre = Preprocessing {
+        decimation: Some(plan.decimation),
+        ..settings.preprocessing.clone()
+    };
+    let (processed, dt, steps) = preprocess::apply(&all, input.dt, &pre);
     let l = input.outputs.len();
     let outputs: Vec<&[f64]> = processed[..l].iter().map(|v| v.as_slice()).collect();
     let inputs: Vec<&[f64]> = processed[l..].iter().map(|v| v.as_slice()).collect();
-    let n_samples = outputs[0].len();
 
     let refs: Vec<usize> = match &settings.reference_channels {
         Some(r) => {
@@ -253,60 +561,31 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
         }
         None => (0..l).collect(),
     };
-    let mut orders: Vec<usize> = settings.orders.iter().copied().filter(|&n| n > 0).collect();
-    orders.sort_unstable();
-    orders.dedup();
-    let max_order = *orders
-        .last()
-        .ok_or_else(|| Error::usage("modal: no model order to sweep"))?;
-    let columns_per_block = match settings.method {
-        Method::Io => l,
-        _ => l.min(refs.len()),
-    };
-    let block_rows = settings
-        .block_rows
-        .unwrap_or_else(|| 30.max(max_order.div_ceil(columns_per_block) + 2));
-    if block_rows < 2 {
-        return Err(Error::usage("modal: block rows must be at least 2"));
-    }
-    // Hankel rows of the largest factorisation, and the columns they need.
-    let hankel_rows = match settings.method {
-        Method::SsiCov => 0,
-        Method::SsiData => block_rows * (refs.len() + l),
-        Method::Io => 2 * block_rows * (inputs.len() + l),
-    };
-    let needed = 2 * block_rows + (2 * hankel_rows).max(10 * block_rows);
-    if n_samples < needed {
-        return Err(Error::input(
-            channel_location(input, 0, &input.output_ids[0]),
-            format!(
-                "too few samples for {block_rows} block rows: {n_samples} after pre-processing, need at least {needed}; reduce block_rows or decimation"
-            ),
-        ));
-    }
+    let block_rows = plan.block_rows;
     let subspace = match settings.method {
         Method::SsiCov => ssi::ssi_cov(&outputs, &refs, block_rows)?,
         Method::SsiData => ssi::ssi_data(&outputs, &refs, block_rows)?,
         Method::Io => ssi::po_moesp(&outputs, &inputs, block_rows)?,
     };
-    let mut notes = Vec::new();
+    let mut notes = plan.notes.clone();
     let nyquist = 0.5 / dt;
+    let mut filters = settings.filters.clone();
+    filters.frequency_min_hz = filters.frequency_min_hz.or(Some(plan.band_hz[0]));
+    filters.frequency_max_hz = filters.frequency_max_hz.or(Some(plan.band_hz[1]));
     let mut poles: Vec<Pole> = Vec::new();
     let mut realised = Vec::new();
     let mut previous_range: Option<(usize, usize)> = None;
-    for &n in &orders {
+    let mut skipped = Vec::new();
+    for &n in &plan.orders {
         if n > subspace.max_order() {
-            notes.push(format!(
-                "order {n} skipped: above the subspace dimension {}",
-                subspace.max_order()
-            ));
+            skipped.push(n);
             continue;
         }
         let (a, c) = subspace.realise(n)?;
         let eig = ssi::eigen_structure(a.as_ref(), c.as_ref())?;
         let mut current = poles::poles_of_order(n, eig, dt);
         for p in current.iter_mut() {
-            p.physical = settings.filters.passes(p, nyquist);
+            p.physical = filters.passes(p, nyquist);
         }
         if let Some((start, end)) = previous_range {
             poles::flag_stability(&mut current, &poles[start..end], &settings.stability);
@@ -316,23 +595,52 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
         previous_range = Some((start, poles.len()));
         realised.push(n);
     }
-    let modes = match &settings.manual_frequencies_hz {
-        Some(f) => selection::select_manual(&mut poles, f, settings.manual_band)?,
-        None => selection::select_automatic(&mut poles, realised.len(), &settings.clustering),
+    if !skipped.is_empty() {
+        notes.push(format!(
+            "orders {skipped:?} skipped: above the subspace dimension {}",
+            subspace.max_order()
+        ));
+    }
+    let band = [
+        filters.frequency_min_hz.unwrap_or(0.0),
+        filters.frequency_max_hz.unwrap_or(0.95 * nyquist),
+    ];
+    let (mut modes, rejected, warnings) = match &settings.manual_frequencies_hz {
+        Some(f) => (
+            selection::select_manual(&mut poles, f, settings.manual_band)?,
+            Vec::new(),
+            Vec::new(),
+        ),
+        None => {
+            let sel = selection::select_automatic(
+                &mut poles,
+                &realised,
+                &filters,
+                nyquist,
+                &settings.selection,
+            );
+            let w = selection_warnings(&poles, &sel, &filters, band);
+            (sel.modes, sel.rejected, w)
+        }
     };
+    for m in modes.iter_mut() {
+        m.direction = direction::label(&m.shape, &input.output_directions, &input.output_groups);
+    }
     let mut preprocessing = steps;
     preprocessing.push(ProcessingStep {
         step: "band_limits".into(),
         channels: Vec::new(),
         params: serde_json::json!({
-            "frequency_min_hz": settings.filters.frequency_min_hz.unwrap_or(0.0),
-            "frequency_max_hz": settings.filters.frequency_max_hz.unwrap_or(0.95 * nyquist),
+            "frequency_min_hz": band[0],
+            "frequency_max_hz": band[1],
             "applies_to": "identified poles",
         }),
     });
     Ok(ModalResult {
         method: settings.method,
         block_rows,
+        band_hz: plan.band_hz,
+        decimation: plan.decimation,
         dt,
         output_ids: input.output_ids.clone(),
         input_ids: if use_inputs {
@@ -340,12 +648,15 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
         } else {
             Vec::new()
         },
+        output_directions: input.output_directions.clone(),
         orders: realised,
         singular_values: subspace.singular_values.clone(),
         poles,
         modes,
+        rejected,
         preprocessing,
         notes,
+        warnings,
     })
 }
 
@@ -355,72 +666,287 @@ fn location_of(record: &Record) -> Location {
     l
 }
 
+/// Which channels of an event enter the identification.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ChannelChoice {
+    /// Input (base) channel ids; `None` = the horizontal base channels
+    /// (role input), structural base sensors preferred to free-field ones.
+    /// Listing a vertical channel here is how verticals enter as inputs.
+    pub inputs: Option<Vec<String>>,
+}
+
+/// Direction label of a channel for [`direction::label`]: building axis,
+/// vertical, or an azimuth folded onto [0, 180) (a reversed sensor measures
+/// the same axis), empty when unknown.
+fn direction_label(channel: &crate::vocab::Channel) -> String {
+    use crate::vocab::{Axis, Direction};
+    match channel.direction {
+        Some(Direction::Axis(Axis::X)) => "X".into(),
+        Some(Direction::Axis(Axis::Y)) => "Y".into(),
+        Some(Direction::Axis(Axis::Z)) | Some(Direction::Up) | Some(Direction::Down) => {
+            direction::VERTICAL.into()
+        }
+        Some(Direction::Azimuth(a)) => format!("{:.0}deg", a.rem_euclid(180.0)),
+        None => String::new(),
+    }
+}
+
+fn is_vertical(channel: &crate::vocab::Channel) -> bool {
+    channel.direction.is_some_and(|d| d.is_vertical())
+}
+
 /// Builds the identification input from an event by channel role: `output`
-/// channels are responses, `input` channels the base motion.  Channels of
-/// unknown role are left out (listed in the returned notes).  All channels
-/// used must share one sampling rate; they are cut to the shortest length
-/// (noted).  Values are used as stored: convert units and normalise
-/// orientation beforehand (METHODS §0).  Floor motions formed by the
-/// rigid-floor combination are left out: they are linear combinations of
-/// the sensor channels, which carry the shapes (torsion included).
-pub fn input_from_event(event: &Event) -> Result<(ModalInput, Vec<String>)> {
+/// channels are responses; inputs are the horizontal `input` channels
+/// (structural base sensors preferred; free-field ones only when there is
+/// no other), or the ids of `choice.inputs`.  Channels of unknown role are
+/// left out.  Channels at a higher sampling rate are decimated (anti-alias
+/// FIR) to the lowest rate when the ratio is an integer, else left out.
+/// When every channel states its start time, channels are aligned on
+/// absolute time and cut to the common window (CSMIP zips hold several
+/// recorders with different starts); otherwise they are cut to the
+/// shortest length from their first sample.  Everything done is noted.
+/// Values are used as stored: convert units and normalise orientation
+/// beforehand (METHODS §0).  Floor motions formed by the rigid-floor
+/// combination are left out: they are linear combinations of the sensor
+/// channels, which carry the shapes (torsion included).
+pub fn input_from_event(
+    event: &Event,
+    choice: &ChannelChoice,
+) -> Result<(ModalInput, Vec<String>)> {
     let mut notes = Vec::new();
-    let sensors = || {
-        event
-            .records
-            .iter()
-            .filter(|r| !r.channel.is_floor_motion())
-    };
-    let outputs: Vec<&Record> = sensors()
-        .filter(|r| r.channel.role == Role::Output)
-        .collect();
-    let inputs: Vec<&Record> = sensors()
-        .filter(|r| r.channel.role == Role::Input)
-        .collect();
-    for r in event
+    let sensors: Vec<&Record> = event
         .records
         .iter()
+        .filter(|r| !r.channel.is_floor_motion())
+        .collect();
+    let (outputs, inputs): (Vec<&Record>, Vec<&Record>) = match &choice.inputs {
+        Some(ids) => {
+            let mut inputs = Vec::new();
+            for id in ids {
+                let r = sensors
+                    .iter()
+                    .find(|r| r.channel.id == *id)
+                    .ok_or_else(|| {
+                        Error::usage(format!(
+                            "modal: input channel {id:?} is not a sensor channel of event {} (channels: {})",
+                            event.name,
+                            sensors.iter().map(|r| r.channel.id.as_str()).collect::<Vec<_>>().join(", ")
+                        ))
+                    })?;
+                inputs.push(*r);
+            }
+            let outputs = sensors
+                .iter()
+                .copied()
+                .filter(|r| r.channel.role == Role::Output && !ids.contains(&r.channel.id))
+                .collect();
+            (outputs, inputs)
+        }
+        None => {
+            let base: Vec<&Record> = sensors
+                .iter()
+                .copied()
+                .filter(|r| r.channel.role == Role::Input)
+                .collect();
+            let vertical: Vec<&str> = base
+                .iter()
+                .filter(|r| is_vertical(&r.channel))
+                .map(|r| r.channel.id.as_str())
+                .collect();
+            if !vertical.is_empty() {
+                notes.push(format!(
+                    "vertical base channels not used as inputs (list them in `inputs` to use them): {}",
+                    vertical.join(", ")
+                ));
+            }
+            let horizontal: Vec<&Record> = base
+                .into_iter()
+                .filter(|r| !is_vertical(&r.channel))
+                .collect();
+            let free = |r: &Record| {
+                crate::event_folder::is_free_field(r.channel.location_text.as_deref().unwrap_or(""))
+            };
+            let structural: Vec<&Record> =
+                horizontal.iter().copied().filter(|r| !free(r)).collect();
+            let inputs = if !structural.is_empty() && structural.len() < horizontal.len() {
+                notes.push(format!(
+                    "free-field channels not used as inputs (base sensors of the structure are): {}",
+                    horizontal
+                        .iter()
+                        .filter(|r| free(r))
+                        .map(|r| r.channel.id.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+                structural
+            } else {
+                horizontal
+            };
+            let outputs = sensors
+                .iter()
+                .copied()
+                .filter(|r| r.channel.role == Role::Output)
+                .collect();
+            (outputs, inputs)
+        }
+    };
+    let unknown: Vec<&str> = sensors
+        .iter()
         .filter(|r| r.channel.role == Role::Unknown)
-    {
-        notes.push(format!("channel {} left out: role unknown", r.channel.id));
+        .map(|r| r.channel.id.as_str())
+        .collect();
+    if !unknown.is_empty() {
+        notes.push(format!(
+            "channels left out, role unknown: {}",
+            unknown.join(", ")
+        ));
     }
-    let first = outputs.first().or(inputs.first()).ok_or_else(|| {
-        Error::usage(format!(
+    if outputs.is_empty() && inputs.is_empty() {
+        return Err(Error::usage(format!(
             "modal: event {} has no channel with role input or output",
             event.name
-        ))
-    })?;
-    let rate = first.channel.sampling_rate_hz;
-    for r in outputs.iter().chain(&inputs) {
-        if (r.channel.sampling_rate_hz - rate).abs() > 1e-9 * rate {
-            return Err(Error::input(
-                location_of(r).with_channel(&r.channel.id),
-                format!(
-                    "sampled at {} Hz, channel {} at {rate} Hz: resample first",
-                    r.channel.sampling_rate_hz, first.channel.id
-                ),
-            ));
-        }
+        )));
     }
-    let n = outputs
+    // One sampling rate: the lowest; integer multiples are decimated.
+    let rate = outputs
         .iter()
         .chain(&inputs)
-        .map(|r| r.samples.len())
-        .min()
-        .unwrap_or(0);
-    if outputs.iter().chain(&inputs).any(|r| r.samples.len() != n) {
-        notes.push(format!("channels cut to the shortest length, {n} samples"));
+        .map(|r| r.channel.sampling_rate_hz)
+        .fold(f64::INFINITY, f64::min);
+    let factor = |r: &Record| -> Option<usize> {
+        let k = r.channel.sampling_rate_hz / rate;
+        let kr = k.round();
+        ((k - kr).abs() <= 1e-6 * k && kr >= 1.0).then_some(kr as usize)
+    };
+    let dropped: Vec<String> = outputs
+        .iter()
+        .chain(&inputs)
+        .filter(|r| factor(r).is_none())
+        .map(|r| r.channel.id.clone())
+        .collect();
+    let outputs: Vec<&Record> = outputs
+        .into_iter()
+        .filter(|r| factor(r).is_some())
+        .collect();
+    let inputs: Vec<&Record> = inputs.into_iter().filter(|r| factor(r).is_some()).collect();
+    if !dropped.is_empty() {
+        notes.push(format!(
+            "channels left out: sampling rate not an integer multiple of {rate} Hz: {}",
+            dropped.join(", ")
+        ));
     }
-    let mut locations: Vec<Location> = outputs.iter().map(|r| location_of(r)).collect();
-    locations.extend(inputs.iter().map(|r| location_of(r)));
+    let resampled: Vec<(&Record, Vec<f64>)> = outputs
+        .iter()
+        .chain(&inputs)
+        .map(|r| {
+            let k = factor(r).unwrap_or(1);
+            let samples = if k > 1 {
+                preprocess::decimate(&r.samples, k, &preprocess::antialias_taps(k))
+            } else {
+                r.samples.clone()
+            };
+            (*r, samples)
+        })
+        .collect();
+    let decimated: Vec<&str> = resampled
+        .iter()
+        .filter(|(r, _)| factor(r).unwrap_or(1) > 1)
+        .map(|(r, _)| r.channel.id.as_str())
+        .collect();
+    if !decimated.is_empty() {
+        notes.push(format!(
+            "decimated to the common {rate} Hz (anti-alias FIR): {}",
+            decimated.join(", ")
+        ));
+    }
+    // Common time window.
+    let dt = 1.0 / rate;
+    let offsets: Vec<usize> = if resampled.iter().all(|(r, _)| r.channel.start_ns.is_some()) {
+        let start = |r: &Record| r.channel.start_ns.unwrap_or(0);
+        let latest = resampled.iter().map(|(r, _)| start(r)).max().unwrap_or(0);
+        let earliest = resampled.iter().map(|(r, _)| start(r)).min().unwrap_or(0);
+        if latest != earliest {
+            notes.push(format!(
+                "channels start at different times (recorders up to {:.3} s apart): aligned on absolute time",
+                (latest - earliest) as f64 / 1e9
+            ));
+        }
+        resampled
+            .iter()
+            .map(|(r, _)| (((latest - start(r)) as f64 / 1e9) / dt).round() as usize)
+            .collect()
+    } else {
+        if resampled.iter().any(|(r, _)| r.channel.start_ns.is_some()) {
+            notes.push(
+                "start times not stated for every channel: channels aligned at their first sample"
+                    .into(),
+            );
+        }
+        vec![0; resampled.len()]
+    };
+    let common = |offsets: &[usize]| {
+        resampled
+            .iter()
+            .zip(offsets)
+            .map(|((_, s), &o)| s.len().saturating_sub(o))
+            .min()
+            .unwrap_or(0)
+    };
+    let shortest = common(&vec![0; resampled.len()]);
+    let mut offsets = offsets;
+    if common(&offsets) < shortest / 2 {
+        // Stated start times that leave less than half the record in common
+        // are not trusted (a recorder clock off by minutes or a time zone).
+        notes.push(format!(
+            "stated start times leave {} of {shortest} samples in common: start times not trusted, channels aligned at their first sample",
+            common(&offsets)
+        ));
+        offsets = vec![0; resampled.len()];
+    }
+    let n = common(&offsets);
+    if n == 0 {
+        return Err(Error::input(
+            location_of(resampled[0].0),
+            "the channels share no common time window (start times and lengths)",
+        ));
+    }
+    if resampled
+        .iter()
+        .zip(&offsets)
+        .any(|((_, s), &o)| s.len() != n + o || o > 0)
+    {
+        notes.push(format!(
+            "channels cut to the common window: {n} samples ({:.2} s)",
+            n as f64 * dt
+        ));
+    }
+    let cut: Vec<Vec<f64>> = resampled
+        .iter()
+        .zip(&offsets)
+        .map(|((_, s), &o)| s[o..o + n].to_vec())
+        .collect();
+    let lo = outputs.len();
+    let locations: Vec<Location> = outputs
+        .iter()
+        .chain(&inputs)
+        .map(|r| location_of(r))
+        .collect();
     Ok((
         ModalInput {
-            dt: 1.0 / rate,
+            dt,
             output_ids: outputs.iter().map(|r| r.channel.id.clone()).collect(),
-            outputs: outputs.iter().map(|r| r.samples[..n].to_vec()).collect(),
+            outputs: cut[..lo].to_vec(),
             input_ids: inputs.iter().map(|r| r.channel.id.clone()).collect(),
-            inputs: inputs.iter().map(|r| r.samples[..n].to_vec()).collect(),
+            inputs: cut[lo..].to_vec(),
             locations,
+            output_directions: outputs
+                .iter()
+                .map(|r| direction_label(&r.channel))
+                .collect(),
+            output_groups: outputs
+                .iter()
+                .map(|r| r.channel.level.map(|l| l.to_string()).unwrap_or_default())
+                .collect(),
         },
         notes,
     ))
@@ -428,8 +954,12 @@ pub fn input_from_event(event: &Event) -> Result<(ModalInput, Vec<String>)> {
 
 /// Identifies an event: input–output when `settings.method` is `Io`,
 /// output-only otherwise (the pipeline picks `Io` when the event has base channels).
-pub fn identify_event(event: &Event, settings: &ModalSettings) -> Result<ModalResult> {
-    let (input, notes) = input_from_event(event)?;
+pub fn identify_event(
+    event: &Event,
+    settings: &ModalSettings,
+    choice: &ChannelChoice,
+) -> Result<ModalResult> {
+    let (input, notes) = input_from_event(event, choice)?;
     let mut result = identify(&input, settings)?;
     result.notes.splice(0..0, notes);
     Ok(result)

@@ -15,15 +15,16 @@ use crate::vocab::ProcessingStep;
 pub struct Preprocessing {
     /// Subtract each channel's mean.
     pub remove_mean: bool,
-    /// Keep every D-th sample after anti-alias filtering (1 = no decimation).
-    pub decimation: usize,
+    /// Keep every D-th sample after anti-alias filtering (1 = no
+    /// decimation; `None` = automatic, see `modal::plan`).
+    pub decimation: Option<usize>,
 }
 
 impl Default for Preprocessing {
     fn default() -> Self {
         Preprocessing {
             remove_mean: true,
-            decimation: 1,
+            decimation: None,
         }
     }
 }
@@ -97,8 +98,8 @@ pub fn apply(
         });
     }
     let mut dt_out = dt;
-    if settings.decimation > 1 {
-        let d = settings.decimation;
+    let d = settings.decimation.unwrap_or(1);
+    if d > 1 {
         let taps = antialias_taps(d);
         out = out.iter().map(|s| decimate(s, d, &taps)).collect();
         dt_out = dt * d as f64;
@@ -145,7 +146,7 @@ mod tests {
             dt,
             &Preprocessing {
                 remove_mean: true,
-                decimation: 4,
+                decimation: Some(4),
             },
         );
         assert_eq!(out[0].len(), 2000);

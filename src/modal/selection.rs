@@ -1,26 +1,39 @@
 //! Automatic mode selection from the stabilisation diagram (METHODS §2):
-//! physical filters, hierarchical clustering of stable poles, one mode per
-//! cluster with mean and standard deviation; and the manual override.
+//! pole COLUMNS followed across consecutive model orders, physical filters,
+//! one mode per accepted column with statistics over its best-converged
+//! part; and the manual override.
 //!
-//! Clustering (documented choice): agglomerative clustering with AVERAGE
-//! linkage (UPGMA) on the distance
-//!   d(i, j) = |f_i − f_j| / max(f_i, f_j) + w_ζ |ζ_i − ζ_j| / max(ζ_i, ζ_j) + (1 − MAC(φ_i, φ_j)),
-//! merging while the closest pair of clusters is nearer than `threshold`.
-//! Average linkage is used rather than single linkage because single linkage
-//! chains neighbouring physical and spurious poles into one cluster.
-//! A cluster is a mode only if it holds poles from at least
-//! `min_cluster_fraction` (default 40 %) of the model orders swept (a
-//! physical mode shows up at almost every order above its own; noise poles
-//! do not: in the 5-storey synthetic tests physical clusters held 15–20 poles
-//! of 21 orders, noise clusters at most 8).  Within a
-//! cluster only one pole per order is kept (the one nearest the cluster's
-//! median frequency).
+//! Why columns rather than clusters over all orders (issue 13): a physical
+//! mode appears at some model order and then stays, with the same frequency
+//! and shape, at every higher order; weakly excited modes (torsion, higher
+//! modes of short records) appear only at high orders.  Requiring a fixed
+//! fraction of ALL orders swept (the former rule) discarded them.  A column
+//! is therefore judged on its own span:
+//! - linking: the pole of order n continues the column ending at order
+//!   n − 1 (or up to `max_gap` realised orders earlier) when
+//!   |Δf|/f ≤ `link_frequency` and MAC ≥ `link_mac` with the column's last pole
+//!   (greedy one-to-one assignment, best match first);
+//! - a column is a mode when it holds at least `min_poles` poles, holds a
+//!   pole at ≥ `min_persistence` of the realised orders from its first order
+//!   to the highest order swept (a physical pole, once present, persists;
+//!   noise poles come and go), its shapes are coherent (mean MAC with the
+//!   column's mean shape ≥ `min_coherence`), at least `min_physical_fraction`
+//!   of its poles pass the physical filters, and its estimate passes them;
+//! - columns of the same mode broken by a gap (frequencies within
+//!   `merge_frequency_tolerance`, MAC ≥ `merge_mac` of mean shapes) are merged
+//!   first, one pole per order kept;
+//! - the estimate (f, ζ, shape and their scatter) is taken over the poles in
+//!   the upper `converged_fraction` of the column's orders: low orders bias
+//!   damped modes (a model too small to separate them from the noise).
+//!
+//! Columns that look physical but fail a criterion are returned as
+//! [`RejectedColumn`]s so the caller can say why fewer modes were selected.
 
 use super::poles::{mac, mpc_mpd, normalise_shape, Pole};
 use crate::error::{Error, Result};
 use faer::c64;
 
-/// Physical-mode filters applied before clustering.
+/// Physical-mode filters.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PhysicalFilters {
     /// Damping window [min, max] (METHODS §2: 0.9–5.5 %).
@@ -30,7 +43,8 @@ pub struct PhysicalFilters {
     pub mpc_min: f64,
     /// Maximum mean phase deviation, degrees.
     pub mpd_max_deg: f64,
-    /// Band limits for the poles, Hz (`None` = 0 to 0.95 × Nyquist).
+    /// Band limits for the poles, Hz (`None` = the band of interest of the
+    /// settings, else 0 to 0.95 × Nyquist).
     pub frequency_min_hz: Option<f64>,
     pub frequency_max_hz: Option<f64>,
 }
@@ -50,130 +64,107 @@ impl Default for PhysicalFilters {
 
 impl PhysicalFilters {
     pub fn passes(&self, pole: &Pole, nyquist_hz: f64) -> bool {
-        let f_min = self.frequency_min_hz.unwrap_or(0.0);
-        let f_max = self.frequency_max_hz.unwrap_or(0.95 * nyquist_hz);
-        (self.damping_min..=self.damping_max).contains(&pole.damping_ratio)
+        self.in_band(pole.frequency_hz, nyquist_hz)
+            && (self.damping_min..=self.damping_max).contains(&pole.damping_ratio)
             && pole.mpc >= self.mpc_min
             && pole.mpd_deg <= self.mpd_max_deg
-            && pole.frequency_hz >= f_min
-            && pole.frequency_hz <= f_max
+    }
+    pub fn in_band(&self, frequency_hz: f64, nyquist_hz: f64) -> bool {
+        let f_min = self.frequency_min_hz.unwrap_or(0.0);
+        let f_max = self.frequency_max_hz.unwrap_or(0.95 * nyquist_hz);
+        (f_min..=f_max).contains(&frequency_hz)
     }
 }
 
-/// Settings of the automatic clustering.
+/// Settings of the automatic selection by pole columns (module doc).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ClusterSettings {
-    /// Weight w_ζ of the relative damping difference in the distance.
-    pub damping_weight: f64,
-    /// Average-linkage merge threshold on the distance.
-    pub threshold: f64,
-    /// A cluster must hold poles of at least this fraction of the orders swept.
-    pub min_cluster_fraction: f64,
-    /// Clusters closer than this relative frequency difference whose medoid
-    /// shapes have MAC ≥ `merge_mac_min` are merged (one mode split in two).
+pub struct SelectionSettings {
+    /// Linking tolerance on |Δf|/f between consecutive poles of a column.
+    pub link_frequency: f64,
+    /// Linking threshold on the MAC between consecutive poles of a column.
+    pub link_mac: f64,
+    /// Realised orders a column may skip and continue.
+    pub max_gap: usize,
+    /// Fewest poles of an accepted column.
+    pub min_poles: usize,
+    /// Fraction of the realised orders from the column's first order to the
+    /// highest order swept at which the column must hold a pole.
+    pub min_persistence: f64,
+    /// Mean MAC between the column's poles and its mean shape.
+    pub min_coherence: f64,
+    /// Fraction of the column's poles that must pass the physical filters.
+    pub min_physical_fraction: f64,
+    /// Columns of one mode split by a gap: relative frequency difference and
+    /// MAC of the mean shapes to merge them.
     pub merge_frequency_tolerance: f64,
-    pub merge_mac_min: f64,
-    /// Candidates must be stable in damping too, not only in frequency and
-    /// shape.  Off by default: with noisy data damping estimates wander by
-    /// more than 5 % between consecutive orders, and requiring it lost a true
-    /// mode of the 5-storey synthetic test for 1 seed in 20; damping still
-    /// enters the clustering distance.
-    pub require_damping_stability: bool,
+    pub merge_mac: f64,
+    /// Upper fraction of the column's orders the estimate is taken over.
+    pub converged_fraction: f64,
 }
 
-impl Default for ClusterSettings {
+impl Default for SelectionSettings {
     fn default() -> Self {
-        ClusterSettings {
-            damping_weight: 0.1,
-            threshold: 0.04,
-            min_cluster_fraction: 0.4,
+        SelectionSettings {
+            link_frequency: 0.01,
+            link_mac: 0.95,
+            max_gap: 1,
+            min_poles: 5,
+            min_persistence: 0.6,
+            min_coherence: 0.95,
+            min_physical_fraction: 0.5,
             merge_frequency_tolerance: 0.01,
-            merge_mac_min: 0.98,
-            require_damping_stability: false,
+            merge_mac: 0.95,
+            converged_fraction: 0.5,
         }
     }
 }
 
-/// One identified mode: statistics over the poles of its cluster.
+/// One identified mode: statistics over the poles of its column.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mode {
     pub frequency_hz: f64,
     pub frequency_std_hz: f64,
     pub damping_ratio: f64,
     pub damping_std: f64,
-    /// Mean complex shape (poles phase-aligned to the cluster's central pole),
+    /// Mean complex shape (poles phase-aligned to the column's central pole),
     /// largest-modulus component 1 + 0i.
     pub shape: Vec<c64>,
     /// Standard deviation of each aligned shape component's modulus.
     pub shape_std: Vec<f64>,
     pub mpc: f64,
     pub mpd_deg: f64,
-    /// Mean MAC between the cluster's poles and the mean shape.
+    /// Mean MAC between the poles used and the mean shape.
     pub mean_mac: f64,
     /// Number of poles (one per order) behind the statistics.
     pub pole_count: usize,
     /// Lowest and highest model order contributing.
     pub order_min: usize,
     pub order_max: usize,
-    /// `true` when picked by the manual override rather than clustering.
+    /// `true` when picked by the manual override rather than automatically.
     pub manual: bool,
+    /// Direction label of the shape: `X`, `Y`, `torsion`, `vertical`,
+    /// `mixed`, an azimuth (`360deg`) for channels not on building axes, or
+    /// empty when the channels' directions are unknown.
+    pub direction: String,
 }
 
-fn distance(a: &Pole, b: &Pole, damping_weight: f64) -> f64 {
-    let df = (a.frequency_hz - b.frequency_hz).abs() / a.frequency_hz.max(b.frequency_hz);
-    let dz = (a.damping_ratio - b.damping_ratio).abs()
-        / a.damping_ratio.abs().max(b.damping_ratio.abs()).max(1e-12);
-    df + damping_weight * dz + (1.0 - mac(&a.shape, &b.shape))
+/// A column that looked like a mode but was not promoted, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RejectedColumn {
+    pub frequency_hz: f64,
+    pub damping_ratio: f64,
+    pub poles: usize,
+    pub order_min: usize,
+    pub order_max: usize,
+    pub reason: String,
 }
 
-/// Average-linkage agglomerative clustering of `items` (indices into
-/// `poles`); returns clusters as lists of pole indices.  O(n²) memory,
-/// O(n³) time in the worst case; n is at most a few hundred poles.
-fn average_linkage(poles: &[Pole], items: &[usize], settings: &ClusterSettings) -> Vec<Vec<usize>> {
-    let n = items.len();
-    let mut dist = vec![0.0; n * n];
-    for i in 0..n {
-        for j in (i + 1)..n {
-            let d = distance(&poles[items[i]], &poles[items[j]], settings.damping_weight);
-            dist[i * n + j] = d;
-            dist[j * n + i] = d;
-        }
-    }
-    let mut members: Vec<Vec<usize>> = (0..n).map(|i| vec![i]).collect();
-    let mut alive = vec![true; n];
-    loop {
-        let mut best: Option<(usize, usize, f64)> = None;
-        for i in 0..n {
-            if !alive[i] {
-                continue;
-            }
-            for j in (i + 1)..n {
-                if alive[j] && best.is_none_or(|b| dist[i * n + j] < b.2) {
-                    best = Some((i, j, dist[i * n + j]));
-                }
-            }
-        }
-        let Some((i, j, d)) = best else { break };
-        if d > settings.threshold {
-            break;
-        }
-        // Lance–Williams update for average linkage.
-        let (ni, nj) = (members[i].len() as f64, members[j].len() as f64);
-        for k in 0..n {
-            if alive[k] && k != i && k != j {
-                let v = (ni * dist[i * n + k] + nj * dist[j * n + k]) / (ni + nj);
-                dist[i * n + k] = v;
-                dist[k * n + i] = v;
-            }
-        }
-        let moved = std::mem::take(&mut members[j]);
-        members[i].extend(moved);
-        alive[j] = false;
-    }
-    (0..n)
-        .filter(|&i| alive[i])
-        .map(|i| members[i].iter().map(|&m| items[m]).collect())
-        .collect()
+/// Outcome of the automatic selection.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Selection {
+    pub modes: Vec<Mode>,
+    /// Columns of at least 3 coherent poles that were not promoted.
+    pub rejected: Vec<RejectedColumn>,
 }
 
 /// Keeps one pole per order: the one nearest `centre_hz`.
@@ -202,55 +193,6 @@ fn one_per_order_by(
     }
     kept.sort_by_key(|&i| (poles[i].order, i));
     kept
-}
-
-/// Merges clusters describing the same mode: mean frequencies within
-/// `merge_frequency_tolerance` and medoid shapes with MAC ≥ `merge_mac_min`.
-/// Two modes of a structure cannot share a shape (they are mass-orthogonal),
-/// so such clusters are one mode split by damping scatter between orders.
-fn merge_same_mode(
-    poles: &[Pole],
-    mut clusters: Vec<Vec<usize>>,
-    settings: &ClusterSettings,
-) -> Vec<Vec<usize>> {
-    let mean_f =
-        |c: &[usize]| c.iter().map(|&i| poles[i].frequency_hz).sum::<f64>() / c.len().max(1) as f64;
-    loop {
-        let mut merge: Option<(usize, usize)> = None;
-        'search: for a in 0..clusters.len() {
-            for b in (a + 1)..clusters.len() {
-                let (fa, fb) = (mean_f(&clusters[a]), mean_f(&clusters[b]));
-                if (fa - fb).abs() / fa.max(fb) > settings.merge_frequency_tolerance {
-                    continue;
-                }
-                let ma = medoid(poles, &clusters[a], settings.damping_weight);
-                let mb = medoid(poles, &clusters[b], settings.damping_weight);
-                if mac(&poles[ma].shape, &poles[mb].shape) >= settings.merge_mac_min {
-                    merge = Some((a, b));
-                    break 'search;
-                }
-            }
-        }
-        let Some((a, b)) = merge else { break };
-        let moved = clusters.remove(b);
-        clusters[a].extend(moved);
-    }
-    clusters
-}
-
-/// Medoid of a cluster: the member with the smallest summed distance to the others.
-fn medoid(poles: &[Pole], cluster: &[usize], damping_weight: f64) -> usize {
-    let total = |i: usize| {
-        cluster
-            .iter()
-            .map(|&j| distance(&poles[i], &poles[j], damping_weight))
-            .sum::<f64>()
-    };
-    cluster
-        .iter()
-        .copied()
-        .min_by(|&a, &b| total(a).total_cmp(&total(b)).then(a.cmp(&b)))
-        .unwrap_or(0)
 }
 
 /// Mode statistics over the given poles (non-empty).
@@ -344,56 +286,233 @@ fn summarise(poles: &[Pole], members: &[usize], manual: bool) -> Mode {
         order_min: members.iter().map(|&i| poles[i].order).min().unwrap_or(0),
         order_max: members.iter().map(|&i| poles[i].order).max().unwrap_or(0),
         manual,
+        direction: String::new(),
     }
 }
 
-/// Automatic selection: clusters the stable physical poles, keeps clusters
-/// spanning enough orders, returns modes in ascending frequency and sets
-/// `Pole::mode` of the poles used.
+/// Columns of poles across consecutive orders (module doc): greedy
+/// one-to-one linking of each order's in-band poles to the columns ending
+/// within `max_gap` realised orders before.  `order_rank[i]` is the rank of
+/// pole i's order among the realised orders.
+fn build_columns(
+    poles: &[Pole],
+    order_rank: &[usize],
+    in_band: &[bool],
+    settings: &SelectionSettings,
+) -> Vec<Vec<usize>> {
+    let mut columns: Vec<Vec<usize>> = Vec::new();
+    let ranks = order_rank.iter().copied().max().map_or(0, |m| m + 1);
+    for rank in 0..ranks {
+        let current: Vec<usize> = (0..poles.len())
+            .filter(|&i| order_rank[i] == rank && in_band[i])
+            .collect();
+        let mut links: Vec<(f64, usize, usize)> = Vec::new();
+        for (c, col) in columns.iter().enumerate() {
+            let last = *col.last().expect("columns are never empty"); // ok: built non-empty
+            if order_rank[last] + 1 + settings.max_gap < rank {
+                continue;
+            }
+            for &i in &current {
+                let (a, b) = (&poles[last], &poles[i]);
+                let df = (a.frequency_hz - b.frequency_hz).abs() / a.frequency_hz;
+                let m = mac(&a.shape, &b.shape);
+                if df <= settings.link_frequency && m >= settings.link_mac {
+                    links.push((df + (1.0 - m), c, i));
+                }
+            }
+        }
+        links.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
+        let mut column_used = vec![false; columns.len()];
+        let mut pole_used = vec![false; poles.len()];
+        for (_, c, i) in links {
+            if !column_used[c] && !pole_used[i] {
+                column_used[c] = true;
+                pole_used[i] = true;
+                columns[c].push(i);
+            }
+        }
+        for i in current {
+            if !pole_used[i] {
+                columns.push(vec![i]);
+            }
+        }
+    }
+    columns
+}
+
+fn mean_frequency(poles: &[Pole], members: &[usize]) -> f64 {
+    members.iter().map(|&i| poles[i].frequency_hz).sum::<f64>() / members.len().max(1) as f64
+}
+
+/// Merges columns of the same mode (module doc); where both hold a pole of
+/// one order, the pole nearest the merged mean frequency is kept.
+fn merge_columns(
+    poles: &[Pole],
+    mut columns: Vec<Vec<usize>>,
+    settings: &SelectionSettings,
+) -> Vec<Vec<usize>> {
+    loop {
+        let mut merge: Option<(usize, usize)> = None;
+        'search: for a in 0..columns.len() {
+            if columns[a].len() < 2 {
+                continue;
+            }
+            for b in (a + 1)..columns.len() {
+                if columns[b].len() < 2 {
+                    continue;
+                }
+                let (fa, fb) = (
+                    mean_frequency(poles, &columns[a]),
+                    mean_frequency(poles, &columns[b]),
+                );
+                if (fa - fb).abs() / fa.max(fb) > settings.merge_frequency_tolerance {
+                    continue;
+                }
+                let sa = summarise(poles, &columns[a], false).shape;
+                let sb = summarise(poles, &columns[b], false).shape;
+                if mac(&sa, &sb) >= settings.merge_mac {
+                    merge = Some((a, b));
+                    break 'search;
+                }
+            }
+        }
+        let Some((a, b)) = merge else { break };
+        let moved = columns.remove(b);
+        columns[a].extend(moved);
+        let centre = mean_frequency(poles, &columns[a]);
+        columns[a] = one_per_order(poles, &columns[a], centre);
+    }
+    columns
+}
+
+/// The best-converged part of a column: its poles in the upper
+/// `fraction` of its orders, physical ones only when there are at least 2.
+fn converged_part(poles: &[Pole], column: &[usize], fraction: f64) -> Vec<usize> {
+    let mut sorted: Vec<usize> = column.to_vec();
+    sorted.sort_by_key(|&i| (poles[i].order, i));
+    let keep = ((fraction * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    let upper: Vec<usize> = sorted[sorted.len() - keep..].to_vec();
+    let physical: Vec<usize> = upper
+        .iter()
+        .copied()
+        .filter(|&i| poles[i].physical)
+        .collect();
+    if physical.len() >= 2 {
+        physical
+    } else {
+        upper
+    }
+}
+
+/// Automatic selection by pole columns (module doc).  `orders` are the
+/// realised model orders, ascending.  Sets `Pole::mode` of the poles behind
+/// each mode (its converged part) and returns modes in ascending frequency.
 pub fn select_automatic(
     poles: &mut [Pole],
-    orders_swept: usize,
-    settings: &ClusterSettings,
-) -> Vec<Mode> {
-    let candidates: Vec<usize> = (0..poles.len())
-        .filter(|&i| {
-            let p = &poles[i];
-            p.physical
-                && p.stable_frequency
-                && p.stable_shape
-                && (!settings.require_damping_stability || p.stable_damping)
+    orders: &[usize],
+    filters: &PhysicalFilters,
+    nyquist_hz: f64,
+    settings: &SelectionSettings,
+) -> Selection {
+    let order_rank: Vec<usize> = poles
+        .iter()
+        .map(|p| {
+            orders
+                .iter()
+                .position(|&o| o == p.order)
+                .unwrap_or(usize::MAX)
         })
         .collect();
-    let clusters = merge_same_mode(
+    let in_band: Vec<bool> = poles
+        .iter()
+        .zip(&order_rank)
+        .map(|(p, &r)| r != usize::MAX && filters.in_band(p.frequency_hz, nyquist_hz))
+        .collect();
+    let columns = merge_columns(
         poles,
-        average_linkage(poles, &candidates, settings),
+        build_columns(poles, &order_rank, &in_band, settings),
         settings,
     );
-    let min_size = ((settings.min_cluster_fraction * orders_swept as f64).ceil() as usize).max(2);
-    let mut kept: Vec<Vec<usize>> = clusters
-        .into_iter()
-        .map(|c| {
-            // Noise poles sometimes sit beside a physical pole of the same
-            // order; keep the one nearest the cluster's medoid (f, ζ and shape).
-            let centre = medoid(poles, &c, settings.damping_weight);
-            one_per_order_by(poles, &c, |i| {
-                distance(&poles[i], &poles[centre], settings.damping_weight)
-            })
-        })
-        .filter(|c| c.len() >= min_size)
-        .collect();
-    kept.sort_by(|a, b| {
-        let fa = a.iter().map(|&i| poles[i].frequency_hz).sum::<f64>() / a.len() as f64;
-        let fb = b.iter().map(|&i| poles[i].frequency_hz).sum::<f64>() / b.len() as f64;
-        fa.total_cmp(&fb)
-    });
-    let modes: Vec<Mode> = kept.iter().map(|c| summarise(poles, c, false)).collect();
-    for (m, c) in kept.iter().enumerate() {
-        for &i in c {
+    let max_rank = orders.len().saturating_sub(1);
+    let mut accepted: Vec<(Vec<usize>, Mode)> = Vec::new();
+    let mut rejected = Vec::new();
+    for column in columns.into_iter().filter(|c| c.len() >= 3) {
+        let all = summarise(poles, &column, false);
+        let physical = column.iter().filter(|&&i| poles[i].physical).count();
+        let first_rank = column.iter().map(|&i| order_rank[i]).min().unwrap_or(0);
+        let span = max_rank + 1 - first_rank.min(max_rank);
+        let persistence = column.len() as f64 / span.max(1) as f64;
+        let part = converged_part(poles, &column, settings.converged_fraction);
+        let mode = summarise(poles, &part, false);
+        let estimate_ok = (filters.damping_min..=filters.damping_max).contains(&mode.damping_ratio)
+            && mode.mpc >= filters.mpc_min
+            && mode.mpd_deg <= filters.mpd_max_deg;
+        let reason = if all.mean_mac < settings.min_coherence {
+            if all.mean_mac < 0.8 {
+                continue; // an incoherent chain of noise poles: not worth a word
+            }
+            Some(format!(
+                "shapes not coherent (mean MAC {:.3} < {})",
+                all.mean_mac, settings.min_coherence
+            ))
+        } else if (physical as f64) < settings.min_physical_fraction * column.len() as f64 {
+            Some(format!(
+                "only {physical} of {} poles pass the physical filters (damping {:.1}–{:.1} %, MPC ≥ {}, MPD ≤ {}°)",
+                column.len(),
+                100.0 * filters.damping_min,
+                100.0 * filters.damping_max,
+                filters.mpc_min,
+                filters.mpd_max_deg
+            ))
+        } else if !estimate_ok {
+            Some(format!(
+                "estimate outside the physical filters (ζ {:.2} %, MPC {:.2}, MPD {:.0}°)",
+                100.0 * mode.damping_ratio,
+                mode.mpc,
+                mode.mpd_deg
+            ))
+        } else if column.len() < settings.min_poles {
+            Some(format!(
+                "only {} poles (need {})",
+                column.len(),
+                settings.min_poles
+            ))
+        } else if persistence < settings.min_persistence {
+            Some(format!(
+                "present at {} of the {span} orders from its first (need {:.0} %)",
+                column.len(),
+                100.0 * settings.min_persistence
+            ))
+        } else {
+            None
+        };
+        match reason {
+            None => accepted.push((part, mode)),
+            Some(reason) => {
+                if physical > 0 {
+                    rejected.push(RejectedColumn {
+                        frequency_hz: mode.frequency_hz,
+                        damping_ratio: mode.damping_ratio,
+                        poles: column.len(),
+                        order_min: all.order_min,
+                        order_max: all.order_max,
+                        reason,
+                    })
+                }
+            }
+        }
+    }
+    accepted.sort_by(|a, b| a.1.frequency_hz.total_cmp(&b.1.frequency_hz));
+    rejected.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    for (m, (part, _)) in accepted.iter().enumerate() {
+        for &i in part {
             poles[i].mode = Some(m);
         }
     }
-    modes
+    Selection {
+        modes: accepted.into_iter().map(|(_, m)| m).collect(),
+        rejected,
+    }
 }
 
 /// Manual override: for each requested frequency, the physical poles that are

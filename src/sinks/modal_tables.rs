@@ -12,6 +12,8 @@ use crate::modal::{FrequencyShift, ModalResult, SpectralOverlay};
 
 /// Metadata key holding the output channel ids (JSON list) the shapes refer to.
 pub const OUTPUT_CHANNELS_KEY: &str = "quaketwin.output_channels";
+/// Metadata key holding why fewer modes than expected were selected (JSON list of strings).
+pub const WARNINGS_KEY: &str = "quaketwin.warnings";
 
 fn meta(schema: &str, result: &ModalResult, settings_json: &str) -> Vec<(String, String)> {
     vec![
@@ -34,6 +36,39 @@ fn meta(schema: &str, result: &ModalResult, settings_json: &str) -> Vec<(String,
         (
             "quaketwin.notes".into(),
             serde_json::to_string(&result.notes).unwrap_or_default(),
+        ),
+        (
+            WARNINGS_KEY.into(),
+            serde_json::to_string(&result.warnings).unwrap_or_default(),
+        ),
+        (
+            "quaketwin.output_directions".into(),
+            serde_json::to_string(&result.output_directions).unwrap_or_default(),
+        ),
+        (
+            "quaketwin.band_hz".into(),
+            serde_json::to_string(&result.band_hz).unwrap_or_default(),
+        ),
+        ("quaketwin.decimation".into(), result.decimation.to_string()),
+        (
+            "quaketwin.rejected_columns".into(),
+            serde_json::Value::Array(
+                result
+                    .rejected
+                    .iter()
+                    .map(|c| {
+                        serde_json::json!({
+                            "frequency_hz": c.frequency_hz,
+                            "damping_ratio": c.damping_ratio,
+                            "poles": c.poles,
+                            "order_min": c.order_min,
+                            "order_max": c.order_max,
+                            "reason": c.reason,
+                        })
+                    })
+                    .collect(),
+            )
+            .to_string(),
         ),
     ]
 }
@@ -87,6 +122,10 @@ pub fn write_modes(path: &Path, r: &ModalResult, settings_json: &str) -> Result<
         .u32("order_min", m.iter().map(|x| x.order_min as u32).collect())
         .u32("order_max", m.iter().map(|x| x.order_max as u32).collect())
         .bool("manual", m.iter().map(|x| x.manual).collect())
+        .str(
+            "direction",
+            &m.iter().map(|x| x.direction.as_str()).collect::<Vec<_>>(),
+        )
         .list_f64(
             "shape_re",
             &m.iter()
@@ -227,6 +266,11 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
             .downcast_ref::<BooleanArray>()
             .cloned();
         let (re, im, sd) = (l("shape_re")?, l("shape_im")?, l("shape_std")?);
+        // Optional: files written before issue 13 have no direction column.
+        let direction = b
+            .column_by_name("direction")
+            .and_then(|c| c.as_any().downcast_ref::<arrow_array::StringArray>())
+            .cloned();
         let values = |a: &ListArray, i: usize| -> Vec<f64> {
             a.value(i)
                 .as_any()
@@ -265,6 +309,10 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
                 order_min: omin.value(i) as usize,
                 order_max: omax.value(i) as usize,
                 manual: manual.as_ref().map(|a| a.value(i)).unwrap_or(false),
+                direction: direction
+                    .as_ref()
+                    .map(|a| a.value(i).to_string())
+                    .unwrap_or_default(),
             });
         }
     }

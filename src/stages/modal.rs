@@ -9,7 +9,8 @@ use serde::Deserialize;
 use super::condition::Conditioned;
 use crate::error::{Error, Result};
 use crate::modal::{
-    frequency_shifts, identify_event, spectral_overlay, Method, ModalResult, ModalSettings,
+    band_for_structure, frequency_shifts, identify_event, spectral_overlay, ChannelChoice, Method,
+    ModalResult, ModalSettings,
 };
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::modal_tables as tables;
@@ -47,25 +48,34 @@ pub struct ModesFile {
     pub path: PathBuf,
 }
 
-/// Parameters of the `modal` stage (docs/pipelines.md).
+/// Parameters of the `modal` stage (docs/pipelines.md).  Unset values
+/// adapt to the record (issue 13, `modal::plan`).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ModalParams {
     /// `auto` (input–output when the event has base channels, else SSI-COV),
     /// `ssi-cov`, `ssi-data` or `io`.
     pub method: MethodChoice,
-    /// Model orders swept: [first, last, step] (thesis: 2 to 42 step 2).
-    pub orders: [usize; 3],
-    /// Block rows; none = automatic.
+    /// Band of interest [low, high] Hz; unset = from the structure's height
+    /// when the manifest gives storey heights, else 0.2–20 Hz.
+    pub band_hz: Option<[f64; 2]>,
+    /// Model orders swept: [first, last, step]; unset = 2, 4, … up to what
+    /// the data support (at most 60).
+    pub orders: Option<[usize; 3]>,
+    /// Block rows; unset = automatic.
     pub block_rows: Option<usize>,
     /// Physical damping window (METHODS §2: 0.9–5.5 %).
     pub damping_min: f64,
     pub damping_max: f64,
     pub frequency_min_hz: Option<f64>,
     pub frequency_max_hz: Option<f64>,
-    /// Decimation factor applied before identification (anti-aliased).
-    pub decimation: usize,
-    /// Manual override: pick these frequencies instead of clustering.
+    /// Decimation factor applied before identification (anti-aliased);
+    /// unset = automatic (sampling rate ≈ 4 × the band's top).
+    pub decimation: Option<usize>,
+    /// Input channel ids for input–output identification; unset = the
+    /// horizontal base channels.  Verticals enter only when listed here.
+    pub inputs: Option<Vec<String>>,
+    /// Manual override: pick these frequencies instead of the automatic selection.
     pub manual_frequencies_hz: Option<Vec<f64>>,
     /// `modes.parquet` of an earlier event of the same structure (path
     /// relative to the working directory) → `frequency_shifts.parquet`.
@@ -79,13 +89,15 @@ impl Default for ModalParams {
         let f = crate::modal::PhysicalFilters::default();
         ModalParams {
             method: MethodChoice::Auto,
-            orders: [2, 42, 2],
+            band_hz: None,
+            orders: None,
             block_rows: None,
             damping_min: f.damping_min,
             damping_max: f.damping_max,
             frequency_min_hz: None,
             frequency_max_hz: None,
-            decimation: 1,
+            decimation: None,
+            inputs: None,
             manual_frequencies_hz: None,
             reference_modes: None,
             psd_segment: 1024,
@@ -96,11 +108,28 @@ impl Default for ModalParams {
 impl ModalParams {
     /// Checks the parameters before any record is read.
     pub fn validate(&self) -> Result<()> {
-        let [first, last, step] = self.orders;
-        if first == 0 || step == 0 || last < first {
-            return Err(Error::usage(
-                "orders must be [first, last, step] with 0 < first ≤ last and step > 0",
-            ));
+        if let Some([first, last, step]) = self.orders {
+            if first == 0 || step == 0 || last < first {
+                return Err(Error::usage(
+                    "orders must be [first, last, step] with 0 < first ≤ last and step > 0",
+                ));
+            }
+        }
+        if let Some([lo, hi]) = self.band_hz {
+            if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) {
+                return Err(Error::usage(format!(
+                    "band_hz [{lo}, {hi}] must satisfy 0 < low < high"
+                )));
+            }
+        }
+        if self.block_rows.is_some_and(|p| p < 2) {
+            return Err(Error::usage("block_rows must be at least 2"));
+        }
+        if self.decimation == Some(0) {
+            return Err(Error::usage("decimation must be at least 1"));
+        }
+        if self.inputs.as_ref().is_some_and(|i| i.is_empty()) {
+            return Err(Error::usage("inputs must list at least one channel id"));
         }
         if !(self.damping_min >= 0.0 && self.damping_max > self.damping_min) {
             return Err(Error::usage(
@@ -117,7 +146,14 @@ impl ModalParams {
     pub fn settings_for(&self, event: &Event) -> Result<ModalSettings> {
         let method = match self.method {
             MethodChoice::Auto => {
-                if event.records.iter().any(|r| r.channel.role == Role::Input) {
+                let has_input = match &self.inputs {
+                    Some(ids) => !ids.is_empty(),
+                    None => event.records.iter().any(|r| {
+                        r.channel.role == Role::Input
+                            && !r.channel.direction.is_some_and(|d| d.is_vertical())
+                    }),
+                };
+                if has_input {
                     Method::Io
                 } else {
                     Method::SsiCov
@@ -128,18 +164,22 @@ impl ModalParams {
             MethodChoice::Io => Method::Io,
         };
         self.validate()?;
-        let [first, last, step] = self.orders;
         let mut s = ModalSettings {
             method,
+            band_hz: self
+                .band_hz
+                .or_else(|| event.structure.as_ref().and_then(band_for_structure)),
             block_rows: self.block_rows,
-            orders: (first..=last).step_by(step).collect(),
+            orders: self
+                .orders
+                .map(|[first, last, step]| (first..=last).step_by(step).collect()),
             ..Default::default()
         };
         s.filters.damping_min = self.damping_min;
         s.filters.damping_max = self.damping_max;
         s.filters.frequency_min_hz = self.frequency_min_hz;
         s.filters.frequency_max_hz = self.frequency_max_hz;
-        s.preprocessing.decimation = self.decimation.max(1);
+        s.preprocessing.decimation = self.decimation;
         s.manual_frequencies_hz = self.manual_frequencies_hz.clone();
         Ok(s)
     }
@@ -149,7 +189,13 @@ impl ModalParams {
 pub fn identify_and_write(event: &Event, p: &ModalParams, out: &Path) -> Result<ModalResult> {
     let settings = p.settings_for(event)?;
     let settings_json = serde_json::to_string(&settings).unwrap_or_default();
-    let result = identify_event(event, &settings)?;
+    let choice = ChannelChoice {
+        inputs: p.inputs.clone(),
+    };
+    let result = identify_event(event, &settings, &choice)?;
+    for w in &result.warnings {
+        eprintln!("quaketwin: warning: modal ({}): {w}", event.name);
+    }
     tables::write_stabilization(&out.join(STABILIZATION_FILE), &result, &settings_json)?;
     tables::write_modes(&out.join(MODES_FILE), &result, &settings_json)?;
     let outputs: Vec<Vec<f64>> = result
@@ -230,7 +276,7 @@ pub fn not_applicable(event: &Event) -> Option<String> {
         .iter()
         .any(|r| !r.channel.is_floor_motion() && r.channel.role == Role::Output);
     (!has_output).then(|| {
-        "no channel is known to be a structural response (role output; input = base/ground): state `role` or `level` per channel in event.toml (docs/event-folder.md)".to_string()
+        "no channel is known to be a structural response (role output; input = base/ground), and no header location text names one (deck, roof, floor, level…): state `role` or `level` per channel in event.toml (docs/event-folder.md)".to_string()
     })
 }
 

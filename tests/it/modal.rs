@@ -184,7 +184,7 @@ pub fn earthquake_input_seeded(seed: u64) -> ModalInput {
         outputs,
         input_ids: vec!["L0".into()],
         inputs: vec![base],
-        locations: Vec::new(),
+        ..Default::default()
     }
 }
 
@@ -326,7 +326,7 @@ fn lab_three_storey_fundamental_near_3_65_hz() {
         outputs: vec![top[1..n].to_vec()],
         input_ids: vec!["ground_x".into()],
         inputs: vec![ground_x[1..n].to_vec()],
-        locations: Vec::new(),
+        ..Default::default()
     };
     let mut settings = ModalSettings {
         method: Method::Io,
@@ -399,23 +399,14 @@ fn painter_street_overpass_transverse_mode() {
         outputs: outputs.iter().map(|(s, _)| s[..n].to_vec()).collect(),
         input_ids: vec!["03".into(), "17".into(), "20".into()],
         inputs: inputs.iter().map(|(s, _)| s[..n].to_vec()).collect(),
-        locations: Vec::new(),
+        ..Default::default()
     };
-    let mut settings = ModalSettings {
+    let settings = ModalSettings {
         method: Method::Io,
         ..Default::default()
     };
-    // The data source's period band 0.1–0.6 s; bridge damping can exceed 5.5 %.
-    settings.filters.frequency_min_hz = Some(1.0 / 0.6);
-    settings.filters.frequency_max_hz = Some(1.0 / 0.1);
-    settings.filters.damping_max = 0.10;
-    // A short weak-motion record (M4.7, 83 s): damping scatters between
-    // orders (1–9 %), so damping is left out of the clustering distance and
-    // the frequency stability tolerance is 3 % instead of 1 %.  With the
-    // defaults no cluster reaches the minimum size; the result is the same
-    // (T = 0.2577–0.2580 s) for tolerances 2–5 % and thresholds 0.04–0.06.
-    settings.stability.frequency = 0.03;
-    settings.clustering.damping_weight = 0.0;
+    // Default settings (issue 13): no stability tolerance, damping weight or
+    // band tuned to this record.
     let result = identify(&input, &settings).unwrap();
     for m in &result.modes {
         eprintln!(

@@ -113,6 +113,20 @@ pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
     }
 
     body.push_str("<h3>Identified modes</h3>");
+    if let Loaded::Ok(t) = &modes {
+        // Why no mode, or fewer than the stable columns suggest (issue 13).
+        let warnings: Vec<String> = t
+            .metadata
+            .get("quaketwin.warnings")
+            .and_then(|w| serde_json::from_str(w).ok())
+            .unwrap_or_default();
+        for w in &warnings {
+            body.push_str(&format!(
+                "<p class=\"warning\">Warning: {}</p>",
+                crate::report::html::escape(w)
+            ));
+        }
+    }
     if let Some(t) = require(&modes, "modes.parquet", &mut body) {
         let known = [
             "mode",
@@ -125,6 +139,7 @@ pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
             "pole_count",
         ];
         body.push_str(&missing_columns_note(t, &known));
+        let known = [&known[..], &["direction"]].concat();
         let cols = known_columns_first(t, &known);
         let rows = cells(t, &cols, settings.max_table_rows);
         body.push_str(&format!(
