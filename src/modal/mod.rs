@@ -84,12 +84,14 @@ pub const DEFAULT_BAND_HZ: [f64; 2] = [0.2, 20.0];
 /// Automatic decimation keeps the sampling rate at least this multiple of
 /// the top of the band (issue 13: ≈ 4–5 ×).
 pub const SAMPLES_PER_TOP_PERIOD: f64 = 4.0;
-/// Automatic block rows: at most this many rows in the matrix factorised
-/// (p·l for SSI-COV, p·(r + l) for SSI-DATA, 2p·(m + l) input–output), which
-/// bounds the cost of the one factorisation.
-pub const MAX_FACTORISED_ROWS: usize = 1000;
-/// Automatic model orders: 2, 4, … up to this, or what the subspace supports.
-pub const MAX_AUTO_ORDER: usize = 60;
+/// Automatic block rows: p · (channels per block row) at most this, with
+/// l channels for SSI-COV and SSI-DATA and m + l for input–output — the
+/// former default (30 block rows) for the 5-storey output-only cases; 36
+/// block rows already gave one persistent spurious column there.
+pub const MAX_BLOCK_WIDTH: usize = 150;
+/// Automatic model orders: 2, 4, … up to this (thesis: 42), or what the
+/// subspace supports.
+pub const MAX_AUTO_ORDER: usize = 42;
 
 /// All settings of the modal stage (serialisable into the output metadata).
 /// `None` fields are resolved from the record by [`plan`] (issue 13).
@@ -422,7 +424,11 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
                 .unwrap_or(0);
             let p_order = want_order.div_ceil(columns_per_block) + 2;
             // … bounded by the cost and by the data.
-            let p_cost = (MAX_FACTORISED_ROWS / needed(1).0.max(1)).max(3);
+            let width = match settings.method {
+                Method::Io => m + l,
+                _ => l,
+            };
+            let p_cost = (MAX_BLOCK_WIDTH / width.max(1)).max(3);
             let p_data = (2..=p_band.max(p_order).max(3))
                 .take_while(|&p| needed(p).1 <= n)
                 .last()
