@@ -50,19 +50,17 @@ pub struct TableBuilder {
 impl TableBuilder {
     /// A builder of the declared table `schema`.
     pub fn new(schema: &'static TableSchema) -> Self {
-        TableBuilder {
-            schema: Some(schema),
-            fields: Vec::new(),
-            columns: Vec::new(),
-            error: None,
-        }
+        Self::of(Some(schema))
     }
     /// A builder of a table quaketwin does not declare: files other tools
     /// wrote, or that an older quaketwin wrote (test fixtures of readers that
     /// must cope with them).  No checks, no units.
     pub fn untyped() -> Self {
+        Self::of(None)
+    }
+    fn of(schema: Option<&'static TableSchema>) -> Self {
         TableBuilder {
-            schema: None,
+            schema,
             fields: Vec::new(),
             columns: Vec::new(),
             error: None,
