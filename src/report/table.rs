@@ -304,17 +304,7 @@ impl Table {
         self.schema
             .fields()
             .iter()
-            .filter_map(|f| {
-                let spec = declared.column(f.name())?;
-                (f.data_type() != &spec.ty.data_type()).then(|| {
-                    format!(
-                        "column {} has type {}, declared {}",
-                        f.name(),
-                        f.data_type(),
-                        spec.ty.doc_name()
-                    )
-                })
-            })
+            .filter_map(|f| declared.column(f.name())?.type_mismatch(f))
             .collect()
     }
     /// Columns of the file the section does not know.

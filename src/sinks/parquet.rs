@@ -75,15 +75,17 @@ impl TableBuilder {
                 Field::new(name, ty.data_type(), nullable)
             }
             Some((_, Some(spec))) => {
-                let nullability = |n: bool| if n { "nullable" } else { "not null" };
                 if spec.ty != ty || spec.nullable != nullable {
+                    let given = ColumnSpec {
+                        ty,
+                        nullable,
+                        ..*spec
+                    };
                     self.error.get_or_insert_with(|| {
                         format!(
-                            "column {name} is set as {} ({}), declared {} ({})",
-                            ty.doc_name(),
-                            nullability(nullable),
-                            spec.ty.doc_name(),
-                            nullability(spec.nullable)
+                            "column {name} is set as {}, declared {}",
+                            given.describe(),
+                            spec.describe()
                         )
                     });
                 }

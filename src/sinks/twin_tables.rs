@@ -100,18 +100,18 @@ pub fn read_measured_modes(path: &Path) -> Result<ModesFile> {
                 .ok_or_else(|| Error::input(loc(), format!("column {name} missing")))
         };
         let numbers = mode_numbers(col(modes::MODE.name)?, &loc)?;
-        let freq = col(modes::FREQUENCY_HZ.name)?
-            .as_primitive_opt::<Float64Type>()
-            .ok_or_else(|| {
-                Error::input(
-                    loc(),
-                    format!(
-                        "column {} is not {}",
-                        modes::FREQUENCY_HZ.name,
-                        modes::FREQUENCY_HZ.ty.doc_name()
-                    ),
-                )
-            })?;
+        // The declared type, nullability aside (nulls are refused per row).
+        let freq_field = batch
+            .schema_ref()
+            .field_with_name(modes::FREQUENCY_HZ.name)
+            .cloned();
+        if let Some(m) = freq_field
+            .ok()
+            .and_then(|f| modes::FREQUENCY_HZ.type_mismatch(&f))
+        {
+            return Err(Error::input(loc(), m));
+        }
+        let freq = col(modes::FREQUENCY_HZ.name)?.as_primitive::<Float64Type>();
         let shape_re = col(modes::SHAPE_RE.name)?;
         let shape_im = batch.column_by_name(modes::SHAPE_IM.name);
         for (i, number) in numbers.iter().enumerate() {

@@ -120,26 +120,43 @@ impl ColumnSpec {
         )]))
     }
 
-    /// Why a field of a file is not this column (type or nullability), if it is not.
-    pub fn mismatch(&self, field: &Field) -> Option<String> {
+    /// Type and nullability, as messages name them (`float64, nullable`).
+    pub fn describe(&self) -> String {
+        format!("{}, {}", self.ty.doc_name(), nullability(self.nullable))
+    }
+
+    /// Why a field of a file does not have this column's type, if it does
+    /// not.  A list's item field may have any name (Arrow says `item`,
+    /// parquet-mr and pyarrow may say `element`): only the item type counts.
+    pub fn type_mismatch(&self, field: &Field) -> Option<String> {
         let expected = self.ty.data_type();
-        if field.data_type() != &expected {
-            return Some(format!(
+        let same = match (field.data_type(), &expected) {
+            (DataType::List(a), DataType::List(b)) => a.data_type() == b.data_type(),
+            (a, b) => a == b,
+        };
+        (!same).then(|| {
+            format!(
                 "column {} has type {}, declared {}",
                 field.name(),
                 field.data_type(),
                 self.ty.doc_name()
-            ));
+            )
+        })
+    }
+
+    /// Why a field of a file is not this column (type or nullability), if it is not.
+    pub fn mismatch(&self, field: &Field) -> Option<String> {
+        if let Some(m) = self.type_mismatch(field) {
+            return Some(m);
         }
-        if field.is_nullable() != self.nullable {
-            return Some(format!(
+        (field.is_nullable() != self.nullable).then(|| {
+            format!(
                 "column {} is {}, declared {}",
                 field.name(),
                 nullability(field.is_nullable()),
                 nullability(self.nullable)
-            ));
-        }
-        None
+            )
+        })
     }
 }
 
