@@ -199,8 +199,9 @@ pub fn ingest(
     let p = parse_pipeline(INGEST_PIPELINE, "built-in ingest pipeline")?;
     let outcomes = pipeline::run(&p, event, out, quiet)?;
     if let Some(path) = mcap {
-        let (conditioned, _) =
-            crate::sinks::event_tables::read_samples(&out.join("samples.parquet"))?;
+        let (conditioned, _) = crate::sinks::event_tables::read_samples(
+            &out.join(crate::vocab::tables::SAMPLES.file),
+        )?;
         let write =
             || crate::sinks::mcap_writer::write_event(&conditioned, path, &Default::default());
         // An MCAP file inside the output directory is listed in its run

@@ -8,12 +8,10 @@ use std::path::Path;
 use super::parquet::{write_parquet, TableBuilder};
 use crate::error::Result;
 pub use crate::hysteresis::DirectionOutcome;
-
-fn meta(schema: &str, extra: &[(String, String)]) -> Vec<(String, String)> {
-    let mut m = vec![("quaketwin.schema".to_string(), schema.to_string())];
-    m.extend_from_slice(extra);
-    m
-}
+use crate::vocab::tables::{
+    bouc_wen, bouc_wen_instantaneous, damage, hysteresis_fit, BOUC_WEN, BOUC_WEN_INSTANTANEOUS,
+    DAMAGE, HYSTERESIS_FIT,
+};
 
 /// `bouc_wen.parquet`: one row per direction, DoF and parameter (a direction
 /// that could not be identified has one row with `status` saying why).
@@ -156,24 +154,24 @@ pub fn write_bouc_wen(
             }
         }
     }
-    let batch = TableBuilder::new()
-        .str("direction", &c.direction)
-        .i32("dof", c.dof)
-        .str("parameter", &c.parameter)
-        .opt_i32("coupled_dof", c.coupled)
-        .f64("value", c.value)
-        .str("unit", &c.unit)
-        .opt_f64("stability_std", c.stability)
-        .bool("stable", c.stable)
-        .f64("cost_j", c.cost)
-        .f64("cost_relative", c.cost_rel)
-        .f64("hysteretic_share", c.share)
-        .str("status", &c.status)
-        .str("reason", &c.reason)
-        .opt_f64("f_statistic", c.f_statistic)
-        .opt_f64("p_value", c.p_value)
+    let batch = TableBuilder::new(&BOUC_WEN)
+        .str(bouc_wen::DIRECTION, &c.direction)
+        .i32(bouc_wen::DOF, c.dof)
+        .str(bouc_wen::PARAMETER, &c.parameter)
+        .opt_i32(bouc_wen::COUPLED_DOF, c.coupled)
+        .f64(bouc_wen::VALUE, c.value)
+        .str(bouc_wen::UNIT, &c.unit)
+        .opt_f64(bouc_wen::STABILITY_STD, c.stability)
+        .bool(bouc_wen::STABLE, c.stable)
+        .f64(bouc_wen::COST_J, c.cost)
+        .f64(bouc_wen::COST_RELATIVE, c.cost_rel)
+        .f64(bouc_wen::HYSTERETIC_SHARE, c.share)
+        .str(bouc_wen::STATUS, &c.status)
+        .str(bouc_wen::REASON, &c.reason)
+        .opt_f64(bouc_wen::F_STATISTIC, c.f_statistic)
+        .opt_f64(bouc_wen::P_VALUE, c.p_value)
         .build()?;
-    write_parquet(path, &[batch], &meta("bouc_wen", extra_meta))
+    write_parquet(path, &[batch], extra_meta)
 }
 
 #[derive(Default)]
@@ -269,18 +267,18 @@ pub fn write_instantaneous(path: &Path, outcomes: &[DirectionOutcome]) -> Result
             }
         }
     }
-    let batch = TableBuilder::new()
-        .str("direction", &dir)
-        .i32("dof", dof)
-        .f64("t_s", t)
-        .bool("informative", inf)
-        .f64("n_exponent", n)
-        .f64("cost_j", cost)
-        .f64("k0_own_n_m", k0)
-        .f64("beta", beta)
-        .f64("gamma", gamma)
+    let batch = TableBuilder::new(&BOUC_WEN_INSTANTANEOUS)
+        .str(bouc_wen_instantaneous::DIRECTION, &dir)
+        .i32(bouc_wen_instantaneous::DOF, dof)
+        .f64(bouc_wen_instantaneous::T_S, t)
+        .bool(bouc_wen_instantaneous::INFORMATIVE, inf)
+        .f64(bouc_wen_instantaneous::N_EXPONENT, n)
+        .f64(bouc_wen_instantaneous::COST_J, cost)
+        .f64(bouc_wen_instantaneous::K0_OWN_N_M, k0)
+        .f64(bouc_wen_instantaneous::BETA, beta)
+        .f64(bouc_wen_instantaneous::GAMMA, gamma)
         .build()?;
-    write_parquet(path, &[batch], &meta("bouc_wen_instantaneous", &[]))
+    write_parquet(path, &[batch], &[])
 }
 
 /// `hysteresis_fit.parquet`: recorded vs model restoring force per storey.
@@ -310,15 +308,15 @@ pub fn write_fit(path: &Path, outcomes: &[DirectionOutcome], decimate: usize) ->
             }
         }
     }
-    let batch = TableBuilder::new()
-        .str("direction", &dir)
-        .i32("dof", dof)
-        .f64("t_s", t)
-        .f64("drift_m", drift)
-        .f64("force_record_n", fr)
-        .f64("force_model_n", fm)
+    let batch = TableBuilder::new(&HYSTERESIS_FIT)
+        .str(hysteresis_fit::DIRECTION, &dir)
+        .i32(hysteresis_fit::DOF, dof)
+        .f64(hysteresis_fit::T_S, t)
+        .f64(hysteresis_fit::DRIFT_M, drift)
+        .f64(hysteresis_fit::FORCE_RECORD_N, fr)
+        .f64(hysteresis_fit::FORCE_MODEL_N, fm)
         .build()?;
-    write_parquet(path, &[batch], &meta("hysteresis_fit", &[]))
+    write_parquet(path, &[batch], &[])
 }
 
 /// `damage.parquet`: ι(t) and, per mode, ω_s(t)/ω_s(0) and c_s(t) — one row
@@ -347,24 +345,21 @@ pub fn write_damage(path: &Path, outcomes: &[DirectionOutcome], decimate: usize)
             }
         }
     }
-    let batch = TableBuilder::new()
-        .str("direction", &dir)
-        .f64("t_s", t)
-        .f64("iota", iota)
-        .i32("mode", mode)
-        .f64("omega_rad_s", omega)
-        .f64("omega_ratio", ratio)
-        .f64("participation", part)
+    let batch = TableBuilder::new(&DAMAGE)
+        .str(damage::DIRECTION, &dir)
+        .f64(damage::T_S, t)
+        .f64(damage::IOTA, iota)
+        .i32(damage::MODE, mode)
+        .f64(damage::OMEGA_RAD_S, omega)
+        .f64(damage::OMEGA_RATIO, ratio)
+        .f64(damage::PARTICIPATION, part)
         .build()?;
     write_parquet(
         path,
         &[batch],
-        &meta(
-            "damage",
-            &[(
-                "quaketwin.indefinite_steps".into(),
-                serde_json::Value::Object(indefinite).to_string(),
-            )],
-        ),
+        &[(
+            "quaketwin.indefinite_steps".into(),
+            serde_json::Value::Object(indefinite).to_string(),
+        )],
     )
 }

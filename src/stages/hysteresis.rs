@@ -38,10 +38,10 @@ pub const DAMAGE_KIND: StageKind = StageKind {
     build: build_damage,
 };
 
-pub const BOUC_WEN_FILE: &str = "bouc_wen.parquet";
-pub const INSTANTANEOUS_FILE: &str = "bouc_wen_instantaneous.parquet";
-pub const FIT_FILE: &str = "hysteresis_fit.parquet";
-pub const DAMAGE_FILE: &str = "damage.parquet";
+pub const BOUC_WEN_FILE: &str = crate::vocab::tables::BOUC_WEN.file;
+pub const INSTANTANEOUS_FILE: &str = crate::vocab::tables::BOUC_WEN_INSTANTANEOUS.file;
+pub const FIT_FILE: &str = crate::vocab::tables::HYSTERESIS_FIT.file;
+pub const DAMAGE_FILE: &str = crate::vocab::tables::DAMAGE.file;
 
 /// The product: the identification of every direction.
 pub struct Identification {

@@ -30,6 +30,7 @@ mod readers_binary;
 mod readers_csv;
 mod readers_text;
 mod report;
+mod schemas;
 mod stage_params;
 mod twin;
 mod twin_update_io;

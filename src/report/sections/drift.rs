@@ -5,6 +5,7 @@ use crate::report::format_number;
 use crate::report::html::{column_notes, note, table, Cell};
 use crate::report::plot::{self, Chart, Mark, RefLine, Series};
 use crate::report::{Assessment, ReportSettings};
+use crate::vocab::tables::{self, drift};
 
 pub(super) fn drift_section(
     drift: &Loaded,
@@ -12,19 +13,19 @@ pub(super) fn drift_section(
     out: &mut Vec<Assessment>,
 ) -> String {
     let mut body = String::new();
-    let Some(t) = require(drift, "drift.parquet", &mut body) else {
+    let Some(t) = require(drift, &tables::DRIFT, &mut body) else {
         return body;
     };
     let known = [
-        "direction",
-        "storey",
-        "lower_channel",
-        "upper_channel",
-        "storey_height_m",
-        "peak_drift_ratio",
+        drift::DIRECTION.name,
+        drift::STOREY.name,
+        drift::LOWER_CHANNEL.name,
+        drift::UPPER_CHANNEL.name,
+        drift::STOREY_HEIGHT_M.name,
+        drift::PEAK_DRIFT_RATIO.name,
     ];
     body.push_str(&column_notes(t, &known));
-    let Some(ratio) = t.number("peak_drift_ratio") else {
+    let Some(ratio) = t.number(drift::PEAK_DRIFT_RATIO.name) else {
         return body;
     };
     let th = settings.drift;
@@ -53,21 +54,28 @@ pub(super) fn drift_section(
                 criterion: "peak inter-storey drift ratio".into(),
                 subject: format!(
                     "storey {}, direction {}",
-                    t.key("storey", r).unwrap_or_else(|| "?".into()),
-                    t.key("direction", r).unwrap_or_else(|| "?".into())
+                    t.key(drift::STOREY.name, r).unwrap_or_else(|| "?".into()),
+                    t.key(drift::DIRECTION.name, r)
+                        .unwrap_or_else(|| "?".into())
                 ),
                 value: v,
                 rating,
-                source: "drift.parquet".into(),
+                source: tables::DRIFT.file.into(),
             });
         }
     }
     body.push_str(&table(Some("drift-table"), &headers, &rows));
     // Drift profile: storey on the vertical axis, one line per direction.
-    if t.has("storey") {
-        let mut chart = Chart::new(520, 300, "peak inter-storey drift ratio", "storey");
-        for (i, (dir, rows)) in t.groups(&["direction"]).into_iter().enumerate() {
-            let mut pts: Vec<(f64, f64)> = rows_points(t, &rows, "peak_drift_ratio", "storey");
+    if t.has(drift::STOREY.name) {
+        let mut chart = Chart::new(
+            520,
+            300,
+            "peak inter-storey drift ratio",
+            drift::STOREY.name,
+        );
+        for (i, (dir, rows)) in t.groups(&[drift::DIRECTION.name]).into_iter().enumerate() {
+            let mut pts: Vec<(f64, f64)> =
+                rows_points(t, &rows, drift::PEAK_DRIFT_RATIO.name, drift::STOREY.name);
             pts.sort_by(|a, b| a.1.total_cmp(&b.1));
             chart.series.push(Series::new(
                 format!("direction {}", dir.join("")),

@@ -7,37 +7,38 @@ use super::{figure, known_columns_first, load, require, rows_points, stride};
 use crate::report::html::{cells, column_notes, missing_columns_note, note, table};
 use crate::report::plot::{self, Chart, Mark, Series};
 use crate::report::ReportSettings;
+use crate::vocab::tables::{self, bouc_wen, bouc_wen_instantaneous, hysteresis_fit};
 
 pub(super) fn hysteresis_section(dir: &Path, settings: &ReportSettings) -> String {
     let mut body = String::new();
-    let fit = load(dir, "hysteresis_fit.parquet", None);
-    let params = load(dir, "bouc_wen.parquet", None);
+    let fit = load(dir, &tables::HYSTERESIS_FIT, None);
+    let params = load(dir, &tables::BOUC_WEN, None);
     body.push_str("<h3>Identified Bouc-Wen parameters</h3>");
-    if let Some(t) = require(&params, "bouc_wen.parquet", &mut body) {
+    if let Some(t) = require(&params, &tables::BOUC_WEN, &mut body) {
         // Long layout (one row per parameter: `parameter`, `value`, `unit`…)
         // or wide (one column per parameter).
-        let known: &[&str] = if t.has("parameter") && t.has("value") {
+        let known: &[&str] = if t.has(bouc_wen::PARAMETER.name) && t.has(bouc_wen::VALUE.name) {
             &[
-                "direction",
-                "dof",
-                "parameter",
-                "coupled_dof",
-                "value",
-                "unit",
-                "stability_std",
-                "stable",
-                "status",
-                "cost_j",
+                bouc_wen::DIRECTION.name,
+                bouc_wen::DOF.name,
+                bouc_wen::PARAMETER.name,
+                bouc_wen::COUPLED_DOF.name,
+                bouc_wen::VALUE.name,
+                bouc_wen::UNIT.name,
+                bouc_wen::STABILITY_STD.name,
+                bouc_wen::STABLE.name,
+                bouc_wen::STATUS.name,
+                bouc_wen::COST_J.name,
             ]
         } else {
             &[
-                "direction",
-                "dof",
+                bouc_wen::DIRECTION.name,
+                bouc_wen::DOF.name,
                 "k0_n_m",
                 "beta",
                 "gamma",
                 "n_exponent",
-                "cost_j",
+                bouc_wen::COST_J.name,
             ]
         };
         body.push_str(&missing_columns_note(t, known));
@@ -49,17 +50,27 @@ pub(super) fn hysteresis_section(dir: &Path, settings: &ReportSettings) -> Strin
         ));
     }
     body.push_str("<h3>Instantaneous estimates</h3>");
-    let inst = load(dir, "bouc_wen_instantaneous.parquet", None);
-    if let Some(t) = require(&inst, "bouc_wen_instantaneous.parquet", &mut body) {
-        let keys: Vec<&str> = ["direction", "dof"]
-            .into_iter()
-            .filter(|k| t.has(k))
-            .collect();
-        if t.number("t_s").is_some() && t.number("n_exponent").is_some() {
+    let inst = load(dir, &tables::BOUC_WEN_INSTANTANEOUS, None);
+    if let Some(t) = require(&inst, &tables::BOUC_WEN_INSTANTANEOUS, &mut body) {
+        let keys: Vec<&str> = [
+            bouc_wen_instantaneous::DIRECTION.name,
+            bouc_wen_instantaneous::DOF.name,
+        ]
+        .into_iter()
+        .filter(|k| t.has(k))
+        .collect();
+        if t.number(bouc_wen_instantaneous::T_S.name).is_some()
+            && t.number(bouc_wen_instantaneous::N_EXPONENT.name).is_some()
+        {
             let mut chart = Chart::new(560, 260, "end of growing window t (s)", "exponent N");
             for (i, (key, rows)) in t.groups(&keys).into_iter().enumerate() {
                 let label = group_label(&keys, &key);
-                let pts = rows_points(t, &rows, "t_s", "n_exponent");
+                let pts = rows_points(
+                    t,
+                    &rows,
+                    bouc_wen_instantaneous::T_S.name,
+                    bouc_wen_instantaneous::N_EXPONENT.name,
+                );
                 chart.series.push(Series::new(
                     label,
                     plot::decimate_min_max(&pts, settings.max_points_per_trace),
@@ -84,39 +95,48 @@ pub(super) fn hysteresis_section(dir: &Path, settings: &ReportSettings) -> Strin
         )));
     }
     body.push_str("<h3>Hysteresis loops: record and model</h3>");
-    if let Some(t) = require(&fit, "hysteresis_fit.parquet", &mut body) {
+    if let Some(t) = require(&fit, &tables::HYSTERESIS_FIT, &mut body) {
         let known = [
-            "direction",
-            "dof",
-            "t_s",
-            "drift_m",
-            "force_record_n",
-            "force_model_n",
+            hysteresis_fit::DIRECTION.name,
+            hysteresis_fit::DOF.name,
+            hysteresis_fit::T_S.name,
+            hysteresis_fit::DRIFT_M.name,
+            hysteresis_fit::FORCE_RECORD_N.name,
+            hysteresis_fit::FORCE_MODEL_N.name,
         ];
         body.push_str(&column_notes(t, &known));
-        if !t.has("drift_m") || !(t.has("force_record_n") || t.has("force_model_n")) {
+        if !t.has(hysteresis_fit::DRIFT_M.name)
+            || !(t.has(hysteresis_fit::FORCE_RECORD_N.name)
+                || t.has(hysteresis_fit::FORCE_MODEL_N.name))
+        {
             return body;
         }
-        let keys: Vec<&str> = ["direction", "dof"]
+        let keys: Vec<&str> = [hysteresis_fit::DIRECTION.name, hysteresis_fit::DOF.name]
             .into_iter()
             .filter(|k| t.has(k))
             .collect();
         body.push_str("<div class=\"multiples\">");
         for (key, rows) in t.groups(&keys) {
             let kn = |col: &str| -> Vec<(f64, f64)> {
-                let pts: Vec<(f64, f64)> = rows_points(t, &rows, "drift_m", col)
+                let pts: Vec<(f64, f64)> = rows_points(t, &rows, hysteresis_fit::DRIFT_M.name, col)
                     .into_iter()
                     .map(|(d, f)| (d, f / 1000.0))
                     .collect();
                 stride(pts, settings.max_points_per_trace)
             };
             let mut chart = Chart::new(440, 300, "inter-storey drift (m)", "storey force (kN)");
-            chart
-                .series
-                .push(Series::new("record", kn("force_record_n"), 0, Mark::Line));
-            chart
-                .series
-                .push(Series::new("model", kn("force_model_n"), 1, Mark::Dashed));
+            chart.series.push(Series::new(
+                "record",
+                kn(hysteresis_fit::FORCE_RECORD_N.name),
+                0,
+                Mark::Line,
+            ));
+            chart.series.push(Series::new(
+                "model",
+                kn(hysteresis_fit::FORCE_MODEL_N.name),
+                1,
+                Mark::Dashed,
+            ));
             let label = group_label(&keys, &key);
             let legend = plot::legend(&chart.series);
             body.push_str(&figure(
