@@ -168,7 +168,8 @@ declare!(FREQUENCY_SHIFTS, frequency_shifts, "frequency_shifts", "frequency_shif
 declare!(BOUC_WEN, bouc_wen, "bouc_wen", "bouc_wen.parquet",
     "one row per direction, DoF and Bouc-Wen parameter", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
-    DOF: "dof", I32, required, "", "DoF (storey) from the base up, 1-based; −1 on a not-identifiable row";
+    DOF: "dof", I32, required, "", "DoF (instrumented floor) from the base up, 1-based; −1 on a not-identifiable row";
+    SEGMENT: "segment", Utf8, nullable, "", "levels the DoF's storey spans, `L<a>–L<b>` (a segment of several storeys where levels between are not instrumented); null on a not-identifiable row";
     PARAMETER: "parameter", Utf8, required, "", "`K0`, `K0_delta`, `delta`, `beta`, `gamma`, `N` (`none` on a not-identifiable row)";
     COUPLED_DOF: "coupled_dof", I32, nullable, "", "r of K0_dr-type rows";
     VALUE: "value", F64, required, "", "parameter value, in the row's `unit`";
@@ -178,8 +179,8 @@ declare!(BOUC_WEN, bouc_wen, "bouc_wen", "bouc_wen.parquet",
     COST_J: "cost_j", F64, required, "", "J(N) at the optimum (Eq. 31; a weighted STFT residual)";
     COST_RELATIVE: "cost_relative", F64, required, "1", "J(N) relative to the target";
     HYSTERETIC_SHARE: "hysteretic_share", F64, required, "1", "share of the record explained by the hysteretic terms";
-    STATUS: "status", Utf8, required, "", "`identified`, `identified_unstable`, `not_identifiable`";
-    REASON: "reason", Utf8, required, "", "why not identifiable (e.g. \"the response stays (nearly) linear …\", \"no base channel\")";
+    STATUS: "status", Utf8, required, "", "`identified`, `identified_unstable` (estimates unstable over time at this DoF), `not_identifiable` (one row per direction: `dof` −1, `parameter` `none`, `value` NaN)";
+    REASON: "reason", Utf8, required, "", "empty unless `not_identifiable`: why (no base or floor channel, a level whose channels could not be combined, masses missing, the response stays (nearly) linear …), naming level, channel or file";
     F_STATISTIC: "f_statistic", F64, nullable, "1", "F-test of the hysteretic terms (β, γ, N) against the nested linear model at this DoF: [(J_lin − J)/3] / [J/(n_eff − p)], n_eff = non-overlapping STFT windows; null on not-identifiable rows";
     P_VALUE: "p_value", F64, nullable, "1", "its p-value; a DoF is identifiable when p < `significance_level` (default 1e-3)";
 });
@@ -199,13 +200,14 @@ declare!(BOUC_WEN_INSTANTANEOUS, bouc_wen_instantaneous, "bouc_wen_instantaneous
 });
 
 declare!(HYSTERESIS_FIT, hysteresis_fit, "hysteresis_fit", "hysteresis_fit.parquet",
-    "recorded vs model restoring force per storey", {
+    "recorded vs model storey shear and drift per storey (segment): the force–drift loops", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
-    DOF: "dof", I32, required, "", "DoF (storey), 1-based";
+    DOF: "dof", I32, required, "", "DoF (instrumented floor), 1-based";
+    SEGMENT: "segment", Utf8, required, "", "levels the storey spans, `L<a>–L<b>`";
     T_S: "t_s", F64, required, "s", "time";
-    DRIFT_M: "drift_m", F64, required, "m", "storey drift u_d − u_{d−1}";
-    FORCE_RECORD_N: "force_record_n", F64, required, "N", "Eq. 46: −m_d (a + ü_d) summed as storey shear";
-    FORCE_MODEL_N: "force_model_n", F64, required, "N", "identified model";
+    DRIFT_M: "drift_m", F64, required, "m", "storey (segment) drift u_d − u_{d−1}, from the stage's own integration of the as-recorded accelerations (no band-pass: permanent drift kept)";
+    FORCE_RECORD_N: "force_record_n", F64, required, "N", "storey shear from the records, V_d = Σ_{r ≥ d} f_r, f_r = −m_r (a + ü_r) (Eq. 46)";
+    FORCE_MODEL_N: "force_model_n", F64, nullable, "N", "storey shear of the identified model along the recorded kinematics; null where the direction is not identified (measured loop only)";
 });
 
 declare!(DAMAGE, damage, "damage", "damage.parquet",

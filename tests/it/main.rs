@@ -20,6 +20,7 @@ mod event_folder;
 mod geometry;
 mod hysteresis;
 mod hysteresis_masses;
+mod hysteresis_partial;
 mod hysteresis_real;
 mod metrics;
 mod modal;

@@ -515,7 +515,7 @@ fn later_stage_sections_render_fixture_tables_and_rate_damage() {
     let hyst_text = node_text(hyst);
     assert!(
         hyst_text
-            .contains("expected column(s) not present: coupled_dof, stability_std, stable, cost_j"),
+            .contains("expected column(s) not present: segment, coupled_dof, stability_std, stable, reason, cost_j"),
         "{hyst_text}"
     );
     let (bh, brows) = table_cells(&doc, "bouc-wen-table");

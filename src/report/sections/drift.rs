@@ -7,8 +7,11 @@ use crate::report::plot::{self, Chart, Mark, RefLine, Series};
 use crate::report::{Assessment, ReportSettings};
 use crate::vocab::tables::{self, drift};
 
+/// `residual`: residual drift (m) per (direction, segment `L<a>–L<b>`) from
+/// the hysteresis stage's unfiltered displacement (`loops::residual_drifts`).
 pub(super) fn drift_section(
     drift: &Loaded,
+    residual: &std::collections::BTreeMap<(String, String), f64>,
     settings: &ReportSettings,
     out: &mut Vec<Assessment>,
 ) -> String {
@@ -34,10 +37,19 @@ pub(super) fn drift_section(
         format_number(th.yellow),
         format_number(th.red)
     )));
+    body.push_str(&note(
+        "Peak drift from the band-passed displacements of the condition stage: the oscillation only, since a band-pass removes a \
+         permanent offset. The residual drift column comes from the hysteresis stage's displacement, integrated from the as-recorded \
+         accelerations without a band-pass (mean over the end of the record; loops and details in the Bouc-Wen section), where that \
+         stage formed the storey.",
+    ));
     let present = present_columns(t, &known);
     let mut headers: Vec<String> = present.iter().map(|s| s.to_string()).collect();
     headers.push("drift (%)".into());
     headers.push("rating".into());
+    if !residual.is_empty() {
+        headers.push("residual drift (m, unfiltered)".into());
+    }
     let mut rows = Vec::new();
     for r in 0..t.rows {
         let v = ratio.get(r).copied().flatten();
@@ -48,6 +60,16 @@ pub(super) fn drift_section(
             None => Cell::number(None),
         });
         row.push(rating_cell(rating));
+        if !residual.is_empty() {
+            let key = (
+                t.key(drift::DIRECTION.name, r).unwrap_or_default(),
+                t.key(drift::STOREY.name, r)
+                    .and_then(|s| s.parse::<i32>().ok())
+                    .map(|s| format!("L{}–L{s}", s - 1))
+                    .unwrap_or_default(),
+            );
+            row.push(Cell::number(residual.get(&key).copied()));
+        }
         rows.push(row);
         if let (Some(v), Some(rating)) = (v, rating) {
             out.push(Assessment {

@@ -1,13 +1,14 @@
-//! Section 8, Bouc-Wen fit: identified parameters, instantaneous exponent and
-//! force–drift loops of record and model.
+//! Section 8, Bouc-Wen fit: identified parameters (and why a direction is
+//! not identifiable), instantaneous exponent and force–drift loops
+//! (`loops`).
 
 use std::path::Path;
 
-use super::{figure, known_columns_first, load, require, rows_points, stride};
-use crate::report::html::{cells, column_notes, missing_columns_note, note, table};
+use super::{figure, known_columns_first, load, require, rows_points};
+use crate::report::html::{cells, missing_columns_note, note, table};
 use crate::report::plot::{self, Chart, Mark, Series};
 use crate::report::ReportSettings;
-use crate::vocab::tables::{self, bouc_wen, bouc_wen_instantaneous, hysteresis_fit};
+use crate::vocab::tables::{self, bouc_wen, bouc_wen_instantaneous};
 
 pub(super) fn hysteresis_section(dir: &Path, settings: &ReportSettings) -> String {
     let mut body = String::new();
@@ -21,6 +22,7 @@ pub(super) fn hysteresis_section(dir: &Path, settings: &ReportSettings) -> Strin
             &[
                 bouc_wen::DIRECTION.name,
                 bouc_wen::DOF.name,
+                bouc_wen::SEGMENT.name,
                 bouc_wen::PARAMETER.name,
                 bouc_wen::COUPLED_DOF.name,
                 bouc_wen::VALUE.name,
@@ -28,6 +30,7 @@ pub(super) fn hysteresis_section(dir: &Path, settings: &ReportSettings) -> Strin
                 bouc_wen::STABILITY_STD.name,
                 bouc_wen::STABLE.name,
                 bouc_wen::STATUS.name,
+                bouc_wen::REASON.name,
                 bouc_wen::COST_J.name,
             ]
         } else {
@@ -94,58 +97,21 @@ pub(super) fn hysteresis_section(dir: &Path, settings: &ReportSettings) -> Strin
             t.names.join(", ")
         )));
     }
-    body.push_str("<h3>Hysteresis loops: record and model</h3>");
+    body.push_str("<h3>Force–drift loops: record and model</h3>");
     if let Some(t) = require(&fit, &tables::HYSTERESIS_FIT, &mut body) {
-        let known = [
-            hysteresis_fit::DIRECTION.name,
-            hysteresis_fit::DOF.name,
-            hysteresis_fit::T_S.name,
-            hysteresis_fit::DRIFT_M.name,
-            hysteresis_fit::FORCE_RECORD_N.name,
-            hysteresis_fit::FORCE_MODEL_N.name,
-        ];
-        body.push_str(&column_notes(t, &known));
-        if !t.has(hysteresis_fit::DRIFT_M.name)
-            || !(t.has(hysteresis_fit::FORCE_RECORD_N.name)
-                || t.has(hysteresis_fit::FORCE_MODEL_N.name))
-        {
-            return body;
-        }
-        let keys: Vec<&str> = [hysteresis_fit::DIRECTION.name, hysteresis_fit::DOF.name]
-            .into_iter()
-            .filter(|k| t.has(k))
-            .collect();
-        body.push_str("<div class=\"multiples\">");
-        for (key, rows) in t.groups(&keys) {
-            let kn = |col: &str| -> Vec<(f64, f64)> {
-                let pts: Vec<(f64, f64)> = rows_points(t, &rows, hysteresis_fit::DRIFT_M.name, col)
-                    .into_iter()
-                    .map(|(d, f)| (d, f / 1000.0))
-                    .collect();
-                stride(pts, settings.max_points_per_trace)
-            };
-            let mut chart = Chart::new(440, 300, "inter-storey drift (m)", "storey force (kN)");
-            chart.series.push(Series::new(
-                "record",
-                kn(hysteresis_fit::FORCE_RECORD_N.name),
-                0,
-                Mark::Line,
-            ));
-            chart.series.push(Series::new(
-                "model",
-                kn(hysteresis_fit::FORCE_MODEL_N.name),
-                1,
-                Mark::Dashed,
-            ));
-            let label = group_label(&keys, &key);
-            let legend = plot::legend(&chart.series);
-            body.push_str(&figure(
-                plot::render(&chart),
-                &format!("Force–drift loop, {label}"),
-                &legend,
-            ));
-        }
-        body.push_str("</div>");
+        let velocity_drift = match &params {
+            super::Loaded::Ok(p) => p
+                .metadata
+                .get("quaketwin.settings")
+                .and_then(|s| serde_json::from_str::<serde_json::Value>(s).ok())
+                .and_then(|v| v.get("velocity_drift")?.as_str().map(str::to_string)),
+            _ => None,
+        };
+        body.push_str(&super::loops::loops_section(
+            t,
+            velocity_drift.as_deref(),
+            settings,
+        ));
     }
     body
 }

@@ -7,6 +7,7 @@ mod damage;
 mod design;
 mod drift;
 mod hysteresis;
+mod loops;
 mod modal;
 mod rating;
 mod spectra;
@@ -157,16 +158,6 @@ fn rows_points(t: &Table, rows: &[usize], x: &str, y: &str) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Keeps every k-th point so at most `max` remain (for x–y loops, where
-/// min–max decimation in time order does not apply).  Display only.
-fn stride(points: Vec<(f64, f64)>, max: usize) -> Vec<(f64, f64)> {
-    if points.len() <= max || max == 0 {
-        return points;
-    }
-    let k = points.len().div_ceil(max);
-    points.into_iter().step_by(k).collect()
-}
-
 /// The `known` columns `t` holds, in the section's order.
 fn present_columns<'a>(t: &Table, known: &[&'a str]) -> Vec<&'a str> {
     known.iter().copied().filter(|c| t.has(c)).collect()
@@ -195,7 +186,11 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
     let channel_table = channels::channel_section(&channels);
     let spectra = spectra::spectra_section(dir, &channels);
     let histories = time_histories::time_history_section(dir, &channels, settings);
-    let drift_html = drift::drift_section(&drift, settings, &mut assessments);
+    let residual = match load(dir, &tables::HYSTERESIS_FIT, None) {
+        Loaded::Ok(t) => loops::residual_drifts(&t),
+        _ => Default::default(),
+    };
+    let drift_html = drift::drift_section(&drift, &residual, settings, &mut assessments);
     let modal = modal::modal_section(dir, settings);
     let hysteresis = hysteresis::hysteresis_section(dir, settings);
     let damage_html = damage::damage_section(&damage, settings, &mut assessments);
