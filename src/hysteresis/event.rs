@@ -56,21 +56,7 @@ pub struct MeasuredResponse {
 
 impl MeasuredResponse {
     pub fn from_kinematics(kin: &DirectionKinematics, segments: Vec<String>) -> Self {
-        let n = kin.samples();
-        let storey_drift = (0..kin.dofs())
-            .map(|d| {
-                (0..n)
-                    .map(|k| {
-                        kin.relative_displacement[d][k]
-                            - if d > 0 {
-                                kin.relative_displacement[d - 1][k]
-                            } else {
-                                0.0
-                            }
-                    })
-                    .collect()
-            })
-            .collect();
+        let storey_drift = (0..kin.dofs()).map(|d| kin.storey_drift(d)).collect();
         MeasuredResponse {
             sampling_rate_hz: kin.sampling_rate_hz,
             segments,

@@ -213,16 +213,7 @@ fn fit_restoring_forces(
         }
         identified[d].fit.force_model = force;
         identified[d].fit.force_record = kin.restoring_force[d].clone();
-        identified[d].fit.storey_drift = (0..n)
-            .map(|k| {
-                kin.relative_displacement[d][k]
-                    - if d > 0 {
-                        kin.relative_displacement[d - 1][k]
-                    } else {
-                        0.0
-                    }
-            })
-            .collect();
+        identified[d].fit.storey_drift = kin.storey_drift(d);
     }
 }
 

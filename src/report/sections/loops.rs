@@ -13,6 +13,14 @@ use crate::vocab::tables::hysteresis_fit;
 /// Share of the record (its end) over which the residual drift is averaged.
 pub const RESIDUAL_WINDOW: f64 = 0.05;
 
+/// The storey drift of one loop's rows, in time order.
+fn drift_series(t: &Table, rows: &[usize]) -> Vec<f64> {
+    rows_points(t, rows, hysteresis_fit::T_S.name, hysteresis_fit::DRIFT_M.name)
+        .into_iter()
+        .map(|p| p.1)
+        .collect()
+}
+
 /// Peak |drift| and residual drift (mean over the last `RESIDUAL_WINDOW` of
 /// the rows, in time order) of one loop, m.
 pub fn peak_and_residual(drift: &[f64]) -> Option<(f64, f64)> {
@@ -39,15 +47,7 @@ pub(super) fn residual_drifts(t: &Table) -> std::collections::BTreeMap<(String, 
         else {
             continue;
         };
-        let drift: Vec<f64> = rows_points(
-            t,
-            &rows,
-            hysteresis_fit::T_S.name,
-            hysteresis_fit::DRIFT_M.name,
-        )
-        .into_iter()
-        .map(|p| p.1)
-        .collect();
+        let drift = drift_series(t, &rows);
         if let Some((_, residual)) = peak_and_residual(&drift) {
             out.insert((key[0].clone(), segment), residual);
         }
@@ -106,15 +106,7 @@ pub(super) fn loops_section(
         let record = kn(hysteresis_fit::FORCE_RECORD_N.name);
         let model = kn(hysteresis_fit::FORCE_MODEL_N.name);
         let identified = !model.is_empty();
-        let drift: Vec<f64> = rows_points(
-            t,
-            &rows,
-            hysteresis_fit::T_S.name,
-            hysteresis_fit::DRIFT_M.name,
-        )
-        .into_iter()
-        .map(|p| p.1)
-        .collect();
+        let drift = drift_series(t, &rows);
         if let Some((peak, residual)) = peak_and_residual(&drift) {
             rows_html.push(vec![
                 Cell::text(&direction),
