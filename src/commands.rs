@@ -199,8 +199,9 @@ pub fn ingest(
     let p = parse_pipeline(INGEST_PIPELINE, "built-in ingest pipeline")?;
     let outcomes = pipeline::run(&p, event, out, quiet)?;
     if let Some(path) = mcap {
-        let (conditioned, _) =
-            crate::sinks::event_tables::read_samples(&out.join("samples.parquet"))?;
+        let (conditioned, _) = crate::sinks::event_tables::read_samples(
+            &out.join(crate::vocab::tables::SAMPLES.file),
+        )?;
         let write =
             || crate::sinks::mcap_writer::write_event(&conditioned, path, &Default::default());
         // An MCAP file inside the output directory is listed in its run
@@ -338,12 +339,13 @@ pub fn modal(event: &Path, out: &Path, flags: &ModalFlags, quiet: bool) -> Resul
 }
 
 /// `quaketwin hysteresis EVENT --out DIR`: Bouc-Wen identification and damage
-/// index on the records as recorded (SI units only).  Fails when a direction
-/// cannot be identified (the pipeline stage records the reason instead).
+/// index on the records as recorded (SI units only).  A direction that cannot
+/// be identified is not a failure: its reason goes to bouc_wen.parquet
+/// (`status = not_identifiable`) and to stderr, and the command exits 0.
 pub fn hysteresis(event: &Path, out: &Path, quiet: bool) -> Result<()> {
     let text = "[pipeline]\nname = \"hysteresis\"\n[[stage]]\nname = \"ingest\"\nkind = \"ingest\"\n\
                 [[stage]]\nname = \"as-recorded\"\nkind = \"condition\"\ninputs = [\"ingest\"]\n[stage.params]\nsteps = []\nsamples_file = \"samples_as_recorded.parquet\"\n\
-                [[stage]]\nname = \"hysteresis\"\nkind = \"hysteresis\"\ninputs = [\"as-recorded\"]\n[stage.params]\nfail_on_error = true\n\
+                [[stage]]\nname = \"hysteresis\"\nkind = \"hysteresis\"\ninputs = [\"as-recorded\"]\n\
                 [[stage]]\nname = \"damage\"\nkind = \"damage\"\ninputs = [\"hysteresis\"]\n";
     let p = parse_pipeline(text, "built-in hysteresis pipeline")?;
     pipeline::run(&p, event, out, quiet).map(|_| ())

@@ -32,6 +32,7 @@ pub mod partition;
 pub mod plan;
 pub mod pod;
 pub mod recorded;
+pub mod resolve;
 pub mod rigid;
 
 pub use craig_bampton::{

@@ -188,8 +188,8 @@ pub fn partition_by_nodes(
         for (a, &pa) in pos.iter().enumerate() {
             for (b, &pb) in pos.iter().enumerate() {
                 if pa < n && pb < n {
-                    k[(pa, pb)] += ke.get(a, b);
-                    m[(pa, pb)] += me.get(a, b);
+                    k[(pa, pb)] += ke[(a, b)];
+                    m[(pa, pb)] += me[(a, b)];
                 }
             }
         }

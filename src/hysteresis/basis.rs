@@ -301,6 +301,14 @@ impl DirectionKinematics {
     pub fn dt(&self) -> f64 {
         1.0 / self.sampling_rate_hz
     }
+    /// Inter-storey drift u_d − u_{d−1} of DoF `d` (u_0 = 0: the base), per sample.
+    pub fn storey_drift(&self, d: usize) -> Vec<f64> {
+        let u = &self.relative_displacement;
+        match d {
+            0 => u[0].clone(),
+            _ => u[d].iter().zip(&u[d - 1]).map(|(a, b)| a - b).collect(),
+        }
+    }
     /// Signed energy term ε_dr(t) at sample k (Eq. 23d).
     pub fn energy(&self, d: usize, r: usize, k: usize) -> f64 {
         let dofs = self.dofs();

@@ -7,10 +7,13 @@ use std::path::Path;
 
 use serde::Deserialize;
 
-use super::mass_resolution::{resolve_masses, MassResolution};
-use super::{identify_direction, DirectionIdentification, DirectionRecords, IdentifySettings};
+use super::mass_resolution::{resolve_masses, MassLumping, MassResolution};
+use super::{
+    identify_kinematics, DirectionIdentification, DirectionKinematics, DirectionRecords,
+    IdentifySettings,
+};
 use crate::error::{Error, Result};
-use crate::vocab::{Axis, Event, Role};
+use crate::vocab::{Axis, Event, Record, Role};
 
 /// Explicit channels of one direction.
 #[derive(Debug, Clone, Deserialize)]
@@ -21,15 +24,46 @@ pub struct DirectionSpec {
     /// Floor channels, DoF 1..D from the base up.
     pub floors: Vec<String>,
     /// Masses per floor (kg); default: `structure.masses_kg` at the channels'
-    /// levels, else the twin's storey masses, and reduced masses (Eq. 35–36)
-    /// when a level below the top instrumented one has no channel.
+    /// levels, else the twin's storey masses, lumped onto the instrumented
+    /// levels (`mass_resolution`) when some level has no channel.
     pub masses_kg: Option<Vec<f64>>,
 }
 
 /// Outcome of one direction: identified, or why not.
 pub enum DirectionOutcome {
     Identified(Box<DirectionIdentification>),
-    NotIdentifiable { direction: String, reason: String },
+    NotIdentifiable {
+        direction: String,
+        reason: String,
+        /// The measured force–drift response, when the records and masses
+        /// allow it (the identification itself failed).
+        measured: Option<Box<MeasuredResponse>>,
+    },
+}
+
+/// The measured response of a direction's segments: what the force–drift
+/// loops are drawn from when the model is not identified.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeasuredResponse {
+    pub sampling_rate_hz: f64,
+    /// Segment of each DoF (`L0–L4`…).
+    pub segments: Vec<String>,
+    /// Inter-storey (segment) drift u_d − u_{d−1}, m, per DoF.
+    pub storey_drift: Vec<Vec<f64>>,
+    /// f_d = −m_d (a + ü_d) (Eq. 46), N, per DoF.
+    pub restoring_force: Vec<Vec<f64>>,
+}
+
+impl MeasuredResponse {
+    pub fn from_kinematics(kin: &DirectionKinematics, segments: Vec<String>) -> Self {
+        let storey_drift = (0..kin.dofs()).map(|d| kin.storey_drift(d)).collect();
+        MeasuredResponse {
+            sampling_rate_hz: kin.sampling_rate_hz,
+            segments,
+            storey_drift,
+            restoring_force: kin.restoring_force.clone(),
+        }
+    }
 }
 
 impl DirectionOutcome {
@@ -47,6 +81,8 @@ pub struct EventSettings {
     pub identify: IdentifySettings,
     /// Grid step of σ in the reduced-mass search of Eq. 35–36.
     pub reduced_mass_step: f64,
+    /// Masses of uninstrumented levels (Eq. 35–36 or tributary lumping).
+    pub mass_lumping: MassLumping,
     /// Explicit directions; None = `auto_directions`.
     pub directions: Option<Vec<DirectionSpec>>,
     /// A direction that cannot be identified fails the whole identification.
@@ -54,8 +90,11 @@ pub struct EventSettings {
 }
 
 /// Directions found automatically: a level-0 input channel and floor channels
-/// (levels > 0) of the same horizontal direction. Levels may have gaps: a
-/// non-instrumented floor is handled with reduced masses (Eq. 35–36).
+/// (levels > 0) of the same horizontal direction, one record per level (the
+/// rigid-floor combination where a level has several channels). Levels may
+/// have gaps: uninstrumented floors are lumped onto the instrumented ones
+/// (`mass_resolution`). A level whose channels could not be combined makes
+/// the direction not identifiable, with the reason.
 pub fn auto_directions(event: &Event) -> (Vec<DirectionSpec>, Vec<DirectionOutcome>) {
     let mut specs = Vec::new();
     let mut skipped = Vec::new();
@@ -71,10 +110,8 @@ pub fn auto_directions(event: &Event) -> (Vec<DirectionSpec>, Vec<DirectionOutco
         if let Some((_, level, ids)) = selection.ambiguous.iter().find(|(a, _, _)| *a == axis) {
             skipped.push(DirectionOutcome::NotIdentifiable {
                 direction: dir,
-                reason: format!(
-                    "level {level} has channels {} in this direction that could not be combined into one floor motion (see the rigid_floor step of the history)",
-                    ids.join(", ")
-                ),
+                reason: not_combined_reason(event, *level, ids),
+                measured: None,
             });
             continue;
         }
@@ -92,6 +129,7 @@ pub fn auto_directions(event: &Event) -> (Vec<DirectionSpec>, Vec<DirectionOutco
             skipped.push(DirectionOutcome::NotIdentifiable {
                 direction: dir,
                 reason: "no base (level 0, role input) channel in this direction".into(),
+                measured: None,
             });
             continue;
         };
@@ -99,6 +137,7 @@ pub fn auto_directions(event: &Event) -> (Vec<DirectionSpec>, Vec<DirectionOutco
             skipped.push(DirectionOutcome::NotIdentifiable {
                 direction: dir,
                 reason: "no floor channel (level > 0) in this direction".into(),
+                measured: None,
             });
             continue;
         }
@@ -125,42 +164,38 @@ pub fn identify_event(
         Some(d) => (d.clone(), Vec::new()),
         None => auto_directions(event),
     };
-    let masses = resolve_masses(event, event_dir, &specs, p.reduced_mass_step);
-    let results: Vec<(String, Result<_>)> = {
+    let masses = resolve_masses(
+        event,
+        event_dir,
+        &specs,
+        p.reduced_mass_step,
+        p.mass_lumping,
+    );
+    let results: Vec<(
+        String,
+        Result<DirectionIdentification>,
+        Option<MeasuredResponse>,
+    )> = {
         use rayon::prelude::*;
         specs
             .par_iter()
             .zip(masses.par_iter())
             .map(|(spec, mass)| {
-                let floors: Vec<&str> = spec.floors.iter().map(|s| s.as_str()).collect();
-                let r = mass.as_ref().map_err(Error::duplicate).and_then(|mass| {
-                    DirectionRecords::from_event(
-                        event,
-                        &spec.direction,
-                        &spec.base,
-                        &floors,
-                        Some(&mass.masses_kg),
-                    )
-                    .and_then(|mut rec| {
-                        rec.declared_processing = event.history.clone();
-                        rec.declared_processing.push_for(
-                            "hysteresis_masses",
-                            spec.floors.clone(),
-                            serde_json::to_value(mass).unwrap_or_default(),
-                        );
-                        identify_direction(&rec, settings)
-                    })
-                });
-                (spec.direction.clone(), r)
+                let (r, measured) = match mass {
+                    Ok(mass) => identify_spec(event, spec, mass, settings),
+                    Err(e) => (Err(e.duplicate()), None),
+                };
+                (spec.direction.clone(), r, measured)
             })
             .collect()
     };
-    for (direction, r) in results {
+    for (direction, r, measured) in results {
         match r {
             Ok(d) => outcomes.push(DirectionOutcome::Identified(Box::new(d))),
             Err(e) if !p.fail_on_error => outcomes.push(DirectionOutcome::NotIdentifiable {
                 direction,
                 reason: e.to_string(),
+                measured: measured.map(Box::new),
             }),
             Err(e) => return Err(e),
         }
@@ -174,9 +209,9 @@ pub fn identify_event(
         let reasons: Vec<String> = outcomes
             .iter()
             .filter_map(|o| match o {
-                DirectionOutcome::NotIdentifiable { direction, reason } => {
-                    Some(format!("{direction}: {reason}"))
-                }
+                DirectionOutcome::NotIdentifiable {
+                    direction, reason, ..
+                } => Some(format!("{direction}: {reason}")),
                 _ => None,
             })
             .collect();
@@ -187,4 +222,101 @@ pub fn identify_event(
     }
     let resolved: Vec<MassResolution> = masses.into_iter().filter_map(|m| m.ok()).collect();
     Ok((outcomes, resolved))
+}
+
+/// Identifies one direction with its resolved masses; when the kinematics
+/// could be formed, also returns the measured response (for the loops of a
+/// direction whose model is not identified).
+fn identify_spec(
+    event: &Event,
+    spec: &DirectionSpec,
+    mass: &MassResolution,
+    settings: &IdentifySettings,
+) -> (Result<DirectionIdentification>, Option<MeasuredResponse>) {
+    let floors: Vec<&str> = spec.floors.iter().map(|s| s.as_str()).collect();
+    let records = DirectionRecords::from_event(
+        event,
+        &spec.direction,
+        &spec.base,
+        &floors,
+        Some(&mass.masses_kg),
+    );
+    let mut records = match records {
+        Ok(r) => r,
+        Err(e) => return (Err(e), None),
+    };
+    records.declared_processing = event.history.clone();
+    records.declared_processing.push_for(
+        "hysteresis_masses",
+        spec.floors.clone(),
+        serde_json::to_value(mass).unwrap_or_default(),
+    );
+    let kin = match DirectionKinematics::from_records(
+        &records,
+        settings.min_samples,
+        settings.velocity_drift,
+    ) {
+        Ok(k) => k,
+        Err(e) => return (Err(e), None),
+    };
+    let segments = if mass.levels.len() == kin.dofs() {
+        mass.segments()
+    } else {
+        (1..=kin.dofs() as i32)
+            .map(|l| format!("L{}–L{l}", l - 1))
+            .collect()
+    };
+    match identify_kinematics(&kin, &spec.direction, settings) {
+        Ok(mut d) => {
+            d.segments = segments;
+            (Ok(d), None)
+        }
+        Err(e) => (
+            Err(e),
+            Some(MeasuredResponse::from_kinematics(&kin, segments)),
+        ),
+    }
+}
+
+/// Why the channels of one level could not be combined into one floor
+/// motion: which channels, and how they differ.
+fn not_combined_reason(event: &Event, level: i32, ids: &[String]) -> String {
+    let records: Vec<&Record> = ids.iter().filter_map(|id| event.record(id)).collect();
+    let differ = |f: &dyn Fn(&Record) -> String| -> Option<String> {
+        let values: Vec<String> = records.iter().map(|r| f(r)).collect();
+        (values.iter().any(|v| *v != values[0])).then(|| {
+            ids.iter()
+                .zip(&values)
+                .map(|(id, v)| format!("{id} {v}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        })
+    };
+    let why = [
+        (
+            "sampling rate",
+            differ(&|r| format!("{} Hz", r.channel.sampling_rate_hz)),
+        ),
+        (
+            "length",
+            differ(&|r| format!("{} samples", r.samples.len())),
+        ),
+        (
+            "start time",
+            differ(&|r| format!("start {:?} ns", r.channel.start_ns)),
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(what, d)| d.map(|d| format!("they differ in {what} ({d})")))
+    .collect::<Vec<_>>();
+    format!(
+        "level {level}: channels {} in this direction could not be combined into one floor motion (rigid-floor assumption): {}; \
+         one record per level is needed, so the chain cannot be formed",
+        ids.join(", "),
+        if why.is_empty() {
+            "see the rigid_floor step of the history".to_string()
+        } else {
+            why.join("; ")
+        }
+    )
 }

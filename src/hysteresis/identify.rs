@@ -48,6 +48,9 @@ pub struct DirectionIdentification {
     /// Full K0∘δ (antisymmetric off the diagonal).
     pub k0_delta_matrix: Vec<Vec<f64>>,
     pub masses: Vec<f64>,
+    /// Segment of each DoF (`L0–L1`, `L1–L3`…: from the instrumented level
+    /// below to the DoF's own); `L<d−1>–L<d>` unless the caller knows the levels.
+    pub segments: Vec<String>,
     pub damage: DamageSeries,
     /// Declared processing plus this stage's steps and settings.
     pub processing: ProcessingHistory,
@@ -146,6 +149,9 @@ pub fn identify_kinematics(
         k0_matrix: k0,
         k0_delta_matrix: k0_delta,
         masses: kin.masses.clone(),
+        segments: (0..dofs)
+            .map(|d| super::lumping::segment_label(&[d as i32, d as i32 + 1], 1))
+            .collect(),
         damage,
         processing,
     })
@@ -207,16 +213,7 @@ fn fit_restoring_forces(
         }
         identified[d].fit.force_model = force;
         identified[d].fit.force_record = kin.restoring_force[d].clone();
-        identified[d].fit.storey_drift = (0..n)
-            .map(|k| {
-                kin.relative_displacement[d][k]
-                    - if d > 0 {
-                        kin.relative_displacement[d - 1][k]
-                    } else {
-                        0.0
-                    }
-            })
-            .collect();
+        identified[d].fit.storey_drift = kin.storey_drift(d);
     }
 }
 

@@ -1,14 +1,22 @@
 //! Lumped masses of each identified direction (Eq. 46 needs m_d): from the
-//! stage's params, the event manifest (`structure.masses_kg`), the digital
-//! twin's storey masses, or — when a floor below the top instrumented one
-//! has no channel — the reduced masses of Eq. 35–36 with one σ shared by
-//! the directions of the same instrumented levels.
+//! stage's params, else from the level masses of the building (the event
+//! manifest's `structure.masses_kg`, or the digital twin's storey masses).
+//! When every level 1..n has a channel they are used as they are; when some
+//! level has none (below, between or above the instrumented ones) the chain
+//! is reduced to the instrumented levels (`mass_lumping`):
+//! - the thesis's reduced masses of Eq. 35–36 (σ search against the twin,
+//!   one σ shared by the directions of the same instrumented levels) when
+//!   exactly two floors are instrumented and the twin has a `[[sensors]]`
+//!   entry for both (`auto`, `eq35_36`);
+//! - otherwise (`auto`, `tributary`) Eq. 35–36 generalised to any set of
+//!   instrumented levels: the tributary lumping of [`super::lumping`].
 
 use std::path::Path;
 
 use serde::Serialize;
 
 use super::event::DirectionSpec;
+use super::lumping::{segment_label, tributary_masses, LumpedMasses};
 use super::storey_masses::{horizontal_axis, twin_reduced_target, twin_storey_masses};
 use super::{reduced_lumped_masses, ReducedMassTarget};
 use crate::error::{Error, Location, Result};
@@ -44,10 +52,36 @@ pub struct MassResolution {
     pub levels: Vec<i32>,
     /// Lumped mass per DoF used in Eq. 46, kg.
     pub masses_kg: Vec<f64>,
-    /// `stage params`, `event.toml structure.masses_kg`, `twin FILE`, or
-    /// `reduced (Eq. 35–36)`.
+    /// `stage params`, `event.toml structure.masses_kg`, `twin FILE`,
+    /// `reduced (Eq. 35–36)` or `tributary lumping (Eq. 35–36 generalised) of …`.
     pub source: String,
     pub reduced: Option<ReducedMassRecord>,
+    /// The tributary lumping, when the masses come from it.
+    pub lumping: Option<LumpedMasses>,
+}
+
+/// How the masses of uninstrumented levels enter the chain (docs/pipelines.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MassLumping {
+    /// Eq. 35–36 when two floors are instrumented and the twin has sensors
+    /// for both; tributary lumping otherwise.
+    #[default]
+    Auto,
+    /// Tributary lumping (`lumping` module) for every partly instrumented chain.
+    Tributary,
+    /// The thesis's Eq. 35–36 only: two instrumented floors and the twin.
+    Eq35_36,
+}
+
+impl MassResolution {
+    /// Segment names of the DoFs: `L0–L1`, `L1–L3`, … (DoF d spans from the
+    /// level below it to its own).
+    pub fn segments(&self) -> Vec<String> {
+        (0..self.levels.len())
+            .map(|d| segment_label(&self.levels, d))
+            .collect()
+    }
 }
 
 impl MassResolution {
@@ -60,6 +94,14 @@ impl MassResolution {
             self.levels,
             self.source
         );
+        if let Some(l) = &self.lumping {
+            s.push_str(&format!(
+                "; segments {}: uninstrumented levels lumped linearly by elevation ({}), {:.6e} kg onto the base",
+                self.segments().join(", "),
+                l.elevation_source,
+                l.dropped_to_base_kg
+            ));
+        }
         if let Some(r) = &self.reduced {
             s.push_str(&format!(
                 "; levels {:?} not instrumented: σ1 = {:.3}, σ2 = {:.3} (step {}), storey masses from {}",
@@ -98,8 +140,9 @@ fn manifest_location(event_dir: Option<&Path>) -> Location {
     })
 }
 
-/// Storey masses of levels 1..=top from the manifest (when it lists enough)
-/// or the twin. `channel` names the first floor channel in errors.
+/// Masses of every level 1..n of the building (n ≥ top) from the manifest
+/// (when it lists enough) or the twin. `channel` names the first floor
+/// channel in errors.
 fn storey_masses(
     event: &Event,
     twins: &mut TwinSource,
@@ -109,10 +152,7 @@ fn storey_masses(
 ) -> Result<(Vec<f64>, String)> {
     let structure = event.structure.as_ref();
     if let Some(s) = structure.filter(|s| s.masses_kg.len() >= top) {
-        return Ok((
-            s.masses_kg[..top].to_vec(),
-            "event.toml structure.masses_kg".into(),
-        ));
+        return Ok((s.masses_kg.clone(), "event.toml structure.masses_kg".into()));
     }
     match twins.twin() {
         Some(Ok(twin)) => {
@@ -144,7 +184,7 @@ fn storey_masses(
                     format!("the twin has no mass at level {} along {direction}", l + 1),
                 ));
             }
-            Ok((masses[..top].to_vec(), format!("twin {}", twin.source)))
+            Ok((masses, format!("twin {}", twin.source)))
         }
         Some(Err(e)) => Err(e.duplicate()),
         None => Err(Error::input(
@@ -164,6 +204,7 @@ pub fn resolve_masses(
     event_dir: Option<&Path>,
     specs: &[DirectionSpec],
     step: f64,
+    lumping: MassLumping,
 ) -> Vec<Result<MassResolution>> {
     let mut twins = TwinSource {
         event,
@@ -200,6 +241,7 @@ pub fn resolve_masses(
             masses_kg: Vec::new(),
             source: String::new(),
             reduced: None,
+            lumping: None,
         };
         if let Some(m) = &spec.masses_kg {
             out.push(Ok(MassResolution {
@@ -217,48 +259,36 @@ pub fn resolve_masses(
                 continue;
             }
         };
-        let contiguous = levels.iter().enumerate().all(|(d, l)| *l == d as i32 + 1);
         let top = levels.iter().copied().max().unwrap_or(0).max(0) as usize;
-        if contiguous {
-            out.push(
-                storey_masses(event, &mut twins, &spec.direction, top, &first).map(
-                    |(masses, source)| MassResolution {
-                        levels: levels.clone(),
-                        masses_kg: masses,
-                        source,
-                        ..base
-                    },
-                ),
-            );
+        let (masses, source) = match storey_masses(event, &mut twins, &spec.direction, top, &first)
+        {
+            Ok(m) => m,
+            Err(e) => {
+                out.push(Err(e));
+                continue;
+            }
+        };
+        let every_level = levels.len() == masses.len()
+            && levels.iter().enumerate().all(|(d, l)| *l == d as i32 + 1);
+        if every_level {
+            out.push(Ok(MassResolution {
+                levels,
+                masses_kg: masses,
+                source,
+                ..base
+            }));
             continue;
         }
-        if levels.len() != 2 || levels.iter().any(|l| *l < 1) {
-            out.push(Err(Error::input(
-                manifest_location(event_dir).with_channel(first.clone()),
-                format!(
-                    "direction {}: floor channels at levels {levels:?}; reduced lumped masses (Eq. 35–36) are defined for two instrumented floors",
-                    spec.direction
-                ),
-            )));
-            continue;
-        }
-        if twins.twin().is_none() {
-            out.push(Err(Error::input(
-                manifest_location(event_dir).with_channel(first.clone()),
-                format!(
-                    "direction {}: floor channels at levels {levels:?} leave floors uninstrumented; reduced lumped masses (Eq. 35–36) \
-                     need the digital twin's reduced stiffness and first frequency: name it in structure.twin",
-                    spec.direction
-                ),
-            )));
-            continue;
-        }
-        match storey_masses(event, &mut twins, &spec.direction, top, &first) {
-            Ok((masses, source)) => {
+        match eq35_applies(lumping, &levels, &spec.floors, &mut twins) {
+            Ok(true) => {
                 out.push(Ok(base));
                 pending.push((i, masses, source, levels));
             }
-            Err(e) => out.push(Err(e)),
+            Ok(false) => out.push(tributary(event, masses, source, levels, base)),
+            Err(message) => out.push(Err(Error::input(
+                manifest_location(event_dir).with_channel(first.clone()),
+                format!("direction {}: {message}", spec.direction),
+            ))),
         }
     }
     // Eq. 35–36: one σ per set of instrumented levels, over its directions.
@@ -329,6 +359,7 @@ pub fn resolve_masses(
                     levels: levels.clone(),
                     masses_kg: vec![r.m1, r.m2],
                     source: "reduced (Eq. 35–36)".into(),
+                    lumping: None,
                     reduced: Some(ReducedMassRecord {
                         storey_masses_kg: storey.clone(),
                         storey_masses_source: source.clone(),
@@ -347,4 +378,63 @@ pub fn resolve_masses(
         }
     }
     out
+}
+
+/// Whether the thesis's Eq. 35–36 gives the masses of a partly instrumented
+/// chain (module doc); `Err` when `eq35_36` is asked for and cannot apply.
+fn eq35_applies(
+    lumping: MassLumping,
+    levels: &[i32],
+    channels: &[String],
+    twins: &mut TwinSource,
+) -> std::result::Result<bool, String> {
+    if lumping == MassLumping::Tributary {
+        return Ok(false);
+    }
+    let why_not = if levels.len() != 2 {
+        Some(format!(
+            "floor channels at levels {levels:?}; the reduced masses of Eq. 35–36 are defined for two instrumented floors (use mass_lumping = \"tributary\")"
+        ))
+    } else {
+        match twins.twin() {
+            None => Some(format!(
+                "floor channels at levels {levels:?} leave floors uninstrumented; reduced lumped masses (Eq. 35–36) need the digital twin's \
+                 reduced stiffness and first frequency: name it in structure.twin (or use mass_lumping = \"tributary\")"
+            )),
+            Some(Err(e)) => Some(e.to_string()),
+            Some(Ok(t)) => channels
+                .iter()
+                .find(|c| !t.system.sensors.iter().any(|s| &s.channel == *c))
+                .map(|c| format!("channel {c} has no [[sensors]] entry in the twin {}: Eq. 35–36 needs the twin DoF of both instrumented floors", t.source)),
+        }
+    };
+    match (why_not, lumping) {
+        (None, _) => Ok(true),
+        (Some(m), MassLumping::Eq35_36) => Err(m),
+        (Some(_), _) => Ok(false),
+    }
+}
+
+/// Tributary lumping (Eq. 35–36 generalised, `lumping` module) of the level
+/// masses onto the instrumented `levels`.
+fn tributary(
+    event: &Event,
+    level_masses: Vec<f64>,
+    source: String,
+    levels: Vec<i32>,
+    base: MassResolution,
+) -> Result<MassResolution> {
+    let heights = event
+        .structure
+        .as_ref()
+        .map(|s| s.storey_heights_m.clone())
+        .unwrap_or_default();
+    let lumped = tributary_masses(&level_masses, &heights, &levels)?;
+    Ok(MassResolution {
+        levels,
+        masses_kg: lumped.masses_kg.clone(),
+        source: format!("tributary lumping (Eq. 35–36 generalised) of {source}"),
+        lumping: Some(lumped),
+        ..base
+    })
 }

@@ -13,6 +13,8 @@
 //!   and their stability, and the F-test of [`significance`].
 //! - [`damage`]: ι(t), ω_s(t), c_s(t) (Eq. 32–34).
 //! - [`reduced_mass`]: reduced lumped masses (Eq. 35–36).
+//! - [`lumping`]: Eq. 35–36 generalised to any instrumented levels
+//!   (tributary lumping, segments `L<a>–L<b>`).
 //! - [`storey_masses`]: storey masses and Eq. 35–36 targets from the twin.
 //!
 //! Processing is explicit: the stage takes minimally processed absolute
@@ -20,22 +22,9 @@
 //! echoes the caller's declared processing plus its own steps in
 //! `DirectionIdentification::processing`.
 //!
-//! Suggested Parquet columns (written by the lead's sinks):
-//! - `bouc_wen.parquet` (one row per direction, DoF and parameter):
-//!   direction, dof, parameter (`K0` | `K0_delta` | `delta` | `beta` | `gamma` | `N`),
-//!   coupled_dof (r for K0_dr-type rows, null otherwise), value, unit,
-//!   rel_std (stability over informative frames; N: absolute std), stable,
-//!   cost_j, cost_relative, hysteretic_share, cost_contrast, form, window_len,
-//!   hop, frames, evaluations; file metadata: `processing` (JSON history).
-//! - `bouc_wen_instantaneous.parquet`: direction, dof, t_s, informative,
-//!   exponent, cost_j, parameter, coupled_dof, value (at N(t)),
-//!   value_at_scalar_exponent.
-//! - `damage.parquet`: direction, t_s, iota, mode, omega_rad_s, omega_ratio,
-//!   participation (one row per time and mode; iota repeated), plus
-//!   `indefinite_steps` in the metadata.
-//! - `hysteresis_fit.parquet`: direction, dof, t_s, target_ne, model_nn,
-//!   force_record_n, force_model_n, storey_drift_m; plus the coarse J(N) curve
-//!   (direction, dof, exponent, cost_j) if a plot is wanted.
+//! The Parquet tables (`bouc_wen`, `bouc_wen_instantaneous`,
+//! `hysteresis_fit`, `damage`) are declared in `crate::vocab::tables` and
+//! written by `crate::sinks::hysteresis_tables`.
 
 // Numerical kernels index several arrays in lock-step, and the
 // `!(x > 0.0)` checks deliberately reject NaN as well.
@@ -49,6 +38,7 @@ mod exponent_search;
 pub mod forward;
 pub mod identify;
 pub mod instantaneous;
+pub mod lumping;
 pub mod mass_resolution;
 pub mod reduced_mass;
 pub mod settings;
@@ -63,13 +53,17 @@ pub use basis::{
 };
 pub use damage::{damage_index, damage_index_of_chain, DamageSeries};
 pub use dof::{DofIdentification, FitSeries};
-pub use event::{auto_directions, identify_event, DirectionOutcome, DirectionSpec, EventSettings};
+pub use event::{
+    auto_directions, identify_event, DirectionOutcome, DirectionSpec, EventSettings,
+    MeasuredResponse,
+};
 pub use forward::{BoucWenChain, ChainResponse};
 pub use identify::{
     identify_direction, identify_directions, identify_kinematics, DirectionIdentification,
 };
 pub use instantaneous::{InstantaneousEstimate, ParameterStability};
-pub use mass_resolution::{MassResolution, ReducedMassRecord};
+pub use lumping::{segment_label, tributary_masses, LumpedMasses};
+pub use mass_resolution::{MassLumping, MassResolution, ReducedMassRecord};
 pub use reduced_mass::{
     first_pulsation_2dof, reduced_lumped_masses, ReducedMassTarget, ReducedMasses,
 };

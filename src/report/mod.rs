@@ -14,6 +14,7 @@
 
 mod html;
 mod plot;
+pub use plot::decimate_curve;
 mod sections;
 pub mod table;
 

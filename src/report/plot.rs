@@ -395,9 +395,149 @@ pub fn decimate_min_max(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f
     out
 }
 
+/// Decimation of a parametric x–y curve (a force–drift loop) for display:
+/// at most `max_points` points, kept by the Ramer–Douglas–Peucker rule
+/// (points far from the chord of their neighbours — the reversals, where the
+/// curvature is — are kept first) in axes normalised by the data ranges,
+/// with the tolerance bisected to the point budget. The first and last
+/// points and the points of extreme x and y are always kept, so the loop's
+/// peak drift and force are drawn exactly. Never min–max per bin: that
+/// assumes x increases with the sample index and turns a loop into chords.
+pub fn decimate_curve(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f64)> {
+    let max_points = max_points.max(8);
+    let finite: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|p| p.0.is_finite() && p.1.is_finite())
+        .collect();
+    if finite.len() <= max_points {
+        return finite;
+    }
+    let range = |f: fn(&(f64, f64)) -> f64| {
+        let (lo, hi) = finite
+            .iter()
+            .map(f)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                (l.min(v), h.max(v))
+            });
+        if hi > lo {
+            hi - lo
+        } else {
+            1.0
+        }
+    };
+    let (sx, sy) = (range(|p| p.0), range(|p| p.1));
+    let norm: Vec<(f64, f64)> = finite.iter().map(|p| (p.0 / sx, p.1 / sy)).collect();
+    let arg = |f: &dyn Fn(&(f64, f64), &(f64, f64)) -> bool| -> usize {
+        (0..norm.len()).fold(0, |best, i| if f(&norm[i], &norm[best]) { i } else { best })
+    };
+    let mut forced = vec![
+        0,
+        norm.len() - 1,
+        arg(&|a, b| a.0 < b.0),
+        arg(&|a, b| a.0 > b.0),
+        arg(&|a, b| a.1 < b.1),
+        arg(&|a, b| a.1 > b.1),
+    ];
+    forced.sort_unstable();
+    forced.dedup();
+    let keep_with = |tol: f64| -> Vec<bool> {
+        let mut keep = vec![false; norm.len()];
+        for &i in &forced {
+            keep[i] = true;
+        }
+        let mut stack: Vec<(usize, usize)> = forced.windows(2).map(|w| (w[0], w[1])).collect();
+        while let Some((a, b)) = stack.pop() {
+            if b <= a + 1 {
+                continue;
+            }
+            let (p, q) = (norm[a], norm[b]);
+            let (dx, dy) = (q.0 - p.0, q.1 - p.1);
+            let len = (dx * dx + dy * dy).sqrt();
+            let (mut worst, mut at) = (-1.0, a);
+            for (i, r) in norm.iter().enumerate().take(b).skip(a + 1) {
+                let d = if len > 0.0 {
+                    ((r.0 - p.0) * dy - (r.1 - p.1) * dx).abs() / len
+                } else {
+                    ((r.0 - p.0).powi(2) + (r.1 - p.1).powi(2)).sqrt()
+                };
+                if d > worst {
+                    worst = d;
+                    at = i;
+                }
+            }
+            if worst > tol {
+                keep[at] = true;
+                stack.push((a, at));
+                stack.push((at, b));
+            }
+        }
+        keep
+    };
+    let count = |k: &[bool]| k.iter().filter(|x| **x).count();
+    // Bisect the tolerance (normalised units) to the largest count ≤ budget.
+    let (mut lo, mut hi) = (0.0f64, 2.0f64);
+    let mut best = keep_with(hi);
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        let k = keep_with(mid);
+        if count(&k) <= max_points {
+            hi = mid;
+            best = k;
+        } else {
+            lo = mid;
+        }
+    }
+    finite
+        .iter()
+        .zip(&best)
+        .filter(|(_, k)| **k)
+        .map(|(p, _)| *p)
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn curve_decimation_keeps_the_loop_shape_and_its_extremes() {
+        // A drifting, growing loop: 40 cycles, 20 000 samples.
+        let pts: Vec<(f64, f64)> = (0..20_000)
+            .map(|i| {
+                let t = i as f64 / 500.0;
+                let a = 0.2 + t / 40.0;
+                (
+                    a * (2.0 * std::f64::consts::PI * t).sin() - 0.002 * t,
+                    a * (2.0 * std::f64::consts::PI * t - 0.6).sin(),
+                )
+            })
+            .collect();
+        let d = decimate_curve(&pts, 1500);
+        assert!(d.len() <= 1500 && d.len() > 1000, "{}", d.len());
+        let max_x = |p: &[(f64, f64)]| p.iter().map(|q| q.0).fold(f64::MIN, f64::max);
+        let min_x = |p: &[(f64, f64)]| p.iter().map(|q| q.0).fold(f64::MAX, f64::min);
+        assert_eq!(max_x(&d), max_x(&pts));
+        assert_eq!(min_x(&d), min_x(&pts));
+        // The positive drift peak of every cycle survives within 2 % of the range.
+        let kept: Vec<usize> = d
+            .iter()
+            .map(|p| pts.iter().position(|q| q == p).unwrap())
+            .collect();
+        let span = max_x(&pts) - min_x(&pts);
+        for c in 0..40 {
+            let peak = max_x(&pts[c * 500..(c + 1) * 500]);
+            let drawn = kept
+                .iter()
+                .filter(|&&i| i / 500 == c)
+                .map(|&i| pts[i].0)
+                .fold(f64::MIN, f64::max);
+            assert!(
+                (peak - drawn).abs() < 0.02 * span,
+                "cycle {c}: {peak} vs {drawn}"
+            );
+        }
+    }
 
     #[test]
     fn decimation_keeps_extremes_and_bounds_size() {

@@ -3,8 +3,9 @@
 //! The report must keep working while table schemas evolve, so a table is
 //! loaded as named columns of a few display-oriented kinds (numbers, text,
 //! booleans, lists) and looked up by name.  Sections ask for the columns they
-//! know, show what is there and list what is missing or unknown — they never
-//! fail because a column was renamed.
+//! know (named by the declarations of `vocab::tables`), show what is there
+//! and list what is missing, unknown or not of the declared type — they
+//! never fail because a column was renamed.
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -16,11 +17,12 @@ use arrow_array::types::{
     UInt16Type, UInt32Type, UInt64Type, UInt8Type,
 };
 use arrow_array::{Array, ArrayRef};
-use arrow_schema::{DataType, TimeUnit};
+use arrow_schema::{DataType, SchemaRef, TimeUnit};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use parquet::arrow::ProjectionMask;
 
 use crate::error::{Error, Location, Result};
+use crate::vocab::schema::TableSchema;
 
 /// One column, converted to the kind the report displays.
 #[derive(Debug, Clone, PartialEq)]
@@ -51,6 +53,8 @@ pub struct Table {
     pub columns: BTreeMap<String, Column>,
     /// Key/value metadata of the file (`quaketwin.*`).
     pub metadata: BTreeMap<String, String>,
+    /// The file's Arrow schema (all columns, also those not loaded).
+    pub schema: SchemaRef,
 }
 
 fn location(path: &Path) -> Location {
@@ -117,6 +121,7 @@ pub fn load(path: &Path, only: Option<&[&str]>) -> Result<Table> {
         names,
         columns,
         metadata,
+        schema,
     })
 }
 
@@ -292,6 +297,15 @@ impl Table {
     /// caller cannot use — `kinds_ok` decides).
     pub fn missing<'a>(&self, expected: &[&'a str]) -> Vec<&'a str> {
         expected.iter().filter(|n| !self.has(n)).copied().collect()
+    }
+    /// The file's columns whose Arrow type is not the declared one (the
+    /// report still shows them as found; a section says so).
+    pub fn type_mismatches(&self, declared: &TableSchema) -> Vec<String> {
+        self.schema
+            .fields()
+            .iter()
+            .filter_map(|f| declared.column(f.name())?.type_mismatch(f))
+            .collect()
     }
     /// Columns of the file the section does not know.
     pub fn unknown(&self, known: &[&str]) -> Vec<String> {

@@ -12,12 +12,16 @@ use crate::design::plan::TestDesign;
 use crate::error::Result;
 use crate::twin::model::Model;
 use crate::twin::sparse::CscMatrix;
+use crate::vocab::tables::{
+    actuator_layout, hybrid_prototype, interface_refinement, pod, reduction_validation,
+    ACTUATOR_LAYOUT, HYBRID_PROTOTYPE, INTERFACE_REFINEMENT, POD, REDUCTION_VALIDATION,
+};
 
-pub const ACTUATOR_LAYOUT_FILE: &str = "actuator_layout.parquet";
-pub const POD_FILE: &str = "pod.parquet";
-pub const REDUCTION_VALIDATION_FILE: &str = "reduction_validation.parquet";
-pub const INTERFACE_REFINEMENT_FILE: &str = "interface_refinement.parquet";
-pub const HYBRID_PROTOTYPE_FILE: &str = "hybrid_prototype.parquet";
+pub const ACTUATOR_LAYOUT_FILE: &str = ACTUATOR_LAYOUT.file;
+pub const POD_FILE: &str = POD.file;
+pub const REDUCTION_VALIDATION_FILE: &str = REDUCTION_VALIDATION.file;
+pub const INTERFACE_REFINEMENT_FILE: &str = INTERFACE_REFINEMENT.file;
+pub const HYBRID_PROTOTYPE_FILE: &str = HYBRID_PROTOTYPE.file;
 pub const PROTOTYPE_STIFFNESS_FILE: &str = "prototype_stiffness.mtx";
 pub const PROTOTYPE_MASS_FILE: &str = "prototype_mass.mtx";
 pub const PS_BASIS_FILE: &str = "ps_basis.mtx";
@@ -49,9 +53,9 @@ pub struct DesignProvenance {
     pub settings_json: String,
 }
 
-fn meta(schema: &str, p: &DesignProvenance) -> Vec<(String, String)> {
+/// Metadata of every design table (the schema name comes from the declaration).
+fn meta(p: &DesignProvenance) -> Vec<(String, String)> {
     vec![
-        ("quaketwin.schema".into(), schema.into()),
         ("quaketwin.design_file".into(), p.design_file.clone()),
         ("quaketwin.twin".into(), p.twin.clone()),
         ("quaketwin.motion".into(), p.motion_source.clone()),
@@ -81,30 +85,36 @@ fn dof_of(model: &Model, d: &TestDesign, p: usize) -> (i64, String) {
 pub fn write_actuator_layout(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()> {
     let a = &d.actuators;
     let k = a.iter().map(|x| x.participation.len()).max().unwrap_or(0);
-    let mut t = TableBuilder::new()
-        .u32("actuator", a.iter().map(|x| x.actuator as u32).collect())
-        .i64("node_id", a.iter().map(|x| x.node_id).collect())
+    let mut t = TableBuilder::new(&ACTUATOR_LAYOUT)
+        .u32(
+            actuator_layout::ACTUATOR,
+            a.iter().map(|x| x.actuator as u32).collect(),
+        )
+        .i64(
+            actuator_layout::NODE_ID,
+            a.iter().map(|x| x.node_id).collect(),
+        )
         .str(
-            "direction",
+            actuator_layout::DIRECTION,
             &a.iter().map(|x| x.direction.as_str()).collect::<Vec<_>>(),
         )
         .str(
-            "control_mode",
+            actuator_layout::CONTROL_MODE,
             &a.iter().map(|x| x.control.name()).collect::<Vec<_>>(),
         )
         .f64(
-            "nominal_force_n",
+            actuator_layout::NOMINAL_FORCE_N,
             a.iter().map(|x| x.nominal_force).collect(),
         );
     for j in 0..k {
         t = t.f64(
-            &format!("pom_{}", j + 1),
+            actuator_layout::POM.member(&(j + 1).to_string()),
             a.iter()
                 .map(|x| x.participation.get(j).copied().unwrap_or(0.0))
                 .collect(),
         );
     }
-    let mut m = meta("actuator_layout", p);
+    let mut m = meta(p);
     m.push(("quaketwin.retained_poms".into(), k.to_string()));
     write_parquet(path, &[t.build()?], &m)
 }
@@ -113,18 +123,18 @@ pub fn write_actuator_layout(path: &Path, d: &TestDesign, p: &DesignProvenance) 
 pub fn write_pod(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()> {
     let pod = &d.pod;
     let n = d.pod_curve.wnrmse.len().min(pod.singular_values.len());
-    let batch = TableBuilder::new()
-        .u32("pom", (1..=n as u32).collect())
-        .f64("singular_value", pod.singular_values[..n].to_vec())
-        .f64("energy_fraction", pod.energy_fraction[..n].to_vec())
-        .f64("cumulative_energy", pod.cumulative_energy[..n].to_vec())
-        .f64("wnrmse", d.pod_curve.wnrmse[..n].to_vec())
+    let batch = TableBuilder::new(&POD)
+        .u32(pod::POM, (1..=n as u32).collect())
+        .f64(pod::SINGULAR_VALUE, pod.singular_values[..n].to_vec())
+        .f64(pod::ENERGY_FRACTION, pod.energy_fraction[..n].to_vec())
+        .f64(pod::CUMULATIVE_ENERGY, pod.cumulative_energy[..n].to_vec())
+        .f64(pod::WNRMSE, d.pod_curve.wnrmse[..n].to_vec())
         .bool(
-            "retained",
+            pod::RETAINED,
             (1..=n).map(|i| i <= d.pod_curve.retained).collect(),
         )
         .build()?;
-    let mut m = meta("pod", p);
+    let mut m = meta(p);
     m.push((
         "quaketwin.retained_poms".into(),
         d.pod_curve.retained.to_string(),
@@ -157,17 +167,20 @@ pub fn write_reduction_validation(
 ) -> Result<()> {
     let v = &d.validation;
     let dofs: Vec<(i64, String)> = v.positions.iter().map(|&q| dof_of(model, d, q)).collect();
-    let batch = TableBuilder::new()
-        .i64("node_id", dofs.iter().map(|x| x.0).collect())
+    let batch = TableBuilder::new(&REDUCTION_VALIDATION)
+        .i64(
+            reduction_validation::NODE_ID,
+            dofs.iter().map(|x| x.0).collect(),
+        )
         .str(
-            "direction",
+            reduction_validation::DIRECTION,
             &dofs.iter().map(|x| x.1.as_str()).collect::<Vec<_>>(),
         )
-        .f64("nrmse", v.nrmse.clone())
-        .f64("weight", v.weight.clone())
-        .bool("is_master", v.is_master.clone())
+        .f64(reduction_validation::NRMSE, v.nrmse.clone())
+        .f64(reduction_validation::WEIGHT, v.weight.clone())
+        .bool(reduction_validation::IS_MASTER, v.is_master.clone())
         .build()?;
-    let mut m = meta("reduction_validation", p);
+    let mut m = meta(p);
     m.push((WNRMSE_KEY.into(), format!("{:e}", v.wnrmse)));
     m.push((WNRMSE_TOTAL_KEY.into(), format!("{:e}", v.wnrmse_total)));
     m.push((
@@ -180,28 +193,34 @@ pub fn write_reduction_validation(
 /// `interface_refinement.parquet`: one row per step of the interface refinement.
 pub fn write_interface_refinement(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()> {
     let r = &d.refinement;
-    let batch = TableBuilder::new()
-        .u32("step", (1..=r.len() as u32).collect())
+    let batch = TableBuilder::new(&INTERFACE_REFINEMENT)
+        .u32(interface_refinement::STEP, (1..=r.len() as u32).collect())
         .u32(
-            "control_nodes",
+            interface_refinement::CONTROL_NODES,
             r.iter().map(|x| x.control_nodes as u32).collect(),
         )
         .u32(
-            "coupled_dofs",
+            interface_refinement::COUPLED_DOFS,
             r.iter().map(|x| x.coupled_dofs as u32).collect(),
         )
-        .u32("actuators", r.iter().map(|x| x.actuators as u32).collect())
-        .f64("wnrmse_total", r.iter().map(|x| x.wnrmse_total).collect())
+        .u32(
+            interface_refinement::ACTUATORS,
+            r.iter().map(|x| x.actuators as u32).collect(),
+        )
         .f64(
-            "wnrmse_deformation",
+            interface_refinement::WNRMSE_TOTAL,
+            r.iter().map(|x| x.wnrmse_total).collect(),
+        )
+        .f64(
+            interface_refinement::WNRMSE_DEFORMATION,
             r.iter().map(|x| x.wnrmse_deformation).collect(),
         )
         .f64(
-            "first_frequency_error",
+            interface_refinement::FIRST_FREQUENCY_ERROR,
             r.iter().map(|x| x.first_frequency_error).collect(),
         )
         .build()?;
-    write_parquet(path, &[batch], &meta("interface_refinement", p))
+    write_parquet(path, &[batch], &meta(p))
 }
 
 /// `hybrid_prototype.parquet`: one row per prototype eigenfrequency, paired in ascending order
@@ -217,21 +236,27 @@ pub fn write_hybrid_prototype(path: &Path, d: &TestDesign, p: &DesignProvenance)
     let error: Vec<Option<f64>> = (0..n)
         .map(|i| full[i].filter(|&x| x > 0.0).map(|x| (f[i] - x).abs() / x))
         .collect();
-    let batch = TableBuilder::new()
-        .u32("mode", (1..=n as u32).collect())
-        .f64("prototype_frequency_hz", f.clone())
-        .opt_f64("full_frequency_hz", full)
-        .opt_f64("relative_error", error)
-        .bool("in_band", (0..n).map(|i| i < h.matched.len()).collect())
+    let batch = TableBuilder::new(&HYBRID_PROTOTYPE)
+        .u32(hybrid_prototype::MODE, (1..=n as u32).collect())
+        .f64(hybrid_prototype::PROTOTYPE_FREQUENCY_HZ, f.clone())
+        .opt_f64(hybrid_prototype::FULL_FREQUENCY_HZ, full)
+        .opt_f64(hybrid_prototype::RELATIVE_ERROR, error)
+        .bool(
+            hybrid_prototype::IN_BAND,
+            (0..n).map(|i| i < h.matched.len()).collect(),
+        )
         .f64(
-            "test_frequency_hz",
+            hybrid_prototype::TEST_FREQUENCY_HZ,
             f.iter().map(|x| x / h.time_scale).collect(),
         )
-        .u32("ns_modes", vec![h.prototype.ns_modes as u32; n])
-        .f64("time_scale", vec![h.time_scale; n])
-        .f64("bandwidth_hz", vec![h.bandwidth_hz; n])
+        .u32(
+            hybrid_prototype::NS_MODES,
+            vec![h.prototype.ns_modes as u32; n],
+        )
+        .f64(hybrid_prototype::TIME_SCALE, vec![h.time_scale; n])
+        .f64(hybrid_prototype::BANDWIDTH_HZ, vec![h.bandwidth_hz; n])
         .build()?;
-    let mut m = meta("hybrid_prototype", p);
+    let mut m = meta(p);
     m.push((
         "quaketwin.recommendation".into(),
         serde_json::json!({

@@ -14,9 +14,10 @@ use super::parquet::{write_parquet, ReadTable, TableBuilder};
 use crate::conditioning::Motion;
 use crate::error::{Error, Result};
 use crate::metrics::{DriftRow, StrongMotionMetrics};
+use crate::vocab::tables::{channels, drift, samples, spectra, CHANNELS, DRIFT, SAMPLES, SPECTRA};
 use crate::vocab::{Channel, Direction, Event, ProcessingHistory, Record};
 
-pub const SCHEMA_KEY: &str = "quaketwin.schema";
+pub use crate::vocab::schema::SCHEMA_KEY;
 pub const HISTORY_KEY: &str = "quaketwin.history";
 pub const CHANNELS_KEY: &str = "quaketwin.channels";
 pub const EVENT_KEY: &str = "quaketwin.event";
@@ -62,124 +63,128 @@ pub fn write_channels(path: &Path, event: &Event, metrics: &[StrongMotionMetrics
         .iter()
         .map(|r| crate::conditioning::qa::snr_db(&r.samples, r.channel.dt(), noise_window_s))
         .collect();
-    let batch = TableBuilder::new()
+    let batch = TableBuilder::new(&CHANNELS)
         .str(
-            "channel_id",
+            channels::CHANNEL_ID,
             &ch.iter().map(|c| c.id.clone()).collect::<Vec<_>>(),
         )
         .opt_str(
-            "network",
+            channels::NETWORK,
             &ch.iter().map(|c| c.network.clone()).collect::<Vec<_>>(),
         )
         .opt_str(
-            "station",
+            channels::STATION,
             &ch.iter().map(|c| c.station.clone()).collect::<Vec<_>>(),
         )
         .opt_str(
-            "location_code",
+            channels::LOCATION_CODE,
             &ch.iter()
                 .map(|c| c.location_code.clone())
                 .collect::<Vec<_>>(),
         )
         .opt_str(
-            "channel_code",
+            channels::CHANNEL_CODE,
             &ch.iter()
                 .map(|c| c.channel_code.clone())
                 .collect::<Vec<_>>(),
         )
         .opt_str(
-            "location_text",
+            channels::LOCATION_TEXT,
             &ch.iter()
                 .map(|c| c.location_text.clone())
                 .collect::<Vec<_>>(),
         )
-        .opt_i32("level", ch.iter().map(|c| c.level).collect())
+        .opt_i32(channels::LEVEL, ch.iter().map(|c| c.level).collect())
         .opt_str(
-            "node",
+            channels::NODE,
             &ch.iter().map(|c| c.node.clone()).collect::<Vec<_>>(),
         )
-        .opt_f64("elevation_m", ch.iter().map(|c| c.elevation_m).collect())
+        .opt_f64(
+            channels::ELEVATION_M,
+            ch.iter().map(|c| c.elevation_m).collect(),
+        )
         .opt_str(
-            "direction",
+            channels::DIRECTION,
             &ch.iter()
                 .map(|c| direction_text(&c.direction))
                 .collect::<Vec<_>>(),
         )
         .opt_f64(
-            "azimuth_deg",
+            channels::AZIMUTH_DEG,
             ch.iter().map(|c| azimuth(&c.direction)).collect(),
         )
-        .opt_f64("dip_deg", ch.iter().map(|c| c.dip_deg).collect())
+        .opt_f64(channels::DIP_DEG, ch.iter().map(|c| c.dip_deg).collect())
         .str(
-            "role",
+            channels::ROLE,
             &ch.iter().map(|c| c.role.name()).collect::<Vec<_>>(),
         )
         .str(
-            "units",
+            channels::UNITS,
             &ch.iter().map(|c| c.units.name()).collect::<Vec<_>>(),
         )
         .f64(
-            "sampling_rate_hz",
+            channels::SAMPLING_RATE_HZ,
             ch.iter().map(|c| c.sampling_rate_hz).collect(),
         )
         .i64(
-            "npts",
+            channels::NPTS,
             recs.iter().map(|r| r.samples.len() as i64).collect(),
         )
-        .opt_timestamp_ns("start_time", ch.iter().map(|c| c.start_ns).collect())
+        .opt_timestamp_ns(
+            channels::START_TIME,
+            ch.iter().map(|c| c.start_ns).collect(),
+        )
         .str(
-            "source_file",
+            channels::SOURCE_FILE,
             &ch.iter().map(|c| c.source.file.clone()).collect::<Vec<_>>(),
         )
         .opt_str(
-            "source_member",
+            channels::SOURCE_MEMBER,
             &ch.iter()
                 .map(|c| c.source.member.clone())
                 .collect::<Vec<_>>(),
         )
         .opt_str(
-            "source_column",
+            channels::SOURCE_COLUMN,
             &ch.iter()
                 .map(|c| c.source.column.clone())
                 .collect::<Vec<_>>(),
         )
         .str(
-            "format",
+            channels::FORMAT,
             &ch.iter()
                 .map(|c| c.source.format.clone())
                 .collect::<Vec<_>>(),
         )
         .list_str(
-            "qa_flags",
+            channels::QA_FLAGS,
             &ch.iter()
                 .map(|c| c.qa.iter().map(|q| q.code().to_string()).collect())
                 .collect::<Vec<_>>(),
         )
         .str(
-            "qa_details",
+            channels::QA_DETAILS,
             &ch.iter()
                 .map(|c| serde_json::to_string(&c.qa).unwrap_or_default())
                 .collect::<Vec<_>>(),
         )
         .list_str(
-            "inferred",
+            channels::INFERRED,
             &ch.iter().map(|c| c.inferred.clone()).collect::<Vec<_>>(),
         )
         .list_str(
-            "missing",
+            channels::MISSING,
             &ch.iter().map(|c| c.missing.clone()).collect::<Vec<_>>(),
         )
-        .opt_f64("snr_db", snr)
-        .opt_f64("pga_m_s2", metric(|m| m.pga_m_per_s2))
-        .opt_f64("pgv_m_s", metric(|m| m.pgv_m_per_s))
-        .opt_f64("pgd_m", metric(|m| m.pgd_m))
-        .opt_f64("arias_m_s", metric(|m| m.arias_m_per_s))
-        .opt_f64("d5_95_s", metric(|m| m.d5_95_s))
-        .opt_f64("cav_m_s", metric(|m| m.cav_m_per_s))
+        .opt_f64(channels::SNR_DB, snr)
+        .opt_f64(channels::PGA_M_S2, metric(|m| m.pga_m_per_s2))
+        .opt_f64(channels::PGV_M_S, metric(|m| m.pgv_m_per_s))
+        .opt_f64(channels::PGD_M, metric(|m| m.pgd_m))
+        .opt_f64(channels::ARIAS_M_S, metric(|m| m.arias_m_per_s))
+        .opt_f64(channels::D5_95_S, metric(|m| m.d5_95_s))
+        .opt_f64(channels::CAV_M_S, metric(|m| m.cav_m_per_s))
         .build()?;
-    let mut meta = event_metadata(event);
-    meta.push((SCHEMA_KEY.into(), "channels".into()));
-    write_parquet(path, &[batch], &meta)
+    write_parquet(path, &[batch], &event_metadata(event))
 }
 
 /// `samples.parquet`: long format, one row per channel and sample.
@@ -210,20 +215,19 @@ pub fn write_samples(path: &Path, event: &Event, motions: &[Motion]) -> Result<(
             None => vec![None; n],
         };
         batches.push(
-            TableBuilder::new()
-                .str("channel_id", &vec![c.id.as_str(); n])
-                .i64("sample", (0..n as i64).collect())
-                .f64("t_s", t)
-                .opt_timestamp_ns("time", abs_time)
-                .f64("acc_m_s2", acc)
-                .opt_f64("vel_m_s", vel)
-                .opt_f64("disp_m", disp)
+            TableBuilder::new(&SAMPLES)
+                .str(samples::CHANNEL_ID, &vec![c.id.as_str(); n])
+                .i64(samples::SAMPLE, (0..n as i64).collect())
+                .f64(samples::T_S, t)
+                .opt_timestamp_ns(samples::TIME, abs_time)
+                .f64(samples::ACC_M_S2, acc)
+                .opt_f64(samples::VEL_M_S, vel)
+                .opt_f64(samples::DISP_M, disp)
                 .build()?,
         );
     }
     let channels: Vec<&Channel> = event.records.iter().map(|r| &r.channel).collect();
     let mut meta = event_metadata(event);
-    meta.push((SCHEMA_KEY.into(), "samples".into()));
     meta.push((
         CHANNELS_KEY.into(),
         serde_json::to_string(&channels).map_err(|e| Error::output(path, e.to_string()))?,
@@ -248,54 +252,50 @@ pub fn write_spectra(path: &Path, event: &Event, metrics: &[StrongMotionMetrics]
             sa.push(s.sa_abs_m_per_s2[i]);
         }
     }
-    let batch = TableBuilder::new()
-        .str("channel_id", &id)
-        .f64("damping", damping)
-        .f64("period_s", period)
-        .f64("sd_m", sd)
-        .f64("psv_m_s", psv)
-        .f64("psa_m_s2", psa)
-        .f64("sa_abs_m_s2", sa)
+    let batch = TableBuilder::new(&SPECTRA)
+        .str(spectra::CHANNEL_ID, &id)
+        .f64(spectra::DAMPING, damping)
+        .f64(spectra::PERIOD_S, period)
+        .f64(spectra::SD_M, sd)
+        .f64(spectra::PSV_M_S, psv)
+        .f64(spectra::PSA_M_S2, psa)
+        .f64(spectra::SA_ABS_M_S2, sa)
         .build()?;
-    let mut meta = event_metadata(event);
-    meta.push((SCHEMA_KEY.into(), "spectra".into()));
-    write_parquet(path, &[batch], &meta)
+    write_parquet(path, &[batch], &event_metadata(event))
 }
 
 /// `drift.parquet`.
 pub fn write_drift(path: &Path, event: &Event, rows: &[DriftRow]) -> Result<()> {
-    let batch = TableBuilder::new()
+    let batch = TableBuilder::new(&DRIFT)
         .str(
-            "direction",
+            drift::DIRECTION,
             &rows.iter().map(|r| r.direction.clone()).collect::<Vec<_>>(),
         )
-        .i32("storey", rows.iter().map(|r| r.storey).collect())
+        .i32(drift::STOREY, rows.iter().map(|r| r.storey).collect())
         .str(
-            "lower_channel",
+            drift::LOWER_CHANNEL,
             &rows
                 .iter()
                 .map(|r| r.lower_channel.clone())
                 .collect::<Vec<_>>(),
         )
         .str(
-            "upper_channel",
+            drift::UPPER_CHANNEL,
             &rows
                 .iter()
                 .map(|r| r.upper_channel.clone())
                 .collect::<Vec<_>>(),
         )
         .f64(
-            "storey_height_m",
+            drift::STOREY_HEIGHT_M,
             rows.iter().map(|r| r.storey_height_m).collect(),
         )
         .f64(
-            "peak_drift_ratio",
+            drift::PEAK_DRIFT_RATIO,
             rows.iter().map(|r| r.peak_drift_ratio).collect(),
         )
         .build()?;
-    let mut meta = event_metadata(event);
-    meta.push((SCHEMA_KEY.into(), "drift".into()));
-    write_parquet(path, &[batch], &meta)
+    write_parquet(path, &[batch], &event_metadata(event))
 }
 
 /// Loads a conditioned event back from `samples.parquet` (channels and
@@ -304,7 +304,7 @@ pub fn read_samples(path: &Path) -> Result<(Event, Vec<Motion>)> {
     let table = ReadTable::open(path)?;
     let loc = || table.location();
     let get = |k: &str| table.metadata(k).map(String::from);
-    if get(SCHEMA_KEY).as_deref() != Some("samples") {
+    if get(SCHEMA_KEY).as_deref() != Some(SAMPLES.name) {
         return Err(Error::input(
             loc(),
             "not a quaketwin samples.parquet (schema key missing)",
@@ -319,10 +319,10 @@ pub fn read_samples(path: &Path) -> Result<(Event, Vec<Motion>)> {
     let mut cols: std::collections::BTreeMap<String, (Vec<f64>, Vec<f64>, Vec<f64>)> =
         Default::default();
     for batch in &table.batches {
-        let ids: StringArray = table.column(batch, "channel_id")?;
-        let acc: Float64Array = table.column(batch, "acc_m_s2")?;
-        let vel: Float64Array = table.column(batch, "vel_m_s")?;
-        let disp: Float64Array = table.column(batch, "disp_m")?;
+        let ids: StringArray = table.declared(batch, &samples::CHANNEL_ID)?;
+        let acc: Float64Array = table.declared(batch, &samples::ACC_M_S2)?;
+        let vel: Float64Array = table.declared(batch, &samples::VEL_M_S)?;
+        let disp: Float64Array = table.declared(batch, &samples::DISP_M)?;
         for i in 0..batch.num_rows() {
             let e = cols.entry(ids.value(i).to_string()).or_default();
             e.0.push(acc.value(i));

@@ -8,12 +8,10 @@ use std::path::Path;
 use super::parquet::{write_parquet, TableBuilder};
 use crate::error::Result;
 pub use crate::hysteresis::DirectionOutcome;
-
-fn meta(schema: &str, extra: &[(String, String)]) -> Vec<(String, String)> {
-    let mut m = vec![("quaketwin.schema".to_string(), schema.to_string())];
-    m.extend_from_slice(extra);
-    m
-}
+use crate::vocab::tables::{
+    bouc_wen, bouc_wen_instantaneous, damage, hysteresis_fit, BOUC_WEN, BOUC_WEN_INSTANTANEOUS,
+    DAMAGE, HYSTERESIS_FIT,
+};
 
 /// `bouc_wen.parquet`: one row per direction, DoF and parameter (a direction
 /// that could not be identified has one row with `status` saying why).
@@ -25,7 +23,9 @@ pub fn write_bouc_wen(
     let mut c = Cols::default();
     for o in outcomes {
         match o {
-            DirectionOutcome::NotIdentifiable { direction, reason } => {
+            DirectionOutcome::NotIdentifiable {
+                direction, reason, ..
+            } => {
                 c.push_row(
                     direction,
                     -1,
@@ -41,7 +41,7 @@ pub fn write_bouc_wen(
                     "not_identifiable",
                     reason,
                 );
-                c.fill_significance(None);
+                c.fill_dof(None, None);
             }
             DirectionOutcome::Identified(d) => {
                 for dof in &d.dofs {
@@ -148,32 +148,33 @@ pub fn write_bouc_wen(
                         status,
                         "",
                     );
-                    c.fill_significance(Some((
-                        dof.significance.f_statistic,
-                        dof.significance.p_value,
-                    )));
+                    c.fill_dof(
+                        Some((dof.significance.f_statistic, dof.significance.p_value)),
+                        d.segments.get(dof.dof - 1).cloned(),
+                    );
                 }
             }
         }
     }
-    let batch = TableBuilder::new()
-        .str("direction", &c.direction)
-        .i32("dof", c.dof)
-        .str("parameter", &c.parameter)
-        .opt_i32("coupled_dof", c.coupled)
-        .f64("value", c.value)
-        .str("unit", &c.unit)
-        .opt_f64("stability_std", c.stability)
-        .bool("stable", c.stable)
-        .f64("cost_j", c.cost)
-        .f64("cost_relative", c.cost_rel)
-        .f64("hysteretic_share", c.share)
-        .str("status", &c.status)
-        .str("reason", &c.reason)
-        .opt_f64("f_statistic", c.f_statistic)
-        .opt_f64("p_value", c.p_value)
+    let batch = TableBuilder::new(&BOUC_WEN)
+        .str(bouc_wen::DIRECTION, &c.direction)
+        .i32(bouc_wen::DOF, c.dof)
+        .opt_str(bouc_wen::SEGMENT, &c.segment)
+        .str(bouc_wen::PARAMETER, &c.parameter)
+        .opt_i32(bouc_wen::COUPLED_DOF, c.coupled)
+        .f64(bouc_wen::VALUE, c.value)
+        .str(bouc_wen::UNIT, &c.unit)
+        .opt_f64(bouc_wen::STABILITY_STD, c.stability)
+        .bool(bouc_wen::STABLE, c.stable)
+        .f64(bouc_wen::COST_J, c.cost)
+        .f64(bouc_wen::COST_RELATIVE, c.cost_rel)
+        .f64(bouc_wen::HYSTERETIC_SHARE, c.share)
+        .str(bouc_wen::STATUS, &c.status)
+        .str(bouc_wen::REASON, &c.reason)
+        .opt_f64(bouc_wen::F_STATISTIC, c.f_statistic)
+        .opt_f64(bouc_wen::P_VALUE, c.p_value)
         .build()?;
-    write_parquet(path, &[batch], &meta("bouc_wen", extra_meta))
+    write_parquet(path, &[batch], extra_meta)
 }
 
 #[derive(Default)]
@@ -193,14 +194,17 @@ struct Cols {
     reason: Vec<String>,
     f_statistic: Vec<Option<f64>>,
     p_value: Vec<Option<f64>>,
+    segment: Vec<Option<String>>,
 }
 
 impl Cols {
-    /// The F-test of the hysteretic terms for the rows pushed since the last call.
-    fn fill_significance(&mut self, test: Option<(f64, f64)>) {
+    /// The F-test of the hysteretic terms and the segment of the DoF, for
+    /// the rows pushed since the last call.
+    fn fill_dof(&mut self, test: Option<(f64, f64)>, segment: Option<String>) {
         while self.f_statistic.len() < self.direction.len() {
             self.f_statistic.push(test.map(|t| t.0));
             self.p_value.push(test.map(|t| t.1));
+            self.segment.push(segment.clone());
         }
     }
 
@@ -269,56 +273,116 @@ pub fn write_instantaneous(path: &Path, outcomes: &[DirectionOutcome]) -> Result
             }
         }
     }
-    let batch = TableBuilder::new()
-        .str("direction", &dir)
-        .i32("dof", dof)
-        .f64("t_s", t)
-        .bool("informative", inf)
-        .f64("n_exponent", n)
-        .f64("cost_j", cost)
-        .f64("k0_own_n_m", k0)
-        .f64("beta", beta)
-        .f64("gamma", gamma)
+    let batch = TableBuilder::new(&BOUC_WEN_INSTANTANEOUS)
+        .str(bouc_wen_instantaneous::DIRECTION, &dir)
+        .i32(bouc_wen_instantaneous::DOF, dof)
+        .f64(bouc_wen_instantaneous::T_S, t)
+        .bool(bouc_wen_instantaneous::INFORMATIVE, inf)
+        .f64(bouc_wen_instantaneous::N_EXPONENT, n)
+        .f64(bouc_wen_instantaneous::COST_J, cost)
+        .f64(bouc_wen_instantaneous::K0_OWN_N_M, k0)
+        .f64(bouc_wen_instantaneous::BETA, beta)
+        .f64(bouc_wen_instantaneous::GAMMA, gamma)
         .build()?;
-    write_parquet(path, &[batch], &meta("bouc_wen_instantaneous", &[]))
+    write_parquet(path, &[batch], &[])
 }
 
-/// `hysteresis_fit.parquet`: recorded vs model restoring force per storey.
+/// Storey shears V_d = Σ_{r ≥ d} f_r of per-DoF forces f_r.
+fn storey_shears(forces: &[&[f64]]) -> Vec<Vec<f64>> {
+    let mut shears: Vec<Vec<f64>> = forces.iter().map(|f| f.to_vec()).collect();
+    for d in (0..shears.len().saturating_sub(1)).rev() {
+        let (lower, upper) = shears.split_at_mut(d + 1);
+        for (v, above) in lower[d].iter_mut().zip(&upper[0]) {
+            *v += above;
+        }
+    }
+    shears
+}
+
+/// `hysteresis_fit.parquet`: storey (segment) shear vs drift from the records
+/// and, for identified directions, from the model — the force–drift loops.
+/// A direction that is not identified contributes its measured loops when
+/// its kinematics could be formed (model column null).
 pub fn write_fit(path: &Path, outcomes: &[DirectionOutcome], decimate: usize) -> Result<()> {
     let step = decimate.max(1);
-    let (mut dir, mut dof, mut t, mut drift, mut fr, mut fm) =
-        (vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut dir, mut dof, mut seg, mut t, mut drift, mut fr, mut fm) =
+        (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     for o in outcomes {
-        let DirectionOutcome::Identified(d) = o else {
-            continue;
+        // (direction, rate, segments, drifts, record forces, model forces)
+        let (direction, fs, segments, drifts, record, model): (_, _, _, Vec<&[f64]>, _, _) = match o
+        {
+            DirectionOutcome::Identified(d) => (
+                &d.direction,
+                d.sampling_rate_hz,
+                &d.segments,
+                d.dofs
+                    .iter()
+                    .map(|f| f.fit.storey_drift.as_slice())
+                    .collect(),
+                storey_shears(
+                    &d.dofs
+                        .iter()
+                        .map(|f| f.fit.force_record.as_slice())
+                        .collect::<Vec<_>>(),
+                ),
+                Some(storey_shears(
+                    &d.dofs
+                        .iter()
+                        .map(|f| f.fit.force_model.as_slice())
+                        .collect::<Vec<_>>(),
+                )),
+            ),
+            DirectionOutcome::NotIdentifiable {
+                direction,
+                measured: Some(m),
+                ..
+            } => (
+                direction,
+                m.sampling_rate_hz,
+                &m.segments,
+                m.storey_drift.iter().map(|v| v.as_slice()).collect(),
+                storey_shears(
+                    &m.restoring_force
+                        .iter()
+                        .map(|v| v.as_slice())
+                        .collect::<Vec<_>>(),
+                ),
+                None,
+            ),
+            DirectionOutcome::NotIdentifiable { .. } => continue,
         };
-        let dt = 1.0 / d.sampling_rate_hz;
-        for f in &d.dofs {
-            let s = &f.fit;
-            let len = s
-                .force_record
-                .len()
-                .min(s.force_model.len())
-                .min(s.storey_drift.len());
+        let dt = 1.0 / fs;
+        for (d, storey_drift) in drifts.iter().enumerate() {
+            let mut len = storey_drift.len().min(record[d].len());
+            if let Some(m) = &model {
+                len = len.min(m[d].len());
+            }
             for i in (0..len).step_by(step) {
-                dir.push(d.direction.clone());
-                dof.push(f.dof as i32);
+                dir.push(direction.clone());
+                dof.push(d as i32 + 1);
+                seg.push(
+                    segments
+                        .get(d)
+                        .cloned()
+                        .unwrap_or_else(|| format!("L{d}–L{}", d + 1)),
+                );
                 t.push(i as f64 * dt);
-                drift.push(s.storey_drift[i]);
-                fr.push(s.force_record[i]);
-                fm.push(s.force_model[i]);
+                drift.push(storey_drift[i]);
+                fr.push(record[d][i]);
+                fm.push(model.as_ref().map(|m| m[d][i]));
             }
         }
     }
-    let batch = TableBuilder::new()
-        .str("direction", &dir)
-        .i32("dof", dof)
-        .f64("t_s", t)
-        .f64("drift_m", drift)
-        .f64("force_record_n", fr)
-        .f64("force_model_n", fm)
+    let batch = TableBuilder::new(&HYSTERESIS_FIT)
+        .str(hysteresis_fit::DIRECTION, &dir)
+        .i32(hysteresis_fit::DOF, dof)
+        .str(hysteresis_fit::SEGMENT, &seg)
+        .f64(hysteresis_fit::T_S, t)
+        .f64(hysteresis_fit::DRIFT_M, drift)
+        .f64(hysteresis_fit::FORCE_RECORD_N, fr)
+        .opt_f64(hysteresis_fit::FORCE_MODEL_N, fm)
         .build()?;
-    write_parquet(path, &[batch], &meta("hysteresis_fit", &[]))
+    write_parquet(path, &[batch], &[])
 }
 
 /// `damage.parquet`: ι(t) and, per mode, ω_s(t)/ω_s(0) and c_s(t) — one row
@@ -347,24 +411,21 @@ pub fn write_damage(path: &Path, outcomes: &[DirectionOutcome], decimate: usize)
             }
         }
     }
-    let batch = TableBuilder::new()
-        .str("direction", &dir)
-        .f64("t_s", t)
-        .f64("iota", iota)
-        .i32("mode", mode)
-        .f64("omega_rad_s", omega)
-        .f64("omega_ratio", ratio)
-        .f64("participation", part)
+    let batch = TableBuilder::new(&DAMAGE)
+        .str(damage::DIRECTION, &dir)
+        .f64(damage::T_S, t)
+        .f64(damage::IOTA, iota)
+        .i32(damage::MODE, mode)
+        .f64(damage::OMEGA_RAD_S, omega)
+        .f64(damage::OMEGA_RATIO, ratio)
+        .f64(damage::PARTICIPATION, part)
         .build()?;
     write_parquet(
         path,
         &[batch],
-        &meta(
-            "damage",
-            &[(
-                "quaketwin.indefinite_steps".into(),
-                serde_json::Value::Object(indefinite).to_string(),
-            )],
-        ),
+        &[(
+            "quaketwin.indefinite_steps".into(),
+            serde_json::Value::Object(indefinite).to_string(),
+        )],
     )
 }

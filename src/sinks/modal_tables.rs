@@ -9,15 +9,19 @@ use std::path::Path;
 use super::parquet::{write_parquet, TableBuilder};
 use crate::error::Result;
 use crate::modal::{FrequencyShift, ModalResult, SpectralOverlay};
+use crate::vocab::tables::{
+    frequency_shifts, modal_spectrum, modes, stabilization, FREQUENCY_SHIFTS, MODAL_SPECTRUM,
+    MODES, STABILIZATION,
+};
 
 /// Metadata key holding the output channel ids (JSON list) the shapes refer to.
 pub const OUTPUT_CHANNELS_KEY: &str = "quaketwin.output_channels";
 /// Metadata key holding why fewer modes than expected were selected (JSON list of strings).
 pub const WARNINGS_KEY: &str = "quaketwin.warnings";
 
-fn meta(schema: &str, result: &ModalResult, settings_json: &str) -> Vec<(String, String)> {
+/// Metadata of every modal table (the schema name comes from the declaration).
+fn meta(result: &ModalResult, settings_json: &str) -> Vec<(String, String)> {
     vec![
-        ("quaketwin.schema".into(), schema.into()),
         (
             OUTPUT_CHANNELS_KEY.into(),
             serde_json::to_string(&result.output_ids).unwrap_or_default(),
@@ -75,75 +79,108 @@ fn meta(schema: &str, result: &ModalResult, settings_json: &str) -> Vec<(String,
 
 pub fn write_stabilization(path: &Path, r: &ModalResult, settings_json: &str) -> Result<()> {
     let p = &r.poles;
-    let batch = TableBuilder::new()
-        .u32("order", p.iter().map(|x| x.order as u32).collect())
-        .f64("frequency_hz", p.iter().map(|x| x.frequency_hz).collect())
-        .f64("damping_ratio", p.iter().map(|x| x.damping_ratio).collect())
-        .f64("mpc", p.iter().map(|x| x.mpc).collect())
-        .f64("mpd_deg", p.iter().map(|x| x.mpd_deg).collect())
+    let batch = TableBuilder::new(&STABILIZATION)
+        .u32(
+            stabilization::ORDER,
+            p.iter().map(|x| x.order as u32).collect(),
+        )
+        .f64(
+            stabilization::FREQUENCY_HZ,
+            p.iter().map(|x| x.frequency_hz).collect(),
+        )
+        .f64(
+            stabilization::DAMPING_RATIO,
+            p.iter().map(|x| x.damping_ratio).collect(),
+        )
+        .f64(stabilization::MPC, p.iter().map(|x| x.mpc).collect())
+        .f64(
+            stabilization::MPD_DEG,
+            p.iter().map(|x| x.mpd_deg).collect(),
+        )
         .bool(
-            "stable_frequency",
+            stabilization::STABLE_FREQUENCY,
             p.iter().map(|x| x.stable_frequency).collect(),
         )
         .bool(
-            "stable_damping",
+            stabilization::STABLE_DAMPING,
             p.iter().map(|x| x.stable_damping).collect(),
         )
-        .bool("stable_shape", p.iter().map(|x| x.stable_shape).collect())
-        .bool("physical", p.iter().map(|x| x.physical).collect())
+        .bool(
+            stabilization::STABLE_SHAPE,
+            p.iter().map(|x| x.stable_shape).collect(),
+        )
+        .bool(
+            stabilization::PHYSICAL,
+            p.iter().map(|x| x.physical).collect(),
+        )
         .i32(
-            "mode",
+            stabilization::MODE,
             p.iter()
                 .map(|x| x.mode.map(|m| m as i32 + 1).unwrap_or(-1))
                 .collect(),
         )
         .build()?;
-    write_parquet(path, &[batch], &meta("stabilization", r, settings_json))
+    write_parquet(path, &[batch], &meta(r, settings_json))
 }
 
 pub fn write_modes(path: &Path, r: &ModalResult, settings_json: &str) -> Result<()> {
     let m = &r.modes;
-    let batch = TableBuilder::new()
-        .u32("mode", (1..=m.len() as u32).collect())
-        .f64("frequency_hz", m.iter().map(|x| x.frequency_hz).collect())
+    let batch = TableBuilder::new(&MODES)
+        .u32(modes::MODE, (1..=m.len() as u32).collect())
         .f64(
-            "frequency_std_hz",
+            modes::FREQUENCY_HZ,
+            m.iter().map(|x| x.frequency_hz).collect(),
+        )
+        .f64(
+            modes::FREQUENCY_STD_HZ,
             m.iter().map(|x| x.frequency_std_hz).collect(),
         )
-        .f64("damping_ratio", m.iter().map(|x| x.damping_ratio).collect())
-        .f64("damping_std", m.iter().map(|x| x.damping_std).collect())
-        .f64("mpc", m.iter().map(|x| x.mpc).collect())
-        .f64("mpd_deg", m.iter().map(|x| x.mpd_deg).collect())
-        .f64("mean_mac", m.iter().map(|x| x.mean_mac).collect())
+        .f64(
+            modes::DAMPING_RATIO,
+            m.iter().map(|x| x.damping_ratio).collect(),
+        )
+        .f64(
+            modes::DAMPING_STD,
+            m.iter().map(|x| x.damping_std).collect(),
+        )
+        .f64(modes::MPC, m.iter().map(|x| x.mpc).collect())
+        .f64(modes::MPD_DEG, m.iter().map(|x| x.mpd_deg).collect())
+        .f64(modes::MEAN_MAC, m.iter().map(|x| x.mean_mac).collect())
         .u32(
-            "pole_count",
+            modes::POLE_COUNT,
             m.iter().map(|x| x.pole_count as u32).collect(),
         )
-        .u32("order_min", m.iter().map(|x| x.order_min as u32).collect())
-        .u32("order_max", m.iter().map(|x| x.order_max as u32).collect())
-        .bool("manual", m.iter().map(|x| x.manual).collect())
+        .u32(
+            modes::ORDER_MIN,
+            m.iter().map(|x| x.order_min as u32).collect(),
+        )
+        .u32(
+            modes::ORDER_MAX,
+            m.iter().map(|x| x.order_max as u32).collect(),
+        )
+        .bool(modes::MANUAL, m.iter().map(|x| x.manual).collect())
         .str(
-            "direction",
+            modes::DIRECTION,
             &m.iter().map(|x| x.direction.as_str()).collect::<Vec<_>>(),
         )
         .list_f64(
-            "shape_re",
+            modes::SHAPE_RE,
             &m.iter()
                 .map(|x| x.shape.iter().map(|c| c.re).collect())
                 .collect::<Vec<_>>(),
         )
         .list_f64(
-            "shape_im",
+            modes::SHAPE_IM,
             &m.iter()
                 .map(|x| x.shape.iter().map(|c| c.im).collect())
                 .collect::<Vec<_>>(),
         )
         .list_f64(
-            "shape_std",
+            modes::SHAPE_STD,
             &m.iter().map(|x| x.shape_std.clone()).collect::<Vec<_>>(),
         )
         .build()?;
-    write_parquet(path, &[batch], &meta("modes", r, settings_json))
+    write_parquet(path, &[batch], &meta(r, settings_json))
 }
 
 /// Singular values of the factorisation and of the PSD matrix, long format.
@@ -170,13 +207,13 @@ pub fn write_spectrum(
             }
         }
     }
-    let batch = TableBuilder::new()
-        .str("kind", &kind)
-        .i32("index", index)
-        .opt_f64("frequency_hz", freq)
-        .f64("value", value)
+    let batch = TableBuilder::new(&MODAL_SPECTRUM)
+        .str(modal_spectrum::KIND, &kind)
+        .i32(modal_spectrum::INDEX, index)
+        .opt_f64(modal_spectrum::FREQUENCY_HZ, freq)
+        .f64(modal_spectrum::VALUE, value)
         .build()?;
-    write_parquet(path, &[batch], &meta("modal_spectrum", r, settings_json))
+    write_parquet(path, &[batch], &meta(r, settings_json))
 }
 
 pub fn write_shifts(
@@ -186,40 +223,45 @@ pub fn write_shifts(
     this_event: &str,
 ) -> Result<()> {
     let s = shifts;
-    let batch = TableBuilder::new()
+    let batch = TableBuilder::new(&FREQUENCY_SHIFTS)
         .u32(
-            "reference_mode",
+            frequency_shifts::REFERENCE_MODE,
             s.iter().map(|x| x.reference_mode as u32 + 1).collect(),
         )
         .u32(
-            "other_mode",
+            frequency_shifts::OTHER_MODE,
             s.iter().map(|x| x.other_mode as u32 + 1).collect(),
         )
         .f64(
-            "frequency_reference_hz",
+            frequency_shifts::FREQUENCY_REFERENCE_HZ,
             s.iter().map(|x| x.frequency_reference_hz).collect(),
         )
         .f64(
-            "frequency_other_hz",
+            frequency_shifts::FREQUENCY_OTHER_HZ,
             s.iter().map(|x| x.frequency_other_hz).collect(),
         )
         .f64(
-            "relative_shift",
+            frequency_shifts::RELATIVE_SHIFT,
             s.iter().map(|x| x.relative_shift).collect(),
         )
-        .f64("shift_in_std", s.iter().map(|x| x.shift_in_std).collect())
         .f64(
-            "damping_reference",
+            frequency_shifts::SHIFT_IN_STD,
+            s.iter().map(|x| x.shift_in_std).collect(),
+        )
+        .f64(
+            frequency_shifts::DAMPING_REFERENCE,
             s.iter().map(|x| x.damping_reference).collect(),
         )
-        .f64("damping_other", s.iter().map(|x| x.damping_other).collect())
-        .f64("mac", s.iter().map(|x| x.mac).collect())
+        .f64(
+            frequency_shifts::DAMPING_OTHER,
+            s.iter().map(|x| x.damping_other).collect(),
+        )
+        .f64(frequency_shifts::MAC, s.iter().map(|x| x.mac).collect())
         .build()?;
     write_parquet(
         path,
         &[batch],
         &[
-            ("quaketwin.schema".into(), "frequency_shifts".into()),
             ("quaketwin.reference_event".into(), reference_event.into()),
             ("quaketwin.event".into(), this_event.into()),
         ],
@@ -233,6 +275,7 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
 
     use super::parquet::ReadTable;
     use crate::error::Error;
+    use crate::vocab::schema::ColumnSpec;
     let table = ReadTable::open(path)?;
     let loc = || table.location();
     let channels: Vec<String> = table
@@ -244,31 +287,34 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
                 format!("metadata {OUTPUT_CHANNELS_KEY} missing: not a quaketwin modes.parquet"),
             )
         })?;
-    let mut modes = Vec::new();
+    let mut out = Vec::new();
     for b in &table.batches {
-        let f = |n: &str| table.column::<Float64Array>(b, n);
-        let u = |n: &str| table.column::<UInt32Array>(b, n);
-        let l = |n: &str| table.column::<ListArray>(b, n);
+        let f = |c: &ColumnSpec| table.declared::<Float64Array>(b, c);
+        let u = |c: &ColumnSpec| table.declared::<UInt32Array>(b, c);
+        let l = |c: &ColumnSpec| table.declared::<ListArray>(b, c);
         let (fr, fs, z, zs, mpc, mpd, mm) = (
-            f("frequency_hz")?,
-            f("frequency_std_hz")?,
-            f("damping_ratio")?,
-            f("damping_std")?,
-            f("mpc")?,
-            f("mpd_deg")?,
-            f("mean_mac")?,
+            f(&modes::FREQUENCY_HZ)?,
+            f(&modes::FREQUENCY_STD_HZ)?,
+            f(&modes::DAMPING_RATIO)?,
+            f(&modes::DAMPING_STD)?,
+            f(&modes::MPC)?,
+            f(&modes::MPD_DEG)?,
+            f(&modes::MEAN_MAC)?,
         );
-        let (pc, omin, omax) = (u("pole_count")?, u("order_min")?, u("order_max")?);
-        let manual = b
-            .column_by_name("manual")
-            .ok_or_else(|| Error::input(loc(), "column manual missing"))?
-            .as_any()
-            .downcast_ref::<BooleanArray>()
-            .cloned();
-        let (re, im, sd) = (l("shape_re")?, l("shape_im")?, l("shape_std")?);
+        let (pc, omin, omax) = (
+            u(&modes::POLE_COUNT)?,
+            u(&modes::ORDER_MIN)?,
+            u(&modes::ORDER_MAX)?,
+        );
+        let manual = table.declared::<BooleanArray>(b, &modes::MANUAL)?;
+        let (re, im, sd) = (
+            l(&modes::SHAPE_RE)?,
+            l(&modes::SHAPE_IM)?,
+            l(&modes::SHAPE_STD)?,
+        );
         // Optional: files written before issue 13 have no direction column.
         let direction = b
-            .column_by_name("direction")
+            .column_by_name(modes::DIRECTION.name)
             .and_then(|c| c.as_any().downcast_ref::<arrow_array::StringArray>())
             .cloned();
         let values = |a: &ListArray, i: usize| -> Vec<f64> {
@@ -291,7 +337,7 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
                     ),
                 ));
             }
-            modes.push(crate::modal::Mode {
+            out.push(crate::modal::Mode {
                 frequency_hz: fr.value(i),
                 frequency_std_hz: fs.value(i),
                 damping_ratio: z.value(i),
@@ -308,7 +354,7 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
                 pole_count: pc.value(i) as usize,
                 order_min: omin.value(i) as usize,
                 order_max: omax.value(i) as usize,
-                manual: manual.as_ref().map(|a| a.value(i)).unwrap_or(false),
+                manual: manual.value(i),
                 direction: direction
                     .as_ref()
                     .map(|a| a.value(i).to_string())
@@ -316,5 +362,5 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
             });
         }
     }
-    Ok((modes, channels))
+    Ok((out, channels))
 }

@@ -1,12 +1,18 @@
-//! Parquet sink: tables are declared as data (explicit Arrow types, one
-//! builder call per column) and written atomically through
-//! [`super::atomic`] — a temporary file in the target directory, then a
-//! rename — so a reader never sees half a file.
+//! Parquet sink: every table is built from its declaration
+//! ([`crate::vocab::tables`]: names, Arrow types, nullability, units) and
+//! written atomically through [`super::atomic`] — a temporary file in the
+//! target directory, then a rename — so a reader never sees half a file.
 //!
 //! Every table carries key/value metadata: `quaketwin.version`, the table's
-//! `quaketwin.schema` name, and whatever the stage adds (processing history as
-//! JSON, settings).  Schemas are documented in docs/formats.md.
+//! `quaketwin.schema` name and `quaketwin.description`, and whatever the stage
+//! adds (processing history as JSON, settings).  They are written twice: as
+//! Parquet footer key/values (where quaketwin and most tools read them) and
+//! as Arrow schema metadata (pyarrow's `read_table(..).schema.metadata` shows
+//! only those once the Arrow schema is embedded).  Each field carries its
+//! `unit` in its Arrow field metadata.  Schemas are documented in
+//! docs/formats.md, checked against the declarations.
 
+use std::collections::BTreeMap;
 use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -16,118 +22,149 @@ use arrow_array::{
     Array, ArrayRef, BooleanArray, Float64Array, Int32Array, Int64Array, RecordBatch, StringArray,
     TimestampNanosecondArray, UInt32Array,
 };
-use arrow_schema::{DataType, Field, Schema, SchemaRef, TimeUnit};
+use arrow_schema::{Field, Schema, SchemaRef};
 use parquet::arrow::ArrowWriter;
 use parquet::basic::{Compression, ZstdLevel};
 use parquet::file::metadata::KeyValue;
 use parquet::file::properties::WriterProperties;
 
 use crate::error::{Error, Result};
+use crate::vocab::schema::{
+    ColumnSpec, ColumnType, TableSchema, DESCRIPTION_KEY, SCHEMA_KEY, VERSION_KEY,
+};
 
 /// Column-by-column builder of one Arrow record batch.  Each method names
-/// the Arrow type it produces; `opt_*` columns are nullable.
-#[derive(Default)]
+/// the Arrow type it produces; `opt_*` columns are nullable.  A builder made
+/// from a declaration ([`TableBuilder::new`]) takes the declared columns (a
+/// column constant or its name) and refuses, at `build`, a column that is
+/// undeclared, missing, out of order or of another type than declared.
 pub struct TableBuilder {
+    schema: Option<&'static TableSchema>,
     fields: Vec<Field>,
     columns: Vec<ArrayRef>,
+    /// The first column that did not match the declaration (reported by `build`,
+    /// so the chained calls stay infallible).
+    error: Option<String>,
 }
 
 impl TableBuilder {
-    pub fn new() -> Self {
-        Self::default()
+    /// A builder of the declared table `schema`.
+    pub fn new(schema: &'static TableSchema) -> Self {
+        Self::of(Some(schema))
     }
-    fn push(mut self, field: Field, column: ArrayRef) -> Self {
+    /// A builder of a table quaketwin does not declare: files other tools
+    /// wrote, or that an older quaketwin wrote (test fixtures of readers that
+    /// must cope with them).  No checks, no units.
+    pub fn untyped() -> Self {
+        Self::of(None)
+    }
+    fn of(schema: Option<&'static TableSchema>) -> Self {
+        TableBuilder {
+            schema,
+            fields: Vec::new(),
+            columns: Vec::new(),
+            error: None,
+        }
+    }
+    fn push(mut self, name: &str, ty: ColumnType, nullable: bool, column: ArrayRef) -> Self {
+        let field = match self.schema.map(|s| (s, s.column(name))) {
+            None => Field::new(name, ty.data_type(), nullable),
+            Some((s, None)) => {
+                self.error
+                    .get_or_insert_with(|| format!("column {name} is not declared in {}", s.file));
+                Field::new(name, ty.data_type(), nullable)
+            }
+            Some((_, Some(spec))) => {
+                if spec.ty != ty || spec.nullable != nullable {
+                    let given = ColumnSpec {
+                        ty,
+                        nullable,
+                        ..*spec
+                    };
+                    self.error.get_or_insert_with(|| {
+                        format!(
+                            "column {name} is set as {}, declared {}",
+                            given.describe(),
+                            spec.describe()
+                        )
+                    });
+                }
+                spec.field(name)
+            }
+        };
         self.fields.push(field);
         self.columns.push(column);
         self
     }
     /// Float64, not null.
-    pub fn f64(self, name: &str, values: Vec<f64>) -> Self {
-        self.push(
-            Field::new(name, DataType::Float64, false),
-            Arc::new(Float64Array::from(values)),
-        )
+    pub fn f64(self, name: impl AsRef<str>, values: Vec<f64>) -> Self {
+        let a = Arc::new(Float64Array::from(values));
+        self.push(name.as_ref(), ColumnType::F64, false, a)
     }
     /// Float64, nullable.
-    pub fn opt_f64(self, name: &str, values: Vec<Option<f64>>) -> Self {
-        self.push(
-            Field::new(name, DataType::Float64, true),
-            Arc::new(Float64Array::from(values)),
-        )
+    pub fn opt_f64(self, name: impl AsRef<str>, values: Vec<Option<f64>>) -> Self {
+        let a = Arc::new(Float64Array::from(values));
+        self.push(name.as_ref(), ColumnType::F64, true, a)
     }
     /// Int64, not null.
-    pub fn i64(self, name: &str, values: Vec<i64>) -> Self {
-        self.push(
-            Field::new(name, DataType::Int64, false),
-            Arc::new(Int64Array::from(values)),
-        )
+    pub fn i64(self, name: impl AsRef<str>, values: Vec<i64>) -> Self {
+        let a = Arc::new(Int64Array::from(values));
+        self.push(name.as_ref(), ColumnType::I64, false, a)
     }
     /// Int32, not null.
-    pub fn i32(self, name: &str, values: Vec<i32>) -> Self {
-        self.push(
-            Field::new(name, DataType::Int32, false),
-            Arc::new(Int32Array::from(values)),
-        )
+    pub fn i32(self, name: impl AsRef<str>, values: Vec<i32>) -> Self {
+        let a = Arc::new(Int32Array::from(values));
+        self.push(name.as_ref(), ColumnType::I32, false, a)
     }
     /// Int32, nullable.
-    pub fn opt_i32(self, name: &str, values: Vec<Option<i32>>) -> Self {
-        self.push(
-            Field::new(name, DataType::Int32, true),
-            Arc::new(Int32Array::from(values)),
-        )
+    pub fn opt_i32(self, name: impl AsRef<str>, values: Vec<Option<i32>>) -> Self {
+        let a = Arc::new(Int32Array::from(values));
+        self.push(name.as_ref(), ColumnType::I32, true, a)
     }
     /// UInt32, not null.
-    pub fn u32(self, name: &str, values: Vec<u32>) -> Self {
-        self.push(
-            Field::new(name, DataType::UInt32, false),
-            Arc::new(UInt32Array::from(values)),
-        )
+    pub fn u32(self, name: impl AsRef<str>, values: Vec<u32>) -> Self {
+        let a = Arc::new(UInt32Array::from(values));
+        self.push(name.as_ref(), ColumnType::U32, false, a)
     }
     /// Boolean, not null.
-    pub fn bool(self, name: &str, values: Vec<bool>) -> Self {
-        self.push(
-            Field::new(name, DataType::Boolean, false),
-            Arc::new(BooleanArray::from(values)),
-        )
+    pub fn bool(self, name: impl AsRef<str>, values: Vec<bool>) -> Self {
+        let a = Arc::new(BooleanArray::from(values));
+        self.push(name.as_ref(), ColumnType::Bool, false, a)
     }
     /// Utf8, not null.
-    pub fn str<S: AsRef<str>>(self, name: &str, values: &[S]) -> Self {
+    pub fn str<S: AsRef<str>>(self, name: impl AsRef<str>, values: &[S]) -> Self {
         let a: StringArray = values.iter().map(|s| Some(s.as_ref())).collect();
-        self.push(Field::new(name, DataType::Utf8, false), Arc::new(a))
+        self.push(name.as_ref(), ColumnType::Utf8, false, Arc::new(a))
     }
     /// Utf8, nullable.
-    pub fn opt_str<S: AsRef<str>>(self, name: &str, values: &[Option<S>]) -> Self {
+    pub fn opt_str<S: AsRef<str>>(self, name: impl AsRef<str>, values: &[Option<S>]) -> Self {
         let a: StringArray = values
             .iter()
             .map(|s| s.as_ref().map(|s| s.as_ref()))
             .collect();
-        self.push(Field::new(name, DataType::Utf8, true), Arc::new(a))
+        self.push(name.as_ref(), ColumnType::Utf8, true, Arc::new(a))
     }
     /// Timestamp(ns, UTC), nullable: absolute times.
-    pub fn opt_timestamp_ns(self, name: &str, values: Vec<Option<i64>>) -> Self {
+    pub fn opt_timestamp_ns(self, name: impl AsRef<str>, values: Vec<Option<i64>>) -> Self {
         let a = TimestampNanosecondArray::from(values).with_timezone("UTC");
-        self.push(
-            Field::new(
-                name,
-                DataType::Timestamp(TimeUnit::Nanosecond, Some("UTC".into())),
-                true,
-            ),
-            Arc::new(a),
-        )
+        self.push(name.as_ref(), ColumnType::TimestampNsUtc, true, Arc::new(a))
     }
     /// List<Float64>, not null (e.g. a mode shape per row).
-    pub fn list_f64(self, name: &str, values: &[Vec<f64>]) -> Self {
+    pub fn list_f64(self, name: impl AsRef<str>, values: &[Vec<f64>]) -> Self {
         let mut b = ListBuilder::new(Float64Builder::new());
         for row in values {
             b.values().append_slice(row);
             b.append(true);
         }
-        let a = b.finish();
-        let field = Field::new(name, a.data_type().clone(), false);
-        self.push(field, Arc::new(a))
+        self.push(
+            name.as_ref(),
+            ColumnType::ListF64,
+            false,
+            Arc::new(b.finish()),
+        )
     }
     /// List<Utf8>, not null (e.g. QA flags per channel).
-    pub fn list_str(self, name: &str, values: &[Vec<String>]) -> Self {
+    pub fn list_str(self, name: impl AsRef<str>, values: &[Vec<String>]) -> Self {
         let mut b = ListBuilder::new(StringBuilder::new());
         for row in values {
             for s in row {
@@ -135,22 +172,47 @@ impl TableBuilder {
             }
             b.append(true);
         }
-        let a = b.finish();
-        let field = Field::new(name, a.data_type().clone(), false);
-        self.push(field, Arc::new(a))
+        self.push(
+            name.as_ref(),
+            ColumnType::ListUtf8,
+            false,
+            Arc::new(b.finish()),
+        )
     }
     pub fn schema(&self) -> SchemaRef {
         Arc::new(Schema::new(self.fields.clone()))
     }
+    /// The record batch; for a declared table, with the table's name and
+    /// description as schema metadata.  A table that does not match its
+    /// declaration is a bug of the writer: an internal (numerical-kind) error.
     pub fn build(self) -> Result<RecordBatch> {
-        let schema = Arc::new(Schema::new(self.fields));
-        RecordBatch::try_new(schema, self.columns)
+        let mut schema = Schema::new(self.fields);
+        if let Some(s) = self.schema {
+            let fields: Vec<&Field> = schema.fields().iter().map(|f| f.as_ref()).collect();
+            if let Some(e) = self.error.or_else(|| s.check_fields(&fields).err()) {
+                return Err(Error::numerical(format!(
+                    "internal error: {} does not match its declaration: {e}",
+                    s.file
+                )));
+            }
+            schema = schema.with_metadata(
+                [
+                    (SCHEMA_KEY.to_string(), s.name.to_string()),
+                    (DESCRIPTION_KEY.to_string(), s.doc.to_string()),
+                ]
+                .into_iter()
+                .collect::<BTreeMap<_, _>>(),
+            );
+        }
+        RecordBatch::try_new(Arc::new(schema), self.columns)
             .map_err(|e| Error::numerical(format!("building a table: {e}")))
     }
 }
 
 /// Writes record batches (all of one schema) to `path` atomically, with
-/// zstd compression and the given key/value metadata.
+/// zstd compression.  The key/value metadata — `quaketwin.version`, then the
+/// batch schema's own (the declaration's name and description), then
+/// `metadata` — goes both into the Parquet footer and into the Arrow schema.
 pub fn write_parquet(
     path: &Path,
     batches: &[RecordBatch],
@@ -159,27 +221,43 @@ pub fn write_parquet(
     let Some(first) = batches.first() else {
         return Err(Error::output(path, "no data to write"));
     };
-    let schema = first.schema();
-    let mut kv: Vec<KeyValue> = vec![KeyValue::new(
-        "quaketwin.version".to_string(),
+    let mut kv: Vec<(String, String)> = vec![(
+        VERSION_KEY.to_string(),
         env!("CARGO_PKG_VERSION").to_string(),
     )];
-    kv.extend(
-        metadata
-            .iter()
-            .map(|(k, v)| KeyValue::new(k.clone(), v.clone())),
+    let own = first.schema().metadata().clone();
+    let given = metadata.iter().map(|(k, v)| (k, v));
+    for (k, v) in own.iter().chain(given) {
+        // One value per key: the declaration's name wins over a repeated one.
+        if !kv.iter().any(|(key, _)| key == k) {
+            kv.push((k.clone(), v.clone()));
+        }
+    }
+    let schema = Arc::new(
+        first
+            .schema()
+            .as_ref()
+            .clone()
+            .with_metadata(kv.iter().cloned().collect::<BTreeMap<_, _>>()),
     );
+    let batches: Vec<RecordBatch> = batches
+        .iter()
+        .map(|b| b.clone().with_schema(schema.clone()))
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|e| Error::output(path, e.to_string()))?;
     let props = WriterProperties::builder()
         .set_compression(Compression::ZSTD(
             ZstdLevel::try_new(3).map_err(|e| Error::output(path, e.to_string()))?,
         ))
         .set_max_row_group_row_count(Some(1 << 20))
-        .set_key_value_metadata(Some(kv))
+        .set_key_value_metadata(Some(
+            kv.into_iter().map(|(k, v)| KeyValue::new(k, v)).collect(),
+        ))
         .build();
     write_atomically(path, |file| {
         let mut writer = ArrowWriter::try_new(file, schema.clone(), Some(props))
             .map_err(|e| Error::output(path, e.to_string()))?;
-        for b in batches {
+        for b in &batches {
             writer
                 .write(b)
                 .map_err(|e| Error::output(path, e.to_string()))?;
@@ -259,5 +337,24 @@ impl ReadTable {
                 ),
             )
         })
+    }
+
+    /// The declared column `spec` of `batch` as the Arrow array type `T`,
+    /// after checking the file's field against the declaration (type and
+    /// nullability): a file that does not match is an input error naming
+    /// the file and the column.
+    pub fn declared<T: Array + Clone + 'static>(
+        &self,
+        batch: &RecordBatch,
+        spec: &ColumnSpec,
+    ) -> Result<T> {
+        let schema = batch.schema();
+        let field = schema
+            .field_with_name(spec.name)
+            .map_err(|_| Error::input(self.location(), format!("column {} missing", spec.name)))?;
+        if let Some(m) = spec.mismatch(field) {
+            return Err(Error::input(self.location(), m));
+        }
+        self.column(batch, spec.name)
     }
 }

@@ -17,11 +17,12 @@ use super::parquet::{write_parquet, TableBuilder};
 use crate::error::{Error, Location, Result};
 use crate::twin::ensemble::EnsembleResult;
 use crate::twin::objective::{MeasuredMode, MeasuredModes, ModeComparison};
+use crate::vocab::tables::{modes, twin_modes, twin_update, TWIN_MODES, TWIN_UPDATE};
 
-/// File metadata key of the schema name.
-pub const SCHEMA_KEY: &str = "quaketwin.schema";
 /// File metadata key of the output channel ids (JSON list) in modes.parquet.
 pub use super::modal_tables::OUTPUT_CHANNELS_KEY;
+/// File metadata key of the schema name.
+pub use crate::vocab::schema::SCHEMA_KEY;
 /// File metadata key of the error summary (JSON) in twin_modes.parquet.
 pub const SUMMARY_KEY: &str = "quaketwin.summary";
 
@@ -33,7 +34,8 @@ pub struct ModesFile {
     pub mode_numbers: Vec<u32>,
 }
 
-/// Read measured modes from `modes.parquet`: `mode` (UInt32/Int32/Int64), `frequency_hz`
+/// Read measured modes from `modes.parquet` (columns named by the declaration
+/// [`crate::vocab::tables::MODES`], but tolerant of the types other tools write): `mode` (UInt32/Int32/Int64), `frequency_hz`
 /// (Float64), `shape_re` (list<f64>, one entry per output channel), optional `shape_im`,
 /// and the channel ids as a JSON list in the `quaketwin.output_channels` metadata entry.
 /// Modes come out sorted by mode number.
@@ -75,8 +77,9 @@ pub fn read_measured_modes(path: &Path) -> Result<ModesFile> {
         }
     }
     let schema = builder.schema().clone();
-    let missing: Vec<&str> = ["mode", "frequency_hz", "shape_re"]
+    let missing: Vec<&str> = [modes::MODE, modes::FREQUENCY_HZ, modes::SHAPE_RE]
         .into_iter()
+        .map(|c| c.name)
         .filter(|c| schema.field_with_name(c).is_err())
         .collect();
     if !missing.is_empty() {
@@ -96,20 +99,29 @@ pub fn read_measured_modes(path: &Path) -> Result<ModesFile> {
                 .column_by_name(name)
                 .ok_or_else(|| Error::input(loc(), format!("column {name} missing")))
         };
-        let numbers = mode_numbers(col("mode")?, &loc)?;
-        let freq = col("frequency_hz")?
-            .as_primitive_opt::<Float64Type>()
-            .ok_or_else(|| Error::input(loc(), "column frequency_hz is not Float64"))?;
-        let shape_re = col("shape_re")?;
-        let shape_im = batch.column_by_name("shape_im");
+        let numbers = mode_numbers(col(modes::MODE.name)?, &loc)?;
+        // The declared type, nullability aside (nulls are refused per row).
+        let freq_field = batch
+            .schema_ref()
+            .field_with_name(modes::FREQUENCY_HZ.name)
+            .cloned();
+        if let Some(m) = freq_field
+            .ok()
+            .and_then(|f| modes::FREQUENCY_HZ.type_mismatch(&f))
+        {
+            return Err(Error::input(loc(), m));
+        }
+        let freq = col(modes::FREQUENCY_HZ.name)?.as_primitive::<Float64Type>();
+        let shape_re = col(modes::SHAPE_RE.name)?;
+        let shape_im = batch.column_by_name(modes::SHAPE_IM.name);
         for (i, number) in numbers.iter().enumerate() {
             let row_err = |m: String| Error::input(loc(), format!("mode {number}: {m}"));
             if freq.is_null(i) {
                 return Err(row_err("frequency_hz is null".into()));
             }
-            let re = list_row(shape_re, i, "shape_re").map_err(row_err)?;
+            let re = list_row(shape_re, i, modes::SHAPE_RE.name).map_err(row_err)?;
             let im = match shape_im {
-                Some(a) => Some(list_row(a, i, "shape_im").map_err(row_err)?),
+                Some(a) => Some(list_row(a, i, modes::SHAPE_IM.name).map_err(row_err)?),
                 None => None,
             };
             if re.len() != channels.len() || im.as_ref().is_some_and(|v| v.len() != re.len()) {
@@ -221,14 +233,17 @@ pub fn write_twin_update(
         .iter()
         .flat_map(|r| r.candidates.iter())
         .collect();
-    let mut t = TableBuilder::new()
-        .u32("round", rows.iter().map(|c| c.round as u32).collect())
+    let mut t = TableBuilder::new(&TWIN_UPDATE)
         .u32(
-            "candidate",
+            twin_update::ROUND,
+            rows.iter().map(|c| c.round as u32).collect(),
+        )
+        .u32(
+            twin_update::CANDIDATE,
             rows.iter().map(|c| c.candidate as u32).collect(),
         )
         .str(
-            "solver",
+            twin_update::SOLVER,
             &rows.iter().map(|c| c.solver.as_str()).collect::<Vec<_>>(),
         );
     for (q, name) in parameter_names.iter().enumerate() {
@@ -239,27 +254,39 @@ pub fn write_twin_update(
             })?;
             values.push(v);
         }
-        t = t.f64(&format!("param_{name}"), values);
+        t = t.f64(twin_update::PARAM.member(name), values);
     }
     let batch = t
-        .f64("objective_j", rows.iter().map(|c| c.objective).collect())
-        .list_f64("z", &rows.iter().map(|c| c.z.clone()).collect::<Vec<_>>())
+        .f64(
+            twin_update::OBJECTIVE_J,
+            rows.iter().map(|c| c.objective).collect(),
+        )
         .list_f64(
-            "scatter",
+            twin_update::Z,
+            &rows.iter().map(|c| c.z.clone()).collect::<Vec<_>>(),
+        )
+        .list_f64(
+            twin_update::SCATTER,
             &rows.iter().map(|c| c.scatters.clone()).collect::<Vec<_>>(),
         )
         .list_f64(
-            "score",
+            twin_update::SCORE,
             &rows.iter().map(|c| c.scores.clone()).collect::<Vec<_>>(),
         )
-        .u32("rank", rows.iter().map(|c| c.rank as u32).collect())
+        .u32(
+            twin_update::RANK,
+            rows.iter().map(|c| c.rank as u32).collect(),
+        )
         .f64(
-            "selection_weight",
+            twin_update::SELECTION_WEIGHT,
             rows.iter().map(|c| c.selection_weight).collect(),
         )
-        .bool("selected", rows.iter().map(|c| c.selected).collect())
+        .bool(
+            twin_update::SELECTED,
+            rows.iter().map(|c| c.selected).collect(),
+        )
         .i64(
-            "evaluations",
+            twin_update::EVALUATIONS,
             rows.iter().map(|c| c.evaluations as i64).collect(),
         )
         .build()?;
@@ -281,7 +308,6 @@ pub fn write_twin_update(
         })
         .collect();
     let mut meta = vec![
-        (SCHEMA_KEY.to_string(), "twin_update".to_string()),
         (
             "quaketwin.parameters".to_string(),
             serde_json::json!(parameter_names).to_string(),
@@ -345,14 +371,14 @@ pub fn write_twin_modes(
             mac.push(p.mac);
         }
     }
-    let batch = TableBuilder::new()
-        .str("stage", &stage)
-        .u32("mode", mode)
-        .opt_i32("model_mode", model_mode)
-        .f64("f_exp_hz", f_exp)
-        .opt_f64("f_num_hz", f_num)
-        .opt_f64("rel_error", rel_error)
-        .f64("mac", mac)
+    let batch = TableBuilder::new(&TWIN_MODES)
+        .str(twin_modes::STAGE, &stage)
+        .u32(twin_modes::MODE, mode)
+        .opt_i32(twin_modes::MODEL_MODE, model_mode)
+        .f64(twin_modes::F_EXP_HZ, f_exp)
+        .opt_f64(twin_modes::F_NUM_HZ, f_num)
+        .opt_f64(twin_modes::REL_ERROR, rel_error)
+        .f64(twin_modes::MAC, mac)
         .build()?;
     let summary = serde_json::json!({
         "initial": {"frequency_error": initial.frequency_error, "shape_error": initial.shape_error},
@@ -360,10 +386,7 @@ pub fn write_twin_modes(
         "frequency_error": "mean over measured modes of |f_exp - f_num| / f_exp (unpaired modes count 1)",
         "shape_error": "mean over measured modes of (1 - MAC)",
     });
-    let mut meta = vec![
-        (SCHEMA_KEY.to_string(), "twin_modes".to_string()),
-        (SUMMARY_KEY.to_string(), summary.to_string()),
-    ];
+    let mut meta = vec![(SUMMARY_KEY.to_string(), summary.to_string())];
     meta.extend(metadata.iter().cloned());
     write_parquet(path, &[batch], &meta)
 }

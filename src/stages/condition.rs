@@ -21,7 +21,7 @@ pub const KIND: StageKind = StageKind {
 /// The conditioned records file (default; `samples_file` names another, so
 /// that two condition stages — e.g. the band-passed records for modal
 /// identification and the records as recorded for Bouc-Wen — can coexist).
-pub const SAMPLES_FILE: &str = "samples.parquet";
+pub const SAMPLES_FILE: &str = crate::vocab::tables::SAMPLES.file;
 
 /// The stage's own params beside the conditioning settings.
 #[derive(Deserialize)]

@@ -14,7 +14,9 @@ use serde::Deserialize;
 
 use super::condition::Conditioned;
 use crate::error::{Error, Result};
-pub use crate::hysteresis::{auto_directions, DirectionSpec, MassResolution, ReducedMassRecord};
+pub use crate::hysteresis::{
+    auto_directions, DirectionSpec, MassLumping, MassResolution, ReducedMassRecord,
+};
 use crate::hysteresis::{
     identify_event, BasisForm, EventSettings, FrequencyBand, IdentifySettings, VelocityDrift,
 };
@@ -38,10 +40,10 @@ pub const DAMAGE_KIND: StageKind = StageKind {
     build: build_damage,
 };
 
-pub const BOUC_WEN_FILE: &str = "bouc_wen.parquet";
-pub const INSTANTANEOUS_FILE: &str = "bouc_wen_instantaneous.parquet";
-pub const FIT_FILE: &str = "hysteresis_fit.parquet";
-pub const DAMAGE_FILE: &str = "damage.parquet";
+pub const BOUC_WEN_FILE: &str = crate::vocab::tables::BOUC_WEN.file;
+pub const INSTANTANEOUS_FILE: &str = crate::vocab::tables::BOUC_WEN_INSTANTANEOUS.file;
+pub const FIT_FILE: &str = crate::vocab::tables::HYSTERESIS_FIT.file;
+pub const DAMAGE_FILE: &str = crate::vocab::tables::DAMAGE.file;
 
 /// The product: the identification of every direction.
 pub struct Identification {
@@ -67,8 +69,10 @@ pub struct HysteresisParams {
     pub velocity_drift: VelocityDrift,
     /// Grid step of σ in the reduced-mass search of Eq. 35–36 (≤ 0.001).
     pub reduced_mass_step: f64,
+    /// Masses of uninstrumented levels: `auto`, `tributary` or `eq35_36`.
+    pub mass_lumping: MassLumping,
     /// Explicit directions; default: one per horizontal direction that has a
-    /// level-0 input channel and floors at levels 1..D.
+    /// level-0 input channel and at least one floor (any levels).
     pub directions: Option<Vec<DirectionSpec>>,
     /// Keep every n-th sample in hysteresis_fit.parquet and damage.parquet.
     pub output_decimation: usize,
@@ -89,6 +93,7 @@ impl Default for HysteresisParams {
             instantaneous: true,
             velocity_drift: VelocityDrift::None,
             reduced_mass_step: 0.001,
+            mass_lumping: MassLumping::Auto,
             directions: None,
             output_decimation: 1,
             fail_on_error: false,
@@ -139,6 +144,7 @@ pub fn identify_event_at(
     let settings = EventSettings {
         identify: p.identify_settings()?,
         reduced_mass_step: p.reduced_mass_step,
+        mass_lumping: p.mass_lumping,
         directions: p.directions.clone(),
         fail_on_error: p.fail_on_error,
     };
@@ -156,6 +162,7 @@ pub fn write_identification(
         "form": p.form, "band_low_hz": p.band_low_hz, "exponent_min": p.exponent_min,
         "exponent_max": p.exponent_max, "exponent_resolution": p.exponent_resolution,
         "velocity_drift": p.velocity_drift, "reduced_mass_step": p.reduced_mass_step,
+        "mass_lumping": p.mass_lumping,
     });
     let processing: serde_json::Map<String, serde_json::Value> = outcomes
         .iter()
@@ -217,6 +224,14 @@ impl Stage for Hysteresis {
         if !ctx.quiet {
             for m in &masses {
                 eprintln!("[hysteresis] {}", m.message());
+            }
+            for o in &outcomes {
+                if let DirectionOutcome::NotIdentifiable {
+                    direction, reason, ..
+                } = o
+                {
+                    eprintln!("[hysteresis] direction {direction}: not identifiable: {reason}");
+                }
             }
         }
         write_identification(&ctx.out_dir, &outcomes, &masses, &self.params)?;

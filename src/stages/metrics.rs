@@ -17,9 +17,9 @@ pub const KIND: StageKind = StageKind {
     build,
 };
 
-pub const CHANNELS_FILE: &str = "channels.parquet";
-pub const SPECTRA_FILE: &str = "spectra.parquet";
-pub const DRIFT_FILE: &str = "drift.parquet";
+pub const CHANNELS_FILE: &str = crate::vocab::tables::CHANNELS.file;
+pub const SPECTRA_FILE: &str = crate::vocab::tables::SPECTRA.file;
+pub const DRIFT_FILE: &str = crate::vocab::tables::DRIFT.file;
 
 fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
     let settings: MetricsSettings = src.params()?;

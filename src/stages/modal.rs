@@ -24,10 +24,10 @@ pub const KIND: StageKind = StageKind {
     build,
 };
 
-pub const STABILIZATION_FILE: &str = "stabilization.parquet";
-pub const MODES_FILE: &str = "modes.parquet";
-pub const SPECTRUM_FILE: &str = "modal_spectrum.parquet";
-pub const SHIFTS_FILE: &str = "frequency_shifts.parquet";
+pub const STABILIZATION_FILE: &str = crate::vocab::tables::STABILIZATION.file;
+pub const MODES_FILE: &str = crate::vocab::tables::MODES.file;
+pub const SPECTRUM_FILE: &str = crate::vocab::tables::MODAL_SPECTRUM.file;
+pub const SHIFTS_FILE: &str = crate::vocab::tables::FREQUENCY_SHIFTS.file;
 
 /// Identification method of the stage: `auto` picks input–output when the
 /// event has base channels, else SSI-COV.

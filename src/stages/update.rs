@@ -26,8 +26,8 @@ pub const KIND: StageKind = StageKind {
 };
 
 /// File names of the stage's outputs.
-pub const TWIN_UPDATE_FILE: &str = "twin_update.parquet";
-pub const TWIN_MODES_FILE: &str = "twin_modes.parquet";
+pub const TWIN_UPDATE_FILE: &str = crate::vocab::tables::TWIN_UPDATE.file;
+pub const TWIN_MODES_FILE: &str = crate::vocab::tables::TWIN_MODES.file;
 pub const UPDATED_TWIN_FILE: &str = "twin_updated.toml";
 
 /// Parameters of the `update` stage and of `quaketwin update`.

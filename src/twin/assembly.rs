@@ -6,11 +6,13 @@
 //! rigid-body motion (u_s = u_m + θ_m × (x_s − x_m), θ_s = θ_m). Element matrices are
 //! scattered through this map, which is the congruence Tᵀ k T with T the constraint matrix.
 
+use nalgebra::{DVector, Vector3};
+
 use super::elements::beam2d::{beam2d_matrices, BeamSection2d};
 use super::elements::beam3d::{beam3d_matrices, BeamSection3d};
 use super::elements::q4::{q4_matrices, PlaneStress};
 use super::elements::shell::{shell4_matrices, ShellSection};
-use super::elements::SmallMatrix;
+use super::elements::{to_element_matrices, ElementMatrix};
 use super::model::{Dimension, ElementKind, Model, ParameterKind};
 use super::sparse::{AffineMatrix, AffineVector, CscMatrix};
 use crate::error::Error;
@@ -331,7 +333,7 @@ pub fn build_dof_map(model: &Model) -> Result<DofMap> {
 fn scatter(
     map: &DofMap,
     full_dofs: &[usize],
-    k: &SmallMatrix,
+    k: &ElementMatrix,
     scale: f64,
     out: &mut Vec<(usize, usize, f64)>,
 ) {
@@ -343,7 +345,7 @@ fn scatter(
             continue;
         }
         for (b, &fb) in full_dofs.iter().enumerate() {
-            let v = k.get(a, b) * scale;
+            let v = k[(a, b)] * scale;
             if v == 0.0 {
                 continue;
             }
@@ -360,11 +362,14 @@ fn scatter(
 }
 
 /// Element stiffness and mass in global coordinates (node DoFs in `ElementKind::dofs` order).
-pub fn element_matrices(model: &Model, element_index: usize) -> Result<(SmallMatrix, SmallMatrix)> {
+pub fn element_matrices(
+    model: &Model,
+    element_index: usize,
+) -> Result<(ElementMatrix, ElementMatrix)> {
     let e = &model.elements[element_index];
     let mat = &model.materials[e.material];
     let sec = &model.sections[e.section];
-    let xyz = |i: usize| model.nodes[e.nodes[i]].coords;
+    let xyz = |i: usize| Vector3::from(model.nodes[e.nodes[i]].coords);
     let result = match e.kind {
         ElementKind::Beam2d => {
             let s = BeamSection2d {
@@ -376,7 +381,7 @@ pub fn element_matrices(model: &Model, element_index: usize) -> Result<(SmallMat
                 shear_factor: sec.shear_factor,
             };
             let (a, b) = (xyz(0), xyz(1));
-            beam2d_matrices([a[0], a[1]], [b[0], b[1]], &s)
+            beam2d_matrices(a.xy(), b.xy(), &s).map(to_element_matrices)
         }
         ElementKind::Beam3d => {
             let s = BeamSection3d {
@@ -389,7 +394,8 @@ pub fn element_matrices(model: &Model, element_index: usize) -> Result<(SmallMat
                 torsion: sec.torsion,
                 shear_factor: sec.shear_factor,
             };
-            beam3d_matrices(xyz(0), xyz(1), e.orientation, &s)
+            beam3d_matrices(xyz(0), xyz(1), e.orientation.map(Vector3::from), &s)
+                .map(to_element_matrices)
         }
         ElementKind::Q4 => {
             let p = PlaneStress {
@@ -398,8 +404,8 @@ pub fn element_matrices(model: &Model, element_index: usize) -> Result<(SmallMat
                 density: mat.density,
                 thickness: sec.thickness,
             };
-            let xy = [0, 1, 2, 3].map(|i| [xyz(i)[0], xyz(i)[1]]);
-            q4_matrices(&xy, &p)
+            let xy = [0, 1, 2, 3].map(|i| xyz(i).xy());
+            q4_matrices(&xy, &p).map(to_element_matrices)
         }
         ElementKind::Shell4 => {
             let s = ShellSection {
@@ -409,7 +415,7 @@ pub fn element_matrices(model: &Model, element_index: usize) -> Result<(SmallMat
                 thickness: sec.thickness,
                 shear_factor: sec.shear_factor,
             };
-            shell4_matrices(&[xyz(0), xyz(1), xyz(2), xyz(3)], &s)
+            shell4_matrices(&[0, 1, 2, 3].map(xyz), &s).map(to_element_matrices)
         }
     };
     result.ok_or_else(|| {
@@ -451,7 +457,7 @@ pub fn assemble(model: &Model) -> Result<TwinSystem> {
         .collect();
     let add_influence = |infl: &mut Vec<AffineVector>,
                          full: &[usize],
-                         me: &SmallMatrix,
+                         me: &ElementMatrix,
                          local_dofs: &[usize],
                          scale: f64,
                          term: Option<usize>| {
@@ -470,7 +476,7 @@ pub fn assemble(model: &Model) -> Result<TwinSystem> {
                     }
                 })
                 .collect();
-            let f = me.mul_vec(&r);
+            let f = me * DVector::from_vec(r);
             let target = match term {
                 Some(g) => &mut infl[axis].terms[g],
                 None => &mut infl[axis].base,
@@ -518,16 +524,11 @@ pub fn assemble(model: &Model) -> Result<TwinSystem> {
     for s in &model.springs {
         let (full, ks) = match s.node2 {
             None => {
-                let mut k = SmallMatrix::zeros(1);
-                k.set(0, 0, 1.0);
+                let k = ElementMatrix::from_element(1, 1, 1.0);
                 (vec![s.node * nd + s.dof], k)
             }
             Some(n2) => {
-                let mut k = SmallMatrix::zeros(2);
-                k.set(0, 0, 1.0);
-                k.set(1, 1, 1.0);
-                k.set(0, 1, -1.0);
-                k.set(1, 0, -1.0);
+                let k = ElementMatrix::from_row_slice(2, 2, &[1.0, -1.0, -1.0, 1.0]);
                 (vec![s.node * nd + s.dof, n2 * nd + s.dof], k)
             }
         };
@@ -538,9 +539,9 @@ pub fn assemble(model: &Model) -> Result<TwinSystem> {
     }
     for lm in &model.masses {
         let full: Vec<usize> = (0..nd).map(|d| lm.node * nd + d).collect();
-        let mut m = SmallMatrix::zeros(nd);
+        let mut m = ElementMatrix::zeros(nd, nd);
         for (d, v) in lm.values.iter().enumerate().take(nd) {
-            m.set(d, d, *v);
+            m[(d, d)] = *v;
         }
         scatter(&map, &full, &m, 1.0, &mut m0);
         let local: Vec<usize> = (0..nd).collect();

@@ -1,9 +1,12 @@
 //! The shared vocabulary every stage speaks: channels, records, events,
-//! structures and the processing history.  Nothing here does I/O.
+//! structures, the processing history, and the schemas of the tables we
+//! write (`schema`, `tables`).  Nothing here does I/O.
 
 mod channel;
 mod event;
 mod history;
+pub mod schema;
+pub mod tables;
 mod time;
 mod units;
 

@@ -291,7 +291,8 @@ fn storey_masses_come_from_the_twin_when_the_manifest_has_none() {
 }
 
 /// Bad input: no masses and no twin → an input error naming event.toml and
-/// the channel; an uninstrumented floor without a twin likewise.
+/// the channel; an uninstrumented floor without a twin likewise when the
+/// thesis's Eq. 35–36 is asked for (`mass_lumping = "eq35_36"`).
 #[test]
 fn missing_masses_or_twin_are_input_errors_naming_the_channel() {
     let params = HysteresisParams {
@@ -325,8 +326,20 @@ fn missing_masses_or_twin_are_input_errors_naming_the_channel() {
         }
         _ => panic!("identified without masses"),
     }
+    // An uninstrumented floor without a twin: the tributary lumping by
+    // default (masses exact: floor 2 at mid-height splits half and half);
+    // the thesis's Eq. 35–36 alone (`eq35_36`) needs the twin.
     let ev = event(&[1, 3], structure(MASSES.to_vec(), None));
-    let (outcomes, _) = identify_event_at(&ev, Some(dir.path()), &lenient).unwrap();
+    let (_, resolved) = identify_event_at(&ev, Some(dir.path()), &lenient).unwrap();
+    assert_eq!(
+        resolved[0].masses_kg,
+        vec![MASSES[0] + MASSES[1] / 2.0, MASSES[2] + MASSES[1] / 2.0]
+    );
+    let eq35 = HysteresisParams {
+        mass_lumping: MassLumping::Eq35_36,
+        ..HysteresisParams::default()
+    };
+    let (outcomes, _) = identify_event_at(&ev, Some(dir.path()), &eq35).unwrap();
     match &outcomes[0] {
         DirectionOutcome::NotIdentifiable { reason, .. } => {
             assert!(

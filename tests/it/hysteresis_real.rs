@@ -34,7 +34,9 @@ fn params(spec: DirectionSpec) -> HysteresisParams {
 
 fn describe(outcome: &DirectionOutcome) -> String {
     match outcome {
-        DirectionOutcome::NotIdentifiable { direction, reason } => {
+        DirectionOutcome::NotIdentifiable {
+            direction, reason, ..
+        } => {
             format!("{direction}: not identifiable: {reason}")
         }
         DirectionOutcome::Identified(id) => {

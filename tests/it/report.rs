@@ -349,7 +349,7 @@ fn write_fixtures(dir: &Path, keep_existing: bool) {
     // Stabilisation: 3 orders × 2 poles; one non-physical pole.
     write_parquet(
         &dir.join("stabilization.parquet"),
-        &[TableBuilder::new()
+        &[TableBuilder::untyped()
             .u32("order", vec![4, 4, 6, 6, 8, 8])
             .f64("frequency_hz", vec![1.5, 4.4, 1.51, 4.41, 1.505, 7.9])
             .f64("damping_ratio", vec![0.02, 0.03, 0.021, 0.03, 0.02, -0.1])
@@ -371,7 +371,7 @@ fn write_fixtures(dir: &Path, keep_existing: bool) {
     .unwrap();
     write_parquet(
         &dir.join("modes.parquet"),
-        &[TableBuilder::new()
+        &[TableBuilder::untyped()
             .i32("mode", vec![0, 1])
             .f64("frequency_hz", vec![1.507, 4.405])
             .f64("frequency_std_hz", vec![0.004, 0.01])
@@ -401,7 +401,7 @@ fn write_fixtures(dir: &Path, keep_existing: bool) {
     let cat = |a: &Vec<f64>| [a.clone(), a.clone()].concat();
     write_parquet(
         &dir.join("hysteresis_fit.parquet"),
-        &[TableBuilder::new()
+        &[TableBuilder::untyped()
             .str("direction", &dir_col)
             .i32("dof", vec![1; 2 * n])
             .f64("t_s", cat(&t))
@@ -417,7 +417,7 @@ fn write_fixtures(dir: &Path, keep_existing: bool) {
     // the report does not know.
     write_parquet(
         &dir.join("bouc_wen.parquet"),
-        &[TableBuilder::new()
+        &[TableBuilder::untyped()
             .str("direction", &["X", "X", "Y", "Y"])
             .i32("dof", vec![1, 1, 1, 1])
             .str("parameter", &["K0", "N", "K0", "N"])
@@ -460,7 +460,7 @@ fn write_fixtures(dir: &Path, keep_existing: bool) {
     }
     write_parquet(
         &dir.join("damage.parquet"),
-        &[TableBuilder::new()
+        &[TableBuilder::untyped()
             .str("direction", &dcol)
             .f64("t_s", tcol)
             .f64("iota", icol)
@@ -473,7 +473,7 @@ fn write_fixtures(dir: &Path, keep_existing: bool) {
     .unwrap();
     write_parquet(
         &dir.join("pod.parquet"),
-        &[TableBuilder::new()
+        &[TableBuilder::untyped()
             .i32("pod_mode", vec![1, 2, 3])
             .f64("energy_fraction", vec![0.9, 0.08, 0.02])
             .build()
@@ -515,7 +515,7 @@ fn later_stage_sections_render_fixture_tables_and_rate_damage() {
     let hyst_text = node_text(hyst);
     assert!(
         hyst_text
-            .contains("expected column(s) not present: coupled_dof, stability_std, stable, cost_j"),
+            .contains("expected column(s) not present: segment, coupled_dof, stability_std, stable, reason, cost_j"),
         "{hyst_text}"
     );
     let (bh, brows) = table_cells(&doc, "bouc-wen-table");

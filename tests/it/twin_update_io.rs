@@ -60,7 +60,7 @@ fn write_modes(path: &Path, channels: &[&str], freqs: &[f64], shapes: &[Vec<f64>
         .iter()
         .map(|&j| shapes[j].iter().map(|v| v * alpha.sin()).collect())
         .collect();
-    let batch = TableBuilder::new()
+    let batch = TableBuilder::untyped()
         .u32("mode", order.iter().map(|&j| j as u32 + 1).collect())
         .f64("frequency_hz", order.iter().map(|&j| freqs[j]).collect())
         .f64("damping_ratio", vec![0.02; freqs.len()])
@@ -130,7 +130,7 @@ fn modes_parquet_round_trips_into_measured_modes() {
         }
     }
     // Int64 mode numbers and no shape_im are accepted too.
-    let batch = TableBuilder::new()
+    let batch = TableBuilder::untyped()
         .i64("mode", vec![4])
         .f64("frequency_hz", vec![2.5])
         .list_f64("shape_re", &[vec![1.0, -0.5]])
@@ -313,7 +313,7 @@ fn modes_file_without_required_columns_is_an_input_error() {
     let dir = tempfile::tempdir().unwrap();
     let twin = write_twin(dir.path());
     let path = dir.path().join("modes.parquet");
-    let batch = TableBuilder::new()
+    let batch = TableBuilder::untyped()
         .u32("mode", vec![1])
         .list_f64("shape_re", &[vec![1.0, 0.3]])
         .build()
@@ -334,7 +334,7 @@ fn modes_file_without_required_columns_is_an_input_error() {
     assert!(!out.join("twin_update.parquet").exists());
 
     // No channel metadata.
-    let batch = TableBuilder::new()
+    let batch = TableBuilder::untyped()
         .u32("mode", vec![1])
         .f64("frequency_hz", vec![1.4])
         .list_f64("shape_re", &[vec![1.0, 0.3]])

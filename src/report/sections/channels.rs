@@ -2,29 +2,30 @@
 
 use super::{present_columns, require, Loaded};
 use crate::report::html::{missing_columns_note, note, table, Cell};
+use crate::vocab::tables::{self, channels};
 
 const CHANNEL_COLUMNS: [&str; 16] = [
-    "channel_id",
-    "level",
-    "direction",
-    "role",
-    "units",
-    "sampling_rate_hz",
-    "npts",
-    "pga_m_s2",
-    "pgv_m_s",
-    "pgd_m",
-    "arias_m_s",
-    "d5_95_s",
-    "cav_m_s",
-    "snr_db",
-    "qa_flags",
-    "missing",
+    channels::CHANNEL_ID.name,
+    channels::LEVEL.name,
+    channels::DIRECTION.name,
+    channels::ROLE.name,
+    channels::UNITS.name,
+    channels::SAMPLING_RATE_HZ.name,
+    channels::NPTS.name,
+    channels::PGA_M_S2.name,
+    channels::PGV_M_S.name,
+    channels::PGD_M.name,
+    channels::ARIAS_M_S.name,
+    channels::D5_95_S.name,
+    channels::CAV_M_S.name,
+    channels::SNR_DB.name,
+    channels::QA_FLAGS.name,
+    channels::MISSING.name,
 ];
 
 pub(super) fn channel_section(channels: &Loaded) -> String {
     let mut body = String::new();
-    let Some(t) = require(channels, "channels.parquet", &mut body) else {
+    let Some(t) = require(channels, &tables::CHANNELS, &mut body) else {
         return body;
     };
     let present = present_columns(t, &CHANNEL_COLUMNS);

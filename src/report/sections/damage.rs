@@ -9,16 +9,17 @@ use crate::report::html::{column_notes, note, table, Cell};
 use crate::report::plot::{self, Chart, Mark, RefLine, Series};
 use crate::report::table::Table;
 use crate::report::{Assessment, IotaStatistic, ReportSettings};
+use crate::vocab::tables::{self, damage};
 
 /// Columns damage.parquet may hold besides the wide layout's `omega_ratio_<mode>`.
 const KNOWN_COLUMNS: [&str; 7] = [
-    "direction",
-    "t_s",
-    "iota",
-    "mode",
-    "omega_rad_s",
-    "omega_ratio",
-    "participation",
+    damage::DIRECTION.name,
+    damage::T_S.name,
+    damage::IOTA.name,
+    damage::MODE.name,
+    damage::OMEGA_RAD_S.name,
+    damage::OMEGA_RATIO.name,
+    damage::PARTICIPATION.name,
 ];
 
 pub(super) fn damage_section(
@@ -27,17 +28,17 @@ pub(super) fn damage_section(
     out: &mut Vec<Assessment>,
 ) -> String {
     let mut body = String::new();
-    let Some(t) = require(damage, "damage.parquet", &mut body) else {
+    let Some(t) = require(damage, &tables::DAMAGE, &mut body) else {
         return body;
     };
     // Two layouts: long (one row per direction, time and `mode`, with
     // `omega_ratio`) or wide (`omega_ratio_<mode>` columns).
-    let long = t.has("mode") && t.number("mode").is_some();
+    let long = t.has(damage::MODE.name) && t.number(damage::MODE.name).is_some();
     let ratio_cols = frequency_ratio_columns(t, long);
     let mut all_known: Vec<&str> = KNOWN_COLUMNS.to_vec();
     all_known.extend(ratio_cols.iter().map(|s| s.as_str()));
     body.push_str(&column_notes(t, &all_known));
-    if t.number("t_s").is_none() || t.number("iota").is_none() {
+    if t.number(damage::T_S.name).is_none() || t.number(damage::IOTA.name).is_none() {
         return body;
     }
     let th = settings.iota;
@@ -58,18 +59,23 @@ pub(super) fn damage_section(
         };
         // In the long layout ι repeats on every mode's row: take one mode's rows.
         let iota_rows: &[usize] = modes.first().map(|g| g.1.as_slice()).unwrap_or(rows);
-        let pts = rows_points(t, iota_rows, "t_s", "iota");
+        let pts = rows_points(t, iota_rows, damage::T_S.name, damage::IOTA.name);
         rows_html.push(rate_direction(&dir, &pts, settings, out));
         figures.push_str(&iota_figure(&dir, &pts, gi, settings));
-        let ratios: Vec<(String, Vec<(f64, f64)>)> = if long && t.has("omega_ratio") {
+        let ratios: Vec<(String, Vec<(f64, f64)>)> = if long && t.has(damage::OMEGA_RATIO.name) {
             modes
                 .iter()
-                .map(|(label, r)| (label.clone(), rows_points(t, r, "t_s", "omega_ratio")))
+                .map(|(label, r)| {
+                    (
+                        label.clone(),
+                        rows_points(t, r, damage::T_S.name, damage::OMEGA_RATIO.name),
+                    )
+                })
                 .collect()
         } else {
             ratio_cols
                 .iter()
-                .map(|c| (c.clone(), rows_points(t, rows, "t_s", c)))
+                .map(|c| (c.clone(), rows_points(t, rows, damage::T_S.name, c)))
                 .collect()
         };
         figures.push_str(&ratio_figure(&dir, ratios, settings));
@@ -81,7 +87,7 @@ pub(super) fn damage_section(
     }
     body.push_str(&table(
         Some("damage-table"),
-        &["direction", "final ι", "peak ι", "rating"].map(String::from),
+        &[damage::DIRECTION.name, "final ι", "peak ι", "rating"].map(String::from),
         &rows_html,
     ));
     body.push_str(&format!("<div class=\"grid2\">{figures}</div>"));
@@ -96,8 +102,8 @@ pub(super) fn damage_section(
 fn frequency_ratio_columns(t: &Table, long: bool) -> Vec<String> {
     t.names
         .iter()
-        .filter(|n| n.starts_with("omega_ratio") && t.number(n).is_some())
-        .filter(|n| !long || n.as_str() != "omega_ratio")
+        .filter(|n| n.starts_with(damage::OMEGA_RATIO.name) && t.number(n).is_some())
+        .filter(|n| !long || n.as_str() != damage::OMEGA_RATIO.name)
         .cloned()
         .collect()
 }
@@ -105,8 +111,8 @@ fn frequency_ratio_columns(t: &Table, long: bool) -> Vec<String> {
 /// Rows per direction (file order), or all rows as direction "—" without a
 /// `direction` column.
 fn direction_groups(t: &Table) -> Vec<(Vec<String>, Vec<usize>)> {
-    let keys: Vec<&str> = if t.has("direction") {
-        vec!["direction"]
+    let keys: Vec<&str> = if t.has(damage::DIRECTION.name) {
+        vec![damage::DIRECTION.name]
     } else {
         vec![]
     };
@@ -120,7 +126,7 @@ fn direction_groups(t: &Table) -> Vec<(Vec<String>, Vec<usize>)> {
 /// The long layout's `rows` of one direction grouped by mode ("mode k", ascending k).
 fn mode_groups(t: &Table, rows: &[usize]) -> Vec<(String, Vec<usize>)> {
     let mut m: BTreeMap<i64, Vec<usize>> = BTreeMap::new();
-    let modes = t.number("mode").unwrap_or(&[]);
+    let modes = t.number(damage::MODE.name).unwrap_or(&[]);
     for &r in rows {
         if let Some(Some(k)) = modes.get(r) {
             m.entry(*k as i64).or_default().push(r);
@@ -158,7 +164,7 @@ fn rate_direction(
             subject: format!("direction {dir}"),
             value: v,
             rating,
-            source: "damage.parquet".into(),
+            source: tables::DAMAGE.file.into(),
         });
     }
     vec![

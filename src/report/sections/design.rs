@@ -9,15 +9,16 @@ use super::{figure, generic, load, Loaded};
 use crate::report::html::escape;
 use crate::report::plot::{self, Chart, Mark, Series};
 use crate::report::ReportSettings;
+use crate::vocab::tables::{self, actuator_layout, hybrid_prototype, interface_refinement, pod};
 
 pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
     let mut body = String::new();
     // Key facts from the tables and their metadata (docs/test-design.md).
-    let pod = load(dir, "pod.parquet", None);
-    let layout = load(dir, "actuator_layout.parquet", None);
-    let validation = load(dir, "reduction_validation.parquet", None);
-    let hybrid = load(dir, "hybrid_prototype.parquet", None);
-    let refinement = load(dir, "interface_refinement.parquet", None);
+    let pod = load(dir, &tables::POD, None);
+    let layout = load(dir, &tables::ACTUATOR_LAYOUT, None);
+    let validation = load(dir, &tables::REDUCTION_VALIDATION, None);
+    let hybrid = load(dir, &tables::HYBRID_PROTOTYPE, None);
+    let refinement = load(dir, &tables::INTERFACE_REFINEMENT, None);
     let meta = |l: &Loaded, key: &str| -> String {
         match l {
             Loaded::Ok(t) => t.metadata.get(key).cloned().unwrap_or_else(|| "—".into()),
@@ -28,7 +29,7 @@ pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
     if let Loaded::Ok(t) = &pod {
         let retained = meta(&pod, "quaketwin.retained_poms");
         let energy = t
-            .number("cumulative_energy")
+            .number(pod::CUMULATIVE_ENERGY.name)
             .and_then(|c| {
                 retained
                     .parse::<usize>()
@@ -54,7 +55,7 @@ pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
         }
     }
     if let Loaded::Ok(t) = &layout {
-        let control = t.text("control_mode").unwrap_or(&[]);
+        let control = t.text(actuator_layout::CONTROL_MODE.name).unwrap_or(&[]);
         let force = control
             .iter()
             .filter(|c| c.as_deref() == Some("force"))
@@ -87,7 +88,7 @@ pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
         let rec: Option<Value> =
             serde_json::from_str(&meta(&hybrid, "quaketwin.recommendation")).ok();
         let num = |k: &str| rec.as_ref().and_then(|r| r.get(k)).and_then(Value::as_f64);
-        let text = match (num("ns_modes"), num("time_scale"), num("bandwidth_hz"), num("highest_frequency_hz")) {
+        let text = match (num(hybrid_prototype::NS_MODES.name), num(hybrid_prototype::TIME_SCALE.name), num(hybrid_prototype::BANDWIDTH_HZ.name), num("highest_frequency_hz")) {
             (Some(n), Some(l), Some(b), Some(top)) => format!(
                 "Craig–Bampton prototype with {n} NS modes (highest frequency {top:.1} Hz); time scale λ = {l}: hybrid bandwidth {b:.3} Hz"
             ),
@@ -106,9 +107,9 @@ pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
     // The trade-off of the interface refinement: accuracy against actuators.
     if let Loaded::Ok(t) = &refinement {
         if let (Some(act), Some(def), Some(tot)) = (
-            t.number("actuators"),
-            t.number("wnrmse_deformation"),
-            t.number("wnrmse_total"),
+            t.number(interface_refinement::ACTUATORS.name),
+            t.number(interface_refinement::WNRMSE_DEFORMATION.name),
+            t.number(interface_refinement::WNRMSE_TOTAL.name),
         ) {
             let pts = |y: &[Option<f64>]| -> Vec<(f64, f64)> {
                 act.iter()
@@ -116,7 +117,7 @@ pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
                     .filter_map(|(a, y)| Some((((*a)?), (*y)?)))
                     .collect()
             };
-            let mut chart = Chart::new(520, 260, "actuators", "WNRMSE");
+            let mut chart = Chart::new(520, 260, interface_refinement::ACTUATORS.name, "WNRMSE");
             chart
                 .series
                 .push(Series::new("deformation", pts(def), 0, Mark::LinePoints));
@@ -136,7 +137,7 @@ pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
     }
     // POD energy per mode.
     if let Loaded::Ok(t) = &pod {
-        if let Some(v) = t.number("energy_fraction") {
+        if let Some(v) = t.number(pod::ENERGY_FRACTION.name) {
             let pts: Vec<(f64, f64)> = v
                 .iter()
                 .enumerate()
@@ -153,8 +154,8 @@ pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
             ));
         }
     }
-    generic(dir, "actuator_layout.parquet", settings, &mut body);
-    generic(dir, "hybrid_prototype.parquet", settings, &mut body);
-    generic(dir, "pod.parquet", settings, &mut body);
+    generic(dir, &tables::ACTUATOR_LAYOUT, settings, &mut body);
+    generic(dir, &tables::HYBRID_PROTOTYPE, settings, &mut body);
+    generic(dir, &tables::POD, settings, &mut body);
     body
 }

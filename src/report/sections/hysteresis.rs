@@ -1,43 +1,47 @@
-//! Section 8, Bouc-Wen fit: identified parameters, instantaneous exponent and
-//! force–drift loops of record and model.
+//! Section 8, Bouc-Wen fit: identified parameters (and why a direction is
+//! not identifiable), instantaneous exponent and force–drift loops
+//! (`loops`).
 
 use std::path::Path;
 
-use super::{figure, known_columns_first, load, require, rows_points, stride};
-use crate::report::html::{cells, column_notes, missing_columns_note, note, table};
+use super::{figure, known_columns_first, load, require, rows_points};
+use crate::report::html::{cells, missing_columns_note, note, table};
 use crate::report::plot::{self, Chart, Mark, Series};
 use crate::report::ReportSettings;
+use crate::vocab::tables::{self, bouc_wen, bouc_wen_instantaneous};
 
 pub(super) fn hysteresis_section(dir: &Path, settings: &ReportSettings) -> String {
     let mut body = String::new();
-    let fit = load(dir, "hysteresis_fit.parquet", None);
-    let params = load(dir, "bouc_wen.parquet", None);
+    let fit = load(dir, &tables::HYSTERESIS_FIT, None);
+    let params = load(dir, &tables::BOUC_WEN, None);
     body.push_str("<h3>Identified Bouc-Wen parameters</h3>");
-    if let Some(t) = require(&params, "bouc_wen.parquet", &mut body) {
+    if let Some(t) = require(&params, &tables::BOUC_WEN, &mut body) {
         // Long layout (one row per parameter: `parameter`, `value`, `unit`…)
         // or wide (one column per parameter).
-        let known: &[&str] = if t.has("parameter") && t.has("value") {
+        let known: &[&str] = if t.has(bouc_wen::PARAMETER.name) && t.has(bouc_wen::VALUE.name) {
             &[
-                "direction",
-                "dof",
-                "parameter",
-                "coupled_dof",
-                "value",
-                "unit",
-                "stability_std",
-                "stable",
-                "status",
-                "cost_j",
+                bouc_wen::DIRECTION.name,
+                bouc_wen::DOF.name,
+                bouc_wen::SEGMENT.name,
+                bouc_wen::PARAMETER.name,
+                bouc_wen::COUPLED_DOF.name,
+                bouc_wen::VALUE.name,
+                bouc_wen::UNIT.name,
+                bouc_wen::STABILITY_STD.name,
+                bouc_wen::STABLE.name,
+                bouc_wen::STATUS.name,
+                bouc_wen::REASON.name,
+                bouc_wen::COST_J.name,
             ]
         } else {
             &[
-                "direction",
-                "dof",
+                bouc_wen::DIRECTION.name,
+                bouc_wen::DOF.name,
                 "k0_n_m",
                 "beta",
                 "gamma",
                 "n_exponent",
-                "cost_j",
+                bouc_wen::COST_J.name,
             ]
         };
         body.push_str(&missing_columns_note(t, known));
@@ -49,17 +53,27 @@ pub(super) fn hysteresis_section(dir: &Path, settings: &ReportSettings) -> Strin
         ));
     }
     body.push_str("<h3>Instantaneous estimates</h3>");
-    let inst = load(dir, "bouc_wen_instantaneous.parquet", None);
-    if let Some(t) = require(&inst, "bouc_wen_instantaneous.parquet", &mut body) {
-        let keys: Vec<&str> = ["direction", "dof"]
-            .into_iter()
-            .filter(|k| t.has(k))
-            .collect();
-        if t.number("t_s").is_some() && t.number("n_exponent").is_some() {
+    let inst = load(dir, &tables::BOUC_WEN_INSTANTANEOUS, None);
+    if let Some(t) = require(&inst, &tables::BOUC_WEN_INSTANTANEOUS, &mut body) {
+        let keys: Vec<&str> = [
+            bouc_wen_instantaneous::DIRECTION.name,
+            bouc_wen_instantaneous::DOF.name,
+        ]
+        .into_iter()
+        .filter(|k| t.has(k))
+        .collect();
+        if t.number(bouc_wen_instantaneous::T_S.name).is_some()
+            && t.number(bouc_wen_instantaneous::N_EXPONENT.name).is_some()
+        {
             let mut chart = Chart::new(560, 260, "end of growing window t (s)", "exponent N");
             for (i, (key, rows)) in t.groups(&keys).into_iter().enumerate() {
                 let label = group_label(&keys, &key);
-                let pts = rows_points(t, &rows, "t_s", "n_exponent");
+                let pts = rows_points(
+                    t,
+                    &rows,
+                    bouc_wen_instantaneous::T_S.name,
+                    bouc_wen_instantaneous::N_EXPONENT.name,
+                );
                 chart.series.push(Series::new(
                     label,
                     plot::decimate_min_max(&pts, settings.max_points_per_trace),
@@ -83,49 +97,21 @@ pub(super) fn hysteresis_section(dir: &Path, settings: &ReportSettings) -> Strin
             t.names.join(", ")
         )));
     }
-    body.push_str("<h3>Hysteresis loops: record and model</h3>");
-    if let Some(t) = require(&fit, "hysteresis_fit.parquet", &mut body) {
-        let known = [
-            "direction",
-            "dof",
-            "t_s",
-            "drift_m",
-            "force_record_n",
-            "force_model_n",
-        ];
-        body.push_str(&column_notes(t, &known));
-        if !t.has("drift_m") || !(t.has("force_record_n") || t.has("force_model_n")) {
-            return body;
-        }
-        let keys: Vec<&str> = ["direction", "dof"]
-            .into_iter()
-            .filter(|k| t.has(k))
-            .collect();
-        body.push_str("<div class=\"multiples\">");
-        for (key, rows) in t.groups(&keys) {
-            let kn = |col: &str| -> Vec<(f64, f64)> {
-                let pts: Vec<(f64, f64)> = rows_points(t, &rows, "drift_m", col)
-                    .into_iter()
-                    .map(|(d, f)| (d, f / 1000.0))
-                    .collect();
-                stride(pts, settings.max_points_per_trace)
-            };
-            let mut chart = Chart::new(440, 300, "inter-storey drift (m)", "storey force (kN)");
-            chart
-                .series
-                .push(Series::new("record", kn("force_record_n"), 0, Mark::Line));
-            chart
-                .series
-                .push(Series::new("model", kn("force_model_n"), 1, Mark::Dashed));
-            let label = group_label(&keys, &key);
-            let legend = plot::legend(&chart.series);
-            body.push_str(&figure(
-                plot::render(&chart),
-                &format!("Force–drift loop, {label}"),
-                &legend,
-            ));
-        }
-        body.push_str("</div>");
+    body.push_str("<h3>Force–drift loops: record and model</h3>");
+    if let Some(t) = require(&fit, &tables::HYSTERESIS_FIT, &mut body) {
+        let velocity_drift = match &params {
+            super::Loaded::Ok(p) => p
+                .metadata
+                .get("quaketwin.settings")
+                .and_then(|s| serde_json::from_str::<serde_json::Value>(s).ok())
+                .and_then(|v| v.get("velocity_drift")?.as_str().map(str::to_string)),
+            _ => None,
+        };
+        body.push_str(&super::loops::loops_section(
+            t,
+            velocity_drift.as_deref(),
+            settings,
+        ));
     }
     body
 }

@@ -7,6 +7,7 @@ mod damage;
 mod design;
 mod drift;
 mod hysteresis;
+mod loops;
 mod modal;
 mod rating;
 mod spectra;
@@ -22,25 +23,30 @@ use serde_json::Value;
 use super::html::{absent, escape, note, unreadable, whole_table, Cell};
 use super::table::{self, Table};
 use super::{Assessment, Rating, ReportSettings};
+use crate::vocab::schema::{ColumnSpec, TableSchema};
+use crate::vocab::tables;
 
 /// Output files the report reads, with the stage that writes each.
 const OUTPUTS: [(&str, &str); 17] = [
     ("event.json", "ingest"),
-    ("samples.parquet", "condition"),
-    ("channels.parquet", "metrics"),
-    ("spectra.parquet", "metrics"),
-    ("drift.parquet", "metrics"),
-    ("stabilization.parquet", "modal"),
-    ("modes.parquet", "modal"),
-    ("frequency_shifts.parquet", "modal (with a reference event)"),
-    ("hysteresis_fit.parquet", "hysteresis"),
-    ("bouc_wen.parquet", "hysteresis"),
-    ("bouc_wen_instantaneous.parquet", "hysteresis"),
-    ("damage.parquet", "damage"),
-    ("twin_update.parquet", "update"),
-    ("twin_modes.parquet", "update"),
-    ("pod.parquet", "design"),
-    ("actuator_layout.parquet", "design"),
+    (tables::SAMPLES.file, "condition"),
+    (tables::CHANNELS.file, "metrics"),
+    (tables::SPECTRA.file, "metrics"),
+    (tables::DRIFT.file, "metrics"),
+    (tables::STABILIZATION.file, "modal"),
+    (tables::MODES.file, "modal"),
+    (
+        tables::FREQUENCY_SHIFTS.file,
+        "modal (with a reference event)",
+    ),
+    (tables::HYSTERESIS_FIT.file, "hysteresis"),
+    (tables::BOUC_WEN.file, "hysteresis"),
+    (tables::BOUC_WEN_INSTANTANEOUS.file, "hysteresis"),
+    (tables::DAMAGE.file, "damage"),
+    (tables::TWIN_UPDATE.file, "update"),
+    (tables::TWIN_MODES.file, "update"),
+    (tables::POD.file, "design"),
+    (tables::ACTUATOR_LAYOUT.file, "design"),
     ("report.html", "report"),
 ];
 
@@ -71,7 +77,8 @@ fn listed(dir: &Path, file: &str) -> bool {
     }
 }
 
-fn load(dir: &Path, file: &str, only: Option<&[&str]>) -> Loaded {
+fn load(dir: &Path, declared: &TableSchema, only: Option<&[&str]>) -> Loaded {
+    let file = declared.file;
     let path = dir.join(file);
     if !listed(dir, file) {
         return Loaded::Absent(crate::pipeline::not_applicable_reason(dir, stage_of(file)));
@@ -82,8 +89,10 @@ fn load(dir: &Path, file: &str, only: Option<&[&str]>) -> Loaded {
     }
 }
 
-/// The section's message for a file that is not usable, or the table.
-fn require<'a>(loaded: &'a Loaded, file: &str, body: &mut String) -> Option<&'a Table> {
+/// The section's message for a file that is not usable, or the table (with
+/// a note on columns whose type is not the declared one).
+fn require<'a>(loaded: &'a Loaded, declared: &TableSchema, body: &mut String) -> Option<&'a Table> {
+    let file = declared.file;
     match loaded {
         Loaded::Absent(Some(reason)) => {
             body.push_str(&format!(
@@ -105,7 +114,16 @@ fn require<'a>(loaded: &'a Loaded, file: &str, body: &mut String) -> Option<&'a 
             body.push_str(&note(&format!("{file} holds no rows.")));
             None
         }
-        Loaded::Ok(t) => Some(t),
+        Loaded::Ok(t) => {
+            let mismatches = t.type_mismatches(declared);
+            if !mismatches.is_empty() {
+                body.push_str(&note(&format!(
+                    "{file}: {} (shown as found).",
+                    mismatches.join("; ")
+                )));
+            }
+            Some(t)
+        }
     }
 }
 
@@ -140,16 +158,6 @@ fn rows_points(t: &Table, rows: &[usize], x: &str, y: &str) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Keeps every k-th point so at most `max` remain (for x–y loops, where
-/// min–max decimation in time order does not apply).  Display only.
-fn stride(points: Vec<(f64, f64)>, max: usize) -> Vec<(f64, f64)> {
-    if points.len() <= max || max == 0 {
-        return points;
-    }
-    let k = points.len().div_ceil(max);
-    points.into_iter().step_by(k).collect()
-}
-
 /// The `known` columns `t` holds, in the section's order.
 fn present_columns<'a>(t: &Table, known: &[&'a str]) -> Vec<&'a str> {
     known.iter().copied().filter(|c| t.has(c)).collect()
@@ -169,16 +177,20 @@ fn known_columns_first(t: &Table, known: &[&str]) -> Vec<String> {
 /// The whole page.
 pub fn page(dir: &Path, settings: &ReportSettings) -> String {
     let event = summary::read_event(dir);
-    let channels = load(dir, "channels.parquet", None);
-    let drift = load(dir, "drift.parquet", None);
-    let damage = load(dir, "damage.parquet", None);
+    let channels = load(dir, &tables::CHANNELS, None);
+    let drift = load(dir, &tables::DRIFT, None);
+    let damage = load(dir, &tables::DAMAGE, None);
 
     let mut assessments: Vec<Assessment> = Vec::new();
     let summary = summary::summary_section(dir, &event, &channels);
     let channel_table = channels::channel_section(&channels);
     let spectra = spectra::spectra_section(dir, &channels);
     let histories = time_histories::time_history_section(dir, &channels, settings);
-    let drift_html = drift::drift_section(&drift, settings, &mut assessments);
+    let residual = match load(dir, &tables::HYSTERESIS_FIT, None) {
+        Loaded::Ok(t) => loops::residual_drifts(&t),
+        _ => Default::default(),
+    };
+    let drift_html = drift::drift_section(&drift, &residual, settings, &mut assessments);
     let modal = modal::modal_section(dir, settings);
     let hysteresis = hysteresis::hysteresis_section(dir, settings);
     let damage_html = damage::damage_section(&damage, settings, &mut assessments);
@@ -260,8 +272,10 @@ fn channel_info(channels: &Loaded) -> BTreeMap<String, (Option<String>, Option<S
     let mut m = BTreeMap::new();
     if let Loaded::Ok(t) = channels {
         for r in 0..t.rows {
-            if let Some(id) = t.key("channel_id", r) {
-                m.insert(id, (t.key("direction", r), t.key("level", r)));
+            let col = |c: &ColumnSpec, r| t.key(c.name, r);
+            if let Some(id) = col(&tables::channels::CHANNEL_ID, r) {
+                let direction = col(&tables::channels::DIRECTION, r);
+                m.insert(id, (direction, col(&tables::channels::LEVEL, r)));
             }
         }
     }
@@ -275,10 +289,10 @@ fn rating_cell(r: Option<Rating>) -> Cell {
     }
 }
 
-fn generic(dir: &Path, file: &str, settings: &ReportSettings, body: &mut String) {
-    body.push_str(&format!("<h3><code>{}</code></h3>", escape(file)));
-    let loaded = load(dir, file, None);
-    if let Some(t) = require(&loaded, file, body) {
+fn generic(dir: &Path, declared: &TableSchema, settings: &ReportSettings, body: &mut String) {
+    body.push_str(&format!("<h3><code>{}</code></h3>", escape(declared.file)));
+    let loaded = load(dir, declared, None);
+    if let Some(t) = require(&loaded, declared, body) {
         body.push_str(&whole_table(t, settings.max_table_rows));
     }
 }

@@ -7,43 +7,47 @@ use super::{figure, known_columns_first, load, require, Loaded};
 use crate::report::html::{cells, column_notes, missing_columns_note, table};
 use crate::report::plot::{self, Chart, Mark, RefLine, Series};
 use crate::report::ReportSettings;
+use crate::vocab::tables::{self, frequency_shifts, modes, stabilization};
 
 pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
     let mut body = String::new();
-    let stab = load(dir, "stabilization.parquet", None);
-    let modes = load(dir, "modes.parquet", None);
-    let shifts = load(dir, "frequency_shifts.parquet", None);
+    let stab = load(dir, &tables::STABILIZATION, None);
+    let modes = load(dir, &tables::MODES, None);
+    let shifts = load(dir, &tables::FREQUENCY_SHIFTS, None);
     let mode_freqs: Vec<f64> = match &modes {
         Loaded::Ok(m) => m
-            .number("frequency_hz")
+            .number(modes::FREQUENCY_HZ.name)
             .map(|v| v.iter().flatten().copied().collect())
             .unwrap_or_default(),
         _ => Vec::new(),
     };
 
     body.push_str("<h3>Stabilisation diagram</h3>");
-    if let Some(t) = require(&stab, "stabilization.parquet", &mut body) {
+    if let Some(t) = require(&stab, &tables::STABILIZATION, &mut body) {
         let known = [
-            "order",
-            "frequency_hz",
-            "damping_ratio",
-            "stable_frequency",
-            "stable_damping",
-            "stable_shape",
-            "physical",
-            "mode",
+            stabilization::ORDER.name,
+            stabilization::FREQUENCY_HZ.name,
+            stabilization::DAMPING_RATIO.name,
+            stabilization::STABLE_FREQUENCY.name,
+            stabilization::STABLE_DAMPING.name,
+            stabilization::STABLE_SHAPE.name,
+            stabilization::PHYSICAL.name,
+            stabilization::MODE.name,
         ];
         body.push_str(&column_notes(t, &known));
-        if t.has("order") && t.has("frequency_hz") {
+        if t.has(stabilization::ORDER.name) && t.has(stabilization::FREQUENCY_HZ.name) {
             let flag = |name: &str, r: usize| {
                 t.boolean(name)
                     .and_then(|v| v.get(r).copied().flatten())
                     .unwrap_or(false)
             };
-            let has_physical = t.has("physical");
+            let has_physical = t.has(stabilization::PHYSICAL.name);
             // Categories, worst first; a pole falls in the first that applies.
             let mut cats: [Vec<(f64, f64)>; 4] = Default::default();
-            let (Some(fcol), Some(ocol)) = (t.number("frequency_hz"), t.number("order")) else {
+            let (Some(fcol), Some(ocol)) = (
+                t.number(stabilization::FREQUENCY_HZ.name),
+                t.number(stabilization::ORDER.name),
+            ) else {
                 return body;
             };
             for r in 0..t.rows {
@@ -53,15 +57,15 @@ pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
                 ) else {
                     continue;
                 };
-                let physical = !has_physical || flag("physical", r);
+                let physical = !has_physical || flag(stabilization::PHYSICAL.name, r);
                 let idx = if !physical {
                     3
-                } else if flag("stable_frequency", r)
-                    && flag("stable_damping", r)
-                    && flag("stable_shape", r)
+                } else if flag(stabilization::STABLE_FREQUENCY.name, r)
+                    && flag(stabilization::STABLE_DAMPING.name, r)
+                    && flag(stabilization::STABLE_SHAPE.name, r)
                 {
                     0
-                } else if flag("stable_frequency", r) {
+                } else if flag(stabilization::STABLE_FREQUENCY.name, r) {
                     1
                 } else {
                     2
@@ -127,16 +131,16 @@ pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
             ));
         }
     }
-    if let Some(t) = require(&modes, "modes.parquet", &mut body) {
+    if let Some(t) = require(&modes, &tables::MODES, &mut body) {
         let known = [
-            "mode",
-            "frequency_hz",
-            "frequency_std_hz",
-            "damping_ratio",
-            "damping_std",
-            "mpc",
-            "mpd_deg",
-            "pole_count",
+            modes::MODE.name,
+            modes::FREQUENCY_HZ.name,
+            modes::FREQUENCY_STD_HZ.name,
+            modes::DAMPING_RATIO.name,
+            modes::DAMPING_STD.name,
+            modes::MPC.name,
+            modes::MPD_DEG.name,
+            modes::POLE_COUNT.name,
         ];
         body.push_str(&missing_columns_note(t, &known));
         let known = [&known[..], &["direction"]].concat();
@@ -154,14 +158,14 @@ pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
             "<p class=\"absent\">Output absent: <code>frequency_shifts.parquet</code> (written by the modal stage only when a previous event of the same structure is given).</p>"
         )),
         _ => {
-            if let Some(t) = require(&shifts, "frequency_shifts.parquet", &mut body) {
+            if let Some(t) = require(&shifts, &tables::FREQUENCY_SHIFTS, &mut body) {
                 let known = [
-                    "reference_mode",
-                    "other_mode",
-                    "frequency_reference_hz",
-                    "frequency_other_hz",
-                    "relative_shift",
-                    "mac",
+                    frequency_shifts::REFERENCE_MODE.name,
+                    frequency_shifts::OTHER_MODE.name,
+                    frequency_shifts::FREQUENCY_REFERENCE_HZ.name,
+                    frequency_shifts::FREQUENCY_OTHER_HZ.name,
+                    frequency_shifts::RELATIVE_SHIFT.name,
+                    frequency_shifts::MAC.name,
                 ];
                 body.push_str(&column_notes(t, &known));
                 let cols = known_columns_first(t, &known);

@@ -6,6 +6,7 @@ use super::{stage_of, Loaded};
 use crate::report::format_number;
 use crate::report::html::{escape, note};
 use crate::report::{Assessment, Rating, ReportSettings};
+use crate::vocab::tables;
 
 pub(super) fn rating_section(
     assessments: &[Assessment],
@@ -16,7 +17,7 @@ pub(super) fn rating_section(
     let mut body = String::new();
     let worst = assessments.iter().map(|a| a.rating).max();
     let mut considered = Vec::new();
-    for (file, loaded) in [("drift.parquet", drift), ("damage.parquet", damage)] {
+    for (file, loaded) in [(tables::DRIFT.file, drift), (tables::DAMAGE.file, damage)] {
         considered.push(match loaded {
             Loaded::Ok(_) if assessments.iter().any(|a| a.source == file) => {
                 format!("{file}: rated")

@@ -6,37 +6,38 @@ use std::path::Path;
 use super::{channel_info, figure, load, require, rows_points, Loaded};
 use crate::report::html::column_notes;
 use crate::report::plot::{self, Chart, Mark, Series};
+use crate::vocab::tables::{self, spectra};
 
 pub(super) fn spectra_section(dir: &Path, channels: &Loaded) -> String {
     let mut body = String::new();
-    let loaded = load(dir, "spectra.parquet", None);
-    let Some(t) = require(&loaded, "spectra.parquet", &mut body) else {
+    let loaded = load(dir, &tables::SPECTRA, None);
+    let Some(t) = require(&loaded, &tables::SPECTRA, &mut body) else {
         return body;
     };
     body.push_str(&column_notes(
         t,
         &[
-            "channel_id",
-            "damping",
-            "period_s",
-            "sd_m",
-            "psv_m_s",
-            "psa_m_s2",
-            "sa_abs_m_s2",
+            spectra::CHANNEL_ID.name,
+            spectra::DAMPING.name,
+            spectra::PERIOD_S.name,
+            spectra::SD_M.name,
+            spectra::PSV_M_S.name,
+            spectra::PSA_M_S2.name,
+            spectra::SA_ABS_M_S2.name,
         ],
     ));
-    if !t.has("period_s") || !t.has("psa_m_s2") {
+    if !t.has(spectra::PERIOD_S.name) || !t.has(spectra::PSA_M_S2.name) {
         return body;
     }
     let info = channel_info(channels);
     let dampings: Vec<String> = t
-        .groups(&["damping"])
+        .groups(&[spectra::DAMPING.name])
         .into_iter()
         .map(|(k, _)| k.join(""))
         .collect();
     // One chart per direction so curves of one direction compare directly.
     let mut by_dir: BTreeMap<String, Vec<(String, Vec<usize>)>> = BTreeMap::new();
-    for (key, rows) in t.groups(&["channel_id"]) {
+    for (key, rows) in t.groups(&[spectra::CHANNEL_ID.name]) {
         let id = key.join("");
         let dir = info
             .get(&id)
@@ -50,10 +51,11 @@ pub(super) fn spectra_section(dir: &Path, channels: &Loaded) -> String {
         chart.log_x = true;
         for (i, (id, rows)) in list.iter().enumerate() {
             // T = 0 (the PGA row) has no place on a log axis.
-            let pts: Vec<(f64, f64)> = rows_points(t, rows, "period_s", "psa_m_s2")
-                .into_iter()
-                .filter(|p| p.0 > 0.0)
-                .collect();
+            let pts: Vec<(f64, f64)> =
+                rows_points(t, rows, spectra::PERIOD_S.name, spectra::PSA_M_S2.name)
+                    .into_iter()
+                    .filter(|p| p.0 > 0.0)
+                    .collect();
             chart
                 .series
                 .push(Series::new(id.clone(), pts, i, Mark::Line));

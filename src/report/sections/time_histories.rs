@@ -8,6 +8,7 @@ use crate::report::format_number;
 use crate::report::html::note;
 use crate::report::plot::{self, Chart, Mark, Series};
 use crate::report::ReportSettings;
+use crate::vocab::tables::{self, channels, samples};
 
 pub(super) fn time_history_section(
     dir: &Path,
@@ -17,13 +18,21 @@ pub(super) fn time_history_section(
     let mut body = String::new();
     let loaded = load(
         dir,
-        "samples.parquet",
-        Some(&["channel_id", "t_s", "acc_m_s2"]),
+        &tables::SAMPLES,
+        Some(&[
+            samples::CHANNEL_ID.name,
+            samples::T_S.name,
+            samples::ACC_M_S2.name,
+        ]),
     );
-    let Some(t) = require(&loaded, "samples.parquet", &mut body) else {
+    let Some(t) = require(&loaded, &tables::SAMPLES, &mut body) else {
         return body;
     };
-    let missing = t.missing(&["channel_id", "t_s", "acc_m_s2"]);
+    let missing = t.missing(&[
+        samples::CHANNEL_ID.name,
+        samples::T_S.name,
+        samples::ACC_M_S2.name,
+    ]);
     if !missing.is_empty() {
         body.push_str(&note(&format!(
             "samples.parquet: column(s) needed for the plots not present: {}.",
@@ -36,18 +45,21 @@ pub(super) fn time_history_section(
         Loaded::Ok(c) => (0..c.rows)
             .filter_map(|r| {
                 Some((
-                    c.key("channel_id", r)?,
-                    c.number("pga_m_s2")?.get(r).copied().flatten()?,
+                    c.key(channels::CHANNEL_ID.name, r)?,
+                    c.number(channels::PGA_M_S2.name)?
+                        .get(r)
+                        .copied()
+                        .flatten()?,
                 ))
             })
             .collect(),
         _ => BTreeMap::new(),
     };
-    let groups = t.groups(&["channel_id"]);
+    let groups = t.groups(&[samples::CHANNEL_ID.name]);
     let traces: Vec<(String, Vec<(f64, f64)>)> = groups
         .into_iter()
         .map(|(k, rows)| {
-            let pts = rows_points(t, &rows, "t_s", "acc_m_s2");
+            let pts = rows_points(t, &rows, samples::T_S.name, samples::ACC_M_S2.name);
             (
                 k.join(""),
                 plot::decimate_min_max(&pts, settings.max_points_per_trace),

@@ -4,10 +4,11 @@ use std::path::Path;
 
 use super::generic;
 use crate::report::ReportSettings;
+use crate::vocab::tables;
 
 pub(super) fn twin_section(dir: &Path, settings: &ReportSettings) -> String {
     let mut body = String::new();
-    generic(dir, "twin_update.parquet", settings, &mut body);
-    generic(dir, "twin_modes.parquet", settings, &mut body);
+    generic(dir, &tables::TWIN_UPDATE, settings, &mut body);
+    generic(dir, &tables::TWIN_MODES, settings, &mut body);
     body
 }

@@ -8,7 +8,9 @@
 //! functions (translational and rotary inertia), integrated by 4-point Gauss (exact for the
 //! degree-6 integrand). Axial: linear bar, EA/L and ρAL/6·[[2,1],[1,2]].
 
-use super::{gauss_legendre, SmallMatrix};
+use nalgebra::{Matrix3, Matrix4, Matrix6, Vector2, Vector4};
+
+use super::{gauss_legendre, rotate_to_global};
 
 /// Section and material data of a beam, with E and ρ separable so that stiffness is linear
 /// in E (for parameter groups) and mass linear in ρ.
@@ -57,40 +59,39 @@ pub fn timoshenko_shape_functions(xi: f64, length: f64, phi: f64) -> ([f64; 4], 
 }
 
 /// Bending stiffness (w1, θ1, w2, θ2) of the exact Timoshenko element.
-pub fn timoshenko_bending_stiffness(ei: f64, phi: f64, length: f64) -> [[f64; 4]; 4] {
+pub fn timoshenko_bending_stiffness(ei: f64, phi: f64, length: f64) -> Matrix4<f64> {
     let l = length;
     let c = ei / ((1.0 + phi) * l * l * l);
-    [
-        [12.0 * c, 6.0 * l * c, -12.0 * c, 6.0 * l * c],
-        [
-            6.0 * l * c,
-            (4.0 + phi) * l * l * c,
-            -6.0 * l * c,
-            (2.0 - phi) * l * l * c,
-        ],
-        [-12.0 * c, -6.0 * l * c, 12.0 * c, -6.0 * l * c],
-        [
-            6.0 * l * c,
-            (2.0 - phi) * l * l * c,
-            -6.0 * l * c,
-            (4.0 + phi) * l * l * c,
-        ],
-    ]
+    Matrix4::new(
+        12.0 * c,
+        6.0 * l * c,
+        -12.0 * c,
+        6.0 * l * c,
+        6.0 * l * c,
+        (4.0 + phi) * l * l * c,
+        -6.0 * l * c,
+        (2.0 - phi) * l * l * c,
+        -12.0 * c,
+        -6.0 * l * c,
+        12.0 * c,
+        -6.0 * l * c,
+        6.0 * l * c,
+        (2.0 - phi) * l * l * c,
+        -6.0 * l * c,
+        (4.0 + phi) * l * l * c,
+    )
 }
 
 /// Consistent bending mass (w1, θ1, w2, θ2): ∫ (ρA N_wᵀN_w + ρI N_θᵀN_θ) dx.
-pub fn timoshenko_bending_mass(rho_a: f64, rho_i: f64, phi: f64, length: f64) -> [[f64; 4]; 4] {
-    let mut m = [[0.0; 4]; 4];
+pub fn timoshenko_bending_mass(rho_a: f64, rho_i: f64, phi: f64, length: f64) -> Matrix4<f64> {
+    let mut m = Matrix4::zeros();
     let (points, weights) = gauss_legendre(4);
     for (p, w) in points.iter().zip(weights.iter()) {
         let xi = 0.5 * (p + 1.0);
         let scale = 0.5 * w * length;
         let (nw, nt) = timoshenko_shape_functions(xi, length, phi);
-        for a in 0..4 {
-            for b in 0..4 {
-                m[a][b] += scale * (rho_a * nw[a] * nw[b] + rho_i * nt[a] * nt[b]);
-            }
-        }
+        let (nw, nt) = (Vector4::from(nw), Vector4::from(nt));
+        m += (nw * nw.transpose() * rho_a + nt * nt.transpose() * rho_i) * scale;
     }
     m
 }
@@ -98,49 +99,45 @@ pub fn timoshenko_bending_mass(rho_a: f64, rho_i: f64, phi: f64, length: f64) ->
 /// Global 6×6 stiffness and consistent mass of a 2D Timoshenko beam between `p1` and `p2`
 /// (x, y). DoF order: ux1, uy1, rz1, ux2, uy2, rz2.
 pub fn beam2d_matrices(
-    p1: [f64; 2],
-    p2: [f64; 2],
+    p1: Vector2<f64>,
+    p2: Vector2<f64>,
     s: &BeamSection2d,
-) -> Option<(SmallMatrix, SmallMatrix)> {
-    let dx = p2[0] - p1[0];
-    let dy = p2[1] - p1[1];
-    let l = (dx * dx + dy * dy).sqrt();
+) -> Option<(Matrix6<f64>, Matrix6<f64>)> {
+    let d = p2 - p1;
+    let l = d.norm();
     if !(l > 0.0) || !l.is_finite() {
         return None;
     }
-    let (c, s_) = (dx / l, dy / l);
+    let (c, s_) = (d.x / l, d.y / l);
     let phi = s.shear_parameter(l);
     let kb = timoshenko_bending_stiffness(s.youngs_modulus * s.inertia, phi, l);
     let mb = timoshenko_bending_mass(s.density * s.area, s.density * s.inertia, phi, l);
     let ka = s.youngs_modulus * s.area / l;
     let ma = s.density * s.area * l / 6.0;
     // Local DoFs (u1, v1, θ1, u2, v2, θ2).
-    let mut kl = SmallMatrix::zeros(6);
-    let mut ml = SmallMatrix::zeros(6);
+    let mut kl = Matrix6::zeros();
+    let mut ml = Matrix6::zeros();
     let axial = [0usize, 3];
     let bend = [1usize, 2, 4, 5];
     for (a, &ia) in axial.iter().enumerate() {
         for (b, &ib) in axial.iter().enumerate() {
             let sign = if a == b { 1.0 } else { -1.0 };
-            kl.add(ia, ib, sign * ka);
-            ml.add(ia, ib, if a == b { 2.0 * ma } else { ma });
+            kl[(ia, ib)] += sign * ka;
+            ml[(ia, ib)] += if a == b { 2.0 * ma } else { ma };
         }
     }
     for (a, &ia) in bend.iter().enumerate() {
         for (b, &ib) in bend.iter().enumerate() {
-            kl.add(ia, ib, kb[a][b]);
-            ml.add(ia, ib, mb[a][b]);
+            kl[(ia, ib)] += kb[(a, b)];
+            ml[(ia, ib)] += mb[(a, b)];
         }
     }
-    // Rotation local → global: u = c·ux + s·uy, v = −s·ux + c·uy, θ unchanged.
-    let mut t = SmallMatrix::zeros(6);
-    for node in 0..2 {
-        let o = 3 * node;
-        t.set(o, o, c);
-        t.set(o, o + 1, s_);
-        t.set(o + 1, o, -s_);
-        t.set(o + 1, o + 1, c);
-        t.set(o + 2, o + 2, 1.0);
-    }
-    Some((kl.congruence(&t), ml.congruence(&t)))
+    // Local axes of the node DoFs (u, v, θ): u = c·ux + s·uy, v = −s·ux + c·uy, θ unchanged.
+    #[rustfmt::skip]
+    let axes = Matrix3::new(
+        c, s_, 0.0,
+        -s_, c, 0.0,
+        0.0, 0.0, 1.0,
+    );
+    Some((rotate_to_global(&kl, &axes), rotate_to_global(&ml, &axes)))
 }

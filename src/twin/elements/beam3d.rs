@@ -8,7 +8,9 @@
 //! the consistent mass of `beam2d`. Axial and torsion are linear (torsional inertia ρ(Iy+Iz)).
 
 use super::beam2d::{timoshenko_bending_mass, timoshenko_bending_stiffness};
-use super::SmallMatrix;
+use nalgebra::{Matrix3, SMatrix, Vector3};
+
+use super::rotate_to_global;
 
 #[derive(Debug, Clone, Copy)]
 pub struct BeamSection3d {
@@ -23,62 +25,49 @@ pub struct BeamSection3d {
     pub shear_factor: f64,
 }
 
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-}
-
-/// Local axes (rows: x, y, z in global coordinates), or None for a zero-length element or a
-/// reference vector parallel to the element.
+/// Local axes (rows: x, y, z in global coordinates) and the length, or None for a
+/// zero-length element or a reference vector parallel to the element.
 pub fn beam_axes(
-    p1: [f64; 3],
-    p2: [f64; 3],
-    vxz: Option<[f64; 3]>,
-) -> Option<([[f64; 3]; 3], f64)> {
-    let d = [p2[0] - p1[0], p2[1] - p1[1], p2[2] - p1[2]];
-    let l = norm(d);
+    p1: Vector3<f64>,
+    p2: Vector3<f64>,
+    vxz: Option<Vector3<f64>>,
+) -> Option<(Matrix3<f64>, f64)> {
+    let d = p2 - p1;
+    let l = d.norm();
     if !(l > 0.0) || !l.is_finite() {
         return None;
     }
-    let ex = [d[0] / l, d[1] / l, d[2] / l];
-    let reference = match vxz {
-        Some(v) => v,
-        None => {
-            if ex[2].abs() > 0.999 {
-                [1.0, 0.0, 0.0]
-            } else {
-                [0.0, 0.0, 1.0]
-            }
-        }
-    };
-    let y = cross(reference, ex);
-    let ny = norm(y);
-    if !(ny > 1e-9 * norm(reference)) {
+    let ex = d / l;
+    let reference = vxz.unwrap_or(if ex.z.abs() > 0.999 {
+        Vector3::x()
+    } else {
+        Vector3::z()
+    });
+    let y = reference.cross(&ex);
+    let ny = y.norm();
+    if !(ny > 1e-9 * reference.norm()) {
         return None;
     }
-    let ey = [y[0] / ny, y[1] / ny, y[2] / ny];
-    let ez = cross(ex, ey);
-    Some(([ex, ey, ez], l))
+    let ey = y / ny;
+    let ez = ex.cross(&ey);
+    Some((
+        Matrix3::from_rows(&[ex.transpose(), ey.transpose(), ez.transpose()]),
+        l,
+    ))
 }
 
 /// Global 12×12 stiffness and consistent mass.
 pub fn beam3d_matrices(
-    p1: [f64; 3],
-    p2: [f64; 3],
-    vxz: Option<[f64; 3]>,
+    p1: Vector3<f64>,
+    p2: Vector3<f64>,
+    vxz: Option<Vector3<f64>>,
     s: &BeamSection3d,
-) -> Option<(SmallMatrix, SmallMatrix)> {
+) -> Option<(SMatrix<f64, 12, 12>, SMatrix<f64, 12, 12>)> {
     let (axes, l) = beam_axes(p1, p2, vxz)?;
     let g = s.youngs_modulus / (2.0 * (1.0 + s.poisson));
     let phi_of = |i: f64| 12.0 * s.youngs_modulus * i / (s.shear_factor * g * s.area * l * l);
-    let mut kl = SmallMatrix::zeros(12);
-    let mut ml = SmallMatrix::zeros(12);
+    let mut kl = SMatrix::<f64, 12, 12>::zeros();
+    let mut ml = SMatrix::<f64, 12, 12>::zeros();
     // Axial (0, 6) and torsion (3, 9): two-node bars.
     let bars = [
         (
@@ -95,8 +84,8 @@ pub fn beam3d_matrices(
     for (dofs, k, m) in bars {
         for a in 0..2 {
             for b in 0..2 {
-                kl.add(dofs[a], dofs[b], if a == b { k } else { -k });
-                ml.add(dofs[a], dofs[b], if a == b { 2.0 * m } else { m });
+                kl[(dofs[a], dofs[b])] += if a == b { k } else { -k };
+                ml[(dofs[a], dofs[b])] += if a == b { 2.0 * m } else { m };
             }
         }
     }
@@ -113,19 +102,11 @@ pub fn beam3d_matrices(
     let sign_y = [1.0, -1.0, 1.0, -1.0];
     for a in 0..4 {
         for b in 0..4 {
-            kl.add(dofs_z[a], dofs_z[b], kz[a][b]);
-            ml.add(dofs_z[a], dofs_z[b], mz[a][b]);
-            kl.add(dofs_y[a], dofs_y[b], sign_y[a] * sign_y[b] * ky[a][b]);
-            ml.add(dofs_y[a], dofs_y[b], sign_y[a] * sign_y[b] * my[a][b]);
+            kl[(dofs_z[a], dofs_z[b])] += kz[(a, b)];
+            ml[(dofs_z[a], dofs_z[b])] += mz[(a, b)];
+            kl[(dofs_y[a], dofs_y[b])] += sign_y[a] * sign_y[b] * ky[(a, b)];
+            ml[(dofs_y[a], dofs_y[b])] += sign_y[a] * sign_y[b] * my[(a, b)];
         }
     }
-    let mut t = SmallMatrix::zeros(12);
-    for block in 0..4 {
-        for r in 0..3 {
-            for c in 0..3 {
-                t.set(3 * block + r, 3 * block + c, axes[r][c]);
-            }
-        }
-    }
-    Some((kl.congruence(&t), ml.congruence(&t)))
+    Some((rotate_to_global(&kl, &axes), rotate_to_global(&ml, &axes)))
 }

@@ -3,89 +3,57 @@
 //! Every element routine is pure numerics: coordinates and section data in, stiffness and
 //! mass out. Stiffness is built with the element's own E (linear in E), mass with its own ρ
 //! (linear in ρ), so the assembly can split them into parameter groups.
+//!
+//! Element algebra uses nalgebra's fixed-size types (`Vector3` geometry, `Matrix3` frames,
+//! `SMatrix<f64, 12, 12>` and friends for element matrices): the sizes are known at compile
+//! time, live on the stack and the products are unrolled. faer stays the home of everything
+//! large (assembled sparse systems, eigen-solutions, reductions).
 
 pub mod beam2d;
 pub mod beam3d;
 pub mod q4;
 pub mod shell;
 
-/// A small dense square matrix stored row-major (element matrices up to 24×24).
-#[derive(Debug, Clone, PartialEq)]
-pub struct SmallMatrix {
-    pub n: usize,
-    pub data: Vec<f64>,
+use nalgebra::{DMatrix, Matrix2, Matrix3, SMatrix, Vector2, Vector3};
+
+/// An element matrix as handed to the assembly: square, of the element's size (1×1 for a
+/// grounded spring up to 24×24 for a shell), so elements of every kind share one scatter.
+pub type ElementMatrix = DMatrix<f64>;
+
+/// Fixed-size element stiffness and mass, moved to the dynamic type the assembly takes.
+pub fn to_element_matrices<const N: usize>(
+    (stiffness, mass): (SMatrix<f64, N, N>, SMatrix<f64, N, N>),
+) -> (ElementMatrix, ElementMatrix) {
+    (
+        DMatrix::from_column_slice(N, N, stiffness.as_slice()),
+        DMatrix::from_column_slice(N, N, mass.as_slice()),
+    )
 }
 
-impl SmallMatrix {
-    pub fn zeros(n: usize) -> Self {
-        SmallMatrix {
-            n,
-            data: vec![0.0; n * n],
+/// k_global = Tᵀ k_local T for T = diag(R, R, …): the congruence of a local element matrix
+/// with a block-diagonal rotation whose 3×3 block R has the local axes as rows (a node's
+/// translations and rotations rotate alike). Done block by block, k_g[IJ] = Rᵀ k_l[IJ] R,
+/// which skips the zero blocks of T.
+pub fn rotate_to_global<const N: usize>(
+    k_local: &SMatrix<f64, N, N>,
+    axes: &Matrix3<f64>,
+) -> SMatrix<f64, N, N> {
+    debug_assert!(N % 3 == 0, "rotation blocks are 3×3");
+    let axes_t = axes.transpose();
+    let mut k_global = SMatrix::<f64, N, N>::zeros();
+    for i in (0..N).step_by(3) {
+        for j in (0..N).step_by(3) {
+            let block = axes_t * k_local.fixed_view::<3, 3>(i, j) * axes;
+            k_global.fixed_view_mut::<3, 3>(i, j).copy_from(&block);
         }
     }
-    #[inline]
-    pub fn get(&self, i: usize, j: usize) -> f64 {
-        self.data[i * self.n + j]
-    }
-    #[inline]
-    pub fn set(&mut self, i: usize, j: usize, v: f64) {
-        self.data[i * self.n + j] = v;
-    }
-    #[inline]
-    pub fn add(&mut self, i: usize, j: usize, v: f64) {
-        self.data[i * self.n + j] += v;
-    }
-    /// Tᵀ · self · T for a square transformation T of the same size.
-    pub fn congruence(&self, t: &SmallMatrix) -> SmallMatrix {
-        let n = self.n;
-        let mut at = SmallMatrix::zeros(n);
-        for i in 0..n {
-            for k in 0..n {
-                let a = self.get(i, k);
-                if a == 0.0 {
-                    continue;
-                }
-                for j in 0..n {
-                    at.data[i * n + j] += a * t.get(k, j);
-                }
-            }
-        }
-        let mut out = SmallMatrix::zeros(n);
-        for k in 0..n {
-            for i in 0..n {
-                let tki = t.get(k, i);
-                if tki == 0.0 {
-                    continue;
-                }
-                for j in 0..n {
-                    out.data[i * n + j] += tki * at.get(k, j);
-                }
-            }
-        }
-        out
-    }
-    /// self · x
-    pub fn mul_vec(&self, x: &[f64]) -> Vec<f64> {
-        (0..self.n)
-            .map(|i| (0..self.n).map(|j| self.get(i, j) * x[j]).sum())
-            .collect()
-    }
-    pub fn scaled(&self, s: f64) -> SmallMatrix {
-        SmallMatrix {
-            n: self.n,
-            data: self.data.iter().map(|v| v * s).collect(),
-        }
-    }
-    /// Largest |a_ij − a_ji|, for symmetry checks.
-    pub fn asymmetry(&self) -> f64 {
-        let mut worst: f64 = 0.0;
-        for i in 0..self.n {
-            for j in 0..i {
-                worst = worst.max((self.get(i, j) - self.get(j, i)).abs());
-            }
-        }
-        worst
-    }
+    k_global
+}
+
+/// The unit vector along `v`, or None for a zero, infinite or NaN vector.
+pub fn unit(v: Vector3<f64>) -> Option<Vector3<f64>> {
+    let n = v.norm();
+    (n > 0.0 && n.is_finite()).then(|| v / n)
 }
 
 /// Gauss–Legendre points and weights on [−1, 1] for 1 to 4 points.
@@ -110,50 +78,60 @@ pub fn gauss_legendre(points: usize) -> (Vec<f64>, Vec<f64>) {
     }
 }
 
+/// Natural coordinates of the four corner nodes of a quadrilateral, counter-clockwise.
+pub const QUAD_CORNERS: [(f64, f64); 4] = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+
 /// Bilinear shape functions of a 4-node quadrilateral at (ξ, η) and their natural
-/// derivatives (nodes at (−1,−1), (1,−1), (1,1), (−1,1)).
+/// derivatives (nodes at [`QUAD_CORNERS`]).
 pub fn bilinear(xi: f64, eta: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
-    const XI: [f64; 4] = [-1.0, 1.0, 1.0, -1.0];
-    const ETA: [f64; 4] = [-1.0, -1.0, 1.0, 1.0];
     let mut n = [0.0; 4];
     let mut dxi = [0.0; 4];
     let mut deta = [0.0; 4];
-    for a in 0..4 {
-        n[a] = 0.25 * (1.0 + XI[a] * xi) * (1.0 + ETA[a] * eta);
-        dxi[a] = 0.25 * XI[a] * (1.0 + ETA[a] * eta);
-        deta[a] = 0.25 * ETA[a] * (1.0 + XI[a] * xi);
+    for (a, &(xi_a, eta_a)) in QUAD_CORNERS.iter().enumerate() {
+        n[a] = 0.25 * (1.0 + xi_a * xi) * (1.0 + eta_a * eta);
+        dxi[a] = 0.25 * xi_a * (1.0 + eta_a * eta);
+        deta[a] = 0.25 * eta_a * (1.0 + xi_a * xi);
     }
     (n, dxi, deta)
 }
 
-/// Jacobian pieces of a planar 4-node map at (ξ, η): returns (det J, ∂N/∂x, ∂N/∂y, J)
-/// with J = [[x_ξ, y_ξ], [x_η, y_η]]; None when the element is inverted or degenerate.
-pub fn quad_jacobian(
-    xy: &[[f64; 2]; 4],
-    xi: f64,
-    eta: f64,
-) -> Option<(f64, [f64; 4], [f64; 4], [[f64; 2]; 2])> {
+/// The isoparametric map of a planar quadrilateral at one natural point.
+pub struct QuadMap {
+    /// det J (area scale), positive.
+    pub det: f64,
+    /// ∂N_a/∂x and ∂N_a/∂y of the four shape functions.
+    pub dx: [f64; 4],
+    pub dy: [f64; 4],
+    /// J⁻¹ with J = [[x_ξ, y_ξ], [x_η, y_η]]: maps natural derivatives to Cartesian ones.
+    pub inverse_jacobian: Matrix2<f64>,
+}
+
+/// The map of a planar 4-node element at (ξ, η); None when it is inverted or degenerate.
+pub fn quad_map(xy: &[Vector2<f64>; 4], xi: f64, eta: f64) -> Option<QuadMap> {
     let (_, dxi, deta) = bilinear(xi, eta);
-    let mut j = [[0.0; 2]; 2];
+    let mut j = Matrix2::<f64>::zeros();
     for a in 0..4 {
-        j[0][0] += dxi[a] * xy[a][0];
-        j[0][1] += dxi[a] * xy[a][1];
-        j[1][0] += deta[a] * xy[a][0];
-        j[1][1] += deta[a] * xy[a][1];
+        j[(0, 0)] += dxi[a] * xy[a].x;
+        j[(0, 1)] += dxi[a] * xy[a].y;
+        j[(1, 0)] += deta[a] * xy[a].x;
+        j[(1, 1)] += deta[a] * xy[a].y;
     }
-    let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+    let det = j.determinant();
     if !(det > 0.0) || !det.is_finite() {
         return None;
     }
-    let inv = [
-        [j[1][1] / det, -j[0][1] / det],
-        [-j[1][0] / det, j[0][0] / det],
-    ];
+    let inverse_jacobian = j.try_inverse()?;
     let mut dx = [0.0; 4];
     let mut dy = [0.0; 4];
     for a in 0..4 {
-        dx[a] = inv[0][0] * dxi[a] + inv[0][1] * deta[a];
-        dy[a] = inv[1][0] * dxi[a] + inv[1][1] * deta[a];
+        let d = inverse_jacobian * Vector2::new(dxi[a], deta[a]);
+        dx[a] = d.x;
+        dy[a] = d.y;
     }
-    Some((det, dx, dy, j))
+    Some(QuadMap {
+        det,
+        dx,
+        dy,
+        inverse_jacobian,
+    })
 }

@@ -15,7 +15,9 @@
 //!   elements are projected onto it (warping is ignored).
 
 use super::q4::{plane_stress_d, q4_matrices, PlaneStress};
-use super::{bilinear, gauss_legendre, quad_jacobian, SmallMatrix};
+use nalgebra::{Matrix3, SMatrix, Vector2, Vector3};
+
+use super::{bilinear, gauss_legendre, quad_map, rotate_to_global, unit, QUAD_CORNERS};
 
 #[derive(Debug, Clone, Copy)]
 pub struct ShellSection {
@@ -30,141 +32,97 @@ pub struct ShellSection {
 /// Relative drilling penalty.
 pub const DRILLING_PENALTY: f64 = 1e-3;
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn unit(a: [f64; 3]) -> Option<[f64; 3]> {
-    let n = dot(a, a).sqrt();
-    if n > 0.0 && n.is_finite() {
-        Some([a[0] / n, a[1] / n, a[2] / n])
-    } else {
-        None
-    }
+/// Mean-plane axes (rows e1, e2, e3) and local 2D coordinates of the four nodes.
+pub fn shell_frame(p: &[Vector3<f64>; 4]) -> Option<(Matrix3<f64>, [Vector2<f64>; 4])> {
+    let e3 = unit((p[2] - p[0]).cross(&(p[3] - p[1])))?;
+    // Mean direction of the edges 1→2 and 4→3, projected onto the plane.
+    let v = (p[1] + p[2] - p[0] - p[3]) * 0.5;
+    let e1 = unit(v - e3 * v.dot(&e3))?;
+    let e2 = e3.cross(&e1);
+    let centre = (p[0] + p[1] + p[2] + p[3]) * 0.25;
+    let xy = p.map(|node| {
+        let d = node - centre;
+        Vector2::new(d.dot(&e1), d.dot(&e2))
+    });
+    let axes = Matrix3::from_rows(&[e1.transpose(), e2.transpose(), e3.transpose()]);
+    Some((axes, xy))
 }
 
-/// Mean-plane axes (rows e1, e2, e3) and local 2D coordinates of the four nodes.
-pub fn shell_frame(p: &[[f64; 3]; 4]) -> Option<([[f64; 3]; 3], [[f64; 2]; 4])> {
-    let e3 = unit(cross(sub(p[2], p[0]), sub(p[3], p[1])))?;
-    let v = [
-        0.5 * (p[1][0] + p[2][0] - p[0][0] - p[3][0]),
-        0.5 * (p[1][1] + p[2][1] - p[0][1] - p[3][1]),
-        0.5 * (p[1][2] + p[2][2] - p[0][2] - p[3][2]),
-    ];
-    let vn = dot(v, e3);
-    let e1 = unit([v[0] - vn * e3[0], v[1] - vn * e3[1], v[2] - vn * e3[2]])?;
-    let e2 = cross(e3, e1);
-    let c = [
-        0.25 * (p[0][0] + p[1][0] + p[2][0] + p[3][0]),
-        0.25 * (p[0][1] + p[1][1] + p[2][1] + p[3][1]),
-        0.25 * (p[0][2] + p[1][2] + p[2][2] + p[3][2]),
-    ];
-    let mut xy = [[0.0; 2]; 4];
+/// Rows of the covariant transverse shear strains (γ_ξ, γ_η) over the 12 plate DoFs
+/// (w, θx, θy per node) at a natural point: γ = ∇w + β with β = (θy, −θx).
+fn covariant_shear_rows(xy: &[Vector2<f64>; 4], xi: f64, eta: f64) -> SMatrix<f64, 2, 12> {
+    let (n, dxi, deta) = bilinear(xi, eta);
+    let (mut x_xi, mut y_xi, mut x_eta, mut y_eta) = (0.0, 0.0, 0.0, 0.0);
     for a in 0..4 {
-        let d = sub(p[a], c);
-        xy[a] = [dot(d, e1), dot(d, e2)];
+        x_xi += dxi[a] * xy[a].x;
+        y_xi += dxi[a] * xy[a].y;
+        x_eta += deta[a] * xy[a].x;
+        y_eta += deta[a] * xy[a].y;
     }
-    Some(([e1, e2, e3], xy))
+    let mut rows = SMatrix::<f64, 2, 12>::zeros();
+    for a in 0..4 {
+        rows[(0, 3 * a)] = dxi[a];
+        rows[(0, 3 * a + 1)] = -n[a] * y_xi;
+        rows[(0, 3 * a + 2)] = n[a] * x_xi;
+        rows[(1, 3 * a)] = deta[a];
+        rows[(1, 3 * a + 1)] = -n[a] * y_eta;
+        rows[(1, 3 * a + 2)] = n[a] * x_eta;
+    }
+    rows
 }
 
 /// Plate part in local coordinates: 12×12 over (w, θx, θy) per node; bending + MITC4 shear.
 pub fn mitc4_plate_stiffness(
-    xy: &[[f64; 2]; 4],
+    xy: &[Vector2<f64>; 4],
     e: f64,
     nu: f64,
     t: f64,
     kappa: f64,
-) -> Option<SmallMatrix> {
-    let db = plane_stress_d(e, nu);
-    let bend_scale = t * t * t / 12.0;
+) -> Option<SMatrix<f64, 12, 12>> {
+    let db = plane_stress_d(e, nu) * (t * t * t / 12.0);
     let g = e / (2.0 * (1.0 + nu));
     let ds = kappa * g * t;
-    // Covariant shear rows at a natural point: γ_ξ and γ_η as rows over the 12 DoFs.
-    let covariant_rows = |xi: f64, eta: f64| -> ([f64; 12], [f64; 12]) {
-        let (n, dxi, deta) = bilinear(xi, eta);
-        let (mut x_xi, mut y_xi, mut x_eta, mut y_eta) = (0.0, 0.0, 0.0, 0.0);
-        for a in 0..4 {
-            x_xi += dxi[a] * xy[a][0];
-            y_xi += dxi[a] * xy[a][1];
-            x_eta += deta[a] * xy[a][0];
-            y_eta += deta[a] * xy[a][1];
-        }
-        let mut r_xi = [0.0; 12];
-        let mut r_eta = [0.0; 12];
-        // γ = ∇w + β with β = (θy, −θx).
-        for a in 0..4 {
-            r_xi[3 * a] = dxi[a];
-            r_xi[3 * a + 1] = -n[a] * y_xi;
-            r_xi[3 * a + 2] = n[a] * x_xi;
-            r_eta[3 * a] = deta[a];
-            r_eta[3 * a + 1] = -n[a] * y_eta;
-            r_eta[3 * a + 2] = n[a] * x_eta;
-        }
-        (r_xi, r_eta)
-    };
-    let (gxi_b, _) = covariant_rows(0.0, -1.0);
-    let (gxi_d, _) = covariant_rows(0.0, 1.0);
-    let (_, geta_a) = covariant_rows(-1.0, 0.0);
-    let (_, geta_c) = covariant_rows(1.0, 0.0);
+    // MITC4 tying points: γ_ξ at B(0,−1) and D(0,1), γ_η at A(−1,0) and C(1,0).
+    let gxi_b = covariant_shear_rows(xy, 0.0, -1.0).row(0).into_owned();
+    let gxi_d = covariant_shear_rows(xy, 0.0, 1.0).row(0).into_owned();
+    let geta_a = covariant_shear_rows(xy, -1.0, 0.0).row(1).into_owned();
+    let geta_c = covariant_shear_rows(xy, 1.0, 0.0).row(1).into_owned();
     let (pts, wts) = gauss_legendre(2);
-    let mut k = SmallMatrix::zeros(12);
+    let mut k = SMatrix::<f64, 12, 12>::zeros();
     for (xi, wxi) in pts.iter().zip(wts.iter()) {
         for (eta, weta) in pts.iter().zip(wts.iter()) {
-            let (det, dx, dy, j) = quad_jacobian(xy, *xi, *eta)?;
-            let w = wxi * weta * det;
+            let map = quad_map(xy, *xi, *eta)?;
+            let w = wxi * weta * map.det;
             // Bending: κx = ∂θy/∂x, κy = −∂θx/∂y, κxy = ∂θy/∂y − ∂θx/∂x.
-            let mut bb = [[0.0; 12]; 3];
+            let mut bb = SMatrix::<f64, 3, 12>::zeros();
             for a in 0..4 {
-                bb[0][3 * a + 2] = dx[a];
-                bb[1][3 * a + 1] = -dy[a];
-                bb[2][3 * a + 1] = -dx[a];
-                bb[2][3 * a + 2] = dy[a];
+                bb[(0, 3 * a + 2)] = map.dx[a];
+                bb[(1, 3 * a + 1)] = -map.dy[a];
+                bb[(2, 3 * a + 1)] = -map.dx[a];
+                bb[(2, 3 * a + 2)] = map.dy[a];
             }
             // MITC4 assumed covariant shear, then Cartesian: [γx; γy] = J⁻¹ [γξ; γη].
-            let mut gxi = [0.0; 12];
-            let mut geta = [0.0; 12];
-            for i in 0..12 {
-                gxi[i] = 0.5 * (1.0 - eta) * gxi_b[i] + 0.5 * (1.0 + eta) * gxi_d[i];
-                geta[i] = 0.5 * (1.0 - xi) * geta_a[i] + 0.5 * (1.0 + xi) * geta_c[i];
-            }
-            let detj = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-            let inv = [
-                [j[1][1] / detj, -j[0][1] / detj],
-                [-j[1][0] / detj, j[0][0] / detj],
-            ];
-            let mut bs = [[0.0; 12]; 2];
-            for i in 0..12 {
-                bs[0][i] = inv[0][0] * gxi[i] + inv[0][1] * geta[i];
-                bs[1][i] = inv[1][0] * gxi[i] + inv[1][1] * geta[i];
-            }
-            for i in 0..12 {
-                for jj in 0..12 {
-                    let mut s = 0.0;
-                    for r in 0..3 {
-                        for c in 0..3 {
-                            s += bb[r][i] * db[r][c] * bb[c][jj];
-                        }
-                    }
-                    let shear = bs[0][i] * bs[0][jj] + bs[1][i] * bs[1][jj];
-                    k.add(i, jj, w * (bend_scale * s + ds * shear));
-                }
-            }
+            let mut covariant = SMatrix::<f64, 2, 12>::zeros();
+            covariant.set_row(
+                0,
+                &(gxi_b * (0.5 * (1.0 - eta)) + gxi_d * (0.5 * (1.0 + eta))),
+            );
+            covariant.set_row(
+                1,
+                &(geta_a * (0.5 * (1.0 - xi)) + geta_c * (0.5 * (1.0 + xi))),
+            );
+            let bs = map.inverse_jacobian * covariant;
+            k += (bb.transpose() * db * bb + bs.transpose() * bs * ds) * w;
         }
     }
     Some(k)
 }
 
 /// Global 24×24 stiffness and mass of the flat shell.
-pub fn shell4_matrices(p: &[[f64; 3]; 4], s: &ShellSection) -> Option<(SmallMatrix, SmallMatrix)> {
+pub fn shell4_matrices(
+    p: &[Vector3<f64>; 4],
+    s: &ShellSection,
+) -> Option<(SMatrix<f64, 24, 24>, SMatrix<f64, 24, 24>)> {
     let (axes, xy) = shell_frame(p)?;
     let ps = PlaneStress {
         youngs_modulus: s.youngs_modulus,
@@ -181,23 +139,18 @@ pub fn shell4_matrices(p: &[[f64; 3]; 4], s: &ShellSection) -> Option<(SmallMatr
         s.shear_factor,
     )?;
     // Local DoFs per node: u v w θx θy θz at offsets 0..5.
-    let mut kl = SmallMatrix::zeros(24);
-    let mut ml = SmallMatrix::zeros(24);
+    let mut kl = SMatrix::<f64, 24, 24>::zeros();
+    let mut ml = SMatrix::<f64, 24, 24>::zeros();
     for a in 0..4 {
         for b in 0..4 {
-            for r in 0..2 {
-                for c in 0..2 {
-                    kl.add(6 * a + r, 6 * b + c, km.get(2 * a + r, 2 * b + c));
-                    ml.add(6 * a + r, 6 * b + c, mm.get(2 * a + r, 2 * b + c));
-                }
-            }
-            for r in 0..3 {
-                for c in 0..3 {
-                    kl.add(6 * a + 2 + r, 6 * b + 2 + c, kp.get(3 * a + r, 3 * b + c));
-                }
-            }
+            kl.fixed_view_mut::<2, 2>(6 * a, 6 * b)
+                .copy_from(&km.fixed_view::<2, 2>(2 * a, 2 * b));
+            ml.fixed_view_mut::<2, 2>(6 * a, 6 * b)
+                .copy_from(&mm.fixed_view::<2, 2>(2 * a, 2 * b));
+            kl.fixed_view_mut::<3, 3>(6 * a + 2, 6 * b + 2)
+                .copy_from(&kp.fixed_view::<3, 3>(3 * a, 3 * b));
             // Transverse translation mass equals the in-plane one.
-            ml.add(6 * a + 2, 6 * b + 2, mm.get(2 * a, 2 * b));
+            ml[(6 * a + 2, 6 * b + 2)] = mm[(2 * a, 2 * b)];
         }
     }
     // Element area and nodal tributary areas ∫N_a dA.
@@ -205,10 +158,10 @@ pub fn shell4_matrices(p: &[[f64; 3]; 4], s: &ShellSection) -> Option<(SmallMatr
     let mut tributary = [0.0; 4];
     for (xi, wxi) in pts.iter().zip(wts.iter()) {
         for (eta, weta) in pts.iter().zip(wts.iter()) {
-            let (det, _, _, _) = quad_jacobian(&xy, *xi, *eta)?;
+            let map = quad_map(&xy, *xi, *eta)?;
             let (n, _, _) = bilinear(*xi, *eta);
             for a in 0..4 {
-                tributary[a] += wxi * weta * det * n[a];
+                tributary[a] += wxi * weta * map.det * n[a];
             }
         }
     }
@@ -216,38 +169,21 @@ pub fn shell4_matrices(p: &[[f64; 3]; 4], s: &ShellSection) -> Option<(SmallMatr
     let rotary = s.density * s.thickness.powi(3) / 12.0;
     for a in 0..4 {
         for r in 3..6 {
-            ml.add(6 * a + r, 6 * a + r, rotary * tributary[a]);
+            ml[(6 * a + r, 6 * a + r)] += rotary * tributary[a];
         }
     }
-    // Drilling penalty: d_a = θz,a − ½(∂v/∂x − ∂u/∂y) at node a.
+    // Drilling penalty: d_a = θz,a − ½(∂v/∂x − ∂u/∂y) at node a; k += k_d dᵀd.
     let g = s.youngs_modulus / (2.0 * (1.0 + s.poisson));
     let kd = DRILLING_PENALTY * g * s.thickness * area / 4.0;
-    const XI: [f64; 4] = [-1.0, 1.0, 1.0, -1.0];
-    const ETA: [f64; 4] = [-1.0, -1.0, 1.0, 1.0];
-    for a in 0..4 {
-        let (_, dx, dy, _) = quad_jacobian(&xy, XI[a], ETA[a])?;
-        let mut row = [0.0; 24];
+    for (a, &(xi_a, eta_a)) in QUAD_CORNERS.iter().enumerate() {
+        let map = quad_map(&xy, xi_a, eta_a)?;
+        let mut row = SMatrix::<f64, 1, 24>::zeros();
         row[6 * a + 5] = 1.0;
         for b in 0..4 {
-            row[6 * b] += 0.5 * dy[b];
-            row[6 * b + 1] -= 0.5 * dx[b];
+            row[6 * b] += 0.5 * map.dy[b];
+            row[6 * b + 1] -= 0.5 * map.dx[b];
         }
-        for i in 0..24 {
-            if row[i] == 0.0 {
-                continue;
-            }
-            for j in 0..24 {
-                kl.add(i, j, kd * row[i] * row[j]);
-            }
-        }
+        kl += row.transpose() * row * kd;
     }
-    let mut t = SmallMatrix::zeros(24);
-    for block in 0..8 {
-        for r in 0..3 {
-            for c in 0..3 {
-                t.set(3 * block + r, 3 * block + c, axes[r][c]);
-            }
-        }
-    }
-    Some((kl.congruence(&t), ml.congruence(&t)))
+    Some((rotate_to_global(&kl, &axes), rotate_to_global(&ml, &axes)))
 }

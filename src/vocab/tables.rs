@@ -1,0 +1,333 @@
+//! Every Parquet table quaketwin writes, declared once: name, file,
+//! description and columns (type, nullability, unit, meaning).  The writers
+//! build their batches from these declarations (`sinks::parquet::TableBuilder`
+//! refuses a table that does not match), the readers of our own outputs look
+//! columns up through them, and docs/formats.md is checked against them
+//! (`tests/it/schemas.rs`).  Units: SI, `1` for a dimensionless quantity,
+//! empty for what is not a physical quantity (ids, labels, indices, counts,
+//! flags).
+//!
+//! Each table has a constant (`MODES`) and a module of its columns
+//! (`modes::FREQUENCY_HZ`), so code names a column without a string literal.
+
+use super::schema::TableSchema;
+
+/// `declare!(CONST, module, "name", "file", "doc", { COL: "col", Type, required|nullable, "unit", "doc"; … })`
+macro_rules! declare {
+    ($konst:ident, $module:ident, $name:literal, $file:literal, $doc:literal, {
+        $($col:ident: $cname:literal, $ty:ident, $null:ident, $unit:literal, $cdoc:literal;)*
+    }) => {
+        #[doc = concat!("Columns of `", $file, "`.")]
+        pub mod $module {
+            use super::super::schema::{ColumnSpec, ColumnType::*};
+            $(
+                #[doc = $cdoc]
+                pub const $col: ColumnSpec = ColumnSpec {
+                    name: $cname,
+                    ty: $ty,
+                    nullable: declare!(@null $null),
+                    unit: $unit,
+                    doc: $cdoc,
+                };
+            )*
+        }
+        #[doc = concat!("`", $file, "`: ", $doc)]
+        pub const $konst: TableSchema = TableSchema {
+            name: $name,
+            file: $file,
+            doc: $doc,
+            columns: &[$($module::$col),*],
+        };
+    };
+    (@null required) => { false };
+    (@null nullable) => { true };
+}
+
+declare!(CHANNELS, channels, "channels", "channels.parquet",
+    "one row per channel: metadata, QA and strong-motion metrics", {
+    CHANNEL_ID: "channel_id", Utf8, required, "", "unique id within the event";
+    NETWORK: "network", Utf8, nullable, "", "network code, as the file header or StationXML states";
+    STATION: "station", Utf8, nullable, "", "station code, as the file header or StationXML states";
+    LOCATION_CODE: "location_code", Utf8, nullable, "", "location code, as the file header or StationXML states";
+    CHANNEL_CODE: "channel_code", Utf8, nullable, "", "channel code, as the file header or StationXML states";
+    LOCATION_TEXT: "location_text", Utf8, nullable, "", "sensor location from the header";
+    LEVEL: "level", I32, nullable, "", "0 = base/ground, 1..n floors";
+    NODE: "node", Utf8, nullable, "", "digital-twin node";
+    ELEVATION_M: "elevation_m", F64, nullable, "m", "sensor elevation";
+    DIRECTION: "direction", Utf8, nullable, "", "`X`, `Y`, `Z`, `UP`, `DOWN` or `<azimuth>deg`";
+    AZIMUTH_DEG: "azimuth_deg", F64, nullable, "deg", "azimuth of an `<azimuth>deg` direction";
+    DIP_DEG: "dip_deg", F64, nullable, "deg", "dip of the sensor axis";
+    ROLE: "role", Utf8, required, "", "`input`, `output` or `unknown`";
+    UNITS: "units", Utf8, required, "", "units after conditioning (`m/s2`)";
+    SAMPLING_RATE_HZ: "sampling_rate_hz", F64, required, "Hz", "after resampling, when configured";
+    NPTS: "npts", I64, required, "", "number of samples";
+    START_TIME: "start_time", TimestampNsUtc, nullable, "", "time of the first sample";
+    SOURCE_FILE: "source_file", Utf8, required, "", "file the samples came from; `(rigid-floor combination)` for a floor motion formed by the rigid-floor combination (its sensors are listed in `inferred`, and in `event.json` / the `quaketwin.channels` metadata as `combines`; each sensor's `combined_into` names the floor)";
+    SOURCE_MEMBER: "source_member", Utf8, nullable, "", "zip member the samples came from";
+    SOURCE_COLUMN: "source_column", Utf8, nullable, "", "column of the file the samples came from";
+    FORMAT: "format", Utf8, required, "", "file format; `floor` for a rigid-floor combination";
+    QA_FLAGS: "qa_flags", ListUtf8, required, "", "QA codes: `clipping`, `gap`, `flat`, `nan`, `spikes`, `low_snr`, `resampled`, `note`";
+    QA_DETAILS: "qa_details", Utf8, required, "", "JSON list of the QA flags with their figures";
+    INFERRED: "inferred", ListUtf8, required, "", "what was inferred, and how";
+    MISSING: "missing", ListUtf8, required, "", "what later stages need and nobody stated";
+    SNR_DB: "snr_db", F64, nullable, "dB", "signal-to-noise ratio of the conditioned record against its first 2 s (pre-event noise); null when too short";
+    PGA_M_S2: "pga_m_s2", F64, nullable, "m/s^2", "peak ground/floor acceleration";
+    PGV_M_S: "pgv_m_s", F64, nullable, "m/s", "peak ground/floor velocity";
+    PGD_M: "pgd_m", F64, nullable, "m", "peak ground/floor displacement";
+    ARIAS_M_S: "arias_m_s", F64, nullable, "m/s", "Arias intensity π/(2g) ∫a² dt";
+    D5_95_S: "d5_95_s", F64, nullable, "s", "significant duration, 5–95 % of Arias intensity";
+    CAV_M_S: "cav_m_s", F64, nullable, "m/s", "cumulative absolute velocity ∫|a| dt";
+});
+
+declare!(SAMPLES, samples, "samples", "samples.parquet",
+    "one row per channel and sample: the conditioned records (long format)", {
+    CHANNEL_ID: "channel_id", Utf8, required, "", "channel id (`channel_id` of channels.parquet)";
+    SAMPLE: "sample", I64, required, "", "index from 0";
+    T_S: "t_s", F64, required, "s", "time from the channel's first sample";
+    TIME: "time", TimestampNsUtc, nullable, "", "absolute time, when the start time is known";
+    ACC_M_S2: "acc_m_s2", F64, required, "m/s^2", "conditioned acceleration";
+    VEL_M_S: "vel_m_s", F64, nullable, "m/s", "velocity (integration with drift control)";
+    DISP_M: "disp_m", F64, nullable, "m", "displacement";
+});
+
+declare!(SPECTRA, spectra, "spectra", "spectra.parquet",
+    "one row per channel and period: elastic response spectra", {
+    CHANNEL_ID: "channel_id", Utf8, required, "", "channel id";
+    DAMPING: "damping", F64, required, "1", "damping ratio (0.05)";
+    PERIOD_S: "period_s", F64, required, "s", "oscillator period; the first row of each channel is T = 0";
+    SD_M: "sd_m", F64, required, "m", "spectral displacement max|u|";
+    PSV_M_S: "psv_m_s", F64, required, "m/s", "pseudo-velocity ω·SD";
+    PSA_M_S2: "psa_m_s2", F64, required, "m/s^2", "pseudo-acceleration ω²·SD";
+    SA_ABS_M_S2: "sa_abs_m_s2", F64, required, "m/s^2", "peak absolute acceleration of the oscillator";
+});
+
+declare!(DRIFT, drift, "drift", "drift.parquet",
+    "one row per storey and direction: peak inter-storey drift ratios", {
+    DIRECTION: "direction", Utf8, required, "", "`X`, `Y` or an azimuth";
+    STOREY: "storey", I32, required, "", "storey L joins levels L−1 and L";
+    LOWER_CHANNEL: "lower_channel", Utf8, required, "", "channel at level L−1";
+    UPPER_CHANNEL: "upper_channel", Utf8, required, "", "channel at level L";
+    STOREY_HEIGHT_M: "storey_height_m", F64, required, "m", "from `structure.storey_heights_m`";
+    PEAK_DRIFT_RATIO: "peak_drift_ratio", F64, required, "1", "max over time of |u_L − u_{L−1}| / h_L";
+});
+
+declare!(STABILIZATION, stabilization, "stabilization", "stabilization.parquet",
+    "one row per pole of every model order (the stabilisation diagram)", {
+    ORDER: "order", U32, required, "", "model order";
+    FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "pole frequency";
+    DAMPING_RATIO: "damping_ratio", F64, required, "1", "pole damping ratio";
+    MPC: "mpc", F64, required, "1", "modal phase collinearity";
+    MPD_DEG: "mpd_deg", F64, required, "deg", "mean phase deviation";
+    STABLE_FREQUENCY: "stable_frequency", Bool, required, "", "frequency stable against the previous order (default tolerance 1 %)";
+    STABLE_DAMPING: "stable_damping", Bool, required, "", "damping stable against the previous order (default tolerance 5 %)";
+    STABLE_SHAPE: "stable_shape", Bool, required, "", "shape stable against the previous order (default MAC tolerance 2 %)";
+    PHYSICAL: "physical", Bool, required, "", "passes the damping window, MPC/MPD and band filters";
+    MODE: "mode", I32, required, "", "selected mode it belongs to (1-based), −1 = none";
+});
+
+declare!(MODES, modes, "modes", "modes.parquet",
+    "one row per selected mode, with statistics and shapes", {
+    MODE: "mode", U32, required, "", "1-based, ascending frequency";
+    FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "mean frequency over the best-converged part of the pole column (upper half of its orders, physical poles)";
+    FREQUENCY_STD_HZ: "frequency_std_hz", F64, required, "Hz", "standard deviation of the frequency over the cluster";
+    DAMPING_RATIO: "damping_ratio", F64, required, "1", "mean damping ratio over the cluster";
+    DAMPING_STD: "damping_std", F64, required, "1", "standard deviation of the damping ratio";
+    MPC: "mpc", F64, required, "1", "modal phase collinearity of the shape";
+    MPD_DEG: "mpd_deg", F64, required, "deg", "mean phase deviation of the shape";
+    MEAN_MAC: "mean_mac", F64, required, "1", "mean MAC of the cluster's poles to the mean shape";
+    POLE_COUNT: "pole_count", U32, required, "", "poles behind the statistics";
+    ORDER_MIN: "order_min", U32, required, "", "lowest model order of the cluster";
+    ORDER_MAX: "order_max", U32, required, "", "highest model order of the cluster";
+    MANUAL: "manual", Bool, required, "", "picked by the manual override";
+    DIRECTION: "direction", Utf8, required, "", "label of the shape from the channels' directions: `X`, `Y`, `vertical`, `torsion` (components of one horizontal direction at one level in opposite senses), `mixed`, an azimuth `<deg>deg` (folded onto 0–180) for channels not on building axes, empty when the directions are unknown";
+    SHAPE_RE: "shape_re", ListF64, required, "1", "real part of the complex mode shape at `quaketwin.output_channels` (largest component 1)";
+    SHAPE_IM: "shape_im", ListF64, required, "1", "imaginary part of the mode shape";
+    SHAPE_STD: "shape_std", ListF64, required, "1", "standard deviation of each component's modulus";
+});
+
+declare!(MODAL_SPECTRUM, modal_spectrum, "modal_spectrum", "modal_spectrum.parquet",
+    "singular values of the factorisation and of the PSD matrix (long format)", {
+    KIND: "kind", Utf8, required, "", "`subspace` (singular values of the factorised matrix) or `psd` (singular values of the Welch PSD matrix)";
+    INDEX: "index", I32, required, "", "singular value number (1 = largest)";
+    FREQUENCY_HZ: "frequency_hz", F64, nullable, "Hz", "PSD bin (null for `subspace`)";
+    VALUE: "value", F64, required, "", "singular value (units of the factorised matrix)";
+});
+
+declare!(FREQUENCY_SHIFTS, frequency_shifts, "frequency_shifts", "frequency_shifts.parquet",
+    "one row per pair of modes matched by MAC ≥ 0.8 against a reference event", {
+    REFERENCE_MODE: "reference_mode", U32, required, "", "mode of the reference event (1-based)";
+    OTHER_MODE: "other_mode", U32, required, "", "mode of this event (1-based)";
+    FREQUENCY_REFERENCE_HZ: "frequency_reference_hz", F64, required, "Hz", "reference frequency";
+    FREQUENCY_OTHER_HZ: "frequency_other_hz", F64, required, "Hz", "frequency of this event";
+    RELATIVE_SHIFT: "relative_shift", F64, required, "1", "(f_other − f_ref)/f_ref";
+    SHIFT_IN_STD: "shift_in_std", F64, required, "1", "shift in units of the frequency standard deviations";
+    DAMPING_REFERENCE: "damping_reference", F64, required, "1", "reference damping ratio";
+    DAMPING_OTHER: "damping_other", F64, required, "1", "damping ratio of this event";
+    MAC: "mac", F64, required, "1", "MAC of the paired shapes";
+});
+
+declare!(BOUC_WEN, bouc_wen, "bouc_wen", "bouc_wen.parquet",
+    "one row per direction, DoF and Bouc-Wen parameter", {
+    DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
+    DOF: "dof", I32, required, "", "DoF (instrumented floor) from the base up, 1-based; −1 on a not-identifiable row";
+    SEGMENT: "segment", Utf8, nullable, "", "levels the DoF's storey spans, `L<a>–L<b>` (a segment of several storeys where levels between are not instrumented); null on a not-identifiable row";
+    PARAMETER: "parameter", Utf8, required, "", "`K0`, `K0_delta`, `delta`, `beta`, `gamma`, `N` (`none` on a not-identifiable row)";
+    COUPLED_DOF: "coupled_dof", I32, nullable, "", "r of K0_dr-type rows";
+    VALUE: "value", F64, required, "", "parameter value, in the row's `unit`";
+    UNIT: "unit", Utf8, required, "", "unit of `value`: `N/m`, `1/J`, `N^(1-N)/m`, `-`";
+    STABILITY_STD: "stability_std", F64, nullable, "1", "relative std over the informative instantaneous estimates (N: absolute)";
+    STABLE: "stable", Bool, required, "", "parameter stability over time (model-adequacy indicator)";
+    COST_J: "cost_j", F64, required, "", "J(N) at the optimum (Eq. 31; a weighted STFT residual)";
+    COST_RELATIVE: "cost_relative", F64, required, "1", "J(N) relative to the target";
+    HYSTERETIC_SHARE: "hysteretic_share", F64, required, "1", "share of the record explained by the hysteretic terms";
+    STATUS: "status", Utf8, required, "", "`identified`, `identified_unstable` (estimates unstable over time at this DoF), `not_identifiable` (one row per direction: `dof` −1, `parameter` `none`, `value` NaN)";
+    REASON: "reason", Utf8, required, "", "empty unless `not_identifiable`: why (no base or floor channel, a level whose channels could not be combined, masses missing, the response stays (nearly) linear …), naming level, channel or file";
+    F_STATISTIC: "f_statistic", F64, nullable, "1", "F-test of the hysteretic terms (β, γ, N) against the nested linear model at this DoF: [(J_lin − J)/3] / [J/(n_eff − p)], n_eff = non-overlapping STFT windows; null on not-identifiable rows";
+    P_VALUE: "p_value", F64, nullable, "1", "its p-value; a DoF is identifiable when p < `significance_level` (default 1e-3)";
+});
+
+declare!(BOUC_WEN_INSTANTANEOUS, bouc_wen_instantaneous, "bouc_wen_instantaneous",
+    "bouc_wen_instantaneous.parquet",
+    "cumulative (t_e → t) Bouc-Wen estimates per frame", {
+    DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
+    DOF: "dof", I32, required, "", "DoF (storey), 1-based";
+    T_S: "t_s", F64, required, "s", "end of the cumulative window";
+    INFORMATIVE: "informative", Bool, required, "", "after the hysteretic onset";
+    N_EXPONENT: "n_exponent", F64, required, "1", "exponent N";
+    COST_J: "cost_j", F64, required, "", "J(N) over the window";
+    K0_OWN_N_M: "k0_own_n_m", F64, required, "N/m", "K0_dd (own storey)";
+    BETA: "beta", F64, required, "N^(1-N)/m", "β";
+    GAMMA: "gamma", F64, required, "N^(1-N)/m", "γ";
+});
+
+declare!(HYSTERESIS_FIT, hysteresis_fit, "hysteresis_fit", "hysteresis_fit.parquet",
+    "recorded vs model storey shear and drift per storey (segment): the force–drift loops", {
+    DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
+    DOF: "dof", I32, required, "", "DoF (instrumented floor), 1-based";
+    SEGMENT: "segment", Utf8, required, "", "levels the storey spans, `L<a>–L<b>`";
+    T_S: "t_s", F64, required, "s", "time";
+    DRIFT_M: "drift_m", F64, required, "m", "storey (segment) drift u_d − u_{d−1}, from the stage's own integration of the as-recorded accelerations (no band-pass: permanent drift kept)";
+    FORCE_RECORD_N: "force_record_n", F64, required, "N", "storey shear from the records, V_d = Σ_{r ≥ d} f_r, f_r = −m_r (a + ü_r) (Eq. 46)";
+    FORCE_MODEL_N: "force_model_n", F64, nullable, "N", "storey shear of the identified model along the recorded kinematics; null where the direction is not identified (measured loop only)";
+});
+
+declare!(DAMAGE, damage, "damage", "damage.parquet",
+    "one row per direction, time and mode: the damage index", {
+    DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
+    T_S: "t_s", F64, required, "s", "time";
+    IOTA: "iota", F64, required, "1", "ι(t), Eq. 34 (repeated on the mode rows of one time)";
+    MODE: "mode", I32, required, "", "mode, 1-based";
+    OMEGA_RAD_S: "omega_rad_s", F64, required, "rad/s", "ω_s(t)";
+    OMEGA_RATIO: "omega_ratio", F64, required, "1", "ω_s(t)/ω_s(0)";
+    PARTICIPATION: "participation", F64, required, "1", "c_s(t), Eq. 33";
+});
+
+declare!(TWIN_UPDATE, twin_update, "twin_update", "twin_update.parquet",
+    "one row per ensemble round and candidate of the twin update", {
+    ROUND: "round", U32, required, "", "0-based ensemble round (thesis Table 1)";
+    CANDIDATE: "candidate", U32, required, "", "0-based candidate index (order of the `solvers` setting)";
+    SOLVER: "solver", Utf8, required, "", "`GA`, `PSO`, `SA`, `PS`, `QN`";
+    PARAM: "param_<name>", F64, required, "", "one column per twin parameter (twin file order): the candidate's value, in the parameter's own unit";
+    OBJECTIVE_J: "objective_j", F64, required, "", "J at the candidate (Eq. 5; mixes squared frequency and MAC terms)";
+    Z: "z", ListF64, required, "", "model quantities per voter (paired frequencies in Hz, then MAC values)";
+    SCATTER: "scatter", ListF64, required, "1", "normalised scatter β per voter (Eq. 3)";
+    SCORE: "score", ListF64, required, "1", "score w per voter (Eq. 4)";
+    RANK: "rank", U32, required, "", "1-based position in the round's most likely Plackett–Luce ranking";
+    SELECTION_WEIGHT: "selection_weight", F64, required, "1", "weight in the round's new point (1 for the first-ranked under `first`; normalised 1/rank under `mrr`)";
+    SELECTED: "selected", Bool, required, "", "selection_weight > 0 (exactly one row per round under `first`; every row under `mrr`)";
+    EVALUATIONS: "evaluations", I64, required, "", "objective evaluations the solver used";
+});
+
+declare!(TWIN_MODES, twin_modes, "twin_modes", "twin_modes.parquet",
+    "one row per measured mode, before and after updating", {
+    STAGE: "stage", Utf8, required, "", "`initial` (twin start values) or `updated`";
+    MODE: "mode", U32, required, "", "measured mode number (`mode` of modes.parquet)";
+    MODEL_MODE: "model_mode", I32, nullable, "", "1-based model mode paired by MAC; null when no model mode was left";
+    F_EXP_HZ: "f_exp_hz", F64, required, "Hz", "measured frequency";
+    F_NUM_HZ: "f_num_hz", F64, nullable, "Hz", "paired model frequency";
+    REL_ERROR: "rel_error", F64, nullable, "1", "|f_exp − f_num| / f_exp";
+    MAC: "mac", F64, required, "1", "MAC at the sensor DoFs (0 when unpaired)";
+});
+
+declare!(ACTUATOR_LAYOUT, actuator_layout, "actuator_layout", "actuator_layout.parquet",
+    "one row per actuator of the hybrid-test design", {
+    ACTUATOR: "actuator", U32, required, "", "1-based actuator number (column order of `ps_basis.mtx`)";
+    NODE_ID: "node_id", I64, required, "", "twin node id";
+    DIRECTION: "direction", Utf8, required, "", "DoF name (`ux`, `uy`, …)";
+    CONTROL_MODE: "control_mode", Utf8, required, "", "`displacement` or `force`";
+    NOMINAL_FORCE_N: "nominal_force_n", F64, required, "N", "nominal (gravity) force (N·m for rotations); 0 without gravity";
+    POM: "pom_<j>", F64, required, "1", "component of each retained POM at this DoF (`pom_1` … `pom_k`, k = retained POMs)";
+});
+
+declare!(POD, pod, "pod", "pod.parquet",
+    "one row per listed proper orthogonal mode (POM)", {
+    POM: "pom", U32, required, "", "1-based";
+    SINGULAR_VALUE: "singular_value", F64, required, "m", "σ_i (m·√step)";
+    ENERGY_FRACTION: "energy_fraction", F64, required, "1", "E_i = σ_i² / Σ σ²";
+    CUMULATIVE_ENERGY: "cumulative_energy", F64, required, "1", "Σ_{j ≤ i} E_j";
+    WNRMSE: "wnrmse", F64, required, "1", "WNRMSE of the reconstruction with POMs 1..i (Eq. 83–84)";
+    RETAINED: "retained", Bool, required, "", "among the retained POMs";
+});
+
+declare!(REDUCTION_VALIDATION, reduction_validation, "reduction_validation",
+    "reduction_validation.parquet",
+    "one row per retained PS DoF (outside c): reduced vs full response", {
+    NODE_ID: "node_id", I64, required, "", "twin node id";
+    DIRECTION: "direction", Utf8, required, "", "DoF name";
+    NRMSE: "nrmse", F64, required, "1", "NRMSE of the reduced vs full deformation history (Eq. 83)";
+    WEIGHT: "weight", F64, required, "m", "WNRMSE weight max|x − μ| of the full history";
+    IS_MASTER: "is_master", Bool, required, "", "actuated DoF";
+});
+
+declare!(INTERFACE_REFINEMENT, interface_refinement, "interface_refinement",
+    "interface_refinement.parquet",
+    "one row per step of the interface refinement", {
+    STEP: "step", U32, required, "", "1-based";
+    CONTROL_NODES: "control_nodes", U32, required, "", "interface control nodes";
+    COUPLED_DOFS: "coupled_dofs", U32, required, "", "control-node interface DoFs";
+    ACTUATORS: "actuators", U32, required, "", "coupled DoFs outside the constrained set";
+    WNRMSE_TOTAL: "wnrmse_total", F64, required, "1", "WNRMSE of the reduced twin's total PS displacement";
+    WNRMSE_DEFORMATION: "wnrmse_deformation", F64, required, "1", "WNRMSE of its PS deformation";
+    FIRST_FREQUENCY_ERROR: "first_frequency_error", F64, required, "1", "relative error of the reduced model's first frequency";
+});
+
+declare!(HYBRID_PROTOTYPE, hybrid_prototype, "hybrid_prototype", "hybrid_prototype.parquet",
+    "one row per prototype eigenfrequency, paired in ascending order with the full model's", {
+    MODE: "mode", U32, required, "", "1-based";
+    PROTOTYPE_FREQUENCY_HZ: "prototype_frequency_hz", F64, required, "Hz", "Craig–Bampton prototype frequency";
+    FULL_FREQUENCY_HZ: "full_frequency_hz", F64, nullable, "Hz", "full twin frequency of the same rank (null beyond those computed)";
+    RELATIVE_ERROR: "relative_error", F64, nullable, "1", "|f_proto − f_full| / f_full";
+    IN_BAND: "in_band", Bool, required, "", "inside the band of interest (checked against `accuracy`)";
+    TEST_FREQUENCY_HZ: "test_frequency_hz", F64, required, "Hz", "f_proto / λ: the frequency in laboratory time";
+    NS_MODES: "ns_modes", U32, required, "", "recommended NS fixed-interface modes (same on every row)";
+    TIME_SCALE: "time_scale", F64, required, "1", "recommended λ";
+    BANDWIDTH_HZ: "bandwidth_hz", F64, required, "Hz", "highest prototype frequency / λ";
+});
+
+/// Every table quaketwin writes, in pipeline order.
+pub const ALL_TABLES: &[&TableSchema] = &[
+    &SAMPLES,
+    &CHANNELS,
+    &SPECTRA,
+    &DRIFT,
+    &STABILIZATION,
+    &MODES,
+    &MODAL_SPECTRUM,
+    &FREQUENCY_SHIFTS,
+    &BOUC_WEN,
+    &BOUC_WEN_INSTANTANEOUS,
+    &HYSTERESIS_FIT,
+    &DAMAGE,
+    &TWIN_UPDATE,
+    &TWIN_MODES,
+    &ACTUATOR_LAYOUT,
+    &POD,
+    &REDUCTION_VALIDATION,
+    &INTERFACE_REFINEMENT,
+    &HYBRID_PROTOTYPE,
+];
+
+/// The declared table of a `quaketwin.schema` name.
+pub fn by_name(name: &str) -> Option<&'static TableSchema> {
+    ALL_TABLES.iter().copied().find(|t| t.name == name)
+}

@@ -1,0 +1,301 @@
+//! The table declarations (`vocab::tables`) are the one source of truth:
+//! every table the sample runs write matches its declaration (names, order,
+//! types, nullability, `unit` field metadata, schema metadata), docs/formats.md
+//! lists every declared column with its type and unit in order, and the
+//! writer refuses a table that does not match.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+use quaketwin::error::Error;
+use quaketwin::sinks::parquet::{write_parquet, TableBuilder};
+use quaketwin::vocab::schema::{DESCRIPTION_KEY, SCHEMA_KEY, UNIT_KEY, VERSION_KEY};
+use quaketwin::vocab::tables::{self, drift, ALL_TABLES, DRIFT};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn declarations_are_well_formed() {
+    let units = [
+        "",
+        "1",
+        "m",
+        "m/s",
+        "m/s^2",
+        "s",
+        "Hz",
+        "deg",
+        "dB",
+        "N",
+        "N/m",
+        "rad/s",
+        "N^(1-N)/m",
+    ];
+    let mut names = BTreeSet::new();
+    let mut files = BTreeSet::new();
+    for t in ALL_TABLES {
+        assert!(names.insert(t.name), "table {} declared twice", t.name);
+        assert!(files.insert(t.file), "file {} declared twice", t.file);
+        assert_eq!(t.file, format!("{}.parquet", t.name));
+        assert!(tables::by_name(t.name) == Some(*t));
+        assert!(!t.doc.is_empty() && !t.columns.is_empty(), "{}", t.name);
+        let mut cols = BTreeSet::new();
+        for c in t.columns {
+            assert!(cols.insert(c.name), "{}: column {} twice", t.name, c.name);
+            assert!(
+                units.contains(&c.unit),
+                "{}.{}: unit {:?}",
+                t.name,
+                c.name,
+                c.unit
+            );
+            assert!(!c.doc.is_empty(), "{}.{} has no doc", t.name, c.name);
+        }
+    }
+}
+
+/// The section of docs/formats.md whose heading names `file`: from that
+/// heading to the next one.
+fn section<'a>(doc: &'a str, file: &str) -> Option<&'a str> {
+    let needle = format!("`{file}`");
+    let start = doc
+        .match_indices('#')
+        .map(|(i, _)| i)
+        .filter(|&i| i == 0 || doc.as_bytes()[i - 1] == b'\n')
+        .find(|&i| doc[i..].lines().next().unwrap_or("").contains(&needle))?;
+    let body_start = start + doc[start..].find('\n')? + 1;
+    let end = doc[body_start..]
+        .find("\n#")
+        .map(|e| body_start + e + 1)
+        .unwrap_or(doc.len());
+    Some(&doc[body_start..end])
+}
+
+#[test]
+fn formats_md_lists_every_declared_column_with_its_type_and_unit() {
+    let doc = std::fs::read_to_string(root().join("docs/formats.md")).unwrap();
+    let mut wrong = Vec::new();
+    for t in ALL_TABLES {
+        let expected = t.markdown();
+        match section(&doc, t.file) {
+            None => wrong.push(format!(
+                "no heading naming `{}`; add a section with:\n{expected}",
+                t.file
+            )),
+            Some(s) if !s.contains(&expected) => wrong.push(format!(
+                "the section of `{}` does not hold the declared columns; expected:\n{expected}",
+                t.file
+            )),
+            Some(_) => {}
+        }
+    }
+    assert!(wrong.is_empty(), "docs/formats.md:\n{}", wrong.join("\n"));
+}
+
+fn run(pipeline: &Path, event: &str, out: &Path) {
+    quaketwin::commands::run_pipeline(
+        pipeline,
+        &root().join("sample-records").join(event),
+        out,
+        true,
+    )
+    .unwrap();
+}
+
+/// Every Parquet file under `dir`, checked against the declaration its
+/// `quaketwin.schema` names; returns the schema names seen.
+fn check_outputs(dir: &Path, seen: &mut BTreeSet<String>) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let path = e.unwrap().path();
+        if path.extension().is_none_or(|x| x != "parquet") {
+            continue;
+        }
+        let file = std::fs::File::open(&path).unwrap();
+        let builder = ParquetRecordBatchReaderBuilder::try_new(file).unwrap();
+        let schema = builder.schema().clone();
+        let footer: Vec<String> = builder
+            .metadata()
+            .file_metadata()
+            .key_value_metadata()
+            .unwrap()
+            .iter()
+            .map(|kv| kv.key.clone())
+            .collect();
+        let p = path.display();
+        let name = schema
+            .metadata()
+            .get(SCHEMA_KEY)
+            .unwrap_or_else(|| panic!("{p}: no {SCHEMA_KEY}"));
+        let declared = tables::by_name(name).unwrap_or_else(|| panic!("{p}: {name} undeclared"));
+        let fields: Vec<&arrow_schema::Field> =
+            schema.fields().iter().map(|f| f.as_ref()).collect();
+        if let Err(e) = declared.check_fields(&fields) {
+            panic!("{p}: {e}");
+        }
+        for f in &fields {
+            let spec = declared.column(f.name()).unwrap();
+            assert_eq!(
+                f.metadata().get(UNIT_KEY).map(String::as_str),
+                Some(spec.unit),
+                "{p}: unit of {}",
+                f.name()
+            );
+        }
+        assert_eq!(
+            schema.metadata().get(DESCRIPTION_KEY).map(String::as_str),
+            Some(declared.doc),
+            "{p}"
+        );
+        for key in [VERSION_KEY, SCHEMA_KEY, DESCRIPTION_KEY] {
+            assert!(footer.iter().any(|k| k == key), "{p}: footer lacks {key}");
+        }
+        seen.insert(name.clone());
+    }
+}
+
+#[test]
+fn every_table_of_the_sample_runs_matches_its_declaration() {
+    let quake = tempfile::tempdir().unwrap();
+    run(
+        &root().join("pipelines/post-earthquake.toml"),
+        "synthetic-4storey-quake",
+        quake.path(),
+    );
+    let design = tempfile::tempdir().unwrap();
+    run(
+        &root().join("pipelines/test-design.toml"),
+        "synthetic-facade",
+        design.path(),
+    );
+    // frequency_shifts.parquet: the ambient record against the quake's modes.
+    let text = format!(
+        "{}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\nreference_modes = {:?}\n",
+        quaketwin::commands::INGEST_PIPELINE,
+        quake.path().join("modes.parquet").display().to_string()
+    );
+    let shifts = tempfile::tempdir().unwrap();
+    let pipeline = shifts.path().join("shifts.toml");
+    std::fs::write(&pipeline, text).unwrap();
+    let out = shifts.path().join("out");
+    run(&pipeline, "synthetic-4storey-ambient", &out);
+
+    let mut seen = BTreeSet::new();
+    for dir in [quake.path(), design.path(), &out] {
+        check_outputs(dir, &mut seen);
+    }
+    let never: Vec<&str> = ALL_TABLES
+        .iter()
+        .map(|t| t.name)
+        .filter(|n| !seen.contains(*n))
+        .collect();
+    assert!(
+        never.is_empty(),
+        "tables the sample runs did not write: {never:?}"
+    );
+}
+
+fn drift_columns(b: TableBuilder) -> TableBuilder {
+    b.str(drift::DIRECTION, &["X"])
+        .i32(drift::STOREY, vec![1])
+        .str(drift::LOWER_CHANNEL, &["B-X"])
+        .str(drift::UPPER_CHANNEL, &["F1-X"])
+        .f64(drift::STOREY_HEIGHT_M, vec![3.0])
+}
+
+#[test]
+fn the_writer_refuses_a_table_that_does_not_match_its_declaration() {
+    let ok = drift_columns(TableBuilder::new(&DRIFT))
+        .f64(drift::PEAK_DRIFT_RATIO, vec![0.01])
+        .build()
+        .unwrap();
+    let unit = |name: &str| {
+        ok.schema()
+            .field_with_name(name)
+            .unwrap()
+            .metadata()
+            .get(UNIT_KEY)
+            .cloned()
+    };
+    assert_eq!(unit("storey_height_m").as_deref(), Some("m"));
+    assert_eq!(unit("peak_drift_ratio").as_deref(), Some("1"));
+    assert_eq!(ok.schema().metadata().get(SCHEMA_KEY).unwrap(), "drift");
+
+    let refused = |b: TableBuilder, why: &str| {
+        let e = b.build().unwrap_err();
+        assert!(matches!(e, Error::Numerical(_)), "{e:?}");
+        let msg = e.to_string();
+        assert!(msg.contains("drift.parquet") && msg.contains(why), "{msg}");
+    };
+    // Missing.
+    refused(
+        drift_columns(TableBuilder::new(&DRIFT)),
+        "peak_drift_ratio missing",
+    );
+    // Wrong type.
+    refused(
+        drift_columns(TableBuilder::new(&DRIFT)).opt_f64(drift::PEAK_DRIFT_RATIO, vec![None]),
+        "peak_drift_ratio",
+    );
+    refused(
+        drift_columns(TableBuilder::new(&DRIFT)).i32(drift::PEAK_DRIFT_RATIO, vec![1]),
+        "declared float64",
+    );
+    // Extra.
+    refused(
+        drift_columns(TableBuilder::new(&DRIFT))
+            .f64(drift::PEAK_DRIFT_RATIO, vec![0.01])
+            .f64("extra", vec![1.0]),
+        "extra",
+    );
+    // Out of order.
+    refused(
+        TableBuilder::new(&DRIFT)
+            .i32(drift::STOREY, vec![1])
+            .str(drift::DIRECTION, &["X"])
+            .str(drift::LOWER_CHANNEL, &["B-X"])
+            .str(drift::UPPER_CHANNEL, &["F1-X"])
+            .f64(drift::STOREY_HEIGHT_M, vec![3.0])
+            .f64(drift::PEAK_DRIFT_RATIO, vec![0.01]),
+        "out of order",
+    );
+}
+
+#[test]
+fn a_quaketwin_file_of_the_wrong_type_is_an_input_error_naming_file_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("samples.parquet");
+    // acc_m_s2 as Int64: not what samples.parquet declares.
+    let batch = TableBuilder::untyped()
+        .str(tables::samples::CHANNEL_ID, &["B-X"])
+        .i64(tables::samples::ACC_M_S2, vec![1])
+        .opt_f64(tables::samples::VEL_M_S, vec![None])
+        .opt_f64(tables::samples::DISP_M, vec![None])
+        .build()
+        .unwrap();
+    let source = quaketwin::vocab::SourceRef {
+        file: "b.csv".into(),
+        member: None,
+        column: None,
+        format: "csv".into(),
+    };
+    let channel =
+        quaketwin::vocab::Channel::new("B-X", quaketwin::vocab::Units::MPerS2, 100.0, source);
+    let meta = vec![
+        (SCHEMA_KEY.to_string(), "samples".to_string()),
+        (
+            "quaketwin.channels".to_string(),
+            serde_json::to_string(&[channel]).unwrap(),
+        ),
+    ];
+    write_parquet(&path, &[batch], &meta).unwrap();
+    let e = quaketwin::sinks::event_tables::read_samples(&path).unwrap_err();
+    let msg = e.to_string();
+    assert!(matches!(e, Error::Input { .. }), "{e:?}");
+    assert!(
+        msg.contains("samples.parquet") && msg.contains("acc_m_s2") && msg.contains("float64"),
+        "{msg}"
+    );
+}
