@@ -219,6 +219,18 @@ impl Stage for Hysteresis {
             FIT_FILE.into(),
         ]
     }
+    /// Automatic directions need levels and building axes; without any (e.g. a folder without
+    /// event.toml whose headers state neither) there is nothing to identify, and saying so
+    /// beats writing empty tables.
+    fn not_applicable(&self, ctx: &mut RunContext) -> Result<Option<String>> {
+        if self.params.directions.is_some() {
+            return Ok(None);
+        }
+        let (specs, skipped) = auto_directions(&ctx.loaded_event()?.event);
+        Ok((specs.is_empty() && skipped.is_empty()).then(|| {
+            "no horizontal direction has records with a known level and building axis (a base, level 0, and at least one floor): state `level` and `direction` per channel in event.toml (docs/event-folder.md)".to_string()
+        }))
+    }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let (outcomes, masses) = self.identify(ctx)?;
         if !ctx.quiet {

@@ -22,6 +22,35 @@ pub fn shared_record(rel: &str) -> PathBuf {
     p
 }
 
+/// An acceleration record (m/s²) along building X at `level`: the base (level 0) is the
+/// input, every floor an output.  The shared fixture of the hysteresis tests.
+pub fn x_record(
+    id: &str,
+    level: i32,
+    rate_hz: f64,
+    file: &str,
+    samples: Vec<f64>,
+) -> quaketwin::vocab::Record {
+    use quaketwin::vocab::{Axis, Channel, Direction, Record, Role, SourceRef, Units};
+    let mut c = Channel::new(
+        id,
+        Units::MPerS2,
+        rate_hz,
+        SourceRef {
+            file: file.into(),
+            ..SourceRef::default()
+        },
+    );
+    c.level = Some(level);
+    c.direction = Some(Direction::Axis(Axis::X));
+    c.role = if level == 0 {
+        Role::Input
+    } else {
+        Role::Output
+    };
+    Record::new(c, samples)
+}
+
 fn batches(path: &std::path::Path) -> Vec<arrow_array::RecordBatch> {
     let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file)

@@ -12,9 +12,7 @@ use quaketwin::hysteresis::*;
 use quaketwin::sinks::hysteresis_tables::DirectionOutcome;
 use quaketwin::stages::hysteresis::{identify_event_at, HysteresisParams};
 use quaketwin::synth::{synthetic_ground_motion, GroundMotionSpec};
-use quaketwin::vocab::{
-    Axis, Channel, Direction, Event, Record, Role, SourceRef, Structure, Units,
-};
+use quaketwin::vocab::{Event, Record, Structure};
 use quaketwin::Error;
 
 const MASSES: [f64; 3] = [1.2e5, 1.0e5, 0.8e5];
@@ -55,23 +53,7 @@ fn truth() -> &'static Truth {
 }
 
 fn record(id: &str, level: i32, samples: Vec<f64>) -> Record {
-    let mut c = Channel::new(
-        id,
-        Units::MPerS2,
-        250.0,
-        SourceRef {
-            file: "floors.csv".into(),
-            ..SourceRef::default()
-        },
-    );
-    c.level = Some(level);
-    c.direction = Some(Direction::Axis(Axis::X));
-    c.role = if level == 0 {
-        Role::Input
-    } else {
-        Role::Output
-    };
-    Record::new(c, samples)
+    crate::common::x_record(id, level, 250.0, "floors.csv", samples)
 }
 
 /// The event with the floors in `levels` instrumented.

@@ -17,9 +17,7 @@ use quaketwin::hysteresis::*;
 use quaketwin::sinks::hysteresis_tables::DirectionOutcome;
 use quaketwin::stages::hysteresis::{identify_event_at, write_identification, HysteresisParams};
 use quaketwin::synth::{synthetic_ground_motion, GroundMotionSpec};
-use quaketwin::vocab::{
-    Axis, Channel, Direction, Event, Record, Role, SourceRef, Structure, Units,
-};
+use quaketwin::vocab::{Event, Record, Structure};
 
 const MASSES: [f64; 7] = [1.0e5, 1.0e5, 1.0e5, 1.0e5, 1.0e5, 1.0e5, 0.8e5];
 const STOREY_K: [f64; 7] = [1.6e8, 1.5e8, 1.4e8, 1.2e8, 1.0e8, 0.8e8, 0.6e8];
@@ -80,23 +78,7 @@ fn weak() -> &'static Truth {
 }
 
 fn record(id: &str, level: i32, rate: f64, samples: Vec<f64>) -> Record {
-    let mut c = Channel::new(
-        id,
-        Units::MPerS2,
-        rate,
-        SourceRef {
-            file: "records.csv".into(),
-            ..SourceRef::default()
-        },
-    );
-    c.level = Some(level);
-    c.direction = Some(Direction::Axis(Axis::X));
-    c.role = if level == 0 {
-        Role::Input
-    } else {
-        Role::Output
-    };
-    Record::new(c, samples)
+    crate::common::x_record(id, level, rate, "records.csv", samples)
 }
 
 fn floor(t: &Truth, level: i32) -> Vec<f64> {

@@ -15,10 +15,15 @@ pub const RESIDUAL_WINDOW: f64 = 0.05;
 
 /// The storey drift of one loop's rows, in time order.
 fn drift_series(t: &Table, rows: &[usize]) -> Vec<f64> {
-    rows_points(t, rows, hysteresis_fit::T_S.name, hysteresis_fit::DRIFT_M.name)
-        .into_iter()
-        .map(|p| p.1)
-        .collect()
+    rows_points(
+        t,
+        rows,
+        hysteresis_fit::T_S.name,
+        hysteresis_fit::DRIFT_M.name,
+    )
+    .into_iter()
+    .map(|p| p.1)
+    .collect()
 }
 
 /// Peak |drift| and residual drift (mean over the last `RESIDUAL_WINDOW` of
