@@ -84,10 +84,15 @@ pub const DEFAULT_BAND_HZ: [f64; 2] = [0.2, 20.0];
 /// Automatic decimation keeps the sampling rate at least this multiple of
 /// the top of the band (issue 13: ≈ 4–5 ×).
 pub const SAMPLES_PER_TOP_PERIOD: f64 = 4.0;
-/// Automatic block rows: p · (channels per block row) at most this, with
-/// l channels for SSI-COV and SSI-DATA and m + l for input–output — the
-/// former default (30 block rows) for the 5-storey output-only cases; 36
-/// block rows already gave one persistent spurious column there.
+/// Automatic block rows: p · l ≤ this, l the output channels (the rows of
+/// the extended observability matrix whose SVD fixes the order; inputs of
+/// input–output identification only enter the projection and do not
+/// count).  150 is the former default of 30 block rows on the 5-storey
+/// output-only cases, where 36 already gave one persistent spurious column
+/// (and 60 a sixth "mode" at 12.97 Hz next to the true 12.43 Hz on a seed).
+/// Counting the inputs too (the former rule) left the CESMD bridges a
+/// horizon of 0.10–0.15 s, below the 0.24 s period of the Painter St.
+/// transverse mode; counting outputs only gives it 0.37 s.
 pub const MAX_BLOCK_WIDTH: usize = 150;
 /// Automatic model orders: 2, 4, … up to this (thesis: 42), or what the
 /// subspace supports.
@@ -105,7 +110,7 @@ pub struct ModalSettings {
     pub band_hz: Option<[f64; 2]>,
     /// Block rows p (past = future horizon).  `None` = automatic: half a
     /// period of the band's low end, bounded by the data (enough Hankel
-    /// columns) and by [`MAX_FACTORISED_ROWS`], never below what the highest
+    /// columns) and by [`MAX_BLOCK_WIDTH`], never below what the highest
     /// order needs when the data allow it.
     pub block_rows: Option<usize>,
     /// Model orders to sweep; `None` = 2, 4, … up to [`MAX_AUTO_ORDER`] or
@@ -424,11 +429,7 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
                 .unwrap_or(0);
             let p_order = want_order.div_ceil(columns_per_block) + 2;
             // … bounded by the cost and by the data.
-            let width = match settings.method {
-                Method::Io => m + l,
-                _ => l,
-            };
-            let p_cost = (MAX_BLOCK_WIDTH / width.max(1)).max(3);
+            let p_cost = (MAX_BLOCK_WIDTH / l.max(1)).max(3);
             let p_data = (2..=p_band.max(p_order).max(3))
                 .take_while(|&p| needed(p).1 <= n)
                 .last()
@@ -679,6 +680,12 @@ pub struct ChannelChoice {
     /// (role input), structural base sensors preferred to free-field ones.
     /// Listing a vertical channel here is how verticals enter as inputs.
     pub inputs: Option<Vec<String>>,
+    /// Vertical response channels enter as outputs.  Off by default when
+    /// the event has horizontal outputs: vertical deck and floor channels
+    /// add vertical modes that are not the lateral modes asked for and
+    /// dominate the shapes of the lateral ones on bridges (CESMD corpus:
+    /// Painter St. modes labelled vertical).
+    pub vertical_outputs: bool,
 }
 
 /// Direction label of a channel for [`direction::label`]: building axis,
@@ -795,6 +802,23 @@ pub fn input_from_event(
                 .collect();
             (outputs, inputs)
         }
+    };
+    let outputs = if choice.vertical_outputs || outputs.iter().all(|r| is_vertical(&r.channel)) {
+        outputs
+    } else {
+        let (vertical, lateral): (Vec<&Record>, Vec<&Record>) =
+            outputs.into_iter().partition(|r| is_vertical(&r.channel));
+        if !vertical.is_empty() {
+            notes.push(format!(
+                "vertical response channels not used as outputs (set `vertical_outputs = true` to use them): {}",
+                vertical
+                    .iter()
+                    .map(|r| r.channel.id.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        lateral
     };
     let unknown: Vec<&str> = sensors
         .iter()

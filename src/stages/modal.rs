@@ -64,7 +64,7 @@ pub struct ModalParams {
     pub orders: Option<[usize; 3]>,
     /// Block rows; unset = automatic.
     pub block_rows: Option<usize>,
-    /// Physical damping window (METHODS §2: 0.9–5.5 %).
+    /// Physical damping window (default 0.5–10 %; the thesis, METHODS §2, used 0.9–5.5 % for a masonry building).
     pub damping_min: f64,
     pub damping_max: f64,
     pub frequency_min_hz: Option<f64>,
@@ -75,6 +75,9 @@ pub struct ModalParams {
     /// Input channel ids for input–output identification; unset = the
     /// horizontal base channels.  Verticals enter only when listed here.
     pub inputs: Option<Vec<String>>,
+    /// Vertical response channels enter as outputs (default: only when the
+    /// event has no horizontal response channel).
+    pub vertical_outputs: bool,
     /// Manual override: pick these frequencies instead of the automatic selection.
     pub manual_frequencies_hz: Option<Vec<f64>>,
     /// `modes.parquet` of an earlier event of the same structure (path
@@ -98,6 +101,7 @@ impl Default for ModalParams {
             frequency_max_hz: None,
             decimation: None,
             inputs: None,
+            vertical_outputs: false,
             manual_frequencies_hz: None,
             reference_modes: None,
             psd_segment: 1024,
@@ -191,6 +195,7 @@ pub fn identify_and_write(event: &Event, p: &ModalParams, out: &Path) -> Result<
     let settings_json = serde_json::to_string(&settings).unwrap_or_default();
     let choice = ChannelChoice {
         inputs: p.inputs.clone(),
+        vertical_outputs: p.vertical_outputs,
     };
     let result = identify_event(event, &settings, &choice)?;
     for w in &result.warnings {
