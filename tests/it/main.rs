@@ -33,5 +33,6 @@ mod readers_text;
 mod report;
 mod schemas;
 mod stage_params;
+mod synth;
 mod twin;
 mod twin_update_io;
