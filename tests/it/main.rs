@@ -36,3 +36,4 @@ mod stage_params;
 mod synth;
 mod twin;
 mod twin_update_io;
+mod vocab;
