@@ -180,18 +180,3 @@ pub fn printable(text: &str, max: usize) -> String {
     }
     out
 }
-
-#[cfg(test)]
-mod printable_tests {
-    use super::printable;
-
-    #[test]
-    fn control_bytes_are_escaped_and_length_is_capped() {
-        assert_eq!(printable("a\0b\x1b[2Jc\nd", 100), "a\\u{0}b\\u{1b}[2Jc\nd");
-        let long = "x".repeat(50);
-        assert_eq!(
-            printable(&long, 10),
-            format!("{} … (40 more characters)", "x".repeat(10))
-        );
-    }
-}

@@ -18,19 +18,3 @@ pub fn cumulative_trapezoid(data: &[f64], dt: f64) -> Vec<f64> {
     }
     out
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn trapezoid_starts_at_zero_and_is_exact_for_a_line() {
-        assert!(cumulative_trapezoid(&[], 0.1).is_empty());
-        assert_eq!(cumulative_trapezoid(&[3.0], 0.1), vec![0.0]);
-        // ∫₀ᵗ 2s ds = t² at t = 0, 0.5, 1.
-        assert_eq!(
-            cumulative_trapezoid(&[0.0, 1.0, 2.0], 0.5),
-            vec![0.0, 0.25, 1.0]
-        );
-    }
-}

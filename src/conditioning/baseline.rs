@@ -186,25 +186,3 @@ pub fn cosine_taper(data: &mut [f64], fraction: f64) -> Result<usize> {
     }
     Ok(m)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn cubic_is_removed_exactly() {
-        let n = 1001;
-        let mut d: Vec<f64> = (0..n)
-            .map(|i| {
-                let t = i as f64 * 0.01;
-                3.0 - 2.0 * t + 0.5 * t * t - 0.01 * t * t * t
-            })
-            .collect();
-        remove_polynomial(&mut d, 3).unwrap();
-        assert!(
-            d.iter().all(|v| v.abs() < 1e-9),
-            "max residual {}",
-            d.iter().fold(0.0f64, |m, v| m.max(v.abs()))
-        );
-    }
-}

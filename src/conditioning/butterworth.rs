@@ -464,21 +464,3 @@ fn zpk_to_sos_nearest(zpk: Zpk) -> Result<Vec<Section>> {
     }
     Ok(sos)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn bandpass_order4_has_four_sections_with_unit_a0() {
-        let sos = butter_sos(4, BandType::Bandpass, &[0.5, 20.0], 200.0).unwrap();
-        assert_eq!(sos.len(), 4);
-        assert!(sos.iter().all(|s| s[3] == 1.0));
-    }
-
-    #[test]
-    fn rejects_corner_above_nyquist() {
-        assert!(butter_sos(4, BandType::Lowpass, &[150.0], 200.0).is_err());
-        assert!(butter_sos(4, BandType::Bandpass, &[20.0, 0.5], 200.0).is_err());
-    }
-}

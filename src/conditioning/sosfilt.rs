@@ -364,37 +364,3 @@ pub fn sosfiltfilt_channels<T: AsRef<[f64]> + Sync>(
         .map(|o| o.unwrap_or_else(|| Err(Error::numerical("internal: channel not filtered"))))
         .collect()
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn zi_gives_steady_state_for_a_step() {
-        let sos = super::super::butterworth::butter_sos(
-            4,
-            super::super::butterworth::BandType::Lowpass,
-            &[10.0],
-            100.0,
-        )
-        .unwrap();
-        let mut zi = sosfilt_zi(&sos).unwrap();
-        let mut ones = vec![1.0; 50];
-        sosfilt_in_place(&sos, &mut ones, &mut zi).unwrap();
-        assert!(ones.iter().all(|v| (v - 1.0).abs() < 1e-12));
-    }
-
-    #[test]
-    fn too_short_signal_is_an_error() {
-        let sos = super::super::butterworth::butter_sos(
-            4,
-            super::super::butterworth::BandType::Bandpass,
-            &[0.5, 20.0],
-            200.0,
-        )
-        .unwrap();
-        assert_eq!(sosfiltfilt_padlen(&sos), 27);
-        assert!(sosfiltfilt(&sos, &[0.0; 27]).is_err());
-        assert!(sosfiltfilt(&sos, &[0.0; 28]).is_ok());
-    }
-}

@@ -205,20 +205,3 @@ fn vertical_action(channel: &str, action: &str, from: &str) -> OrientationAction
         partner: None,
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn x_axis_is_the_line_with_most_sensors() {
-        // 351/171 line: 3 sensors; 261/81 line: 2.
-        assert_eq!(
-            infer_x_axis(&[351.0, 171.0, 261.0, 350.0, 81.0], 5.0),
-            Some(170.0)
-        );
-        // A tie goes to the smaller line azimuth.
-        assert_eq!(infer_x_axis(&[351.0, 261.0], 5.0), Some(81.0));
-        assert_eq!(infer_x_axis(&[], 5.0), None);
-    }
-}

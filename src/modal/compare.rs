@@ -102,30 +102,3 @@ pub fn frequency_shifts(reference: &[Mode], other: &[Mode], min_mac: f64) -> Vec
         })
         .collect()
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn real(v: &[f64]) -> Vec<c64> {
-        v.iter().map(|&x| c64::new(x, 0.0)).collect()
-    }
-
-    #[test]
-    fn pairing_follows_mac_not_order() {
-        let a = vec![real(&[1.0, 1.0, 1.0]), real(&[1.0, 0.0, -1.0])];
-        let b = vec![
-            real(&[1.0, 0.1, -0.9]),
-            real(&[0.9, 1.0, 1.1]),
-            real(&[0.0, 1.0, 0.0]),
-        ];
-        let m = mac_matrix(&a, &b);
-        assert_eq!(m.len(), 2);
-        assert_eq!(m[0].len(), 3);
-        let pairs = pair_modes(&a, &b, 0.8);
-        assert_eq!(pairs.len(), 2);
-        assert_eq!((pairs[0].reference, pairs[0].other), (0, 1));
-        assert_eq!((pairs[1].reference, pairs[1].other), (1, 0));
-        assert!(pairs.iter().all(|p| p.mac > 0.95));
-    }
-}

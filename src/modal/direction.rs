@@ -74,35 +74,3 @@ pub fn label(shape: &[c64], directions: &[String], groups: &[String]) -> String 
     }
     "mixed".into()
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn s(v: &[&str]) -> Vec<String> {
-        v.iter().map(|x| x.to_string()).collect()
-    }
-    fn real(v: &[f64]) -> Vec<c64> {
-        v.iter().map(|&x| c64::new(x, 0.0)).collect()
-    }
-
-    #[test]
-    fn translation_torsion_vertical_and_mixed() {
-        // Two floors, each with Y sensors at two corners and one X sensor.
-        let dirs = s(&["Y", "Y", "X", "Y", "Y", "X"]);
-        let groups = s(&["1", "1", "1", "2", "2", "2"]);
-        let y = real(&[0.5, 0.45, 0.02, 1.0, 0.9, 0.05]);
-        assert_eq!(label(&y, &dirs, &groups), "Y");
-        let torsion = real(&[0.5, -0.45, 0.1, 1.0, -0.9, 0.2]);
-        assert_eq!(label(&torsion, &dirs, &groups), "torsion");
-        // A second bending mode changes sign between floors, not within one.
-        let second = real(&[1.0, 0.95, 0.0, -0.6, -0.55, 0.0]);
-        assert_eq!(label(&second, &dirs, &groups), "Y");
-        let mixed = real(&[0.5, 0.5, 0.8, 0.6, 0.6, 1.0]);
-        assert_eq!(label(&mixed, &dirs, &groups), "mixed");
-        let dirs_v = s(&["Y", VERTICAL, VERTICAL]);
-        assert_eq!(label(&real(&[0.1, 1.0, 0.8]), &dirs_v, &[]), VERTICAL);
-        // Unknown directions give an empty label.
-        assert_eq!(label(&real(&[1.0, 0.5]), &[], &[]), "");
-    }
-}

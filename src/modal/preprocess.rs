@@ -118,39 +118,3 @@ pub fn apply(
     }
     (out, dt_out, steps)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn decimation_passes_low_and_rejects_aliasing_frequencies() {
-        let dt = 0.005; // 200 Hz, decimate by 4 → 50 Hz, new Nyquist 25 Hz
-        let n = 8000;
-        let tone = |f: f64| {
-            (0..n)
-                .map(|i| (std::f64::consts::TAU * f * i as f64 * dt).sin())
-                .collect::<Vec<f64>>()
-        };
-        let taps = antialias_taps(4);
-        let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
-        // Pass band (5 Hz): amplitude kept within 0.1 % away from the edges.
-        let low = decimate(&tone(5.0), 4, &taps);
-        let gain = rms(&low[100..1900]) / std::f64::consts::FRAC_1_SQRT_2;
-        assert!((gain - 1.0).abs() < 1e-3, "pass-band gain {gain}");
-        // 40 Hz would alias to 10 Hz: must be attenuated below −60 dB.
-        let high = decimate(&tone(40.0), 4, &taps);
-        assert!(rms(&high[100..1900]) < 1e-3 * std::f64::consts::FRAC_1_SQRT_2);
-        let (out, dt2, steps) = apply(
-            &[tone(5.0)],
-            dt,
-            &Preprocessing {
-                remove_mean: true,
-                decimation: Some(4),
-            },
-        );
-        assert_eq!(out[0].len(), 2000);
-        assert!((dt2 - 0.02).abs() < 1e-15);
-        assert_eq!(steps.len(), 2);
-    }
-}

@@ -86,34 +86,3 @@ pub fn spectral_overlay(
         segment_length: seg,
     })
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sine_shows_as_first_singular_value_peak_and_white_noise_level_is_right() {
-        let dt = 0.01;
-        let n = 20_000;
-        let mut rng = crate::rng::Rng::new(11);
-        let a: Vec<f64> = (0..n)
-            .map(|i| (std::f64::consts::TAU * 7.0 * i as f64 * dt).sin() + 0.1 * rng.normal())
-            .collect();
-        let b: Vec<f64> = (0..n)
-            .map(|i| 0.5 * (std::f64::consts::TAU * 7.0 * i as f64 * dt).sin() + 0.1 * rng.normal())
-            .collect();
-        let o = spectral_overlay(&[a, b], dt, 1000).unwrap();
-        let peak = (0..o.frequencies_hz.len())
-            .max_by(|&x, &y| o.singular_values[x][0].total_cmp(&o.singular_values[y][0]))
-            .unwrap();
-        assert!((o.frequencies_hz[peak] - 7.0).abs() < 0.11);
-        // Away from the sine, the mean of the two singular values (half the trace)
-        // equals the one-sided white-noise density 2σ²Δt = 2e-4; averaged over 200 bins.
-        let mean_level: f64 = (200..400)
-            .map(|k| 0.5 * (o.singular_values[k][0] + o.singular_values[k][1]))
-            .sum::<f64>()
-            / 200.0;
-        assert!((mean_level / 2e-4 - 1.0).abs() < 0.05, "{mean_level}");
-        assert!(o.singular_values[peak][0] > 1e3 * o.singular_values[peak][1]);
-    }
-}

@@ -165,7 +165,11 @@ fn count_values(fields: &csv::StringRecord) -> usize {
 }
 
 /// Could be a row of the table (see the module doc).
-fn data_like(fields: &csv::StringRecord) -> bool {
+// Public only for the tests in tests/it/readers_csv.rs (the library's tests
+// live there, so the library is compiled once); not part of the API: it
+// takes the `csv` crate's record type.
+#[doc(hidden)]
+pub fn data_like(fields: &csv::StringRecord) -> bool {
     let first = fields.get(0).unwrap_or("");
     if first.ends_with(':') {
         return false;
@@ -176,7 +180,7 @@ fn data_like(fields: &csv::StringRecord) -> bool {
 
 /// How an ISO 8601 cell stated its zone.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Zone {
+pub enum Zone {
     Z,
     Offset(i32),
     Naive,
@@ -198,7 +202,7 @@ impl Zone {
 }
 
 /// Parses an ISO 8601 date-time cell into ns since the epoch (UTC).
-fn parse_datetime_cell(s: &str) -> Option<(i64, Zone)> {
+pub fn parse_datetime_cell(s: &str) -> Option<(i64, Zone)> {
     if !looks_like_datetime(s) {
         return None;
     }
@@ -231,7 +235,7 @@ fn fraction_digits(s: &str) -> usize {
 
 /// A plain decimal `[-]123.456` times `ns_per_unit`, exactly (f64 cannot hold
 /// epoch nanoseconds: 1.7e18 is past 2⁵³).  `None` for exponent forms.
-fn decimal_to_ns(s: &str, ns_per_unit: i128) -> Option<i64> {
+pub fn decimal_to_ns(s: &str, ns_per_unit: i128) -> Option<i64> {
     let (neg, digits) = match s.strip_prefix('-') {
         Some(d) => (true, d),
         None => (false, s.strip_prefix('+').unwrap_or(s)),
@@ -358,7 +362,7 @@ fn zone_offset_hours(zone: &str) -> Option<i64> {
 
 /// Parses `2025-03-06_12:26:07_000 PST` (Xsens) or ISO 8601 UTC.
 /// Returns (ns since epoch UTC, description of the zone used).
-fn parse_start_time(s: &str) -> Option<(i64, String)> {
+pub fn parse_start_time(s: &str) -> Option<(i64, String)> {
     let s = s.trim();
     let (stamp, zone) = match s.rsplit_once(' ') {
         Some((a, z)) if z.chars().all(|c| c.is_ascii_alphabetic()) => (a.trim(), Some(z)),
@@ -440,7 +444,10 @@ fn time_kind(name: &str) -> Option<TimeKind> {
 
 /// Unit of a unitless epoch time column from the magnitude of its first value
 /// (see the module doc): (seconds per unit, name).
-fn epoch_unit(first: f64) -> (f64, &'static str) {
+// Public only for the tests in tests/it/readers_csv.rs (the library's tests
+// live there, so the library is compiled once); not part of the API.
+#[doc(hidden)]
+pub fn epoch_unit(first: f64) -> (f64, &'static str) {
     let a = first.abs();
     if a < 1e11 {
         (1.0, "seconds")
@@ -944,146 +951,4 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         records,
         ..Default::default()
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn src() -> SourceRef {
-        SourceRef {
-            file: "x.csv".into(),
-            ..Default::default()
-        }
-    }
-
-    #[test]
-    fn semicolon_with_units_and_time() {
-        let text = "# test\ntime[s];acc_x[m/s2];acc_y (g);temp\n0.00;1;2;20\n0.01;3;4;20\n0.02;5;6;20\n0.03;7;8;20\n";
-        let fc = read(text.as_bytes(), &src(), &ReadOptions::default()).unwrap();
-        assert_eq!(fc.records.len(), 2);
-        assert_eq!(fc.records[0].channel.units, Units::MPerS2);
-        assert_eq!(fc.records[1].channel.units, Units::G);
-        assert_eq!(fc.records[0].channel.sampling_rate_hz, 100.0);
-        assert_eq!(fc.records[1].samples, vec![2.0, 4.0, 6.0, 8.0]);
-        assert!(fc.records[0].channel.missing.is_empty());
-    }
-
-    #[test]
-    fn uneven_time_is_resampled() {
-        // v = 10 t sampled at uneven times: linear resampling is exact.
-        let ts = [0.0, 0.1, 0.19, 0.31, 0.4, 0.5, 0.6];
-        let mut text = String::from("t,a_x\n");
-        for t in ts {
-            text += &format!("{t},{}\n", 10.0 * t);
-        }
-        let fc = read(text.as_bytes(), &src(), &ReadOptions::default()).unwrap();
-        let r = &fc.records[0];
-        assert_eq!(r.channel.sampling_rate_hz, 10.0);
-        assert!(r
-            .channel
-            .qa
-            .iter()
-            .any(|q| matches!(q, QaFlag::Resampled { .. })));
-        assert_eq!(r.samples.len(), 7);
-        for (i, v) in r.samples.iter().enumerate() {
-            assert!((v - i as f64).abs() < 1e-9, "{i}: {v}");
-        }
-    }
-
-    #[test]
-    fn whitespace_no_header_needs_rate() {
-        let text = "1 2\n3 4\n5 6\n";
-        let opts = ReadOptions {
-            sampling_rate_hz: Some(50.0),
-            columns: Some(vec!["1".into()]),
-            ..Default::default()
-        };
-        let fc = read(text.as_bytes(), &src(), &opts).unwrap();
-        assert_eq!(fc.records[0].samples, vec![2.0, 4.0, 6.0]);
-        let e = read(
-            text.as_bytes(),
-            &src(),
-            &ReadOptions {
-                columns: Some(vec!["0".into()]),
-                ..Default::default()
-            },
-        );
-        assert!(e.is_err());
-    }
-
-    #[test]
-    fn xsens_start_time_zone() {
-        let (ns, _) = parse_start_time("2025-03-06_12:26:07_000 PST").unwrap();
-        assert_eq!(ns, epoch_ns_from_civil(2025, 3, 6, 20, 26, 7.0).unwrap());
-        let (ns, _) = parse_start_time("2025-04-11_11:49:50_000 PDT").unwrap();
-        assert_eq!(ns, epoch_ns_from_civil(2025, 4, 11, 18, 49, 50.0).unwrap());
-    }
-
-    #[test]
-    fn exact_decimal_epoch_values() {
-        assert_eq!(
-            decimal_to_ns("1709294400.005", 1_000_000_000),
-            Some(1_709_294_400_005_000_000)
-        );
-        assert_eq!(
-            decimal_to_ns("1709294400005", 1_000_000),
-            Some(1_709_294_400_005_000_000)
-        );
-        assert_eq!(decimal_to_ns("-1.5", 1_000), Some(-1_500));
-        assert_eq!(
-            decimal_to_ns("1.7e12", 1_000_000),
-            None,
-            "exponent: f64 path"
-        );
-        assert_eq!(
-            decimal_to_ns("99999999999", 1_000_000_000),
-            None,
-            "past i64 ns"
-        );
-        assert_eq!(decimal_to_ns(".", 1), None);
-    }
-
-    #[test]
-    fn epoch_unit_by_magnitude() {
-        assert_eq!(epoch_unit(1.7e9).1, "seconds");
-        assert_eq!(epoch_unit(1.7e12).1, "milliseconds");
-        assert_eq!(epoch_unit(1.7e15).1, "microseconds");
-        assert_eq!(epoch_unit(1.7e18).1, "nanoseconds");
-    }
-
-    #[test]
-    fn datetime_cells() {
-        let noon = epoch_ns_from_civil(2024, 3, 1, 12, 0, 0.0).unwrap();
-        let h = 3_600_000_000_000;
-        assert_eq!(
-            parse_datetime_cell("2024-03-01T12:00:00.005Z"),
-            Some((noon + 5_000_000, Zone::Z))
-        );
-        assert_eq!(
-            parse_datetime_cell("2024-03-01 12:00:00+01:00"),
-            Some((noon - h, Zone::Offset(3600)))
-        );
-        assert_eq!(
-            parse_datetime_cell("2024-03-01T12:00:00.123456789"),
-            Some((noon + 123_456_789, Zone::Naive))
-        );
-        assert_eq!(parse_datetime_cell("2024-02-30T12:00:00"), None);
-        assert_eq!(parse_datetime_cell("2024-03-01"), None);
-        assert_eq!(parse_datetime_cell("12:00:00"), None);
-    }
-
-    #[test]
-    fn rows_know_which_are_data() {
-        let rec = |f: &[&str]| csv::StringRecord::from(f.to_vec());
-        assert!(!data_like(&rec(&["SampleRate:", "60"])));
-        assert!(data_like(&rec(&[
-            "2024-03-01T12:00:00Z",
-            "ST01",
-            "a, b",
-            "0.1"
-        ])));
-        assert!(!data_like(&rec(&["ST01", "site", "0.1"])));
-        assert!(data_like(&rec(&["ST01", "0.2", "0.1"])));
-    }
 }

@@ -560,30 +560,3 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
         ..Default::default()
     })
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn protobuf_decoder_reads_packed_and_unpacked() {
-        // channel "A" (1), t0 = -5 (2, two's complement varint), rate 100 (3), samples packed [1.5] and unpacked [2.5].
-        let mut d = vec![0x0a, 1, b'A', 0x10];
-        d.extend_from_slice(&[0xfb, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0x01]);
-        d.push(0x19);
-        d.extend_from_slice(&100f64.to_le_bytes());
-        d.extend_from_slice(&[0x2a, 8]);
-        d.extend_from_slice(&1.5f64.to_le_bytes());
-        d.push(0x29);
-        d.extend_from_slice(&2.5f64.to_le_bytes());
-        d.extend_from_slice(&[0x30, 0x07]); // unknown field 6 varint, skipped
-        let b = decode_accel_block_protobuf(&d).unwrap();
-        assert_eq!(b.channel, "A");
-        assert_eq!(b.t0_ns, -5);
-        assert_eq!(b.rate_hz, 100.0);
-        assert_eq!(b.samples, vec![1.5, 2.5]);
-        // Truncated packed field.
-        let e = decode_accel_block_protobuf(&d[..d.len() - 14]).unwrap_err();
-        assert!(e.contains("runs past the end"), "{e}");
-    }
-}

@@ -19,7 +19,7 @@ pub mod resample;
 pub mod sac;
 pub mod smc;
 pub mod stationxml;
-mod textfmt;
+pub mod textfmt;
 
 use crate::error::{Error, Location, Result};
 use crate::vocab::{Record, SourceRef};

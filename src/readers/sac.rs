@@ -21,7 +21,8 @@ use super::{FileContents, ReadOptions};
 use crate::error::{Error, Result};
 use crate::vocab::{epoch_ns_from_ordinal, Channel, Direction, QaFlag, Record, SourceRef, Units};
 
-const HEADER_LEN: usize = 632;
+/// Length of the binary header, bytes (the samples follow it).
+pub const HEADER_LEN: usize = 632;
 const UNDEFINED_F: f64 = -12345.0;
 const UNDEFINED_I: i32 = -12345;
 
@@ -314,99 +315,4 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
         records: vec![Record::new(ch, samples)],
         ..Default::default()
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Builds a SAC file with the given byte order.
-    fn make(little: bool, npts: i32, data: &[f32]) -> Vec<u8> {
-        let mut b = vec![0u8; HEADER_LEN];
-        let putf = |b: &mut Vec<u8>, i: usize, v: f32| {
-            let w = if little {
-                v.to_le_bytes()
-            } else {
-                v.to_be_bytes()
-            };
-            b[4 * i..4 * i + 4].copy_from_slice(&w);
-        };
-        let puti = |b: &mut Vec<u8>, i: usize, v: i32| {
-            let w = if little {
-                v.to_le_bytes()
-            } else {
-                v.to_be_bytes()
-            };
-            b[280 + 4 * i..284 + 4 * i].copy_from_slice(&w);
-        };
-        for i in 0..70 {
-            putf(&mut b, i, -12345.0);
-        }
-        for i in 0..40 {
-            puti(&mut b, i, -12345);
-        }
-        for c in b[440..632].chunks_mut(8) {
-            c.copy_from_slice(b"-12345  ");
-        }
-        putf(&mut b, 0, 0.01);
-        putf(&mut b, 5, 1.5);
-        putf(&mut b, 58, 0.0);
-        for (i, v) in [2001, 32, 0, 0, 0, 250, 6].iter().enumerate() {
-            puti(&mut b, i, *v);
-        }
-        puti(&mut b, 9, npts);
-        puti(&mut b, 15, 1);
-        puti(&mut b, 16, 8);
-        b[440..448].copy_from_slice(b"ABC\0xyz ");
-        b[600..608].copy_from_slice(b"HNZ     ");
-        for v in data {
-            b.extend_from_slice(&if little {
-                v.to_le_bytes()
-            } else {
-                v.to_be_bytes()
-            });
-        }
-        b
-    }
-
-    #[test]
-    fn both_byte_orders() {
-        for little in [true, false] {
-            let bytes = make(little, 3, &[1.0, -2.5, 3.25]);
-            let src = SourceRef {
-                file: "x.sac".into(),
-                ..Default::default()
-            };
-            let fc = read(&bytes, &src, &ReadOptions::default()).unwrap();
-            let r = &fc.records[0];
-            assert_eq!(r.samples, vec![1.0, -2.5, 3.25]);
-            assert_eq!(r.channel.id, ".ABC..HNZ");
-            assert_eq!(r.channel.sampling_rate_hz, 100.0);
-            assert_eq!(r.channel.direction, Some(Direction::Up));
-            let t = crate::vocab::epoch_ns_from_civil(2001, 2, 1, 0, 0, 1.75).unwrap();
-            assert_eq!(r.channel.start_ns, Some(t));
-            assert_eq!(r.channel.missing, vec!["units".to_string()]);
-        }
-    }
-
-    #[test]
-    fn short_file_is_an_error_with_offset() {
-        let bytes = make(true, 5, &[1.0, 2.0]);
-        let e = read(
-            &bytes,
-            &SourceRef {
-                file: "x.sac".into(),
-                ..Default::default()
-            },
-            &ReadOptions::default(),
-        )
-        .unwrap_err();
-        match e {
-            Error::Input { location, message } => {
-                assert_eq!(location.byte_offset, Some(640));
-                assert!(message.contains("NPTS=5"), "{message}");
-            }
-            other => panic!("{other:?}"),
-        }
-    }
 }

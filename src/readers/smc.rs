@@ -36,7 +36,7 @@
 //!   header has none), flagged `QaFlag::Resampled`, and the step is recorded
 //!   in the channel's `inferred` list.
 
-use super::resample::resample_linear;
+use super::resample::{median_step, resample_linear};
 use super::textfmt::{self, Layout, Lines};
 use super::{FileContents, ReadOptions};
 use crate::error::Result;
@@ -476,37 +476,4 @@ fn text_date(line: &str) -> Option<(String, i64, bool)> {
     let ns = epoch_ns_from_civil(y, mo as u32, d as u32, h as u32, m as u32, 0.0)?;
     let shown = tokens[..if hhmm.is_some() { 4 } else { 3 }].join(" ");
     Some((shown, ns, hhmm.is_some()))
-}
-
-/// Median of successive differences of increasing times.
-fn median_step(times: &[f64]) -> f64 {
-    let mut d: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
-    if d.is_empty() {
-        return f64::NAN;
-    }
-    d.sort_by(f64::total_cmp);
-    let m = d.len() / 2;
-    if d.len() % 2 == 1 {
-        d[m]
-    } else {
-        0.5 * (d[m - 1] + d[m])
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn linear_resampling_reproduces_a_line() {
-        // A straight line is reproduced exactly by linear interpolation.
-        let t = [0.0, 0.013, 0.02, 0.041, 0.05];
-        let v: Vec<f64> = t.iter().map(|x| 3.0 * x - 1.0).collect();
-        let r = resample_linear(&t, &v, 0.01);
-        assert_eq!(r.len(), 6);
-        for (k, y) in r.iter().enumerate() {
-            assert!((y - (3.0 * (k as f64 * 0.01) - 1.0)).abs() < 1e-12);
-        }
-        assert!((median_step(&t) - 0.011).abs() < 1e-12);
-    }
 }

@@ -112,7 +112,7 @@ pub(crate) fn decode(bytes: &[u8]) -> String {
 
 /// Why a field is not a usable number.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum NumError {
+pub enum NumError {
     NotANumber,
     NonFinite,
 }
@@ -120,7 +120,7 @@ pub(crate) enum NumError {
 /// Parses one Fortran numeric field: surrounding blanks, `D`/`d` exponents,
 /// leading-dot reals (`-.8075668E-03`), and the exponent-without-letter form
 /// Fortran writes for three-digit exponents (`1.234-105`).
-pub(crate) fn parse_number(field: &str) -> Result<f64, NumError> {
+pub fn parse_number(field: &str) -> Result<f64, NumError> {
     let t = field.trim();
     if t.is_empty() {
         return Err(NumError::NotANumber);
@@ -166,7 +166,7 @@ pub(crate) fn parse_int(field: &str) -> Option<i64> {
 /// Splits a free-format line into number tokens: whitespace separates, and
 /// a sign directly after a digit or a dot starts a new number (values that
 /// touch, as in `-1.234E-02-5.678E-03` or `0.00630-0.00128`).
-pub(crate) fn split_free(line: &str) -> Vec<&str> {
+pub fn split_free(line: &str) -> Vec<&str> {
     let mut out = Vec::new();
     for token in line.split_whitespace() {
         let b = token.as_bytes();
@@ -210,7 +210,7 @@ pub(crate) fn fixed_fields(line: &str, width: usize, per_line: usize) -> Vec<Str
 
 /// How the values of a data block are laid out on their lines.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum Layout {
+pub enum Layout {
     /// Fortran `per_line` F/E fields of `width` characters.
     Fixed { per_line: usize, width: usize },
     /// Whitespace-separated (touching values split at signs).
@@ -247,7 +247,7 @@ impl Layout {
 /// if a field is not numeric the line is retried as free format (writers do
 /// not always respect the declared widths), and only if that fails too is
 /// the value reported bad.
-pub(crate) fn line_values(line: &str, layout: Layout) -> Result<Vec<f64>, (String, NumError)> {
+pub fn line_values(line: &str, layout: Layout) -> Result<Vec<f64>, (String, NumError)> {
     let parse_free = |line: &str| -> Result<Vec<f64>, (String, NumError)> {
         split_free(line)
             .into_iter()
@@ -392,7 +392,7 @@ pub(crate) fn is_numeric_line(line: &str) -> bool {
 
 /// Maps a units word from a header to `Units` (`CM/SEC/SEC`, `cm/sec2`,
 /// `(g)`, `G`, `mm/s/s`, `counts(50)`, `gal`…).
-pub(crate) fn units_from_text(s: &str) -> Result<Units, String> {
+pub fn units_from_text(s: &str) -> Result<Units, String> {
     let mut t = s
         .trim()
         .trim_end_matches(['.', ',', ';', ':'])
@@ -414,7 +414,7 @@ pub(crate) fn units_from_text(s: &str) -> Result<Units, String> {
 /// `h:m:s.f` in a named zone (`UTC`, `GMT`, `UT`, `PDT`, `PST`).  Two-digit
 /// years below 30 are 20yy (CSMIP records start in 1933).  `None` when a part
 /// is missing or the zone is unknown.
-pub(crate) fn us_datetime_ns(date: &str, time: &str, zone: &str) -> Option<i64> {
+pub fn us_datetime_ns(date: &str, time: &str, zone: &str) -> Option<i64> {
     let mut dp = date.trim().split('/');
     let month: u32 = dp.next()?.trim().parse().ok()?;
     let day: u32 = dp.next()?.trim().parse().ok()?;
@@ -469,7 +469,7 @@ pub(crate) fn number_after(line: &str, key: &str) -> Option<f64> {
 }
 
 /// Latitude/longitude written `32.773N`, `115.448W`: signed decimal degrees.
-pub(crate) fn signed_degrees(s: &str) -> Option<f64> {
+pub fn signed_degrees(s: &str) -> Option<f64> {
     let t = s.trim().trim_end_matches(',');
     let (num, hemi) = t.split_at(t.len().checked_sub(1)?);
     let v: f64 = num.trim().parse().ok()?;
@@ -477,80 +477,5 @@ pub(crate) fn signed_degrees(s: &str) -> Option<f64> {
         "N" | "E" => Some(v),
         "S" | "W" => Some(-v),
         _ => None,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn fortran_numbers() {
-        assert_eq!(parse_number(" -.8075668E-03"), Ok(-0.8075668e-3));
-        assert_eq!(parse_number("1.5D+02"), Ok(150.0));
-        assert_eq!(
-            parse_number("1.234-105").map(|v| (v / 1.234e-105 - 1.0).abs() < 1e-12),
-            Ok(true)
-        );
-        assert_eq!(parse_number("NaN"), Err(NumError::NonFinite));
-        assert_eq!(parse_number("abc"), Err(NumError::NotANumber));
-        assert_eq!(
-            split_free("-1.234E-02-5.678E-03 1.5057E+0-2.2223E+0"),
-            vec!["-1.234E-02", "-5.678E-03", "1.5057E+0", "-2.2223E+0"]
-        );
-        assert_eq!(
-            Layout::from_fortran("(8F10.5)"),
-            Some(Layout::Fixed {
-                per_line: 8,
-                width: 10
-            })
-        );
-        assert_eq!(
-            Layout::from_fortran("(1I8)"),
-            Some(Layout::Fixed {
-                per_line: 1,
-                width: 8
-            })
-        );
-        assert_eq!(
-            Layout::from_fortran("8f10.6"),
-            Some(Layout::Fixed {
-                per_line: 8,
-                width: 10
-            })
-        );
-        // Fields that touch: fixed widths separate them.
-        let v = line_values(
-            "  1234.5671234.567   -1.000",
-            Layout::Fixed {
-                per_line: 8,
-                width: 10,
-            },
-        )
-        .unwrap();
-        assert_eq!(v, vec![1234.567, 1234.567, -1.0]);
-    }
-
-    #[test]
-    fn units_and_times() {
-        assert_eq!(units_from_text("CM/SEC/SEC"), Ok(Units::CmPerS2));
-        assert_eq!(units_from_text("(g)"), Ok(Units::G));
-        assert_eq!(
-            units_from_text("counts(50)"),
-            Ok(Units::Counts {
-                counts_per_si: None
-            })
-        );
-        assert!(units_from_text("furlongs").is_err());
-        // 05/02/83 16:42:48.2 PDT = 23:42:48.2 UTC.
-        assert_eq!(
-            us_datetime_ns("05/02/83", "16:42:48.2", "PDT"),
-            epoch_ns_from_civil(1983, 5, 2, 23, 42, 48.2)
-        );
-        assert_eq!(
-            us_datetime_ns("9/30/23", "15:26: 1.0", "UTC"),
-            epoch_ns_from_civil(2023, 9, 30, 15, 26, 1.0)
-        );
-        assert_eq!(signed_degrees("115.448W,"), Some(-115.448));
     }
 }

@@ -240,26 +240,3 @@ pub fn column_notes(t: &Table, expected: &[&str]) -> String {
     }
     s
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn numbers_have_four_significant_digits() {
-        assert_eq!(format_number(0.012346), "0.01235");
-        assert_eq!(format_number(1.5), "1.500");
-        assert_eq!(format_number(1234.5678), "1235");
-        assert_eq!(format_number(2.5e-5), "2.500e-5");
-        assert_eq!(format_number(0.0), "0");
-        assert_eq!(format_number(-3.0), "-3.000");
-    }
-
-    #[test]
-    fn escaping_covers_markup() {
-        assert_eq!(
-            escape("<a href=\"x\">&'"),
-            "&lt;a href=&quot;x&quot;&gt;&amp;&#39;"
-        );
-    }
-}

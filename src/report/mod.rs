@@ -13,7 +13,7 @@
 //! Rating thresholds and their rationale: docs/report.md.
 
 mod html;
-mod plot;
+pub mod plot;
 pub use plot::decimate_curve;
 mod sections;
 pub mod table;
@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-pub use html::format_number;
+pub use html::{escape, format_number};
 
 /// Green/yellow/red limits of one criterion: value < `yellow` is green,
 /// `yellow` ≤ value < `red` is yellow, value ≥ `red` is red.
@@ -221,33 +221,4 @@ pub fn write_report(dir: &Path, settings: &ReportSettings) -> Result<PathBuf> {
     let path = dir.join(REPORT_FILE);
     crate::sinks::parquet::write_bytes_atomically(&path, page.as_bytes())?;
     Ok(path)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn thresholds_are_half_open_intervals() {
-        let s = ReportSettings::default();
-        assert_eq!(s.drift.rate(0.004_999), Some(Rating::Green));
-        assert_eq!(s.drift.rate(0.005), Some(Rating::Yellow));
-        assert_eq!(s.drift.rate(0.014_999), Some(Rating::Yellow));
-        assert_eq!(s.drift.rate(0.015), Some(Rating::Red));
-        assert_eq!(s.iota.rate(0.019), Some(Rating::Green));
-        assert_eq!(s.iota.rate(0.02), Some(Rating::Yellow));
-        assert_eq!(s.iota.rate(0.05), Some(Rating::Red));
-        assert_eq!(s.iota.rate(f64::NAN), None);
-    }
-
-    #[test]
-    fn settings_deserialise_with_defaults_and_validate() {
-        let s: ReportSettings = toml::from_str("drift = { yellow = 0.004, red = 0.01 }").unwrap();
-        assert_eq!(s.drift.yellow, 0.004);
-        assert_eq!(s.iota, ReportSettings::default().iota);
-        assert!(s.validate().is_ok());
-        let bad: ReportSettings = toml::from_str("iota = { yellow = 0.1, red = 0.05 }").unwrap();
-        assert!(matches!(bad.validate(), Err(Error::Usage(_))));
-        assert!(toml::from_str::<ReportSettings>("colour = 1").is_err());
-    }
 }

@@ -26,7 +26,7 @@ pub const TEMP_SUFFIX: &str = ".tmp";
 static COUNTER: AtomicU64 = AtomicU64::new(0);
 
 /// Temporary path beside `path`: `.<name>.quaketwin-<pid>-<n>.tmp`.
-fn temp_path(path: &Path) -> PathBuf {
+pub fn temp_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -167,60 +167,4 @@ pub fn sweep_temp_files(dir: &Path) -> Result<Vec<String>> {
     }
     removed.sort();
     Ok(removed)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn temp_names_are_recognised() {
-        let t = temp_path(Path::new("/x/samples.parquet"));
-        let name = t.file_name().unwrap().to_str().unwrap();
-        assert!(is_temp_name(name), "{name}");
-        assert!(is_temp_name(".samples.parquet.1234.tmp"));
-        assert!(is_temp_name(".x.mcap.tmp-77"));
-        assert!(!is_temp_name("samples.parquet"));
-        assert!(!is_temp_name(".hidden.tmp"));
-        assert!(!is_temp_name("a.1.tmp"));
-    }
-
-    #[test]
-    fn writes_replace_regular_files_only_and_leave_no_temp_file() {
-        let d = tempfile::tempdir().unwrap();
-        let p = d.path().join("a.json");
-        write_bytes_atomically(&p, b"one").unwrap();
-        write_bytes_atomically(&p, b"two").unwrap();
-        assert_eq!(std::fs::read(&p).unwrap(), b"two");
-        std::fs::create_dir(d.path().join("sub")).unwrap();
-        let e = write_bytes_atomically(&d.path().join("sub"), b"x").unwrap_err();
-        assert!(e.to_string().contains("a directory"), "{e}");
-        // A failing writer leaves neither a temp file nor a changed target.
-        let e = write_atomically(&p, |_| Err(Error::numerical("boom"))).unwrap_err();
-        assert!(e.to_string().contains("boom"));
-        assert_eq!(std::fs::read(&p).unwrap(), b"two");
-        let names: Vec<_> = std::fs::read_dir(d.path())
-            .unwrap()
-            .map(|e| e.unwrap().file_name().into_string().unwrap())
-            .collect();
-        assert!(names.iter().all(|n| !is_temp_name(n)), "{names:?}");
-    }
-
-    #[cfg(unix)]
-    #[test]
-    fn a_symlink_is_never_replaced() {
-        let d = tempfile::tempdir().unwrap();
-        let target = d.path().join("target");
-        std::fs::write(&target, b"keep").unwrap();
-        let link = d.path().join("link.json");
-        std::os::unix::fs::symlink(&target, &link).unwrap();
-        let e = write_bytes_atomically(&link, b"x").unwrap_err();
-        assert_eq!(e.exit_code(), 2);
-        assert!(e.to_string().contains("symbolic link"), "{e}");
-        assert!(std::fs::symlink_metadata(&link)
-            .unwrap()
-            .file_type()
-            .is_symlink());
-        assert_eq!(std::fs::read(&target).unwrap(), b"keep");
-    }
 }

@@ -410,27 +410,3 @@ fn filter_in_spectrum(
         .map_err(|e| Error::numerical(format!("inverse FFT: {e}")))?;
     Ok(signal)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn envelope_peaks_where_asked_and_record_is_deterministic() {
-        let e_peak = saragoni_hart_envelope(8.0, 40.0, 0.2, 0.05);
-        assert!((e_peak - 1.0).abs() < 1e-12);
-        assert!((saragoni_hart_envelope(40.0, 40.0, 0.2, 0.05) - 0.05).abs() < 1e-12);
-        assert!(saragoni_hart_envelope(7.0, 40.0, 0.2, 0.05) < 1.0);
-        let p = GroundMotionSpec::default();
-        let a = synthetic_ground_motion(&p).unwrap();
-        assert_eq!(a.len(), 8000);
-        assert_eq!(a, synthetic_ground_motion(&p).unwrap());
-        let pga = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        assert!((pga - 2.0).abs() < 1e-12);
-        // Strongest shaking near the envelope peak: energy of 4–16 s exceeds that of 28–40 s.
-        let energy = |r: std::ops::Range<usize>| a[r].iter().map(|v| v * v).sum::<f64>();
-        assert!(energy(800..3200) > 5.0 * energy(5600..8000));
-        let other = synthetic_ground_motion(&GroundMotionSpec { seed: 2, ..p }).unwrap();
-        assert_ne!(a, other);
-    }
-}

@@ -176,32 +176,3 @@ pub fn format_matrix_market_general(a: MatRef<'_, f64>, comments: &[String]) -> 
     }
     format_coordinate("general", a.nrows(), a.ncols(), comments, &entries)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn both_writers_keep_their_exact_text_and_read_back() {
-        let mut a = faer::Mat::<f64>::zeros(2, 2);
-        a[(0, 0)] = 2.0;
-        a[(1, 0)] = -0.5;
-        a[(0, 1)] = -0.5;
-        let general = format_matrix_market_general(a.as_ref(), &["note".to_string()]);
-        assert_eq!(
-            general,
-            "%%MatrixMarket matrix coordinate real general\n% note\n2 2 3\n\
-             1 1 2.00000000000000000e0\n2 1 -5.00000000000000000e-1\n1 2 -5.00000000000000000e-1\n"
-        );
-        let symmetric = format_matrix_market_symmetric(&CscMatrix::from_dense(a.as_ref()));
-        assert_eq!(
-            symmetric,
-            "%%MatrixMarket matrix coordinate real symmetric\n2 2 2\n\
-             1 1 2.00000000000000000e0\n2 1 -5.00000000000000000e-1\n"
-        );
-        for text in [general, symmetric] {
-            let back = parse_matrix_market(&text, "m.mtx").unwrap();
-            assert_eq!(back.to_dense()[(1, 0)], -0.5);
-        }
-    }
-}

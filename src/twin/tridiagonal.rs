@@ -98,39 +98,3 @@ pub fn tridiagonal_eigen_rows(
         .collect();
     Some((values, vectors))
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use faer::{Mat, Side};
-
-    #[test]
-    fn matches_faer_on_a_random_tridiagonal() {
-        let mut rng = crate::rng::Rng::new(3);
-        let n = 17;
-        let d: Vec<f64> = (0..n).map(|_| rng.uniform_in(-2.0, 2.0)).collect();
-        let o: Vec<f64> = (0..n - 1).map(|_| rng.uniform_in(-1.0, 1.0)).collect();
-        let (vals, vecs) = tridiagonal_eigen(&d, &o).unwrap();
-        let mut t = Mat::<f64>::zeros(n, n);
-        for i in 0..n {
-            t[(i, i)] = d[i];
-            if i + 1 < n {
-                t[(i, i + 1)] = o[i];
-                t[(i + 1, i)] = o[i];
-            }
-        }
-        let reference = t.self_adjoint_eigenvalues(Side::Lower).unwrap();
-        for (a, b) in vals.iter().zip(reference.iter()) {
-            assert!((a - b).abs() < 1e-12, "{a} vs {b}");
-        }
-        // T v = λ v and unit norm.
-        for (lam, v) in vals.iter().zip(vecs.iter()) {
-            let norm: f64 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-            assert!((norm - 1.0).abs() < 1e-12);
-            for i in 0..n {
-                let tv: f64 = (0..n).map(|j| t[(i, j)] * v[j]).sum();
-                assert!((tv - lam * v[i]).abs() < 1e-11);
-            }
-        }
-    }
-}

@@ -154,3 +154,25 @@ fn every_stage_file_is_under_300_lines() {
         assert!(n < 300, "{}: {n} lines", f.display());
     }
 }
+
+/// `[lib] test = false` (Cargo.toml): unit tests live in this binary.  A
+/// `#[cfg(test)]` module added under src/ would be compiled by no build and
+/// never run, silently; refuse it here.
+#[test]
+fn no_unit_test_module_hides_in_src() {
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    let offenders: Vec<String> = files
+        .iter()
+        .filter(|f| {
+            std::fs::read_to_string(f)
+                .unwrap()
+                .contains(concat!("#[cfg(", "test)]"))
+        })
+        .map(|f| f.display().to_string())
+        .collect();
+    assert!(
+        offenders.is_empty(),
+        "unit tests in src/ never run (the library is built with test = false); move them to tests/it: {offenders:?}"
+    );
+}

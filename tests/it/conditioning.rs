@@ -4,8 +4,8 @@
 
 use quaketwin::conditioning::{
     self, align_records, butter_sos, cosine_taper, integrate_motion, qa, remove_linear_trend,
-    remove_polynomial, resample_to_rate, sosfiltfilt, sosfiltfilt_channels, BandType,
-    ConditioningSettings, DriftControl, Step,
+    remove_polynomial, resample_to_rate, sosfilt::sosfilt_in_place, sosfilt_zi, sosfiltfilt,
+    sosfiltfilt_channels, sosfiltfilt_padlen, BandType, ConditioningSettings, DriftControl, Step,
 };
 use quaketwin::geometry::{normalise_orientation, OrientationSettings};
 use quaketwin::numeric::cumulative_trapezoid;
@@ -610,5 +610,66 @@ fn qa_detects_clipping_flat_spikes_and_low_snr() {
     assert!(
         flags.iter().any(|f| matches!(f, QaFlag::LowSnr { .. })),
         "{flags:?}"
+    );
+}
+
+// The building blocks on their own: polynomial detrend, Butterworth design,
+// the filter's initial state, cumulative integration.
+
+#[test]
+fn cubic_is_removed_exactly() {
+    let n = 1001;
+    let mut d: Vec<f64> = (0..n)
+        .map(|i| {
+            let t = i as f64 * 0.01;
+            3.0 - 2.0 * t + 0.5 * t * t - 0.01 * t * t * t
+        })
+        .collect();
+    remove_polynomial(&mut d, 3).unwrap();
+    assert!(
+        d.iter().all(|v| v.abs() < 1e-9),
+        "max residual {}",
+        d.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+    );
+}
+
+#[test]
+fn bandpass_order4_has_four_sections_with_unit_a0() {
+    let sos = butter_sos(4, BandType::Bandpass, &[0.5, 20.0], 200.0).unwrap();
+    assert_eq!(sos.len(), 4);
+    assert!(sos.iter().all(|s| s[3] == 1.0));
+}
+
+#[test]
+fn rejects_corner_above_nyquist() {
+    assert!(butter_sos(4, BandType::Lowpass, &[150.0], 200.0).is_err());
+    assert!(butter_sos(4, BandType::Bandpass, &[20.0, 0.5], 200.0).is_err());
+}
+
+#[test]
+fn zi_gives_steady_state_for_a_step() {
+    let sos = butter_sos(4, BandType::Lowpass, &[10.0], 100.0).unwrap();
+    let mut zi = sosfilt_zi(&sos).unwrap();
+    let mut ones = vec![1.0; 50];
+    sosfilt_in_place(&sos, &mut ones, &mut zi).unwrap();
+    assert!(ones.iter().all(|v| (v - 1.0).abs() < 1e-12));
+}
+
+#[test]
+fn too_short_signal_is_an_error() {
+    let sos = butter_sos(4, BandType::Bandpass, &[0.5, 20.0], 200.0).unwrap();
+    assert_eq!(sosfiltfilt_padlen(&sos), 27);
+    assert!(sosfiltfilt(&sos, &[0.0; 27]).is_err());
+    assert!(sosfiltfilt(&sos, &[0.0; 28]).is_ok());
+}
+
+#[test]
+fn trapezoid_starts_at_zero_and_is_exact_for_a_line() {
+    assert!(cumulative_trapezoid(&[], 0.1).is_empty());
+    assert_eq!(cumulative_trapezoid(&[3.0], 0.1), vec![0.0]);
+    // ∫₀ᵗ 2s ds = t² at t = 0, 0.5, 1.
+    assert_eq!(
+        cumulative_trapezoid(&[0.0, 1.0, 2.0], 0.5),
+        vec![0.0, 0.25, 1.0]
     );
 }

@@ -111,6 +111,32 @@ fn zip_member_with_absolute_path_is_refused() {
     assert!(msg.contains("abs.zip") && msg.contains("absolute"), "{msg}");
 }
 
+/// What `collect` makes of a zip holding one member named `name`: `Ok`, or
+/// `Err` with its refusal of the member name (any other error fails the test).
+fn member_name_check(name: &str) -> Result<(), String> {
+    let dir = tempfile::tempdir().unwrap();
+    let p = temp_file(dir.path(), "names.zip", &zip_bytes(&[(name, b"x")]));
+    match event_folder::collect(&p, &ArchiveLimits::default()) {
+        Ok(_) => Ok(()),
+        Err(e) => {
+            let msg = input_error_text(e);
+            assert!(msg.contains("member name"), "{msg}");
+            Err(msg)
+        }
+    }
+}
+
+#[test]
+fn member_names_that_escape_are_refused() {
+    assert!(member_name_check("CHAN1.V2").is_ok());
+    assert!(member_name_check("Structure/CHAN1.V2").is_ok());
+    assert!(member_name_check("../evil").is_err());
+    assert!(member_name_check("a/../../evil").is_err());
+    assert!(member_name_check("/etc/passwd").is_err());
+    assert!(member_name_check("C:/x").is_err());
+    assert!(member_name_check("..\\evil").is_err());
+}
+
 #[test]
 fn zips_nested_deeper_than_the_limit_are_refused() {
     let mut z = zip_bytes(&[("rec.AT2", AT2.as_bytes())]);
@@ -414,6 +440,34 @@ fn referenced_twin_must_be_a_regular_file() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("not a regular file"), "{e}");
+}
+
+#[test]
+fn paths_outside_the_event_are_refused() {
+    // Every path exists, so only the inside-the-event check can refuse one.
+    let dir = tempfile::tempdir().unwrap();
+    let event = dir.path().join("event");
+    std::fs::create_dir_all(event.join("model")).unwrap();
+    for f in ["event/twin.toml", "event/model/twin.toml", "twin.toml"] {
+        temp_file(dir.path(), f, b"");
+    }
+    let mut files = event_folder::ReferencedFiles::new(&event);
+    let mut is_relative_inside = |rel: &str| match files.resolve(rel, "structure.twin") {
+        Ok(_) => true,
+        Err(e) => {
+            let msg = e.to_string();
+            assert!(
+                msg.contains("must be a relative path inside the event"),
+                "{msg}"
+            );
+            false
+        }
+    };
+    assert!(is_relative_inside("twin.toml"));
+    assert!(is_relative_inside("model/twin.toml"));
+    assert!(!is_relative_inside("../twin.toml"));
+    assert!(!is_relative_inside("/etc/passwd"));
+    assert!(!is_relative_inside(""));
 }
 
 #[test]

@@ -6,7 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use quaketwin::event_folder;
-use quaketwin::geometry::{apply_building_geometry, one_record_per_level, AxesSource};
+use quaketwin::geometry::{
+    apply_building_geometry, infer_x_axis, one_record_per_level, AxesSource,
+};
 use quaketwin::pipeline::{self, StageOutcome};
 use quaketwin::stages::hysteresis::auto_directions;
 use quaketwin::stages::parse_pipeline;
@@ -379,4 +381,16 @@ orientation = { x_azimuth_deg = 171.0 }
     // Refused when the pipeline file is read (typed params), before any data.
     let err = parse_pipeline(text, "old.toml").unwrap_err().to_string();
     assert!(err.contains("x_axis_azimuth_deg"), "{err}");
+}
+
+#[test]
+fn x_axis_is_the_line_with_most_sensors() {
+    // 351/171 line: 3 sensors; 261/81 line: 2.
+    assert_eq!(
+        infer_x_axis(&[351.0, 171.0, 261.0, 350.0, 81.0], 5.0),
+        Some(170.0)
+    );
+    // A tie goes to the smaller line azimuth.
+    assert_eq!(infer_x_axis(&[351.0, 261.0], 5.0), Some(81.0));
+    assert_eq!(infer_x_axis(&[], 5.0), None);
 }

@@ -512,3 +512,32 @@ fn report_draws_the_measured_loop_of_a_not_identified_direction() {
         assert!((full - kept).abs() <= 0.01 * full);
     }
 }
+
+// The tributary rule itself (src/hysteresis/lumping.rs) on hand-worked masses.
+
+#[test]
+fn seven_levels_on_base_four_and_roof() {
+    let m = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
+    let r = tributary_masses(&m, &[3.0; 7], &[4, 7]).unwrap();
+    // L4: own 4 + ¾·3 + ½·2 + ¼·1 + ⅔·5 + ⅓·6; L7: 7 + ⅓·5 + ⅔·6.
+    let l4 = 4.0 + 0.75 * 3.0 + 0.5 * 2.0 + 0.25 + 2.0 / 3.0 * 5.0 + 6.0 / 3.0;
+    let l7 = 7.0 + 5.0 / 3.0 + 4.0;
+    assert!((r.masses_kg[0] - l4).abs() < 1e-12, "{:?}", r.masses_kg);
+    assert!((r.masses_kg[1] - l7).abs() < 1e-12);
+    assert!((r.dropped_to_base_kg - (0.75 + 1.0 + 0.75)).abs() < 1e-12);
+    let total: f64 = m.iter().sum();
+    assert!((r.masses_kg.iter().sum::<f64>() + r.dropped_to_base_kg - total).abs() < 1e-12);
+    assert_eq!(segment_label(&[4, 7], 0), "L0–L4");
+    assert_eq!(segment_label(&[4, 7], 1), "L4–L7");
+}
+
+#[test]
+fn levels_above_the_top_move_with_it_and_heights_weight_the_split() {
+    let r = tributary_masses(&[1.0, 1.0, 1.0, 1.0], &[4.0, 1.0, 3.0, 3.0], &[1, 3]).unwrap();
+    // Level 2 at z = 5 between z = 4 and z = 8: ξ = 0.25 to level 3.
+    assert!((r.masses_kg[0] - 1.75).abs() < 1e-12);
+    assert!((r.masses_kg[1] - 2.25).abs() < 1e-12);
+    assert_eq!(r.dropped_to_base_kg, 0.0);
+    assert!(tributary_masses(&[1.0], &[], &[2]).is_err());
+    assert!(tributary_masses(&[1.0, 1.0], &[], &[2, 1]).is_err());
+}

@@ -1,5 +1,7 @@
-//! All integration tests in one binary (one link instead of one per area:
-//! linking was most of CI's time).  One module per area; shared helpers in
+//! All tests in one binary (one link instead of one per area: linking was
+//! most of CI's time), the unit tests of the library's pieces included: the
+//! library has no `#[cfg(test)]` modules and `[lib] test = false`, so
+//! `cargo test` compiles it once.  One module per area; shared helpers in
 //! `common`.  Tests that read the real records of `../shared/records` have
 //! `shared_` in their name or live in a module that says so, and fail with a
 //! clear message when the folder is missing.
@@ -33,5 +35,7 @@ mod readers_text;
 mod report;
 mod schemas;
 mod stage_params;
+mod synth;
 mod twin;
 mod twin_update_io;
+mod vocab;

@@ -1,7 +1,14 @@
 //! Issue 3 "Must show": subspace identification against synthetic truth and
 //! real records.  Accuracy figures are printed (run with `--nocapture`).
 
-use quaketwin::modal::{self, identify, Method, ModalInput, ModalSettings, Mode};
+use faer::c64;
+use quaketwin::modal::hankel::{dot, hankel_gram, HankelRow};
+use quaketwin::modal::poles::poles_of_order;
+use quaketwin::modal::preprocess::{antialias_taps, apply, decimate};
+use quaketwin::modal::{
+    self, identify, mac, mac_matrix, mpc_mpd, pair_modes, spectral_overlay, Method, ModalInput,
+    ModalSettings, Mode, Preprocessing,
+};
 use quaketwin::rng::Rng;
 use quaketwin::synth::{
     add_measurement_noise, synthetic_ground_motion, BuildingModes, GroundMotionSpec, ShearBuilding,
@@ -484,4 +491,207 @@ fn painter_street_overpass_event_defaults_find_transverse_mode() {
             .collect::<Vec<_>>(),
         result.warnings
     );
+}
+
+// The pieces of the identification on their own: mode pairing by MAC, the
+// block-Hankel Gram matrix, pole indicators, decimation, the spectral overlay.
+
+fn real_shape(v: &[f64]) -> Vec<c64> {
+    v.iter().map(|&x| c64::new(x, 0.0)).collect()
+}
+
+#[test]
+fn pairing_follows_mac_not_order() {
+    let a = vec![real_shape(&[1.0, 1.0, 1.0]), real_shape(&[1.0, 0.0, -1.0])];
+    let b = vec![
+        real_shape(&[1.0, 0.1, -0.9]),
+        real_shape(&[0.9, 1.0, 1.1]),
+        real_shape(&[0.0, 1.0, 0.0]),
+    ];
+    let m = mac_matrix(&a, &b);
+    assert_eq!(m.len(), 2);
+    assert_eq!(m[0].len(), 3);
+    let pairs = pair_modes(&a, &b, 0.8);
+    assert_eq!(pairs.len(), 2);
+    assert_eq!((pairs[0].reference, pairs[0].other), (0, 1));
+    assert_eq!((pairs[1].reference, pairs[1].other), (1, 0));
+    assert!(pairs.iter().all(|p| p.mac > 0.95));
+}
+
+#[test]
+fn gram_matches_explicit_hankel_product() {
+    let x: Vec<f64> = (0..57)
+        .map(|i| ((i * 37 % 11) as f64 - 5.0) * 0.3 + (i as f64 * 0.1).sin())
+        .collect();
+    let y: Vec<f64> = (0..57).map(|i| ((i * 13 % 7) as f64 - 3.0) * 0.5).collect();
+    let signals: Vec<&[f64]> = vec![&x, &y];
+    let rows = vec![
+        HankelRow {
+            signal: 1,
+            shift: 0,
+        },
+        HankelRow {
+            signal: 0,
+            shift: 0,
+        },
+        HankelRow {
+            signal: 1,
+            shift: 1,
+        },
+        HankelRow {
+            signal: 0,
+            shift: 3,
+        },
+        HankelRow {
+            signal: 0,
+            shift: 5,
+        },
+        HankelRow {
+            signal: 1,
+            shift: 4,
+        },
+    ];
+    let cols = 50;
+    let g = hankel_gram(&signals, &rows, cols);
+    for (i, ra) in rows.iter().enumerate() {
+        for (k, rb) in rows.iter().enumerate() {
+            let explicit: f64 = (0..cols)
+                .map(|c| signals[ra.signal][c + ra.shift] * signals[rb.signal][c + rb.shift])
+                .sum::<f64>()
+                / cols as f64;
+            assert!((g[i * rows.len() + k] - explicit).abs() < 1e-12, "{i} {k}");
+        }
+    }
+    assert!((dot(&x, &y) - x.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>()).abs() < 1e-12);
+}
+
+#[test]
+fn indicators_of_real_and_complex_shapes() {
+    let real = vec![c64::new(1.0, 0.0), c64::new(-0.5, 0.0), c64::new(0.25, 0.0)];
+    let (mpc, mpd) = mpc_mpd(&real);
+    assert!((mpc - 1.0).abs() < 1e-12 && mpd.abs() < 1e-9);
+    // Rotating a real shape by any phase keeps MPC = 1, MPD = 0.
+    let rot: Vec<c64> = real.iter().map(|z| z * c64::new(0.6, 0.8)).collect();
+    let (mpc, mpd) = mpc_mpd(&rot);
+    assert!((mpc - 1.0).abs() < 1e-12 && mpd.abs() < 1e-6, "{mpc} {mpd}");
+    assert!((mac(&real, &rot) - 1.0).abs() < 1e-12);
+    // Two components 90° apart with equal modulus: MPC = 0, MPD = 45°.
+    let (mpc, mpd) = mpc_mpd(&[c64::new(1.0, 0.0), c64::new(0.0, 1.0)]);
+    assert!(
+        mpc.abs() < 1e-12 && (mpd - 45.0).abs() < 1e-9,
+        "{mpc} {mpd}"
+    );
+    let orth = vec![c64::new(1.0, 0.0), c64::new(2.0, 0.0), c64::new(0.0, 0.0)];
+    let other = vec![c64::new(2.0, 0.0), c64::new(-1.0, 0.0), c64::new(0.0, 0.0)];
+    assert!(mac(&orth, &other).abs() < 1e-15);
+}
+
+#[test]
+fn discrete_pole_maps_back_to_frequency_and_damping() {
+    let (f, zeta, dt) = (2.0, 0.03, 0.01);
+    let w = std::f64::consts::TAU * f;
+    let lambda = c64::new(-zeta * w, w * (1.0 - zeta * zeta).sqrt());
+    let mu = (lambda * dt).exp();
+    let poles = poles_of_order(
+        2,
+        vec![
+            (mu, vec![c64::new(2.0, 0.0)]),
+            (mu.conj(), vec![c64::new(2.0, 0.0)]),
+        ],
+        dt,
+    );
+    assert_eq!(poles.len(), 1);
+    assert!((poles[0].frequency_hz - f).abs() < 1e-12);
+    assert!((poles[0].damping_ratio - zeta).abs() < 1e-12);
+    assert_eq!(poles[0].shape, vec![c64::new(1.0, 0.0)]);
+}
+
+#[test]
+fn decimation_passes_low_and_rejects_aliasing_frequencies() {
+    let dt = 0.005; // 200 Hz, decimate by 4 → 50 Hz, new Nyquist 25 Hz
+    let n = 8000;
+    let tone = |f: f64| {
+        (0..n)
+            .map(|i| (std::f64::consts::TAU * f * i as f64 * dt).sin())
+            .collect::<Vec<f64>>()
+    };
+    let taps = antialias_taps(4);
+    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+    // Pass band (5 Hz): amplitude kept within 0.1 % away from the edges.
+    let low = decimate(&tone(5.0), 4, &taps);
+    let gain = rms(&low[100..1900]) / std::f64::consts::FRAC_1_SQRT_2;
+    assert!((gain - 1.0).abs() < 1e-3, "pass-band gain {gain}");
+    // 40 Hz would alias to 10 Hz: must be attenuated below −60 dB.
+    let high = decimate(&tone(40.0), 4, &taps);
+    assert!(rms(&high[100..1900]) < 1e-3 * std::f64::consts::FRAC_1_SQRT_2);
+    let (out, dt2, steps) = apply(
+        &[tone(5.0)],
+        dt,
+        &Preprocessing {
+            remove_mean: true,
+            decimation: Some(4),
+        },
+    );
+    assert_eq!(out[0].len(), 2000);
+    assert!((dt2 - 0.02).abs() < 1e-15);
+    assert_eq!(steps.len(), 2);
+}
+
+#[test]
+fn sine_shows_as_first_singular_value_peak_and_white_noise_level_is_right() {
+    let dt = 0.01;
+    let n = 20_000;
+    let mut rng = Rng::new(11);
+    let a: Vec<f64> = (0..n)
+        .map(|i| (std::f64::consts::TAU * 7.0 * i as f64 * dt).sin() + 0.1 * rng.normal())
+        .collect();
+    let b: Vec<f64> = (0..n)
+        .map(|i| 0.5 * (std::f64::consts::TAU * 7.0 * i as f64 * dt).sin() + 0.1 * rng.normal())
+        .collect();
+    let o = spectral_overlay(&[a, b], dt, 1000).unwrap();
+    let peak = (0..o.frequencies_hz.len())
+        .max_by(|&x, &y| o.singular_values[x][0].total_cmp(&o.singular_values[y][0]))
+        .unwrap();
+    assert!((o.frequencies_hz[peak] - 7.0).abs() < 0.11);
+    // Away from the sine, the mean of the two singular values (half the trace)
+    // equals the one-sided white-noise density 2σ²Δt = 2e-4; averaged over 200 bins.
+    let mean_level: f64 = (200..400)
+        .map(|k| 0.5 * (o.singular_values[k][0] + o.singular_values[k][1]))
+        .sum::<f64>()
+        / 200.0;
+    assert!((mean_level / 2e-4 - 1.0).abs() < 0.05, "{mean_level}");
+    assert!(o.singular_values[peak][0] > 1e3 * o.singular_values[peak][1]);
+}
+
+// Direction labels of mode shapes (moved from src/modal/direction.rs).
+mod direction_labels {
+    use faer::c64;
+    use quaketwin::modal::direction::{label, VERTICAL};
+
+    fn s(v: &[&str]) -> Vec<String> {
+        v.iter().map(|x| x.to_string()).collect()
+    }
+    fn real(v: &[f64]) -> Vec<c64> {
+        v.iter().map(|&x| c64::new(x, 0.0)).collect()
+    }
+
+    #[test]
+    fn translation_torsion_vertical_and_mixed() {
+        // Two floors, each with Y sensors at two corners and one X sensor.
+        let dirs = s(&["Y", "Y", "X", "Y", "Y", "X"]);
+        let groups = s(&["1", "1", "1", "2", "2", "2"]);
+        let y = real(&[0.5, 0.45, 0.02, 1.0, 0.9, 0.05]);
+        assert_eq!(label(&y, &dirs, &groups), "Y");
+        let torsion = real(&[0.5, -0.45, 0.1, 1.0, -0.9, 0.2]);
+        assert_eq!(label(&torsion, &dirs, &groups), "torsion");
+        // A second bending mode changes sign between floors, not within one.
+        let second = real(&[1.0, 0.95, 0.0, -0.6, -0.55, 0.0]);
+        assert_eq!(label(&second, &dirs, &groups), "Y");
+        let mixed = real(&[0.5, 0.5, 0.8, 0.6, 0.6, 1.0]);
+        assert_eq!(label(&mixed, &dirs, &groups), "mixed");
+        let dirs_v = s(&["Y", VERTICAL, VERTICAL]);
+        assert_eq!(label(&real(&[0.1, 1.0, 0.8]), &dirs_v, &[]), VERTICAL);
+        // Unknown directions give an empty label.
+        assert_eq!(label(&real(&[1.0, 0.5]), &[], &[]), "");
+    }
 }

@@ -6,9 +6,12 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use quaketwin::pipeline::lock::{host_name, DirLock, Holder, LOCK_FILE};
 use quaketwin::pipeline::manifest::{self, StageState};
 use quaketwin::pipeline::{self, StageOutcome};
+use quaketwin::sinks::atomic::{is_temp_name, temp_path, write_atomically, write_bytes_atomically};
 use quaketwin::stages::parse_pipeline;
+use quaketwin::Error;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -476,4 +479,111 @@ fn mcap_output_refuses_links_and_fifos_and_is_listed_inside_the_output_directory
     )
     .unwrap();
     assert!(!inside.exists());
+}
+
+// The lock and the atomic writes on their own (src/pipeline/lock.rs,
+// src/sinks/atomic.rs).
+
+#[test]
+fn a_second_lock_is_refused_naming_the_holder_and_released_on_drop() {
+    let d = tempfile::tempdir().unwrap();
+    let first = DirLock::acquire(d.path(), "event A").unwrap();
+    assert!(first.took_over.is_none());
+    let e = DirLock::acquire(d.path(), "event B").unwrap_err();
+    let msg = e.to_string();
+    assert_eq!(e.exit_code(), 2);
+    assert!(
+        msg.contains(&format!("pid {}", std::process::id())),
+        "{msg}"
+    );
+    assert!(msg.contains("event A") && msg.contains("in use"), "{msg}");
+    drop(first);
+    assert!(!d.path().join(LOCK_FILE).exists());
+    let again = DirLock::acquire(d.path(), "event B").unwrap();
+    assert!(again.took_over.is_none());
+}
+
+#[test]
+fn a_stale_lock_on_this_host_is_taken_over_one_of_another_host_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let stale = Holder {
+        pid: u32::MAX - 1,
+        host: host_name(),
+        started: "2020-01-01T00:00:00Z".into(),
+        what: "killed run".into(),
+    };
+    std::fs::write(
+        d.path().join(LOCK_FILE),
+        serde_json::to_string(&stale).unwrap(),
+    )
+    .unwrap();
+    let l = DirLock::acquire(d.path(), "new").unwrap();
+    let said = l.took_over.clone().unwrap();
+    assert!(
+        said.contains("stale lock") && said.contains("killed run"),
+        "{said}"
+    );
+    drop(l);
+    let foreign = Holder {
+        host: format!("{}-elsewhere", host_name()),
+        ..stale
+    };
+    std::fs::write(
+        d.path().join(LOCK_FILE),
+        serde_json::to_string(&foreign).unwrap(),
+    )
+    .unwrap();
+    let e = DirLock::acquire(d.path(), "new").unwrap_err();
+    assert!(e.to_string().contains("another host"), "{e}");
+}
+
+#[test]
+fn temp_names_are_recognised() {
+    let t = temp_path(Path::new("/x/samples.parquet"));
+    let name = t.file_name().unwrap().to_str().unwrap();
+    assert!(is_temp_name(name), "{name}");
+    assert!(is_temp_name(".samples.parquet.1234.tmp"));
+    assert!(is_temp_name(".x.mcap.tmp-77"));
+    assert!(!is_temp_name("samples.parquet"));
+    assert!(!is_temp_name(".hidden.tmp"));
+    assert!(!is_temp_name("a.1.tmp"));
+}
+
+#[test]
+fn writes_replace_regular_files_only_and_leave_no_temp_file() {
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join("a.json");
+    write_bytes_atomically(&p, b"one").unwrap();
+    write_bytes_atomically(&p, b"two").unwrap();
+    assert_eq!(std::fs::read(&p).unwrap(), b"two");
+    std::fs::create_dir(d.path().join("sub")).unwrap();
+    let e = write_bytes_atomically(&d.path().join("sub"), b"x").unwrap_err();
+    assert!(e.to_string().contains("a directory"), "{e}");
+    // A failing writer leaves neither a temp file nor a changed target.
+    let e = write_atomically(&p, |_| Err(Error::numerical("boom"))).unwrap_err();
+    assert!(e.to_string().contains("boom"));
+    assert_eq!(std::fs::read(&p).unwrap(), b"two");
+    let names: Vec<_> = std::fs::read_dir(d.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    assert!(names.iter().all(|n| !is_temp_name(n)), "{names:?}");
+}
+
+#[cfg(unix)]
+#[test]
+fn a_symlink_is_never_replaced() {
+    let d = tempfile::tempdir().unwrap();
+    let target = d.path().join("target");
+    std::fs::write(&target, b"keep").unwrap();
+    let link = d.path().join("link.json");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    let e = write_bytes_atomically(&link, b"x").unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("symbolic link"), "{e}");
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(std::fs::read(&target).unwrap(), b"keep");
 }

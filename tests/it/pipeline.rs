@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use quaketwin::error::printable;
 use quaketwin::pipeline::{self, StageOutcome};
 use quaketwin::stages::parse_pipeline;
 
@@ -107,4 +108,15 @@ fn cli_exit_codes() {
         .unwrap();
     assert_eq!(bad.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("x.AT2"));
+}
+
+/// Error text is printed through `printable` (src/main.rs).
+#[test]
+fn control_bytes_are_escaped_and_length_is_capped() {
+    assert_eq!(printable("a\0b\x1b[2Jc\nd", 100), "a\\u{0}b\\u{1b}[2Jc\nd");
+    let long = "x".repeat(50);
+    assert_eq!(
+        printable(&long, 10),
+        format!("{} … (40 more characters)", "x".repeat(10))
+    );
 }

@@ -7,10 +7,16 @@ use std::io::Cursor;
 use std::path::Path;
 
 use quaketwin::error::Error;
+use quaketwin::readers::mseed::{
+    decode_steim, join_segments, rate_from_factor, ByteOrder, Segment,
+};
 use quaketwin::readers::{self, mcap as mcap_reader, stationxml, FileContents, ReadOptions};
 use quaketwin::rng::SplitMix64;
 use quaketwin::sinks::mcap_writer::{self, McapWriteOptions};
-use quaketwin::vocab::{parse_iso8601_ns, Direction, Event, QaFlag, Record, SourceRef, Units};
+use quaketwin::vocab::{
+    epoch_ns_from_civil, parse_iso8601_ns, Channel, Direction, Event, QaFlag, Record, SourceRef,
+    Units,
+};
 
 const RECORDS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/records");
 
@@ -1117,4 +1123,350 @@ fn shared_stationxml_absurd_sensitivity_is_refused_not_applied() {
             "{e}"
         );
     }
+}
+
+// Pieces of the binary readers on crafted bytes: the MCAP protobuf block
+// decoder, MiniSEED records, Steim frames, rate factors and record joins,
+// SAC in both byte orders, StationXML epochs.
+
+#[test]
+fn mcap_protobuf_decoder_reads_packed_and_unpacked() {
+    // channel "A" (1), t0 = -5 (2, two's complement varint), rate 100 (3), samples packed [1.5] and unpacked [2.5].
+    let mut d = vec![0x0a, 1, b'A', 0x10];
+    d.extend_from_slice(&[0xfb, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0x01]);
+    d.push(0x19);
+    d.extend_from_slice(&100f64.to_le_bytes());
+    d.extend_from_slice(&[0x2a, 8]);
+    d.extend_from_slice(&1.5f64.to_le_bytes());
+    d.push(0x29);
+    d.extend_from_slice(&2.5f64.to_le_bytes());
+    d.extend_from_slice(&[0x30, 0x07]); // unknown field 6 varint, skipped
+    let b = mcap_reader::decode_accel_block_protobuf(&d).unwrap();
+    assert_eq!(b.channel, "A");
+    assert_eq!(b.t0_ns, -5);
+    assert_eq!(b.rate_hz, 100.0);
+    assert_eq!(b.samples, vec![1.5, 2.5]);
+    // Truncated packed field.
+    let e = mcap_reader::decode_accel_block_protobuf(&d[..d.len() - 14]).unwrap_err();
+    assert!(e.contains("runs past the end"), "{e}");
+}
+
+/// Builds one 512-byte record (big- or little-endian) with the given encoding and data bytes.
+fn mseed_record(
+    order: ByteOrder,
+    encoding: u8,
+    nsamples: u16,
+    start_sec: u8,
+    data: &[u8],
+) -> Vec<u8> {
+    let mut r = vec![0u8; 512];
+    r[..8].copy_from_slice(b"000001D ");
+    r[8..13].copy_from_slice(b"STA  ");
+    r[13..15].copy_from_slice(b"00");
+    r[15..18].copy_from_slice(b"HNZ");
+    r[18..20].copy_from_slice(b"XX");
+    let put16 = |r: &mut Vec<u8>, at: usize, v: u16| {
+        let b = if order == ByteOrder::Big {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        };
+        r[at..at + 2].copy_from_slice(&b);
+    };
+    put16(&mut r, 20, 2020);
+    put16(&mut r, 22, 32);
+    r[24] = 1;
+    r[25] = 2;
+    r[26] = start_sec;
+    put16(&mut r, 28, 5000); // 0.5 s
+    put16(&mut r, 30, nsamples);
+    put16(&mut r, 32, 100);
+    put16(&mut r, 34, 1);
+    r[39] = 1;
+    put16(&mut r, 44, 64);
+    put16(&mut r, 46, 48);
+    put16(&mut r, 48, 1000);
+    put16(&mut r, 50, 0);
+    r[52] = encoding;
+    r[53] = if order == ByteOrder::Big { 1 } else { 0 };
+    r[54] = 9;
+    r[64..64 + data.len()].copy_from_slice(data);
+    r
+}
+
+#[test]
+fn mseed_int32_both_byte_orders_and_gap_join() {
+    for order in [ByteOrder::Big, ByteOrder::Little] {
+        let vals = [1i32, -2, 300_000, -4];
+        let data: Vec<u8> = vals
+            .iter()
+            .flat_map(|v| {
+                if order == ByteOrder::Big {
+                    v.to_be_bytes()
+                } else {
+                    v.to_le_bytes()
+                }
+            })
+            .collect();
+        let mut bytes = mseed_record(order, 3, 4, 10, &data);
+        // Second record 0.06 s after the first ends (4 samples at 100 Hz = 0.04 s): 2 samples missing.
+        let mut second = mseed_record(order, 3, 4, 10, &data);
+        let fract: u16 = 5000 + 600; // 10.56 s
+        let b = if order == ByteOrder::Big {
+            fract.to_be_bytes()
+        } else {
+            fract.to_le_bytes()
+        };
+        second[28..30].copy_from_slice(&b);
+        bytes.extend(second);
+        let source = SourceRef {
+            format: "mseed".into(),
+            ..src("t.mseed")
+        };
+        let fc = readers::mseed::read(&bytes, &source, &ReadOptions::default()).unwrap();
+        assert_eq!(fc.records.len(), 1);
+        let r = &fc.records[0];
+        assert_eq!(r.channel.id, "XX.STA.00.HNZ");
+        assert_eq!(r.channel.sampling_rate_hz, 100.0);
+        assert_eq!(r.samples.len(), 10);
+        assert_eq!(&r.samples[..4], &[1.0, -2.0, 300_000.0, -4.0]);
+        // Interpolated between -4 and 1 over two missing samples.
+        assert!((r.samples[4] - (-4.0 + 5.0 / 3.0)).abs() < 1e-12);
+        assert!(r.channel.qa.iter().any(
+            |q| matches!(q, QaFlag::Gap { duration_s, .. } if (duration_s - 0.02).abs() < 1e-9)
+        ));
+        let expect = epoch_ns_from_civil(2020, 2, 1, 1, 2, 10.5).unwrap();
+        assert_eq!(r.channel.start_ns, Some(expect));
+    }
+}
+
+#[test]
+fn mseed_steim1_hand_built_frame() {
+    // Samples 10, 12, 9, 9, 1000: differences (d0 unused) 2, -3, 0, 991.
+    let mut frame = vec![0u8; 64];
+    // nibbles: w0=0, w1=0 (X0), w2=0 (Xn), w3=1 (four bytes), w4=3 (one 32-bit)
+    let nibbles: u32 = (1 << (30 - 6)) | (3 << (30 - 8));
+    frame[0..4].copy_from_slice(&nibbles.to_be_bytes());
+    frame[4..8].copy_from_slice(&10i32.to_be_bytes());
+    frame[8..12].copy_from_slice(&1000i32.to_be_bytes());
+    frame[12..16].copy_from_slice(&[0u8, 2, (-3i8) as u8, 0]);
+    frame[16..20].copy_from_slice(&991i32.to_be_bytes());
+    let out = decode_steim(&frame, false, ByteOrder::Big, 5).unwrap();
+    assert_eq!(out, vec![10, 12, 9, 9, 1000]);
+    // Wrong reverse constant.
+    frame[8..12].copy_from_slice(&999i32.to_be_bytes());
+    let e = decode_steim(&frame, false, ByteOrder::Big, 5).unwrap_err();
+    assert!(e.contains("reverse constant"), "{e}");
+}
+
+#[test]
+fn mseed_rate_factor_multiplier_rules() {
+    assert_eq!(rate_from_factor(200, 1), 200.0);
+    assert_eq!(rate_from_factor(-10, 1), 0.1);
+    assert_eq!(rate_from_factor(1, -10), 0.1);
+    assert_eq!(rate_from_factor(-10, -10), 0.01);
+    assert_eq!(rate_from_factor(20, -2), 10.0);
+}
+
+fn mseed_segment(start_ns: i64, samples: Vec<f64>) -> Segment {
+    Segment {
+        start_ns,
+        rate_hz: 10.0,
+        samples,
+        origin: "test".into(),
+    }
+}
+
+#[test]
+fn mseed_join_overlap_identical_is_silent_and_different_is_flagged() {
+    // 10 Hz: second segment starts 0.2 s (2 samples) before the first ends.
+    let j = join_segments(vec![
+        mseed_segment(0, vec![1.0, 2.0, 3.0, 4.0]),
+        mseed_segment(200_000_000, vec![3.0, 4.0, 5.0]),
+    ])
+    .unwrap();
+    assert_eq!(j.samples, vec![1.0, 2.0, 3.0, 4.0, 5.0]);
+    assert!(j.qa.is_empty());
+    let j = join_segments(vec![
+        mseed_segment(200_000_000, vec![9.0, 4.0, 5.0]),
+        mseed_segment(0, vec![1.0, 2.0, 3.0, 4.0]),
+    ])
+    .unwrap();
+    assert_eq!(
+        j.samples,
+        vec![1.0, 2.0, 3.0, 4.0, 5.0],
+        "sorted by start, earlier samples kept"
+    );
+    assert!(j
+        .qa
+        .iter()
+        .any(|q| matches!(q, QaFlag::Gap { duration_s, .. } if (duration_s + 0.2).abs() < 1e-9)));
+}
+
+#[test]
+fn mseed_join_absurd_gap_and_rate_change_are_errors() {
+    assert!(join_segments(vec![
+        mseed_segment(0, vec![1.0]),
+        mseed_segment(i64::MAX / 2, vec![2.0])
+    ])
+    .is_err());
+    let mut other = mseed_segment(100_000_000, vec![2.0]);
+    other.rate_hz = 20.0;
+    let e = join_segments(vec![mseed_segment(0, vec![1.0]), other]).unwrap_err();
+    assert!(e.contains("sampling rate changes"), "{e}");
+}
+
+/// Builds a SAC file with the given byte order.
+fn sac_file(little: bool, npts: i32, data: &[f32]) -> Vec<u8> {
+    let mut b = vec![0u8; readers::sac::HEADER_LEN];
+    let putf = |b: &mut Vec<u8>, i: usize, v: f32| {
+        let w = if little {
+            v.to_le_bytes()
+        } else {
+            v.to_be_bytes()
+        };
+        b[4 * i..4 * i + 4].copy_from_slice(&w);
+    };
+    let puti = |b: &mut Vec<u8>, i: usize, v: i32| {
+        let w = if little {
+            v.to_le_bytes()
+        } else {
+            v.to_be_bytes()
+        };
+        b[280 + 4 * i..284 + 4 * i].copy_from_slice(&w);
+    };
+    for i in 0..70 {
+        putf(&mut b, i, -12345.0);
+    }
+    for i in 0..40 {
+        puti(&mut b, i, -12345);
+    }
+    for c in b[440..632].chunks_mut(8) {
+        c.copy_from_slice(b"-12345  ");
+    }
+    putf(&mut b, 0, 0.01);
+    putf(&mut b, 5, 1.5);
+    putf(&mut b, 58, 0.0);
+    for (i, v) in [2001, 32, 0, 0, 0, 250, 6].iter().enumerate() {
+        puti(&mut b, i, *v);
+    }
+    puti(&mut b, 9, npts);
+    puti(&mut b, 15, 1);
+    puti(&mut b, 16, 8);
+    b[440..448].copy_from_slice(b"ABC\0xyz ");
+    b[600..608].copy_from_slice(b"HNZ     ");
+    for v in data {
+        b.extend_from_slice(&if little {
+            v.to_le_bytes()
+        } else {
+            v.to_be_bytes()
+        });
+    }
+    b
+}
+
+#[test]
+fn sac_both_byte_orders() {
+    for little in [true, false] {
+        let bytes = sac_file(little, 3, &[1.0, -2.5, 3.25]);
+        let fc = readers::sac::read(&bytes, &src("x.sac"), &ReadOptions::default()).unwrap();
+        let r = &fc.records[0];
+        assert_eq!(r.samples, vec![1.0, -2.5, 3.25]);
+        assert_eq!(r.channel.id, ".ABC..HNZ");
+        assert_eq!(r.channel.sampling_rate_hz, 100.0);
+        assert_eq!(r.channel.direction, Some(Direction::Up));
+        let t = epoch_ns_from_civil(2001, 2, 1, 0, 0, 1.75).unwrap();
+        assert_eq!(r.channel.start_ns, Some(t));
+        assert_eq!(r.channel.missing, vec!["units".to_string()]);
+    }
+}
+
+#[test]
+fn sac_short_file_is_an_error_with_offset() {
+    let bytes = sac_file(true, 5, &[1.0, 2.0]);
+    let e = readers::sac::read(&bytes, &src("x.sac"), &ReadOptions::default()).unwrap_err();
+    let (location, message) = input_error(e);
+    assert_eq!(location.byte_offset, Some(640));
+    assert!(message.contains("NPTS=5"), "{message}");
+}
+
+/// One channel in two epochs (2010–2015 and from 2015) with different
+/// elevation, dip and sensitivity.
+const STATIONXML_EPOCHS: &str = r#"<?xml version="1.0"?>
+<FDSNStationXML xmlns="http://www.fdsn.org/xml/station/1" schemaVersion="1.1">
+ <Network code="XX"><Station code="S1">
+  <Site><Name>Test site</Name></Site>
+  <Channel code="HNZ" locationCode="00" startDate="2010-01-01T00:00:00Z" endDate="2015-01-01T00:00:00Z">
+   <Elevation>5.0</Elevation><Azimuth>0</Azimuth><Dip>-90</Dip><SampleRate>100</SampleRate>
+   <Response><InstrumentSensitivity><Value>1000</Value><Frequency>1</Frequency>
+    <InputUnits><Name>M/S**2</Name></InputUnits></InstrumentSensitivity></Response>
+  </Channel>
+  <Channel code="HNZ" locationCode="00" startDate="2015-01-01T00:00:00Z">
+   <Elevation>6.0</Elevation><Azimuth>0</Azimuth><Dip>90</Dip><SampleRate>100</SampleRate>
+   <Response><InstrumentSensitivity><Value>20</Value><Frequency>1</Frequency>
+    <InputUnits><Name>cm/s**2</Name></InputUnits></InstrumentSensitivity></Response>
+  </Channel>
+ </Station></Network>
+</FDSNStationXML>"#;
+
+fn stationxml_source() -> SourceRef {
+    SourceRef {
+        format: "stationxml".into(),
+        ..src("s.xml")
+    }
+}
+
+#[test]
+fn stationxml_epochs_select_by_time() {
+    let meta = stationxml::parse(STATIONXML_EPOCHS.as_bytes(), &stationxml_source()).unwrap();
+    assert_eq!(meta.len(), 2);
+    let mut ch = Channel::new(
+        "XX.S1.00.HNZ",
+        Units::Counts {
+            counts_per_si: None,
+        },
+        100.0,
+        SourceRef {
+            format: "mseed".into(),
+            ..Default::default()
+        },
+    );
+    ch.network = Some("XX".into());
+    ch.station = Some("S1".into());
+    ch.location_code = Some("00".into());
+    ch.channel_code = Some("HNZ".into());
+    ch.start_ns = parse_iso8601_ns("2016-05-01T00:00:00Z");
+    let mut recs = vec![Record::new(ch.clone(), vec![0.0])];
+    stationxml::apply(&mut recs, &meta);
+    let c = &recs[0].channel;
+    assert_eq!(
+        c.units,
+        Units::Counts {
+            counts_per_si: Some(2000.0)
+        }
+    );
+    assert_eq!(c.direction, Some(Direction::Down));
+    assert_eq!(c.elevation_m, Some(6.0));
+    ch.start_ns = parse_iso8601_ns("2012-05-01T00:00:00Z");
+    let mut recs = vec![Record::new(ch, vec![0.0])];
+    stationxml::apply(&mut recs, &meta);
+    let c = &recs[0].channel;
+    assert_eq!(
+        c.units,
+        Units::Counts {
+            counts_per_si: Some(1000.0)
+        }
+    );
+    assert_eq!(c.direction, Some(Direction::Up));
+    assert_eq!(c.location_text.as_deref(), Some("Test site"));
+}
+
+#[test]
+fn stationxml_bad_number_names_the_line() {
+    let bad =
+        STATIONXML_EPOCHS.replace("<Elevation>5.0</Elevation>", "<Elevation>five</Elevation>");
+    let e = stationxml::parse(bad.as_bytes(), &stationxml_source()).unwrap_err();
+    let (location, message) = input_error(e);
+    assert_eq!(location.line, Some(6));
+    assert!(message.contains("five"));
 }

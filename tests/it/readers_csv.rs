@@ -6,7 +6,12 @@ use std::time::Instant;
 
 use quaketwin::error::Error;
 use quaketwin::event_folder;
-use quaketwin::readers::{self, csv::MAX_RESAMPLE_GROWTH, FileContents, ReadOptions};
+use quaketwin::readers::csv::{
+    data_like, decimal_to_ns, epoch_unit, parse_datetime_cell, parse_start_time, Zone,
+    MAX_RESAMPLE_GROWTH,
+};
+use quaketwin::readers::resample::check_grid;
+use quaketwin::readers::{self, FileContents, ReadOptions};
 use quaketwin::vocab::{epoch_ns_from_civil, QaFlag, SourceRef, Units};
 
 fn src(name: &str) -> SourceRef {
@@ -318,4 +323,137 @@ fn manifest_units_per_csv_column() {
         );
         assert_eq!(r.channel.sampling_rate_hz, 100.0);
     }
+}
+
+#[test]
+fn semicolon_with_units_and_time() {
+    let text = "# test\ntime[s];acc_x[m/s2];acc_y (g);temp\n0.00;1;2;20\n0.01;3;4;20\n0.02;5;6;20\n0.03;7;8;20\n";
+    let fc = read("x.csv", text).unwrap();
+    assert_eq!(fc.records.len(), 2);
+    assert_eq!(fc.records[0].channel.units, Units::MPerS2);
+    assert_eq!(fc.records[1].channel.units, Units::G);
+    assert_eq!(fc.records[0].channel.sampling_rate_hz, 100.0);
+    assert_eq!(fc.records[1].samples, vec![2.0, 4.0, 6.0, 8.0]);
+    assert!(fc.records[0].channel.missing.is_empty());
+}
+
+#[test]
+fn uneven_time_is_resampled() {
+    // v = 10 t sampled at uneven times: linear resampling is exact.
+    let ts = [0.0, 0.1, 0.19, 0.31, 0.4, 0.5, 0.6];
+    let mut text = String::from("t,a_x\n");
+    for t in ts {
+        text += &format!("{t},{}\n", 10.0 * t);
+    }
+    let fc = read("x.csv", &text).unwrap();
+    let r = &fc.records[0];
+    assert_eq!(r.channel.sampling_rate_hz, 10.0);
+    assert!(resampled(&fc));
+    assert_eq!(r.samples.len(), 7);
+    for (i, v) in r.samples.iter().enumerate() {
+        assert!((v - i as f64).abs() < 1e-9, "{i}: {v}");
+    }
+}
+
+#[test]
+fn whitespace_no_header_needs_rate() {
+    let text = "1 2\n3 4\n5 6\n";
+    let opts = ReadOptions {
+        sampling_rate_hz: Some(50.0),
+        columns: Some(vec!["1".into()]),
+        ..Default::default()
+    };
+    let fc = readers::csv::read(text.as_bytes(), &src("x.csv"), &opts).unwrap();
+    assert_eq!(fc.records[0].samples, vec![2.0, 4.0, 6.0]);
+    let e = readers::csv::read(
+        text.as_bytes(),
+        &src("x.csv"),
+        &ReadOptions {
+            columns: Some(vec!["0".into()]),
+            ..Default::default()
+        },
+    );
+    assert!(e.is_err());
+}
+
+#[test]
+fn xsens_start_time_zone() {
+    let (ns, _) = parse_start_time("2025-03-06_12:26:07_000 PST").unwrap();
+    assert_eq!(ns, epoch_ns_from_civil(2025, 3, 6, 20, 26, 7.0).unwrap());
+    let (ns, _) = parse_start_time("2025-04-11_11:49:50_000 PDT").unwrap();
+    assert_eq!(ns, epoch_ns_from_civil(2025, 4, 11, 18, 49, 50.0).unwrap());
+}
+
+#[test]
+fn exact_decimal_epoch_values() {
+    assert_eq!(
+        decimal_to_ns("1709294400.005", 1_000_000_000),
+        Some(1_709_294_400_005_000_000)
+    );
+    assert_eq!(
+        decimal_to_ns("1709294400005", 1_000_000),
+        Some(1_709_294_400_005_000_000)
+    );
+    assert_eq!(decimal_to_ns("-1.5", 1_000), Some(-1_500));
+    assert_eq!(
+        decimal_to_ns("1.7e12", 1_000_000),
+        None,
+        "exponent: f64 path"
+    );
+    assert_eq!(
+        decimal_to_ns("99999999999", 1_000_000_000),
+        None,
+        "past i64 ns"
+    );
+    assert_eq!(decimal_to_ns(".", 1), None);
+}
+
+#[test]
+fn epoch_unit_by_magnitude() {
+    assert_eq!(epoch_unit(1.7e9).1, "seconds");
+    assert_eq!(epoch_unit(1.7e12).1, "milliseconds");
+    assert_eq!(epoch_unit(1.7e15).1, "microseconds");
+    assert_eq!(epoch_unit(1.7e18).1, "nanoseconds");
+}
+
+#[test]
+fn datetime_cells() {
+    let noon = noon();
+    let h = 3_600_000_000_000;
+    assert_eq!(
+        parse_datetime_cell("2024-03-01T12:00:00.005Z"),
+        Some((noon + 5_000_000, Zone::Z))
+    );
+    assert_eq!(
+        parse_datetime_cell("2024-03-01 12:00:00+01:00"),
+        Some((noon - h, Zone::Offset(3600)))
+    );
+    assert_eq!(
+        parse_datetime_cell("2024-03-01T12:00:00.123456789"),
+        Some((noon + 123_456_789, Zone::Naive))
+    );
+    assert_eq!(parse_datetime_cell("2024-02-30T12:00:00"), None);
+    assert_eq!(parse_datetime_cell("2024-03-01"), None);
+    assert_eq!(parse_datetime_cell("12:00:00"), None);
+}
+
+#[test]
+fn rows_know_which_are_data() {
+    let rec = |f: &[&str]| csv::StringRecord::from(f.to_vec());
+    assert!(!data_like(&rec(&["SampleRate:", "60"])));
+    assert!(data_like(&rec(&[
+        "2024-03-01T12:00:00Z",
+        "ST01",
+        "a, b",
+        "0.1"
+    ])));
+    assert!(!data_like(&rec(&["ST01", "site", "0.1"])));
+    assert!(data_like(&rec(&["ST01", "0.2", "0.1"])));
+}
+
+#[test]
+fn absurd_spans_are_refused_before_allocating() {
+    assert!(check_grid(200, 1e9, 0.01).is_err());
+    assert!(check_grid(200, f64::INFINITY, 0.01).is_err());
+    assert_eq!(check_grid(200, 1.99, 0.01), Ok(200));
 }

@@ -5,6 +5,11 @@
 //! printed rounding.  Bad-input tests use crafted byte strings.
 
 use quaketwin::error::Error;
+use quaketwin::readers::resample::{median_step, resample_linear};
+use quaketwin::readers::textfmt::{
+    line_values, parse_number, signed_degrees, split_free, units_from_text, us_datetime_ns, Layout,
+    NumError,
+};
 use quaketwin::readers::{self, FileContents, Format, ReadOptions};
 use quaketwin::vocab::{epoch_ns_from_civil, Direction, QaFlag, Record, SourceRef, Units};
 use std::io::Read;
@@ -1665,4 +1670,90 @@ fn shared_header_counts_of_a_trillion_are_errors_not_aborts() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("comment lines") && e.contains(rel), "{e}");
+}
+
+// The shared pieces of the text readers on their own: uneven times onto a
+// uniform grid, Fortran numbers and layouts, unit words, civil times.
+
+#[test]
+fn linear_resampling_reproduces_a_line() {
+    // A straight line is reproduced exactly by linear interpolation.
+    let t = [0.0, 0.013, 0.02, 0.041, 0.05];
+    let v: Vec<f64> = t.iter().map(|x| 3.0 * x - 1.0).collect();
+    let r = resample_linear(&t, &v, 0.01);
+    assert_eq!(r.len(), 6);
+    for (k, y) in r.iter().enumerate() {
+        assert!((y - (3.0 * (k as f64 * 0.01) - 1.0)).abs() < 1e-12);
+    }
+    assert!((median_step(&t) - 0.011).abs() < 1e-12);
+}
+
+#[test]
+fn fortran_numbers() {
+    assert_eq!(parse_number(" -.8075668E-03"), Ok(-0.8075668e-3));
+    assert_eq!(parse_number("1.5D+02"), Ok(150.0));
+    assert_eq!(
+        parse_number("1.234-105").map(|v| (v / 1.234e-105 - 1.0).abs() < 1e-12),
+        Ok(true)
+    );
+    assert_eq!(parse_number("NaN"), Err(NumError::NonFinite));
+    assert_eq!(parse_number("abc"), Err(NumError::NotANumber));
+    assert_eq!(
+        split_free("-1.234E-02-5.678E-03 1.5057E+0-2.2223E+0"),
+        vec!["-1.234E-02", "-5.678E-03", "1.5057E+0", "-2.2223E+0"]
+    );
+    assert_eq!(
+        Layout::from_fortran("(8F10.5)"),
+        Some(Layout::Fixed {
+            per_line: 8,
+            width: 10
+        })
+    );
+    assert_eq!(
+        Layout::from_fortran("(1I8)"),
+        Some(Layout::Fixed {
+            per_line: 1,
+            width: 8
+        })
+    );
+    assert_eq!(
+        Layout::from_fortran("8f10.6"),
+        Some(Layout::Fixed {
+            per_line: 8,
+            width: 10
+        })
+    );
+    // Fields that touch: fixed widths separate them.
+    let v = line_values(
+        "  1234.5671234.567   -1.000",
+        Layout::Fixed {
+            per_line: 8,
+            width: 10,
+        },
+    )
+    .unwrap();
+    assert_eq!(v, vec![1234.567, 1234.567, -1.0]);
+}
+
+#[test]
+fn units_and_times() {
+    assert_eq!(units_from_text("CM/SEC/SEC"), Ok(Units::CmPerS2));
+    assert_eq!(units_from_text("(g)"), Ok(Units::G));
+    assert_eq!(
+        units_from_text("counts(50)"),
+        Ok(Units::Counts {
+            counts_per_si: None
+        })
+    );
+    assert!(units_from_text("furlongs").is_err());
+    // 05/02/83 16:42:48.2 PDT = 23:42:48.2 UTC.
+    assert_eq!(
+        us_datetime_ns("05/02/83", "16:42:48.2", "PDT"),
+        epoch_ns_from_civil(1983, 5, 2, 23, 42, 48.2)
+    );
+    assert_eq!(
+        us_datetime_ns("9/30/23", "15:26: 1.0", "UTC"),
+        epoch_ns_from_civil(2023, 9, 30, 15, 26, 1.0)
+    );
+    assert_eq!(signed_degrees("115.448W,"), Some(-115.448));
 }

@@ -12,8 +12,12 @@ use arrow_array::cast::AsArray;
 use arrow_array::types::{Float64Type, Int64Type};
 use arrow_array::Array;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
-use quaketwin::report::{self, IotaStatistic, ReportSettings};
+use quaketwin::report::plot::{decimate_min_max, render, Chart, Mark, Series};
+use quaketwin::report::{
+    self, decimate_curve, escape, format_number, IotaStatistic, Rating, ReportSettings,
+};
 use quaketwin::sinks::parquet::{write_parquet, TableBuilder};
+use quaketwin::Error;
 
 const SECTION_IDS: [&str; 11] = [
     "summary",
@@ -704,4 +708,117 @@ fn sample_report_renders_in_headless_chromium() {
         assert!(offending.is_empty(), "console: {offending:?}");
     }
     println!("screenshot: {} ({size} bytes)", shot.display());
+}
+
+// The report's pieces on their own: number formatting and escaping, rating
+// thresholds and settings, trace decimation, the inline SVG chart.
+
+#[test]
+fn numbers_have_four_significant_digits() {
+    assert_eq!(format_number(0.012346), "0.01235");
+    assert_eq!(format_number(1.5), "1.500");
+    assert_eq!(format_number(1234.5678), "1235");
+    assert_eq!(format_number(2.5e-5), "2.500e-5");
+    assert_eq!(format_number(0.0), "0");
+    assert_eq!(format_number(-3.0), "-3.000");
+}
+
+#[test]
+fn escaping_covers_markup() {
+    assert_eq!(
+        escape("<a href=\"x\">&'"),
+        "&lt;a href=&quot;x&quot;&gt;&amp;&#39;"
+    );
+}
+
+#[test]
+fn thresholds_are_half_open_intervals() {
+    let s = ReportSettings::default();
+    assert_eq!(s.drift.rate(0.004_999), Some(Rating::Green));
+    assert_eq!(s.drift.rate(0.005), Some(Rating::Yellow));
+    assert_eq!(s.drift.rate(0.014_999), Some(Rating::Yellow));
+    assert_eq!(s.drift.rate(0.015), Some(Rating::Red));
+    assert_eq!(s.iota.rate(0.019), Some(Rating::Green));
+    assert_eq!(s.iota.rate(0.02), Some(Rating::Yellow));
+    assert_eq!(s.iota.rate(0.05), Some(Rating::Red));
+    assert_eq!(s.iota.rate(f64::NAN), None);
+}
+
+#[test]
+fn settings_deserialise_with_defaults_and_validate() {
+    let s: ReportSettings = toml::from_str("drift = { yellow = 0.004, red = 0.01 }").unwrap();
+    assert_eq!(s.drift.yellow, 0.004);
+    assert_eq!(s.iota, ReportSettings::default().iota);
+    assert!(s.validate().is_ok());
+    let bad: ReportSettings = toml::from_str("iota = { yellow = 0.1, red = 0.05 }").unwrap();
+    assert!(matches!(bad.validate(), Err(Error::Usage(_))));
+    assert!(toml::from_str::<ReportSettings>("colour = 1").is_err());
+}
+
+#[test]
+fn curve_decimation_keeps_the_loop_shape_and_its_extremes() {
+    // A drifting, growing loop: 40 cycles, 20 000 samples.
+    let pts: Vec<(f64, f64)> = (0..20_000)
+        .map(|i| {
+            let t = i as f64 / 500.0;
+            let a = 0.2 + t / 40.0;
+            (
+                a * (2.0 * std::f64::consts::PI * t).sin() - 0.002 * t,
+                a * (2.0 * std::f64::consts::PI * t - 0.6).sin(),
+            )
+        })
+        .collect();
+    let d = decimate_curve(&pts, 1500);
+    assert!(d.len() <= 1500 && d.len() > 1000, "{}", d.len());
+    let max_x = |p: &[(f64, f64)]| p.iter().map(|q| q.0).fold(f64::MIN, f64::max);
+    let min_x = |p: &[(f64, f64)]| p.iter().map(|q| q.0).fold(f64::MAX, f64::min);
+    assert_eq!(max_x(&d), max_x(&pts));
+    assert_eq!(min_x(&d), min_x(&pts));
+    // The positive drift peak of every cycle survives within 2 % of the range.
+    let kept: Vec<usize> = d
+        .iter()
+        .map(|p| pts.iter().position(|q| q == p).unwrap())
+        .collect();
+    let span = max_x(&pts) - min_x(&pts);
+    for c in 0..40 {
+        let peak = max_x(&pts[c * 500..(c + 1) * 500]);
+        let drawn = kept
+            .iter()
+            .filter(|&&i| i / 500 == c)
+            .map(|&i| pts[i].0)
+            .fold(f64::MIN, f64::max);
+        assert!(
+            (peak - drawn).abs() < 0.02 * span,
+            "cycle {c}: {peak} vs {drawn}"
+        );
+    }
+}
+
+#[test]
+fn decimation_keeps_extremes_and_bounds_size() {
+    let pts: Vec<(f64, f64)> = (0..10_000)
+        .map(|i| (i as f64, ((i as f64) * 0.01).sin()))
+        .chain(std::iter::once((10_000.0, 5.0)))
+        .collect();
+    let d = decimate_min_max(&pts, 2000);
+    assert!(d.len() <= 2000, "{}", d.len());
+    assert!(d.iter().any(|p| p.1 == 5.0));
+    assert!(d.windows(2).all(|w| w[0].0 < w[1].0));
+}
+
+#[test]
+fn chart_is_inline_svg_without_urls() {
+    let mut c = Chart::new(300, 200, "period (s)", "PSA (m/s²)");
+    c.log_x = true;
+    c.series.push(Series::new(
+        "a",
+        vec![(0.05, 1.0), (0.5, 3.0), (2.0, 0.5)],
+        0,
+        Mark::Line,
+    ));
+    let svg = render(&c).unwrap();
+    assert!(svg.starts_with("<svg class=\"plot\""), "{}", &svg[..60]);
+    assert!(!svg.contains("http"));
+    assert!(svg.contains("period (s)"));
+    assert!(svg.contains("<polyline"));
 }

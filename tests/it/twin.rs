@@ -4,15 +4,23 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
+use faer::{Mat, Side};
+use quaketwin::rng::Rng;
+
 use quaketwin::twin::benchmark::{thesis_cantilever_toml, TRUE_MODULI};
 use quaketwin::twin::eigen::{dense_modes, lanczos_modes, LanczosOptions};
 use quaketwin::twin::ensemble::{run_ensemble, EnsembleOptions, Selection};
 use quaketwin::twin::guyan::guyan_reduce;
+use quaketwin::twin::matrix_market::{
+    format_matrix_market_general, format_matrix_market_symmetric, parse_matrix_market,
+};
 use quaketwin::twin::newmark::{newmark_base_excitation, rayleigh_coefficients, NewmarkSettings};
 use quaketwin::twin::objective::{
     compare_modes, mac, MeasuredMode, MeasuredModes, ModalObjective, ObjectiveOptions,
 };
 use quaketwin::twin::optimisers::{default_solvers, Bounds};
+use quaketwin::twin::sparse::CscMatrix;
+use quaketwin::twin::tridiagonal::tridiagonal_eigen;
 use quaketwin::twin::{parse_twin, updated_twin_toml, Twin};
 use quaketwin::Error;
 
@@ -914,8 +922,6 @@ fn update_twin_returns_outputs_and_an_updated_file() {
 #[test]
 fn matrix_market_twin_reproduces_the_mesh_twin() {
     use quaketwin::sinks::matrix_market::write_matrix_market_symmetric;
-    use quaketwin::twin::matrix_market::parse_matrix_market;
-    use quaketwin::twin::sparse::CscMatrix;
     let mesh = twin(&thesis_cantilever_toml([5.05e9; 3]));
     let sys = &mesh.system;
     let dir = tempfile::tempdir().unwrap();
@@ -965,4 +971,60 @@ fn matrix_market_twin_reproduces_the_mesh_twin() {
         matches!(e, Error::Input { ref location, .. } if location.file == "bad.mtx" && location.line == Some(3)),
         "{e}"
     );
+}
+
+// The Matrix Market text and the tridiagonal eigensolver on their own.
+
+#[test]
+fn both_writers_keep_their_exact_text_and_read_back() {
+    let mut a = faer::Mat::<f64>::zeros(2, 2);
+    a[(0, 0)] = 2.0;
+    a[(1, 0)] = -0.5;
+    a[(0, 1)] = -0.5;
+    let general = format_matrix_market_general(a.as_ref(), &["note".to_string()]);
+    assert_eq!(
+        general,
+        "%%MatrixMarket matrix coordinate real general\n% note\n2 2 3\n\
+         1 1 2.00000000000000000e0\n2 1 -5.00000000000000000e-1\n1 2 -5.00000000000000000e-1\n"
+    );
+    let symmetric = format_matrix_market_symmetric(&CscMatrix::from_dense(a.as_ref()));
+    assert_eq!(
+        symmetric,
+        "%%MatrixMarket matrix coordinate real symmetric\n2 2 2\n\
+         1 1 2.00000000000000000e0\n2 1 -5.00000000000000000e-1\n"
+    );
+    for text in [general, symmetric] {
+        let back = parse_matrix_market(&text, "m.mtx").unwrap();
+        assert_eq!(back.to_dense()[(1, 0)], -0.5);
+    }
+}
+
+#[test]
+fn matches_faer_on_a_random_tridiagonal() {
+    let mut rng = Rng::new(3);
+    let n = 17;
+    let d: Vec<f64> = (0..n).map(|_| rng.uniform_in(-2.0, 2.0)).collect();
+    let o: Vec<f64> = (0..n - 1).map(|_| rng.uniform_in(-1.0, 1.0)).collect();
+    let (vals, vecs) = tridiagonal_eigen(&d, &o).unwrap();
+    let mut t = Mat::<f64>::zeros(n, n);
+    for i in 0..n {
+        t[(i, i)] = d[i];
+        if i + 1 < n {
+            t[(i, i + 1)] = o[i];
+            t[(i + 1, i)] = o[i];
+        }
+    }
+    let reference = t.self_adjoint_eigenvalues(Side::Lower).unwrap();
+    for (a, b) in vals.iter().zip(reference.iter()) {
+        assert!((a - b).abs() < 1e-12, "{a} vs {b}");
+    }
+    // T v = λ v and unit norm.
+    for (lam, v) in vals.iter().zip(vecs.iter()) {
+        let norm: f64 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!((norm - 1.0).abs() < 1e-12);
+        for i in 0..n {
+            let tv: f64 = (0..n).map(|j| t[(i, j)] * v[j]).sum();
+            assert!((tv - lam * v[i]).abs() < 1e-11);
+        }
+    }
 }
