@@ -430,6 +430,16 @@ mod tests {
         }
     }
 
+    /// [`compare_events`] with the modes' own std (no floor).
+    fn compare(reference: (&[Mode], &[String]), current: (&[Mode], &[String])) -> Comparison {
+        let set = |(modes, channels)| ModeSet { modes, channels };
+        let settings = PairingSettings {
+            frequency_std_floor: 0.0,
+            ..Default::default()
+        };
+        compare_events(set(reference), set(current), &settings)
+    }
+
     #[test]
     fn pairing_follows_mac_not_order() {
         let a = vec![real(&[1.0, 1.0, 1.0]), real(&[1.0, 0.0, -1.0])];
@@ -464,20 +474,7 @@ mod tests {
             // Same shape as reference mode 2 but 30 % off: outside the window.
             mode(7.9, 0.006, "X", &[-0.8, 0.2, 0.0, 0.9]),
         ];
-        let c = compare_events(
-            ModeSet {
-                modes: &reference,
-                channels: &ref_ids,
-            },
-            ModeSet {
-                modes: &current,
-                channels: &cur_ids,
-            },
-            &PairingSettings {
-                frequency_std_floor: 0.0,
-                ..Default::default()
-            },
-        );
+        let c = compare((&reference, &ref_ids), (&current, &cur_ids));
         assert_eq!(c.shared_channels, ids(&["A", "C", "D"]));
         assert_eq!(c.basis, PairingBasis::MacAndFrequency);
         assert_eq!(c.shifts.len(), 1, "{:?}", c.shifts);
@@ -508,20 +505,7 @@ mod tests {
             mode(2.15, 0.0, "X", &[1.0, 0.1]),
             mode(2.1, 0.0, "Y", &[0.3, 1.0]),
         ];
-        let c = compare_events(
-            ModeSet {
-                modes: &reference,
-                channels: &ref_ids,
-            },
-            ModeSet {
-                modes: &current,
-                channels: &cur_ids,
-            },
-            &PairingSettings {
-                frequency_std_floor: 0.0,
-                ..Default::default()
-            },
-        );
+        let c = compare((&reference, &ref_ids), (&current, &cur_ids));
         assert_eq!(c.basis, PairingBasis::FrequencyAndDirection);
         assert_eq!(c.shared_channels, ids(&["A"]));
         let pairs: Vec<(usize, usize)> = c

@@ -51,7 +51,7 @@ pub fn x_record(
     Record::new(c, samples)
 }
 
-pub fn batches(path: &std::path::Path) -> Vec<arrow_array::RecordBatch> {
+fn batches(path: &std::path::Path) -> Vec<arrow_array::RecordBatch> {
     let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file)
         .unwrap()

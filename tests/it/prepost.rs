@@ -13,8 +13,6 @@ use quaketwin::rng::Rng;
 use quaketwin::synth::event::{sample_building, write_quake_event, QuakeEvent, SynthSettings};
 use quaketwin::synth::ShearBuilding;
 
-use super::common::{column_f64, column_str};
-
 /// Storey-1 stiffness of the X direction after the damage, as a fraction.
 const RETAINED_K1_X: f64 = 0.92;
 
@@ -83,37 +81,29 @@ struct Shifts {
 
 fn read_shifts(out: &Path) -> Shifts {
     let p = out.join("frequency_shifts.parquet");
-    let b = super::common::batches(&p);
-    let mut significant = Vec::new();
-    let mut shared = Vec::new();
-    for batch in &b {
-        use arrow_array::Array;
-        let s = batch
-            .column_by_name("significant")
-            .unwrap()
-            .as_any()
-            .downcast_ref::<arrow_array::BooleanArray>()
-            .unwrap()
-            .clone();
-        significant.extend((0..s.len()).map(|i| (!s.is_null(i)).then(|| s.value(i))));
-        let n = batch
-            .column_by_name("shared_channels")
-            .unwrap()
-            .as_any()
-            .downcast_ref::<arrow_array::UInt32Array>()
-            .unwrap()
-            .clone();
-        shared.extend(n.values().iter().copied());
-    }
+    let t = quaketwin::report::table::load(&p, None).unwrap();
+    let numbers = |c: &str| -> Vec<f64> {
+        let v = t
+            .number(c)
+            .unwrap_or_else(|| panic!("no number column {c}"));
+        v.iter().map(|x| x.unwrap_or(f64::NAN)).collect()
+    };
+    let texts = |c: &str| -> Vec<String> {
+        let v = t.text(c).unwrap_or_else(|| panic!("no text column {c}"));
+        v.iter().map(|x| x.clone().unwrap_or_default()).collect()
+    };
     Shifts {
-        direction: column_str(&p, "direction_current"),
-        f_reference: column_f64(&p, "frequency_reference_hz"),
-        shift_percent: column_f64(&p, "shift_percent"),
-        shift_std_percent: column_f64(&p, "shift_std_percent"),
-        significant,
-        mac: column_f64(&p, "mac"),
-        shared,
-        pairing: column_str(&p, "pairing"),
+        direction: texts("direction_current"),
+        f_reference: numbers("frequency_reference_hz"),
+        shift_percent: numbers("shift_percent"),
+        shift_std_percent: numbers("shift_std_percent"),
+        significant: t.boolean("significant").unwrap().to_vec(),
+        mac: numbers("mac"),
+        shared: numbers("shared_channels")
+            .iter()
+            .map(|&n| n as u32)
+            .collect(),
+        pairing: texts("pairing"),
     }
 }
 
