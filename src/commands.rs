@@ -180,8 +180,61 @@ pub fn run_pipeline(
     out: &Path,
     quiet: bool,
 ) -> Result<Vec<(String, StageOutcome)>> {
-    let p = load_pipeline(pipeline_path)?;
+    run_pipeline_with(pipeline_path, event, out, None, quiet)
+}
+
+/// `quaketwin run PIPELINE EVENT --out DIR [--reference EARLIER_RUN]`.
+pub fn run_pipeline_with(
+    pipeline_path: &Path,
+    event: &Path,
+    out: &Path,
+    reference: Option<&Path>,
+    quiet: bool,
+) -> Result<Vec<(String, StageOutcome)>> {
+    let p = load_run_pipeline(pipeline_path, out, reference)?;
     pipeline::run(&p, event, out, quiet)
+}
+
+/// The pipeline of `quaketwin run`, with `--reference` set into its modal
+/// stages (checked first: usage errors, exit 2, before any event is read).
+fn load_run_pipeline(
+    pipeline_path: &Path,
+    out: &Path,
+    reference: Option<&Path>,
+) -> Result<crate::pipeline::Pipeline> {
+    match reference {
+        None => load_pipeline(pipeline_path),
+        Some(r) => {
+            let file = check_reference(r, out)?;
+            crate::stages::load_pipeline_with_reference(pipeline_path, &path_text(&file)?)
+        }
+    }
+}
+
+/// The `modes.parquet` of `--reference` (an earlier run's output directory
+/// or the file itself): usage errors naming the path when it is missing,
+/// not a modes table, or inside the output directory `out` (which the run
+/// rewrites).
+pub fn check_reference(reference: &Path, out: &Path) -> Result<std::path::PathBuf> {
+    let file = crate::sinks::modal_tables::locate_modes(reference)
+        .map_err(|e| crate::error::Error::usage(format!("--reference: {e}")))?;
+    if let (Ok(f), Ok(o)) = (std::fs::canonicalize(&file), std::fs::canonicalize(out)) {
+        if f.starts_with(&o) {
+            return Err(crate::error::Error::usage(format!(
+                "--reference {}: lies inside the output directory {}, which this run rewrites: give the output directory of an earlier run",
+                reference.display(),
+                out.display()
+            )));
+        }
+    }
+    Ok(file)
+}
+
+/// A path as pipeline-file text (usage error when it is not UTF-8).
+fn path_text(p: &Path) -> Result<String> {
+    p.to_str().map(str::to_string).ok_or_else(|| {
+        crate::error::Error::usage(format!("{}: path is not valid UTF-8", p.display()))
+    })
 }
 
 /// The pipeline `quaketwin ingest` runs (a copy of pipelines/ingest.toml
@@ -265,6 +318,8 @@ pub struct ModalFlags {
     pub block_rows: Option<String>,
     pub orders: Option<String>,
     pub inputs: Option<String>,
+    /// `--reference`: an earlier run's output directory or modes.parquet.
+    pub reference: Option<std::path::PathBuf>,
 }
 
 fn numbers<T: std::str::FromStr>(flag: &str, text: &str, counts: &[usize]) -> Result<Vec<T>> {
@@ -328,11 +383,20 @@ impl ModalFlags {
 }
 
 /// `quaketwin modal EVENT --out DIR [--method M] [--band LO,HI] [--decimate N]
-/// [--block-rows N] [--orders MIN,MAX] [--inputs ID,…]`: ingest + condition + modal.
+/// [--block-rows N] [--orders MIN,MAX] [--inputs ID,…] [--reference EARLIER_RUN]`:
+/// ingest + condition + modal (+ frequency_shifts.parquet).
 pub fn modal(event: &Path, out: &Path, flags: &ModalFlags, quiet: bool) -> Result<()> {
+    let mut params = flags.params_toml()?;
+    if let Some(r) = &flags.reference {
+        let file = path_text(&check_reference(r, out)?)?;
+        params += &format!(
+            "{} = {}\n",
+            crate::stages::prepost::REFERENCE_KEY,
+            toml::Value::String(file)
+        );
+    }
     let text = format!(
-        "{INGEST_PIPELINE}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\n{}",
-        flags.params_toml()?
+        "{INGEST_PIPELINE}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\n{params}"
     );
     let p = parse_pipeline(&text, "built-in modal pipeline")?;
     pipeline::run(&p, event, out, quiet).map(|_| ())
@@ -461,8 +525,19 @@ pub fn run_many(
     out: &Path,
     quiet: bool,
 ) -> Result<Vec<(std::path::PathBuf, Result<()>)>> {
+    run_many_with(pipeline_path, events, out, None, quiet)
+}
+
+/// [`run_many`] with `--reference` (the same earlier run for every event).
+pub fn run_many_with(
+    pipeline_path: &Path,
+    events: &[std::path::PathBuf],
+    out: &Path,
+    reference: Option<&Path>,
+    quiet: bool,
+) -> Result<Vec<(std::path::PathBuf, Result<()>)>> {
     use rayon::prelude::*;
-    let p = load_pipeline(pipeline_path)?;
+    let p = load_run_pipeline(pipeline_path, out, reference)?;
     let results: Vec<(std::path::PathBuf, Result<()>)> = events
         .par_iter()
         .map(|e| {

@@ -84,6 +84,10 @@ enum Command {
         /// Input channel ids ID,ID,… for io (default: horizontal base channels).
         #[arg(long)]
         inputs: Option<String>,
+        /// An earlier run of the same structure (its output directory, or its
+        /// modes.parquet): pair the modes and write frequency_shifts.parquet.
+        #[arg(long, value_name = "DIR_OR_FILE")]
+        reference: Option<PathBuf>,
     },
     /// Bouc-Wen identification and damage index (bouc_wen.parquet, damage.parquet…).
     Hysteresis {
@@ -121,6 +125,11 @@ enum Command {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
+        /// An earlier run of the same structure (its output directory, holding
+        /// modes.parquet): every modal stage pairs its modes with it and writes
+        /// frequency_shifts.parquet.
+        #[arg(long, value_name = "DIR")]
+        reference: Option<PathBuf>,
     },
 }
 
@@ -156,6 +165,7 @@ fn main() -> ExitCode {
             block_rows,
             orders,
             inputs,
+            reference,
         } => {
             let flags = quaketwin::commands::ModalFlags {
                 method: method.clone(),
@@ -164,6 +174,7 @@ fn main() -> ExitCode {
                 block_rows: block_rows.clone(),
                 orders: orders.clone(),
                 inputs: inputs.clone(),
+                reference: reference.clone(),
             };
             quaketwin::commands::modal(event, out, &flags, cli.quiet)
         }
@@ -184,20 +195,24 @@ fn main() -> ExitCode {
             pipeline,
             event,
             out,
+            reference,
         } => {
             let events = quaketwin::commands::expand_events(event);
+            let reference = reference.as_deref();
             if event.len() == 1 && events.len() == 1 && events[0] == event[0] {
-                quaketwin::commands::run_pipeline(pipeline, &events[0], out, cli.quiet).map(|_| ())
+                quaketwin::commands::run_pipeline_with(
+                    pipeline, &events[0], out, reference, cli.quiet,
+                )
+                .map(|_| ())
             } else {
-                quaketwin::commands::run_many(pipeline, &events, out, cli.quiet).and_then(
-                    |results| {
+                quaketwin::commands::run_many_with(pipeline, &events, out, reference, cli.quiet)
+                    .and_then(|results| {
                         results
                             .into_iter()
                             .map(|(_, r)| r)
                             .find(|r| r.is_err())
                             .unwrap_or(Ok(()))
-                    },
-                )
+                    })
             }
         }
     };

@@ -1,10 +1,41 @@
-//! Helpers for later stages: MAC matrix between two mode sets, pairing of
-//! modes, and frequency shifts between two events of the same structure
-//! (pre/post earthquake) as a damage indicator.
+//! Pre/post comparison of two events of the same structure (issue 13): the
+//! modes of a reference (earlier) event paired with this event's on the
+//! channels both share, and the frequency shift of each pair with its
+//! uncertainty, a damage indicator (a drop = stiffness loss).
+//!
+//! Pairing (deterministic, greedy one-to-one, best candidate first):
+//! - shapes are given at channel ids (`quaketwin.output_channels`); both are
+//!   restricted to the ids both events share, in the reference's order, and
+//!   renormalised (largest component 1);
+//! - with at least [`MIN_SHARED_FOR_MAC`] shared channels a pair needs
+//!   MAC ≥ `min_mac` AND |f − f_ref|/f_ref ≤ `frequency_window`; candidates
+//!   are taken by decreasing MAC (ties: smaller |Δf|, then smaller indices).
+//!   A mode holding less than [`MIN_SHARED_ENERGY`] of its shape's energy on
+//!   the shared channels is not paired (its MAC there would be noise);
+//! - with fewer shared channels a MAC says nothing (one component: always 1),
+//!   so a pair needs the frequency window and the same direction label
+//!   (`direction` of modes.parquet); candidates are taken by increasing |Δf|.
+//!
+//! Shift and uncertainty: s = (f − f_ref)/f_ref; with the two frequency
+//! standard deviations σ, σ_ref (independent estimates), first-order
+//! propagation gives σ_s = √((σ/f_ref)² + (f σ_ref/f_ref²)²).  A shift is
+//! significant when |s| > 2 σ_s; unknown (None) when both σ are zero.
+//! Each σ is taken at least `frequency_std_floor` × f: `frequency_std_hz`
+//! of modes.parquet is the scatter of the poles over the model orders of
+//! one record, which understates the statistical error of the estimate
+//! (the sample building identified from its quake and from its ambient
+//! record: order scatter 1e-5–0.2 %, the two records' frequencies 0.1–0.3 %
+//! apart; 20 synthetic 600-s ambient records: std of Δf/f 0.11–0.19 %).
 
-use super::poles::mac;
+use super::poles::{mac, normalise_shape};
 use super::selection::Mode;
 use faer::c64;
+
+/// Fewest shared channels for pairing by MAC.
+pub const MIN_SHARED_FOR_MAC: usize = 2;
+/// Least share of a shape's energy Σ|φ_k|² on the shared channels for the
+/// mode to be paired by MAC.
+pub const MIN_SHARED_ENERGY: f64 = 0.05;
 
 /// MAC matrix: `result[i][j]` = MAC(a_i, b_j).  Shapes must refer to the
 /// same channels in the same order (shorter vectors are compared on the common prefix).
@@ -24,81 +55,346 @@ pub struct ModePair {
     pub mac: f64,
 }
 
-/// Greedy pairing by decreasing MAC: repeatedly takes the unpaired pair with
-/// the highest MAC (ties broken by the smaller indices, so the result is
-/// deterministic) until no pair reaches `min_mac`.  Greedy rather than the
-/// Hungarian assignment because mode sets are small and a high-MAC pair is
-/// almost never worth sacrificing for the global sum.
-pub fn pair_modes(a: &[Vec<c64>], b: &[Vec<c64>], min_mac: f64) -> Vec<ModePair> {
-    let m = mac_matrix(a, b);
-    let mut candidates: Vec<(usize, usize, f64)> = m
-        .iter()
-        .enumerate()
-        .flat_map(|(i, row)| row.iter().enumerate().map(move |(j, &v)| (i, j, v)))
-        .collect();
-    candidates.sort_by(|x, y| y.2.total_cmp(&x.2).then(x.0.cmp(&y.0)).then(x.1.cmp(&y.1)));
-    let (mut used_a, mut used_b) = (vec![false; a.len()], vec![false; b.len()]);
-    let mut pairs = Vec::new();
-    for (i, j, v) in candidates {
-        if v < min_mac {
-            break;
-        }
+/// Greedy one-to-one assignment: `candidates` (i, j, score) sorted best
+/// first by the caller; a candidate is taken when neither of its modes is
+/// taken yet.  Returns the pairs taken, by `i`.
+fn assign(candidates: &[(usize, usize, f64)], n_a: usize, n_b: usize) -> Vec<(usize, usize, f64)> {
+    let (mut used_a, mut used_b) = (vec![false; n_a], vec![false; n_b]);
+    let mut taken = Vec::new();
+    for &(i, j, v) in candidates {
         if !used_a[i] && !used_b[j] {
             used_a[i] = true;
             used_b[j] = true;
-            pairs.push(ModePair {
-                reference: i,
-                other: j,
-                mac: v,
-            });
+            taken.push((i, j, v));
         }
     }
-    pairs.sort_by_key(|p| p.reference);
-    pairs
+    taken.sort_by_key(|p| p.0);
+    taken
+}
+
+/// Greedy pairing by decreasing MAC (ties broken by the smaller indices)
+/// of every pair reaching `min_mac`.  Greedy rather than the Hungarian
+/// assignment because mode sets are small and a high-MAC pair is almost
+/// never worth sacrificing for the global sum.
+pub fn pair_modes(a: &[Vec<c64>], b: &[Vec<c64>], min_mac: f64) -> Vec<ModePair> {
+    let mut candidates: Vec<(usize, usize, f64)> = mac_matrix(a, b)
+        .iter()
+        .enumerate()
+        .flat_map(|(i, row)| row.iter().enumerate().map(move |(j, &v)| (i, j, v)))
+        .filter(|c| c.2 >= min_mac)
+        .collect();
+    candidates.sort_by(|x, y| y.2.total_cmp(&x.2).then(x.0.cmp(&y.0)).then(x.1.cmp(&y.1)));
+    assign(&candidates, a.len(), b.len())
+        .into_iter()
+        .map(|(reference, other, mac)| ModePair {
+            reference,
+            other,
+            mac,
+        })
+        .collect()
+}
+
+/// Settings of the pre/post pairing (the `modal` stage's
+/// `reference_min_mac` and `reference_frequency_window`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PairingSettings {
+    /// Least MAC of a pair on the shared channels.
+    pub min_mac: f64,
+    /// Largest |f − f_ref| / f_ref of a pair.
+    pub frequency_window: f64,
+    /// Least relative standard deviation of each frequency in the shift's
+    /// uncertainty (module doc); 0 = the modes' `frequency_std_hz` alone.
+    pub frequency_std_floor: f64,
+}
+
+impl Default for PairingSettings {
+    fn default() -> Self {
+        PairingSettings {
+            min_mac: 0.8,
+            frequency_window: 0.2,
+            frequency_std_floor: 0.002,
+        }
+    }
+}
+
+/// One event's modes and the channel ids their shapes are given at.
+#[derive(Debug, Clone, Copy)]
+pub struct ModeSet<'a> {
+    pub modes: &'a [Mode],
+    pub channels: &'a [String],
+}
+
+/// What the pairing of a comparison was based on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PairingBasis {
+    /// MAC on the shared channels and the frequency window.
+    MacAndFrequency,
+    /// Fewer than [`MIN_SHARED_FOR_MAC`] shared channels: the frequency
+    /// window and the direction label.
+    FrequencyAndDirection,
+}
+
+impl PairingBasis {
+    /// The name written to `frequency_shifts.parquet` (`pairing`).
+    pub fn name(self) -> &'static str {
+        match self {
+            PairingBasis::MacAndFrequency => "mac_and_frequency",
+            PairingBasis::FrequencyAndDirection => "frequency_and_direction",
+        }
+    }
 }
 
 /// Frequency and damping change of one paired mode between two events.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrequencyShift {
+    /// Index in the reference set.
     pub reference_mode: usize,
-    pub other_mode: usize,
+    /// Index in this (current) event's set.
+    pub current_mode: usize,
+    pub direction_reference: String,
+    pub direction_current: String,
     pub frequency_reference_hz: f64,
-    pub frequency_other_hz: f64,
-    /// (f_other − f_ref) / f_ref; a drop (negative) indicates stiffness loss.
-    pub relative_shift: f64,
-    /// Shift divided by the combined standard deviation of the two estimates
-    /// (0 when both standard deviations are zero).
-    pub shift_in_std: f64,
+    pub frequency_reference_std_hz: f64,
+    pub frequency_current_hz: f64,
+    pub frequency_current_std_hz: f64,
+    /// 100 (f − f_ref)/f_ref; a drop (negative) indicates stiffness loss.
+    pub shift_percent: f64,
+    /// Its standard deviation (module doc, with the floor), %.
+    pub shift_std_percent: f64,
+    /// |shift| > 2σ; None when the uncertainty is unknown (both σ zero).
+    pub significant: Option<bool>,
     pub damping_reference: f64,
-    pub damping_other: f64,
-    pub mac: f64,
+    pub damping_current: f64,
+    /// MAC on the shared channels; None when paired by frequency and direction.
+    pub mac: Option<f64>,
 }
 
-/// Pairs two identified mode sets by MAC and reports the frequency shifts.
-pub fn frequency_shifts(reference: &[Mode], other: &[Mode], min_mac: f64) -> Vec<FrequencyShift> {
-    let a: Vec<Vec<c64>> = reference.iter().map(|m| m.shape.clone()).collect();
-    let b: Vec<Vec<c64>> = other.iter().map(|m| m.shape.clone()).collect();
-    pair_modes(&a, &b, min_mac)
-        .into_iter()
-        .map(|p| {
-            let (r, o) = (&reference[p.reference], &other[p.other]);
-            let combined_std = (r.frequency_std_hz.powi(2) + o.frequency_std_hz.powi(2)).sqrt();
-            let diff = o.frequency_hz - r.frequency_hz;
-            FrequencyShift {
-                reference_mode: p.reference,
-                other_mode: p.other,
-                frequency_reference_hz: r.frequency_hz,
-                frequency_other_hz: o.frequency_hz,
-                relative_shift: diff / r.frequency_hz,
-                shift_in_std: if combined_std > 0.0 {
-                    diff / combined_std
-                } else {
-                    0.0
-                },
-                damping_reference: r.damping_ratio,
-                damping_other: o.damping_ratio,
-                mac: p.mac,
-            }
+/// The pre/post comparison of two events.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Comparison {
+    /// Channel ids both events share, in the reference's order.
+    pub shared_channels: Vec<String>,
+    pub basis: PairingBasis,
+    /// One per pair, by reference mode.
+    pub shifts: Vec<FrequencyShift>,
+    /// Channels only one event has, modes left unpaired and why.
+    pub notes: Vec<String>,
+}
+
+/// Relative shift (f − f_ref)/f_ref and its standard deviation from the two
+/// frequency standard deviations (module doc).
+pub fn relative_shift(f_ref: f64, sd_ref: f64, f: f64, sd: f64) -> (f64, f64) {
+    let s = (f - f_ref) / f_ref;
+    let sd_s = ((sd / f_ref).powi(2) + (f * sd_ref / (f_ref * f_ref)).powi(2)).sqrt();
+    (s, sd_s)
+}
+
+/// `shape` at `indices`, renormalised (largest component 1), and the share
+/// of the shape's energy those components hold.
+fn restrict(shape: &[c64], indices: &[usize]) -> (Vec<c64>, f64) {
+    let total: f64 = shape.iter().map(|z| z.norm_sqr()).sum();
+    let mut part: Vec<c64> = indices
+        .iter()
+        .map(|&k| shape.get(k).copied().unwrap_or(c64::new(0.0, 0.0)))
+        .collect();
+    let kept: f64 = part.iter().map(|z| z.norm_sqr()).sum();
+    normalise_shape(&mut part);
+    (part, if total > 0.0 { kept / total } else { 0.0 })
+}
+
+fn describe(m: &Mode, index: usize) -> String {
+    let dir = if m.direction.is_empty() {
+        String::new()
+    } else {
+        format!(", {}", m.direction)
+    };
+    format!("mode {} ({:.4} Hz{dir})", index + 1, m.frequency_hz)
+}
+
+/// Pairs the modes of `reference` and `current` on their shared channels
+/// and reports the frequency shifts (module doc).
+pub fn compare_events(
+    reference: ModeSet,
+    current: ModeSet,
+    settings: &PairingSettings,
+) -> Comparison {
+    let mut notes = Vec::new();
+    let shared: Vec<(usize, usize)> = reference
+        .channels
+        .iter()
+        .enumerate()
+        .filter_map(|(a, id)| {
+            current
+                .channels
+                .iter()
+                .position(|c| c == id)
+                .map(|b| (a, b))
         })
-        .collect()
+        .collect();
+    let shared_channels: Vec<String> = shared
+        .iter()
+        .map(|&(a, _)| reference.channels[a].clone())
+        .collect();
+    let only = |of: &[String], other: &[String]| -> Vec<String> {
+        of.iter().filter(|c| !other.contains(c)).cloned().collect()
+    };
+    for (who, ids) in [
+        ("the reference", only(reference.channels, current.channels)),
+        ("this event", only(current.channels, reference.channels)),
+    ] {
+        if !ids.is_empty() {
+            notes.push(format!(
+                "channels only in {who} (left out of the shapes): {}",
+                ids.join(", ")
+            ));
+        }
+    }
+    let (ra, rb) = (reference.modes, current.modes);
+    if ra.is_empty() {
+        notes.push(
+            "the reference run identified no mode (its modes.parquet warnings say why)".into(),
+        );
+    }
+    if rb.is_empty() {
+        notes.push(
+            "this event's identification found no mode (modes.parquet warnings say why)".into(),
+        );
+    }
+    let window = |i: usize, j: usize| {
+        let f_ref = ra[i].frequency_hz;
+        ((rb[j].frequency_hz - f_ref) / f_ref).abs()
+    };
+    let in_window = |i, j| window(i, j) <= settings.frequency_window;
+    let basis = if shared.len() >= MIN_SHARED_FOR_MAC {
+        PairingBasis::MacAndFrequency
+    } else {
+        notes.push(format!(
+            "{} shared channel(s): mode shapes cannot be compared, modes paired by frequency (within {} %) and direction label only",
+            shared.len(),
+            100.0 * settings.frequency_window
+        ));
+        PairingBasis::FrequencyAndDirection
+    };
+    // (i, j, score, mac): score orders the candidates, best first.
+    let mut candidates: Vec<(usize, usize, f64, Option<f64>)> = Vec::new();
+    match basis {
+        PairingBasis::MacAndFrequency => {
+            let (ia, ib): (Vec<usize>, Vec<usize>) = shared.iter().copied().unzip();
+            let a: Vec<(Vec<c64>, f64)> = ra.iter().map(|m| restrict(&m.shape, &ia)).collect();
+            let b: Vec<(Vec<c64>, f64)> = rb.iter().map(|m| restrict(&m.shape, &ib)).collect();
+            for (set, modes, shapes) in [("reference", ra, &a), ("this event's", rb, &b)] {
+                for (k, (_, share)) in shapes.iter().enumerate() {
+                    if *share < MIN_SHARED_ENERGY {
+                        notes.push(format!(
+                            "{set} {} holds {:.1} % of its shape on the shared channels: not paired",
+                            describe(&modes[k], k),
+                            100.0 * share
+                        ));
+                    }
+                }
+            }
+            for i in 0..ra.len() {
+                for j in 0..rb.len() {
+                    if a[i].1 < MIN_SHARED_ENERGY || b[j].1 < MIN_SHARED_ENERGY {
+                        continue;
+                    }
+                    let m = mac(&a[i].0, &b[j].0);
+                    if m >= settings.min_mac && in_window(i, j) {
+                        candidates.push((i, j, m, Some(m)));
+                    }
+                }
+            }
+        }
+        PairingBasis::FrequencyAndDirection => {
+            for i in 0..ra.len() {
+                for j in 0..rb.len() {
+                    if ra[i].direction == rb[j].direction && in_window(i, j) {
+                        candidates.push((i, j, -window(i, j), None));
+                    }
+                }
+            }
+        }
+    }
+    candidates.sort_by(|x, y| {
+        y.2.total_cmp(&x.2)
+            .then(window(x.0, x.1).total_cmp(&window(y.0, y.1)))
+            .then(x.0.cmp(&y.0))
+            .then(x.1.cmp(&y.1))
+    });
+    let scored: Vec<(usize, usize, f64)> = candidates.iter().map(|c| (c.0, c.1, c.2)).collect();
+    let taken = assign(&scored, ra.len(), rb.len());
+    let mac_of = |i: usize, j: usize| {
+        candidates
+            .iter()
+            .find(|c| c.0 == i && c.1 == j)
+            .and_then(|c| c.3)
+    };
+    let shifts: Vec<FrequencyShift> = taken
+        .iter()
+        .map(|&(i, j, _)| shift((&ra[i], i), (&rb[j], j), mac_of(i, j), settings))
+        .collect();
+    let why = match basis {
+        PairingBasis::MacAndFrequency => format!(
+            "no mode within {} % with MAC ≥ {} on the {} shared channels",
+            100.0 * settings.frequency_window,
+            settings.min_mac,
+            shared.len()
+        ),
+        PairingBasis::FrequencyAndDirection => format!(
+            "no mode of the same direction within {} %",
+            100.0 * settings.frequency_window
+        ),
+    };
+    // (When one side has no mode at all, its note above says why.)
+    for (i, m) in ra.iter().enumerate().filter(|_| !rb.is_empty()) {
+        if !taken.iter().any(|p| p.0 == i) {
+            notes.push(format!(
+                "reference {} not found in this event: {why}",
+                describe(m, i)
+            ));
+        }
+    }
+    for (j, m) in rb.iter().enumerate().filter(|_| !ra.is_empty()) {
+        if !taken.iter().any(|p| p.1 == j) {
+            notes.push(format!(
+                "this event's {} has no partner in the reference: {why}",
+                describe(m, j)
+            ));
+        }
+    }
+    Comparison {
+        shared_channels,
+        basis,
+        shifts,
+        notes,
+    }
+}
+
+fn shift(
+    (r, i): (&Mode, usize),
+    (c, j): (&Mode, usize),
+    mac: Option<f64>,
+    settings: &PairingSettings,
+) -> FrequencyShift {
+    let floor = |m: &Mode| {
+        m.frequency_std_hz
+            .max(settings.frequency_std_floor * m.frequency_hz)
+    };
+    let (s, sd) = relative_shift(r.frequency_hz, floor(r), c.frequency_hz, floor(c));
+    FrequencyShift {
+        reference_mode: i,
+        current_mode: j,
+        direction_reference: r.direction.clone(),
+        direction_current: c.direction.clone(),
+        frequency_reference_hz: r.frequency_hz,
+        frequency_reference_std_hz: r.frequency_std_hz,
+        frequency_current_hz: c.frequency_hz,
+        frequency_current_std_hz: c.frequency_std_hz,
+        shift_percent: 100.0 * s,
+        shift_std_percent: 100.0 * sd,
+        significant: (sd.is_finite() && sd > 0.0).then(|| s.abs() > 2.0 * sd),
+        damping_reference: r.damping_ratio,
+        damping_current: c.damping_ratio,
+        mac,
+    }
 }

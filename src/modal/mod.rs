@@ -25,10 +25,8 @@
 //!   `order_min` u32, `order_max` u32, `manual` bool, and per output channel
 //!   either list columns `shape_re`, `shape_im`, `shape_std` plus a metadata entry
 //!   with the channel ids, or long format (`mode`, `channel_id`, `shape_re`, `shape_im`, `shape_std`).
-//! - `mode_pairs.parquet` / `frequency_shifts.parquet` (from [`compare`]):
-//!   `reference_mode` u32, `other_mode` u32, `mac` f64, `frequency_reference_hz`,
-//!   `frequency_other_hz`, `relative_shift`, `shift_in_std`, `damping_reference`,
-//!   `damping_other`; metadata: the two event names.
+//! - `frequency_shifts.parquet` (from [`compare`]): the pre/post comparison
+//!   against a reference event (docs/formats.md).
 
 pub mod compare;
 pub mod direction;
@@ -39,7 +37,10 @@ pub mod selection;
 pub mod spectrum;
 pub mod ssi;
 
-pub use compare::{frequency_shifts, mac_matrix, pair_modes, FrequencyShift, ModePair};
+pub use compare::{
+    compare_events, mac_matrix, pair_modes, Comparison, FrequencyShift, ModePair, ModeSet,
+    PairingBasis, PairingSettings,
+};
 pub use poles::{mac, mpc_mpd, Pole, StabilityTolerances};
 pub use preprocess::Preprocessing;
 pub use selection::{Mode, PhysicalFilters, RejectedColumn, Selection, SelectionSettings};

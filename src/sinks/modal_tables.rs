@@ -8,7 +8,7 @@ use std::path::Path;
 
 use super::parquet::{write_parquet, TableBuilder};
 use crate::error::Result;
-use crate::modal::{FrequencyShift, ModalResult, SpectralOverlay};
+use crate::modal::{Comparison, FrequencyShift, ModalResult, PairingSettings, SpectralOverlay};
 use crate::vocab::tables::{
     frequency_shifts, modal_spectrum, modes, stabilization, FREQUENCY_SHIFTS, MODAL_SPECTRUM,
     MODES, STABILIZATION,
@@ -216,56 +216,122 @@ pub fn write_spectrum(
     write_parquet(path, &[batch], &meta(r, settings_json))
 }
 
+/// Writes the pre/post comparison against the reference modes at
+/// `reference` (docs/formats.md): one row per pair; the shared channels,
+/// the pairing settings and the notes (channels of one event only, modes
+/// left unpaired and why) in the metadata.
 pub fn write_shifts(
     path: &Path,
-    shifts: &[FrequencyShift],
-    reference_event: &str,
+    c: &Comparison,
+    pairing: &PairingSettings,
+    reference: &Path,
     this_event: &str,
 ) -> Result<()> {
-    let s = shifts;
+    use frequency_shifts as fs;
+    let s = &c.shifts;
+    let f = |g: fn(&FrequencyShift) -> f64| s.iter().map(g).collect::<Vec<f64>>();
+    let mode = |g: fn(&FrequencyShift) -> usize| s.iter().map(|x| g(x) as u32 + 1).collect();
     let batch = TableBuilder::new(&FREQUENCY_SHIFTS)
+        .u32(fs::REFERENCE_MODE, mode(|x| x.reference_mode))
+        .u32(fs::CURRENT_MODE, mode(|x| x.current_mode))
+        .str(
+            fs::DIRECTION_REFERENCE,
+            &s.iter()
+                .map(|x| x.direction_reference.as_str())
+                .collect::<Vec<_>>(),
+        )
+        .str(
+            fs::DIRECTION_CURRENT,
+            &s.iter()
+                .map(|x| x.direction_current.as_str())
+                .collect::<Vec<_>>(),
+        )
+        .f64(fs::FREQUENCY_REFERENCE_HZ, f(|x| x.frequency_reference_hz))
+        .f64(
+            fs::FREQUENCY_REFERENCE_STD_HZ,
+            f(|x| x.frequency_reference_std_hz),
+        )
+        .f64(fs::FREQUENCY_CURRENT_HZ, f(|x| x.frequency_current_hz))
+        .f64(
+            fs::FREQUENCY_CURRENT_STD_HZ,
+            f(|x| x.frequency_current_std_hz),
+        )
+        .f64(fs::SHIFT_PERCENT, f(|x| x.shift_percent))
+        .f64(fs::SHIFT_STD_PERCENT, f(|x| x.shift_std_percent))
+        .opt_bool(fs::SIGNIFICANT, s.iter().map(|x| x.significant).collect())
+        .f64(fs::DAMPING_REFERENCE, f(|x| x.damping_reference))
+        .f64(fs::DAMPING_CURRENT, f(|x| x.damping_current))
+        .opt_f64(fs::MAC, s.iter().map(|x| x.mac).collect())
         .u32(
-            frequency_shifts::REFERENCE_MODE,
-            s.iter().map(|x| x.reference_mode as u32 + 1).collect(),
+            fs::SHARED_CHANNELS,
+            vec![c.shared_channels.len() as u32; s.len()],
         )
-        .u32(
-            frequency_shifts::OTHER_MODE,
-            s.iter().map(|x| x.other_mode as u32 + 1).collect(),
-        )
-        .f64(
-            frequency_shifts::FREQUENCY_REFERENCE_HZ,
-            s.iter().map(|x| x.frequency_reference_hz).collect(),
-        )
-        .f64(
-            frequency_shifts::FREQUENCY_OTHER_HZ,
-            s.iter().map(|x| x.frequency_other_hz).collect(),
-        )
-        .f64(
-            frequency_shifts::RELATIVE_SHIFT,
-            s.iter().map(|x| x.relative_shift).collect(),
-        )
-        .f64(
-            frequency_shifts::SHIFT_IN_STD,
-            s.iter().map(|x| x.shift_in_std).collect(),
-        )
-        .f64(
-            frequency_shifts::DAMPING_REFERENCE,
-            s.iter().map(|x| x.damping_reference).collect(),
-        )
-        .f64(
-            frequency_shifts::DAMPING_OTHER,
-            s.iter().map(|x| x.damping_other).collect(),
-        )
-        .f64(frequency_shifts::MAC, s.iter().map(|x| x.mac).collect())
+        .str(fs::PAIRING, &vec![c.basis.name(); s.len()])
         .build()?;
     write_parquet(
         path,
         &[batch],
         &[
-            ("quaketwin.reference_event".into(), reference_event.into()),
+            (
+                "quaketwin.reference".into(),
+                reference.display().to_string(),
+            ),
             ("quaketwin.event".into(), this_event.into()),
+            (
+                "quaketwin.shared_channels".into(),
+                serde_json::to_string(&c.shared_channels).unwrap_or_default(),
+            ),
+            (
+                "quaketwin.pairing".into(),
+                serde_json::json!({
+                    "basis": c.basis.name(),
+                    "min_mac": pairing.min_mac,
+                    "frequency_window": pairing.frequency_window,
+                    "frequency_std_floor": pairing.frequency_std_floor,
+                })
+                .to_string(),
+            ),
+            (
+                "quaketwin.notes".into(),
+                serde_json::to_string(&c.notes).unwrap_or_default(),
+            ),
         ],
     )
+}
+
+/// The `modes.parquet` an earlier run left at `path`: the file itself, or
+/// `path/modes.parquet` when `path` is a run's output directory.  Usage
+/// errors (the user named it) that name the path: missing, no modes table
+/// in the directory, not a quaketwin modes table.
+pub fn locate_modes(path: &Path) -> Result<std::path::PathBuf> {
+    use crate::error::Error;
+    let shown = path.display();
+    let file = match std::fs::metadata(path) {
+        Err(e) => {
+            return Err(Error::usage(format!(
+                "{shown}: {e}: expected the output directory of an earlier run (holding {}) or a {} file",
+                MODES.file, MODES.file
+            )))
+        }
+        Ok(m) if m.is_dir() => {
+            let f = path.join(MODES.file);
+            if !f.is_file() {
+                return Err(Error::usage(format!(
+                    "{shown}: holds no {}: not the output directory of a run with a modal stage",
+                    MODES.file
+                )));
+            }
+            f
+        }
+        Ok(_) => path.to_path_buf(),
+    };
+    read_modes(&file).map_err(|e| {
+        Error::usage(format!(
+            "{}: not a quaketwin modes table: {e}",
+            file.display()
+        ))
+    })?;
+    Ok(file)
 }
 
 /// Reads the modes of a `modes.parquet` back (for pre/post comparison),
@@ -278,6 +344,16 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
     use crate::vocab::schema::ColumnSpec;
     let table = ReadTable::open(path)?;
     let loc = || table.location();
+    // Files written before the schema-first sinks carry no schema name.
+    match table.metadata(crate::vocab::schema::SCHEMA_KEY) {
+        Some(name) if name != MODES.name => {
+            return Err(Error::input(
+                loc(),
+                format!("a {name} table, not {}", MODES.file),
+            ))
+        }
+        _ => {}
+    }
     let channels: Vec<String> = table
         .metadata(OUTPUT_CHANNELS_KEY)
         .and_then(|v| serde_json::from_str(v).ok())

@@ -131,6 +131,11 @@ impl TableBuilder {
         let a = Arc::new(BooleanArray::from(values));
         self.push(name.as_ref(), ColumnType::Bool, false, a)
     }
+    /// Boolean, nullable.
+    pub fn opt_bool(self, name: impl AsRef<str>, values: Vec<Option<bool>>) -> Self {
+        let a = Arc::new(BooleanArray::from(values));
+        self.push(name.as_ref(), ColumnType::Bool, true, a)
+    }
     /// Utf8, not null.
     pub fn str<S: AsRef<str>>(self, name: impl AsRef<str>, values: &[S]) -> Self {
         let a: StringArray = values.iter().map(|s| Some(s.as_ref())).collect();

@@ -12,12 +12,13 @@ pub mod hysteresis;
 pub mod ingest;
 pub mod metrics;
 pub mod modal;
+pub mod prepost;
 pub mod report;
 pub mod update;
 
 use std::path::Path;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::pipeline::{Pipeline, StageKind};
 
 /// Every stage kind of this build, in pipeline order.
@@ -41,4 +42,25 @@ pub fn parse_pipeline(text: &str, file: &str) -> Result<Pipeline> {
 /// Reads and builds the pipeline file at `path`.
 pub fn load_pipeline(path: &Path) -> Result<Pipeline> {
     Pipeline::load(path, CATALOG)
+}
+
+/// Reads and builds the pipeline file at `path` with `reference_modes =
+/// reference` in every `modal` stage (`quaketwin run … --reference`):
+/// the file as written is built first (its errors name its lines), then the
+/// file with the reference.  A usage error when it has no `modal` stage.
+pub fn load_pipeline_with_reference(path: &Path, reference: &str) -> Result<Pipeline> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let file = path.display().to_string();
+    Pipeline::parse(&text, &file, CATALOG)?;
+    let mut doc: toml::Table = toml::from_str(&text)
+        .map_err(|e| Error::usage(format!("{file}: invalid pipeline file: {e}")))?;
+    if prepost::set_reference(&mut doc, reference) == 0 {
+        return Err(Error::usage(format!(
+            "--reference {reference}: pipeline {file} has no `{}` stage to compare modes",
+            modal::KIND.kind
+        )));
+    }
+    let text = toml::to_string(&doc)
+        .map_err(|e| Error::usage(format!("{file}: rewriting with --reference: {e}")))?;
+    Pipeline::parse(&text, &format!("{file} (with --reference)"), CATALOG)
 }

@@ -1,16 +1,18 @@
 //! `modal`: subspace identification of the conditioned records (METHODS §2)
 //! → `stabilization.parquet`, `modes.parquet`, `modal_spectrum.parquet`,
-//! and `frequency_shifts.parquet` against a previous event's modes.
+//! and `frequency_shifts.parquet` against an earlier run's modes
+//! ([`super::prepost`]).
 
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
 use super::condition::Conditioned;
+use super::prepost::{self, ReferenceParams, ReferenceRun};
 use crate::error::{Error, Result};
 use crate::modal::{
-    band_for_structure, frequency_shifts, identify_event, spectral_overlay, ChannelChoice, Method,
-    ModalResult, ModalSettings,
+    band_for_structure, identify_event, spectral_overlay, ChannelChoice, Method, ModalResult,
+    ModalSettings,
 };
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::modal_tables as tables;
@@ -27,7 +29,6 @@ pub const KIND: StageKind = StageKind {
 pub const STABILIZATION_FILE: &str = crate::vocab::tables::STABILIZATION.file;
 pub const MODES_FILE: &str = crate::vocab::tables::MODES.file;
 pub const SPECTRUM_FILE: &str = crate::vocab::tables::MODAL_SPECTRUM.file;
-pub const SHIFTS_FILE: &str = crate::vocab::tables::FREQUENCY_SHIFTS.file;
 
 /// Identification method of the stage: `auto` picks input–output when the
 /// event has base channels, else SSI-COV.
@@ -48,8 +49,9 @@ pub struct ModesFile {
     pub path: PathBuf,
 }
 
-/// Parameters of the `modal` stage (docs/pipelines.md).  Unset values
-/// adapt to the record (issue 13, `modal::plan`).
+/// Parameters of the `modal` stage (docs/pipelines.md) but the pre/post
+/// ones ([`ReferenceParams`]).  Unset values adapt to the record (issue 13,
+/// `modal::plan`).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ModalParams {
@@ -80,9 +82,6 @@ pub struct ModalParams {
     pub vertical_outputs: bool,
     /// Manual override: pick these frequencies instead of the automatic selection.
     pub manual_frequencies_hz: Option<Vec<f64>>,
-    /// `modes.parquet` of an earlier event of the same structure (path
-    /// relative to the working directory) → `frequency_shifts.parquet`.
-    pub reference_modes: Option<PathBuf>,
     /// Welch segment length for the PSD singular values.
     pub psd_segment: usize,
 }
@@ -103,7 +102,6 @@ impl Default for ModalParams {
             inputs: None,
             vertical_outputs: false,
             manual_frequencies_hz: None,
-            reference_modes: None,
             psd_segment: 1024,
         }
     }
@@ -189,10 +187,18 @@ impl ModalParams {
     }
 }
 
-/// Identifies `event` and writes the modal tables into `out`.
-pub fn identify_and_write(event: &Event, p: &ModalParams, out: &Path) -> Result<ModalResult> {
+/// Identifies `event` and writes the modal tables into `out`; with a
+/// reference, also `frequency_shifts.parquet` (read before identifying, so
+/// a bad reference fails first).
+pub fn identify_and_write(
+    event: &Event,
+    p: &ModalParams,
+    reference: Option<&ReferenceRun>,
+    out: &Path,
+) -> Result<ModalResult> {
     let settings = p.settings_for(event)?;
     let settings_json = serde_json::to_string(&settings).unwrap_or_default();
+    let reference = reference.map(|r| r.read(out)).transpose()?;
     let choice = ChannelChoice {
         inputs: p.inputs.clone(),
         vertical_outputs: p.vertical_outputs,
@@ -219,49 +225,49 @@ pub fn identify_and_write(event: &Event, p: &ModalParams, out: &Path) -> Result<
         overlay.as_ref(),
         &settings_json,
     )?;
-    if let Some(reference) = &p.reference_modes {
-        let (ref_modes, ref_channels) = tables::read_modes(reference)?;
-        if ref_channels != result.output_ids {
-            return Err(Error::input(
-                crate::error::Location::file(reference.display().to_string()),
-                format!(
-                    "reference modes are given at channels {ref_channels:?}, this event at {:?}",
-                    result.output_ids
-                ),
-            ));
-        }
-        let shifts = frequency_shifts(&ref_modes, &result.modes, 0.8);
-        tables::write_shifts(
-            &out.join(SHIFTS_FILE),
-            &shifts,
-            &reference.display().to_string(),
-            &event.name,
-        )?;
+    if let Some(reference) = &reference {
+        prepost::compare_and_write(reference, &result, out, &event.name)?;
     }
     Ok(result)
 }
 
 fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
-    let params: ModalParams = src.params()?;
+    let (params, reference): (ModalParams, ReferenceParams) = src.params_split(prepost::KEYS)?;
     params.validate().map_err(|e| src.invalid(e))?;
-    Ok(Box::new(Modal { params }))
+    let reference = reference.check().map_err(|e| src.invalid(e))?;
+    Ok(Box::new(Modal { params, reference }))
 }
 
 struct Modal {
     params: ModalParams,
+    /// The earlier run to compare with (checked when the pipeline was read).
+    reference: Option<ReferenceRun>,
 }
 
 impl Stage for Modal {
     fn outputs(&self) -> Vec<String> {
-        outputs(&self.params)
+        let mut v = vec![
+            STABILIZATION_FILE.to_string(),
+            MODES_FILE.into(),
+            SPECTRUM_FILE.into(),
+        ];
+        if self.reference.is_some() {
+            v.push(prepost::SHIFTS_FILE.into());
+        }
+        v
     }
     fn not_applicable(&self, ctx: &mut RunContext) -> Result<Option<String>> {
         Ok(not_applicable(&ctx.loaded_event()?.event))
     }
+    fn extra_fingerprint(&self, _ctx: &mut RunContext) -> Result<String> {
+        self.reference
+            .as_ref()
+            .map_or(Ok(String::new()), |r| r.fingerprint())
+    }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let out = ctx.out_dir.clone();
         let Conditioned { event, .. } = ctx.input(ProductKind::ConditionedEvent)?;
-        identify_and_write(event, &self.params, &out)?;
+        identify_and_write(event, &self.params, self.reference.as_ref(), &out)?;
         self.restore(ctx)
     }
     fn restore(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
@@ -271,7 +277,6 @@ impl Stage for Modal {
     }
 }
 
-/// Output files of the stage (the shifts file only with `reference_modes`).
 /// Why modal identification cannot run on `event`: no sensor channel is a
 /// structural response (role output) — e.g. a folder without event.toml
 /// whose headers name only the ground sensors.
@@ -283,16 +288,4 @@ pub fn not_applicable(event: &Event) -> Option<String> {
     (!has_output).then(|| {
         "no channel is known to be a structural response (role output; input = base/ground), and no header location text names one (deck, roof, floor, level…): state `role` or `level` per channel in event.toml (docs/event-folder.md)".to_string()
     })
-}
-
-pub fn outputs(p: &ModalParams) -> Vec<String> {
-    let mut v = vec![
-        STABILIZATION_FILE.to_string(),
-        MODES_FILE.into(),
-        SPECTRUM_FILE.into(),
-    ];
-    if p.reference_modes.is_some() {
-        v.push(SHIFTS_FILE.into());
-    }
-    v
 }

@@ -3,7 +3,8 @@
 //! build their batches from these declarations (`sinks::parquet::TableBuilder`
 //! refuses a table that does not match), the readers of our own outputs look
 //! columns up through them, and docs/formats.md is checked against them
-//! (`tests/it/schemas.rs`).  Units: SI, `1` for a dimensionless quantity,
+//! (`tests/it/schemas.rs`).  Units: SI, `1` for a dimensionless quantity
+//! (`%` where a column says percent),
 //! empty for what is not a physical quantity (ids, labels, indices, counts,
 //! flags).
 //!
@@ -154,16 +155,23 @@ declare!(MODAL_SPECTRUM, modal_spectrum, "modal_spectrum", "modal_spectrum.parqu
 });
 
 declare!(FREQUENCY_SHIFTS, frequency_shifts, "frequency_shifts", "frequency_shifts.parquet",
-    "one row per pair of modes matched by MAC ≥ 0.8 against a reference event", {
-    REFERENCE_MODE: "reference_mode", U32, required, "", "mode of the reference event (1-based)";
-    OTHER_MODE: "other_mode", U32, required, "", "mode of this event (1-based)";
+    "one row per mode of a reference (earlier) event paired with a mode of this event on the channels both share", {
+    REFERENCE_MODE: "reference_mode", U32, required, "", "mode of the reference event (`mode` of its modes.parquet)";
+    CURRENT_MODE: "current_mode", U32, required, "", "mode of this event (`mode` of modes.parquet)";
+    DIRECTION_REFERENCE: "direction_reference", Utf8, required, "", "direction label of the reference mode (`direction` of its modes.parquet)";
+    DIRECTION_CURRENT: "direction_current", Utf8, required, "", "direction label of this event's mode";
     FREQUENCY_REFERENCE_HZ: "frequency_reference_hz", F64, required, "Hz", "reference frequency";
-    FREQUENCY_OTHER_HZ: "frequency_other_hz", F64, required, "Hz", "frequency of this event";
-    RELATIVE_SHIFT: "relative_shift", F64, required, "1", "(f_other − f_ref)/f_ref";
-    SHIFT_IN_STD: "shift_in_std", F64, required, "1", "shift in units of the frequency standard deviations";
+    FREQUENCY_REFERENCE_STD_HZ: "frequency_reference_std_hz", F64, required, "Hz", "its standard deviation (`frequency_std_hz` of the reference)";
+    FREQUENCY_CURRENT_HZ: "frequency_current_hz", F64, required, "Hz", "frequency of this event";
+    FREQUENCY_CURRENT_STD_HZ: "frequency_current_std_hz", F64, required, "Hz", "its standard deviation";
+    SHIFT_PERCENT: "shift_percent", F64, required, "%", "100 (f_current − f_reference)/f_reference: negative = softening";
+    SHIFT_STD_PERCENT: "shift_std_percent", F64, required, "%", "standard deviation of the shift from the two frequency standard deviations (independent, first order), each at least `reference_frequency_std_floor` × f (the std of modes.parquet is the scatter over model orders, which understates the error of one record): 100 √((σ_cur/f_ref)² + (f_cur σ_ref/f_ref²)²)";
+    SIGNIFICANT: "significant", Bool, nullable, "", "|shift| > 2 `shift_std_percent`; null when that is zero (no uncertainty known)";
     DAMPING_REFERENCE: "damping_reference", F64, required, "1", "reference damping ratio";
-    DAMPING_OTHER: "damping_other", F64, required, "1", "damping ratio of this event";
-    MAC: "mac", F64, required, "1", "MAC of the paired shapes";
+    DAMPING_CURRENT: "damping_current", F64, required, "1", "damping ratio of this event";
+    MAC: "mac", F64, nullable, "1", "MAC of the two shapes restricted to the shared channels (renormalised); null when paired by frequency and direction";
+    SHARED_CHANNELS: "shared_channels", U32, required, "", "output channels (same id) both events have; the same on every row";
+    PAIRING: "pairing", Utf8, required, "", "what the pairing was based on: `mac_and_frequency` (MAC ≥ `reference_min_mac` on the shared channels and |Δf|/f_ref ≤ `reference_frequency_window`) or `frequency_and_direction` (fewer than 2 shared channels: the frequency window and the same direction label only)";
 });
 
 declare!(BOUC_WEN, bouc_wen, "bouc_wen", "bouc_wen.parquet",

@@ -29,6 +29,7 @@ mod modal;
 mod outdir;
 mod pipeline;
 mod plackett_luce;
+mod prepost;
 mod readers_binary;
 mod readers_csv;
 mod readers_text;

@@ -33,6 +33,7 @@ fn declarations_are_well_formed() {
         "N/m",
         "rad/s",
         "N^(1-N)/m",
+        "%",
     ];
     let mut names = BTreeSet::new();
     let mut files = BTreeSet::new();

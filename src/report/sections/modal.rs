@@ -4,7 +4,9 @@
 use std::path::Path;
 
 use super::{figure, known_columns_first, load, require, Loaded};
-use crate::report::html::{cells, column_notes, missing_columns_note, table};
+use crate::report::html::{
+    cells, column_notes, escape, format_number, missing_columns_note, table, Cell,
+};
 use crate::report::plot::{self, Chart, Mark, RefLine, Series};
 use crate::report::ReportSettings;
 use crate::vocab::tables::{self, frequency_shifts, modes, stabilization};
@@ -153,26 +155,138 @@ pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
     }
 
     body.push_str("<h3>Frequency shift against a reference event</h3>");
-    match &shifts {
-        Loaded::Absent(_) => body.push_str(&format!(
-            "<p class=\"absent\">Output absent: <code>frequency_shifts.parquet</code> (written by the modal stage only when a previous event of the same structure is given).</p>"
-        )),
-        _ => {
-            if let Some(t) = require(&shifts, &tables::FREQUENCY_SHIFTS, &mut body) {
-                let known = [
-                    frequency_shifts::REFERENCE_MODE.name,
-                    frequency_shifts::OTHER_MODE.name,
-                    frequency_shifts::FREQUENCY_REFERENCE_HZ.name,
-                    frequency_shifts::FREQUENCY_OTHER_HZ.name,
-                    frequency_shifts::RELATIVE_SHIFT.name,
-                    frequency_shifts::MAC.name,
-                ];
-                body.push_str(&column_notes(t, &known));
-                let cols = known_columns_first(t, &known);
-                let rows = cells(t, &cols, settings.max_table_rows);
-                body.push_str(&table(Some("shifts-table"), &cols, &rows));
-            }
+    body.push_str(&shifts_part(&shifts, settings));
+    body
+}
+
+/// The pre/post table: reference vs this event, shift ± σ, MAC, significant;
+/// then what the pairing was based on and the notes (unpaired modes…).
+fn shifts_part(shifts: &Loaded, settings: &ReportSettings) -> String {
+    use frequency_shifts as fs;
+    let mut body = String::new();
+    if let Loaded::Absent(None) = shifts {
+        body.push_str("<p class=\"absent\">Output absent: <code>frequency_shifts.parquet</code> (written by the modal stage only when an earlier run of the same structure is given: <code>--reference DIR</code> or the <code>reference_modes</code> param).</p>");
+        return body;
+    }
+    let Loaded::Ok(t) = shifts else {
+        require(shifts, &tables::FREQUENCY_SHIFTS, &mut body);
+        return body;
+    };
+    let meta = |k: &str| t.metadata.get(k).cloned().unwrap_or_default();
+    let mut facts = format!(
+        "Reference: <code>{}</code>",
+        escape(&meta("quaketwin.reference"))
+    );
+    if let Ok(c) = serde_json::from_str::<Vec<String>>(&meta("quaketwin.shared_channels")) {
+        facts.push_str(&format!(
+            "; {} shared channel(s): {}",
+            c.len(),
+            escape(&c.join(", "))
+        ));
+    }
+    if let Ok(p) = serde_json::from_str::<serde_json::Value>(&meta("quaketwin.pairing")) {
+        let basis = p["basis"].as_str().unwrap_or("");
+        facts.push_str(&match basis {
+            "frequency_and_direction" => format!(
+                "; paired by frequency (within {} %) and direction label only (fewer than 2 shared channels: no MAC)",
+                100.0 * p["frequency_window"].as_f64().unwrap_or(f64::NAN)
+            ),
+            _ => format!(
+                "; paired by MAC ≥ {} on the shared channels and frequency within {} %",
+                p["min_mac"].as_f64().unwrap_or(f64::NAN),
+                100.0 * p["frequency_window"].as_f64().unwrap_or(f64::NAN)
+            ),
+        });
+    }
+    body.push_str(&format!("<p>{facts}.</p>"));
+    if let Some(t) = require(shifts, &tables::FREQUENCY_SHIFTS, &mut body) {
+        let known = [
+            fs::REFERENCE_MODE.name,
+            fs::FREQUENCY_REFERENCE_HZ.name,
+            fs::CURRENT_MODE.name,
+            fs::FREQUENCY_CURRENT_HZ.name,
+            fs::DIRECTION_CURRENT.name,
+            fs::SHIFT_PERCENT.name,
+            fs::SHIFT_STD_PERCENT.name,
+            fs::MAC.name,
+            fs::SIGNIFICANT.name,
+            fs::DAMPING_REFERENCE.name,
+            fs::DAMPING_CURRENT.name,
+        ];
+        body.push_str(&missing_columns_note(t, &known));
+        let num = |c: &str, r: usize| t.number(c).and_then(|v| v.get(r).copied().flatten());
+        let headers: Vec<String> = [
+            "reference mode",
+            "f reference (Hz)",
+            "mode",
+            "f (Hz)",
+            "direction",
+            "shift ± σ (%)",
+            "MAC",
+            "significant (|shift| > 2σ)",
+            "damping reference → this event",
+        ]
+        .iter()
+        .map(|h| h.to_string())
+        .collect();
+        let rows: Vec<Vec<Cell>> = (0..t.rows.min(settings.max_table_rows))
+            .map(|r| {
+                let shift = num(fs::SHIFT_PERCENT.name, r);
+                let pm = |v: Option<f64>, sd: Option<f64>| match (v, sd) {
+                    (Some(v), Some(sd)) => {
+                        format!("{} ± {}", format_number(v), format_number(sd))
+                    }
+                    (Some(v), None) => format_number(v),
+                    _ => "—".into(),
+                };
+                let significant = match t
+                    .boolean(fs::SIGNIFICANT.name)
+                    .and_then(|v| v.get(r).copied().flatten())
+                {
+                    Some(true) if shift.is_some_and(|s| s < 0.0) => "yes: drop",
+                    Some(true) => "yes: rise",
+                    Some(false) => "no",
+                    None => "unknown (no frequency std)",
+                };
+                vec![
+                    Cell::of(t, fs::REFERENCE_MODE.name, r),
+                    Cell::raw(pm(
+                        num(fs::FREQUENCY_REFERENCE_HZ.name, r),
+                        num(fs::FREQUENCY_REFERENCE_STD_HZ.name, r),
+                    )),
+                    Cell::of(t, fs::CURRENT_MODE.name, r),
+                    Cell::raw(pm(
+                        num(fs::FREQUENCY_CURRENT_HZ.name, r),
+                        num(fs::FREQUENCY_CURRENT_STD_HZ.name, r),
+                    )),
+                    Cell::of(t, fs::DIRECTION_CURRENT.name, r),
+                    Cell {
+                        value: shift,
+                        class: Some("num"),
+                        ..Cell::raw(pm(shift, num(fs::SHIFT_STD_PERCENT.name, r)))
+                    },
+                    Cell::of(t, fs::MAC.name, r),
+                    Cell::text(significant),
+                    Cell::raw(format!(
+                        "{} → {}",
+                        pm(num(fs::DAMPING_REFERENCE.name, r), None),
+                        pm(num(fs::DAMPING_CURRENT.name, r), None)
+                    )),
+                ]
+            })
+            .collect();
+        body.push_str(&format!(
+            "<div class=\"scroll\">{}</div>",
+            table(Some("shifts-table"), &headers, &rows)
+        ));
+    }
+    let notes: Vec<String> = serde_json::from_str(&meta("quaketwin.notes")).unwrap_or_default();
+    if !notes.is_empty() {
+        body.push_str("<ul class=\"note\">");
+        for n in &notes {
+            body.push_str(&format!("<li>{}</li>", escape(n)));
         }
+        body.push_str("</ul>");
     }
     body
 }
