@@ -11,18 +11,21 @@
 //! is therefore judged on its own span:
 //! - linking: the pole of order n continues the column ending at order
 //!   n − 1 (or up to `max_gap` realised orders earlier) when
-//!   |Δf|/f ≤ `link_frequency` and MAC ≥ `link_mac` with the column's last pole
+//!   |Δf|/f ≤ max(`link_frequency`, ζ/2) (capped at `link_frequency_max`,
+//!   see [`mode_tolerance`]) and MAC ≥ `link_mac` with the column's last pole
 //!   (greedy one-to-one assignment, best match first);
-//! - a column is a mode when it holds at least `min_poles` poles and
-//!   `min_order_fraction` of the realised orders (default 40 %: the former
-//!   rule kept as a floor, see [`SelectionSettings`] — so a weak mode
-//!   present only at the top orders is reported in the warnings, not yet
-//!   promoted), holds a
+//! - a column is a mode when it holds at least `min_poles` poles,
+//!   `min_order_fraction` of the realised orders (default 0) and
+//!   `min_relative_length` of the poles of the longest coherent, mostly
+//!   physical column (default 60 %: a column's length depends on the record,
+//!   not on the number of orders), holds a
 //!   pole at ≥ `min_persistence` of the realised orders from its first order
 //!   to the highest order swept (a physical pole, once present, persists;
 //!   noise poles come and go), its shapes are coherent (mean MAC with the
 //!   column's mean shape ≥ `min_coherence`), at least `min_physical_fraction`
 //!   of its poles pass the physical filters, and its estimate passes them;
+//! - two accepted columns of the same mode ([`same_mode`]) are a split twin:
+//!   the longer is kept, the other reported;
 //! - columns of the same mode broken by a gap (frequencies within
 //!   `merge_frequency_tolerance`, MAC ≥ `merge_mac` of mean shapes) are merged
 //!   first, one pole per order kept;
@@ -96,10 +99,11 @@ pub struct SelectionSettings {
     /// Fewest poles of an accepted column.
     pub min_poles: usize,
     /// …and at least this fraction of the realised orders (the former
-    /// clustering rule, kept as a floor: without it, SSI-COV/SSI-DATA on the
-    /// 600-s 5-storey ambient records promoted persistent columns of 6–10
-    /// poles at orders ≥ 28 (MPC ≈ 0.89, 9.0, 11.0, 12.6, 13.2, 15.3 Hz) that
-    /// no physical mode explains; issue 13 left open — see the module doc).
+    /// clustering rule; default 0 since issue 13).  At 40 % it kept out the
+    /// persistent spurious columns of 6–10 poles at orders ≥ 28 that
+    /// SSI-COV/SSI-DATA find on the 600-s 5-storey ambient records, but also
+    /// every mode of the short real bridge records; `min_relative_length`
+    /// and the twin rule now keep the spurious columns out.
     pub min_order_fraction: f64,
     /// …and at least this fraction of the poles of the longest coherent,
     /// mostly physical column of the same diagram.
@@ -395,6 +399,20 @@ fn mode_tolerance(zeta_a: f64, zeta_b: f64, base: f64, settings: &SelectionSetti
     }
 }
 
+/// Two estimates (column summaries) of one mode: frequencies within
+/// [`mode_tolerance`] and shapes with MAC ≥ `merge_mac`.  Decides both the
+/// merging of a column broken by a gap and the dropping of a split twin.
+fn same_mode(a: &Mode, b: &Mode, settings: &SelectionSettings) -> bool {
+    let tolerance = mode_tolerance(
+        a.damping_ratio,
+        b.damping_ratio,
+        settings.merge_frequency_tolerance,
+        settings,
+    );
+    (a.frequency_hz - b.frequency_hz).abs() / a.frequency_hz.max(b.frequency_hz) <= tolerance
+        && mac(&a.shape, &b.shape) >= settings.merge_mac
+}
+
 fn mean_frequency(poles: &[Pole], members: &[usize]) -> f64 {
     members.iter().map(|&i| poles[i].frequency_hz).sum::<f64>() / members.len().max(1) as f64
 }
@@ -416,24 +434,11 @@ fn merge_columns(
                 if columns[b].len() < 2 {
                     continue;
                 }
-                let (fa, fb) = (
-                    mean_frequency(poles, &columns[a]),
-                    mean_frequency(poles, &columns[b]),
-                );
                 let (sa, sb) = (
                     summarise(poles, &columns[a], false),
                     summarise(poles, &columns[b], false),
                 );
-                let tolerance = mode_tolerance(
-                    sa.damping_ratio,
-                    sb.damping_ratio,
-                    settings.merge_frequency_tolerance,
-                    settings,
-                );
-                if (fa - fb).abs() / fa.max(fb) > tolerance {
-                    continue;
-                }
-                if mac(&sa.shape, &sb.shape) >= settings.merge_mac {
+                if same_mode(&sa, &sb, settings) {
                     merge = Some((a, b));
                     break 'search;
                 }
@@ -465,6 +470,14 @@ fn converged_part(poles: &[Pole], column: &[usize], fraction: f64) -> Vec<usize>
     } else {
         upper
     }
+}
+
+/// A column promoted to a mode: the poles of its estimate, the mode, and the
+/// column's description (reported if it later turns out to be a split twin).
+struct Accepted {
+    part: Vec<usize>,
+    mode: Mode,
+    column: RejectedColumn,
 }
 
 /// Automatic selection by pole columns (module doc).  `orders` are the
@@ -515,7 +528,7 @@ pub fn select_automatic(
         .min_poles
         .max((settings.min_order_fraction * orders.len() as f64).ceil() as usize)
         .max((settings.min_relative_length * longest as f64).ceil() as usize);
-    let mut accepted: Vec<(Vec<usize>, Mode, usize, usize, usize)> = Vec::new();
+    let mut accepted: Vec<Accepted> = Vec::new();
     let mut rejected = Vec::new();
     for column in columns {
         let all = summarise(poles, &column, false);
@@ -564,7 +577,18 @@ pub fn select_automatic(
             None
         };
         match reason {
-            None => accepted.push((part, mode, column.len(), all.order_min, all.order_max)),
+            None => accepted.push(Accepted {
+                column: RejectedColumn {
+                    frequency_hz: mode.frequency_hz,
+                    damping_ratio: mode.damping_ratio,
+                    poles: column.len(),
+                    order_min: all.order_min,
+                    order_max: all.order_max,
+                    reason: String::new(),
+                },
+                part,
+                mode,
+            }),
             Some(reason) => {
                 if physical > 0 {
                     rejected.push(RejectedColumn {
@@ -581,50 +605,39 @@ pub fn select_automatic(
     }
     // One mode, two columns: at high orders a mode can be fitted twice (a
     // split twin a few per cent apart with the same shape).  Keep the longer
-    // column; the twin is reported.  Same tolerance as for merging.
+    // column; the twin is reported.
     accepted.sort_by(|a, b| {
-        b.2.cmp(&a.2)
-            .then(a.1.frequency_hz.total_cmp(&b.1.frequency_hz))
+        b.column
+            .poles
+            .cmp(&a.column.poles)
+            .then(a.mode.frequency_hz.total_cmp(&b.mode.frequency_hz))
     });
-    let mut kept: Vec<(Vec<usize>, Mode, usize, usize, usize)> = Vec::new();
+    let mut kept: Vec<Accepted> = Vec::new();
     for candidate in accepted {
-        let twin = kept.iter().find(|k| {
-            let tolerance = mode_tolerance(
-                k.1.damping_ratio,
-                candidate.1.damping_ratio,
-                settings.merge_frequency_tolerance,
-                settings,
-            );
-            (k.1.frequency_hz - candidate.1.frequency_hz).abs()
-                / k.1.frequency_hz.max(candidate.1.frequency_hz)
-                <= tolerance
-                && mac(&k.1.shape, &candidate.1.shape) >= settings.merge_mac
-        });
-        match twin {
+        match kept
+            .iter()
+            .find(|k| same_mode(&k.mode, &candidate.mode, settings))
+        {
             Some(k) => rejected.push(RejectedColumn {
-                frequency_hz: candidate.1.frequency_hz,
-                damping_ratio: candidate.1.damping_ratio,
-                poles: candidate.2,
-                order_min: candidate.3,
-                order_max: candidate.4,
                 reason: format!(
                     "twin of the {:.3} Hz mode (same shape, a longer column)",
-                    k.1.frequency_hz
+                    k.mode.frequency_hz
                 ),
+                ..candidate.column
             }),
             None => kept.push(candidate),
         }
     }
     let mut accepted = kept;
-    accepted.sort_by(|a, b| a.1.frequency_hz.total_cmp(&b.1.frequency_hz));
+    accepted.sort_by(|a, b| a.mode.frequency_hz.total_cmp(&b.mode.frequency_hz));
     rejected.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
-    for (m, (part, ..)) in accepted.iter().enumerate() {
-        for &i in part {
+    for (m, a) in accepted.iter().enumerate() {
+        for &i in &a.part {
             poles[i].mode = Some(m);
         }
     }
     Selection {
-        modes: accepted.into_iter().map(|(_, m, ..)| m).collect(),
+        modes: accepted.into_iter().map(|a| a.mode).collect(),
         rejected,
     }
 }
