@@ -458,9 +458,8 @@ fn merge_columns(
     columns: Vec<Vec<usize>>,
     settings: &SelectionSettings,
 ) -> Vec<Vec<usize>> {
-    let (mut live, untouched): (Vec<Vec<usize>>, Vec<Vec<usize>>) = columns
-        .into_iter()
-        .partition(|c| c.len() >= 2);
+    let (mut live, untouched): (Vec<Vec<usize>>, Vec<Vec<usize>>) =
+        columns.into_iter().partition(|c| c.len() >= 2);
     let mut summaries: Vec<Mode> = live.iter().map(|c| summarise(poles, c, false)).collect();
     let orders_of = |c: &[usize]| -> Vec<usize> { c.iter().map(|&i| poles[i].order).collect() };
     let mut orders: Vec<Vec<usize>> = live.iter().map(|c| orders_of(c)).collect();
@@ -472,8 +471,7 @@ fn merge_columns(
                 let pieces = mostly_physical(poles, &live[a])
                     && mostly_physical(poles, &live[b])
                     && !orders[a].iter().any(|o| orders[b].contains(o));
-                if same_mode(sa, sb, settings)
-                    || (pieces && pieces_of_one_column(sa, sb, settings))
+                if same_mode(sa, sb, settings) || (pieces && pieces_of_one_column(sa, sb, settings))
                 {
                     merge = Some((a, b));
                     break 'search;

@@ -13,6 +13,7 @@ mod common;
 
 mod architecture;
 
+mod bridge_consistency;
 mod conditioning;
 mod dataset;
 mod design;
