@@ -28,7 +28,9 @@
 //!   the longer is kept, the other reported;
 //! - columns of the same mode broken by a gap (frequencies within
 //!   `merge_frequency_tolerance`, MAC ≥ `merge_mac` of mean shapes) are merged
-//!   first, one pole per order kept;
+//!   first, one pole per order kept; so are mostly physical pieces of one
+//!   column broken by frequency jumps (poles of different orders only, within
+//!   `merge_disjoint_tolerance`, MAC ≥ `merge_mac`: [`pieces_of_one_column`]);
 //! - the estimate (f, ζ, shape and their scatter) is taken over the poles in
 //!   the upper `converged_fraction` of the column's orders: low orders bias
 //!   damped modes (a model too small to separate them from the noise).
