@@ -317,3 +317,222 @@ fn five_storey_default_settings_find_the_five_modes_on_three_seeds() {
         }
     }
 }
+
+// ------------------------------------------------------- weakly excited torsion
+
+use quaketwin::modal::{identify_event, ChannelChoice, ModalResult};
+use quaketwin::rng::Rng;
+use quaketwin::synth::{
+    add_measurement_noise, synthetic_ground_motion, GroundMotionSpec, PlanBuilding, PlanModes,
+    PlanResponse, Sensor,
+};
+use quaketwin::vocab::{Axis, Event};
+
+/// Five storeys of 30 m × 20 m in plan: uniform floors of 600 t with the
+/// polar inertia of a uniform slab, J = m (30² + 20²)/12; storey
+/// stiffnesses giving ≈ 1.0 Hz along X, 1.25 Hz along Y and 1.6 Hz in
+/// torsion (the proportions of the 7-storey building of issue 13); the
+/// centre of mass 5 % of the plan dimensions off the centre of stiffness
+/// (e = (1.5, 1.0) m, the accidental eccentricity of Eurocode 8); 2 %
+/// damping in every mode.
+fn eccentric_building() -> PlanBuilding {
+    let n = 5;
+    let m = 6.0e5;
+    PlanBuilding {
+        masses_kg: vec![m; n],
+        rotational_inertia_kg_m2: vec![m * (30.0f64.powi(2) + 20.0f64.powi(2)) / 12.0; n],
+        mass_eccentricity_m: [1.5, 1.0],
+        storey_stiffness_x_n_per_m: vec![2.92e8; n],
+        storey_stiffness_y_n_per_m: vec![4.57e8; n],
+        storey_torsional_stiffness_n_m_per_rad: vec![8.1e10; n],
+        damping_ratios: vec![0.02],
+    }
+}
+
+/// Two opposite corners of floors 3 and 5 (roof), X and Y at each (8
+/// outputs); X and Y at the base centre (inputs).
+fn corner_sensors() -> Vec<Sensor> {
+    let mut sensors = Vec::new();
+    for (axis, name) in [(Axis::X, "X"), (Axis::Y, "Y")] {
+        sensors.push(Sensor {
+            id: format!("B-{name}"),
+            level: 0,
+            position_m: [0.0, 0.0],
+            axis,
+        });
+    }
+    for level in [3, 5] {
+        for (corner, position_m) in [("SW", [-15.0, -10.0]), ("NE", [15.0, 10.0])] {
+            for (axis, name) in [(Axis::X, "X"), (Axis::Y, "Y")] {
+                sensors.push(Sensor {
+                    id: format!("L{level}-{corner}-{name}"),
+                    level,
+                    position_m,
+                    axis,
+                });
+            }
+        }
+    }
+    sensors
+}
+
+/// The event the sensors record, with `snr_db` of noise on every channel;
+/// without the base sensors when `base` is false (ambient: no base motion).
+fn plan_event(response: &PlanResponse, base: bool, snr_db: f64, seed: u64) -> Event {
+    let mut rng = Rng::new(seed);
+    let sensors: Vec<Sensor> = corner_sensors()
+        .into_iter()
+        .filter(|s| base || s.level > 0)
+        .collect();
+    let mut records = response.to_records(&sensors).unwrap();
+    for r in records.iter_mut() {
+        r.samples = add_measurement_noise(&r.samples, snr_db, &mut rng);
+    }
+    Event {
+        name: "eccentric-5storey".into(),
+        records,
+        ..Default::default()
+    }
+}
+
+/// The truth (first) torsional mode: the lowest mode with most of its
+/// kinetic energy in floor rotation: (frequency, damping ratio).
+fn torsional_mode(truth: &PlanModes) -> (f64, f64) {
+    let j = (0..truth.rotation_share.len())
+        .find(|&j| truth.rotation_share[j] > 0.5)
+        .expect("the building has a torsional mode");
+    (truth.modes.frequencies_hz[j], truth.modes.damping_ratios[j])
+}
+
+fn print_result(kind: &str, truth: &PlanModes, result: &ModalResult) {
+    let t: Vec<String> = (0..truth.modes.frequencies_hz.len())
+        .map(|j| {
+            format!(
+                "{:.3} Hz ({:.0} % rot.)",
+                truth.modes.frequencies_hz[j],
+                100.0 * truth.rotation_share[j]
+            )
+        })
+        .collect();
+    eprintln!("{kind}: truth {}", t.join(", "));
+    eprintln!(
+        "{kind}: block rows {}, decimation {}, orders ≤ {:?}",
+        result.block_rows,
+        result.decimation,
+        result.orders.last()
+    );
+    for m in &result.modes {
+        eprintln!(
+            "  mode {:.4} Hz ζ {:.4} {:8} orders {}–{} poles {} MPC {:.3}",
+            m.frequency_hz,
+            m.damping_ratio,
+            m.direction,
+            m.order_min,
+            m.order_max,
+            m.pole_count,
+            m.mpc
+        );
+    }
+    for c in &result.rejected {
+        eprintln!(
+            "  rejected {:.4} Hz ζ {:.4} orders {}–{} poles {}: {}",
+            c.frequency_hz, c.damping_ratio, c.order_min, c.order_max, c.poles, c.reason
+        );
+    }
+    for w in &result.warnings {
+        eprintln!("  warning: {w}");
+    }
+}
+
+/// Identifies `event` with default settings but the method, prints the
+/// result and asserts that a selected mode is labelled torsion within 1 % of
+/// the truth torsional frequency (the nearest other modes, X₁ and Y₁, are
+/// more than 20 % away) and within the issue's 0.005 of its damping ratio.
+fn identify_torsion(kind: &str, method: Method, truth: &PlanModes, event: &Event) {
+    let settings = ModalSettings {
+        method,
+        ..Default::default()
+    };
+    let result = identify_event(event, &settings, &ChannelChoice::default()).unwrap();
+    print_result(kind, truth, &result);
+    let (f, zeta) = torsional_mode(truth);
+    let found = result
+        .modes
+        .iter()
+        .find(|m| (m.frequency_hz / f - 1.0).abs() <= 0.01);
+    let m = found.unwrap_or_else(|| {
+        panic!(
+            "{kind}: no mode within 1 % of the torsion at {f:.4} Hz; rejected columns {:?}; warnings {:?}",
+            result
+                .rejected
+                .iter()
+                .map(|c| (c.frequency_hz, c.poles, c.reason.clone()))
+                .collect::<Vec<_>>(),
+            result.warnings
+        )
+    });
+    assert_eq!(
+        m.direction, "torsion",
+        "{kind}: the {:.4} Hz mode is labelled {:?}",
+        m.frequency_hz, m.direction
+    );
+    assert!(
+        (m.damping_ratio - zeta).abs() <= 0.005,
+        "{kind}: torsion ζ {:.4} for {zeta}",
+        m.damping_ratio
+    );
+}
+
+/// Ambient vibration, 600 s at 100 Hz, white-noise forces along X and Y at
+/// every floor's centre of mass and no torque (the torsion is excited only
+/// through the eccentricity), 20 dB noise; `ssi-cov` with default settings.
+///
+/// Ignored because it fails (issue 13, not fixed here: `modal::plan` and
+/// `modal::selection`): with the defaults the automatic block rows are 18
+/// (the cost bound 150 / 8 outputs) at 100 Hz, a horizon of 0.18 s against
+/// the 1.0 s fundamental period: X₁ and Y₁ give no pole column at all and only
+/// two modes are selected (6.57 Hz X, ζ 4.4 %, and 8.26 Hz Y, ζ 3.7 %, for
+/// 6.72 and 8.30 Hz at 2 %).  The torsion IS in the stabilisation diagram,
+/// a column at 1.621 Hz (truth 1.628 Hz) present at every order from 30 to
+/// 42, and is rejected "only 7 poles (need 12)" by `min_relative_length`
+/// (60 % of the longest column).  With block rows 50 or 100, or a band of
+/// 0.2–5 Hz (decimation 5), the translational modes are found but the
+/// torsion column (1.633 Hz, 7–9 poles from order 26–30 to 42) is still
+/// rejected for its length.
+///
+/// Run: `cargo test --test it modal_synthetic::weak_torsion_ambient -- --ignored --nocapture`
+#[test]
+#[ignore]
+fn weak_torsion_ambient_is_selected_and_labelled() {
+    let building = eccentric_building();
+    let truth = building.modes().unwrap();
+    let mut rng = Rng::new(13);
+    let response = building
+        .simulate_ambient(60_000, 0.01, 1.0e4, 0.0, &mut rng)
+        .unwrap();
+    let event = plan_event(&response, false, 20.0, 14);
+    identify_torsion("ambient ssi-cov", Method::SsiCov, &truth, &event);
+}
+
+/// Earthquake, 40 s at 200 Hz, independent base motions along X and Y
+/// (the inputs), 20 dB noise; `io` with default settings.  (Measured: the
+/// torsion at 1.6272 Hz for 1.628 Hz, labelled torsion; on five more seed
+/// sets 1.6265–1.6309 Hz.)
+#[test]
+fn weak_torsion_earthquake_is_selected_and_labelled() {
+    let building = eccentric_building();
+    let truth = building.modes().unwrap();
+    let spec = |seed| GroundMotionSpec {
+        seed,
+        ..Default::default()
+    };
+    let (gx, gy) = (
+        synthetic_ground_motion(&spec(21)).unwrap(),
+        synthetic_ground_motion(&spec(22)).unwrap(),
+    );
+    let response = building
+        .simulate_base_motion(&gx, &gy, spec(21).dt())
+        .unwrap();
+    let event = plan_event(&response, true, 20.0, 23);
+    identify_torsion("earthquake io", Method::Io, &truth, &event);
+}
