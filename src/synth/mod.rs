@@ -15,17 +15,21 @@
 //! x[k+1] = e^{A Δt} x[k] + A⁻¹(e^{A Δt} − I) B p[k] with the closed-form
 //! exponential of an under-damped oscillator.  For inputs held constant over
 //! each sample step this is exact (no integration error).
-//! The numerical code of this file and of [`ground_motion`] is free of I/O;
+//! [`plan`] is the same model with rigid floors moving in plan (x, y, θ per
+//! floor, eccentric masses: torsion), simulated by the same recursion.
+//! The numerical code of this file, [`plan`] and [`ground_motion`] is free of I/O;
 //! [`event`] and [`facade`] write the bundled sample events (`quaketwin synth`).
 
 pub mod event;
 pub mod facade;
 pub mod ground_motion;
+pub mod plan;
 
 use crate::rng::Rng;
 pub use ground_motion::{
     synthetic_ground_motion, Envelope, GroundMotionSpec, Sampling, Shaping, WhiteNoise,
 };
+pub use plan::{PlanBuilding, PlanModes, PlanResponse, Sensor};
 
 use crate::error::{Error, Result};
 use crate::vocab::{Channel, Record, Role, SourceRef, Units};
@@ -150,45 +154,16 @@ impl ShearBuilding {
         kk
     }
 
-    /// Undamped modes: K φ = ω² M φ solved as a symmetric eigenproblem after
-    /// the Cholesky factorisation of M (here diagonal, L = diag √m):
-    /// (L⁻¹ K L⁻ᵀ) ψ = ω² ψ, φ = L⁻ᵀ ψ, which is mass-normalised when ψ is unit.
+    /// Undamped modes: K φ = ω² M φ ([`diagonal_mass_modes`]), the top level
+    /// non-negative, participation for base motion Γ_j = φ_jᵀ M 1.
     pub fn modes(&self) -> Result<BuildingModes> {
         self.validate()?;
-        let n = self.levels();
-        let kk = self.stiffness_matrix();
-        let inv_sqrt_m: Vec<f64> = self.masses_kg.iter().map(|m| 1.0 / m.sqrt()).collect();
-        let a = Mat::<f64>::from_fn(n, n, |i, j| inv_sqrt_m[i] * kk[i][j] * inv_sqrt_m[j]);
-        let eig = a
-            .self_adjoint_eigen(Side::Lower)
-            .map_err(|e| Error::numerical(format!("shear building eigenproblem: {e:?}")))?;
-        let lambdas = eig.S().column_vector();
-        let psi = eig.U();
-        let mut frequencies_hz = Vec::with_capacity(n);
-        let mut circular = Vec::with_capacity(n);
-        let mut shapes = Vec::with_capacity(n);
-        let mut participation = Vec::with_capacity(n);
-        for j in 0..n {
-            let omega = lambdas[j].max(0.0).sqrt();
-            let mut phi: Vec<f64> = (0..n).map(|i| psi[(i, j)] * inv_sqrt_m[i]).collect();
-            if phi[n - 1] < 0.0 {
-                phi.iter_mut().for_each(|v| *v = -*v);
-            }
-            participation.push(phi.iter().zip(&self.masses_kg).map(|(p, m)| p * m).sum());
-            circular.push(omega);
-            frequencies_hz.push(omega / std::f64::consts::TAU);
-            shapes.push(phi);
-        }
-        let damping_ratios = (0..n)
-            .map(|j| self.damping_ratios[if self.damping_ratios.len() == 1 { 0 } else { j }])
-            .collect();
-        Ok(BuildingModes {
-            frequencies_hz,
-            circular_frequencies: circular,
-            damping_ratios,
-            shapes,
-            participation,
-        })
+        diagonal_mass_modes(
+            &self.masses_kg,
+            &self.stiffness_matrix(),
+            &self.damping_ratios,
+            &vec![1.0; self.levels()],
+        )
     }
 
     /// Response to a base (ground) acceleration history `base_acceleration` (m/s²)
@@ -240,35 +215,119 @@ impl ShearBuilding {
             ));
         }
         let modes = self.modes()?;
-        let n = self.levels();
-        // Discard ten times the slowest decay time 1/(ζ ω) so the output is stationary.
-        let slowest_decay_s = modes
-            .circular_frequencies
-            .iter()
-            .zip(&modes.damping_ratios)
-            .map(|(w, z)| 1.0 / (z.max(1e-3) * w.max(1e-9)))
-            .fold(0.0, f64::max);
-        let warm_up = ((10.0 * slowest_decay_s / dt).ceil() as usize).min(10 * n_samples.max(1));
-        let total = n_samples + warm_up;
-        let forces: Vec<Vec<f64>> = (0..n).map(|_| rng.normal_vec(total, force_std_n)).collect();
-        let (disp, acc) = simulate_modal(&modes, dt, total, |j, k| {
-            (0..n)
-                .map(|i| modes.shapes[j][i] * forces[i][k])
-                .sum::<f64>()
-        });
-        let cut = |v: Vec<Vec<f64>>| {
-            v.into_iter()
-                .map(|row| row[warm_up..].to_vec())
-                .collect::<Vec<_>>()
-        };
+        let (disp, acc, forces) = ambient_response(
+            &modes,
+            n_samples,
+            dt,
+            &vec![force_std_n; self.levels()],
+            rng,
+        );
         Ok(Response {
             dt,
             base_acceleration: vec![0.0; n_samples],
-            absolute_acceleration: cut(acc),
-            relative_displacement: cut(disp),
-            floor_forces: cut(forces),
+            absolute_acceleration: acc,
+            relative_displacement: disp,
+            floor_forces: forces,
         })
     }
+}
+
+/// Undamped modes of K φ = ω² M φ for a diagonal mass matrix M = diag(`masses`)
+/// (kg, or kg·m² for a rotation), solved as a symmetric eigenproblem after
+/// the Cholesky factorisation of M, L = diag √m: (L⁻¹ K L⁻ᵀ) ψ = ω² ψ,
+/// φ = L⁻ᵀ ψ, which is mass-normalised when ψ is unit.  Modes in ascending
+/// frequency, each signed so that its last degree of freedom is non-negative;
+/// `damping_ratios` one value or one per mode; participation Γ_j = φ_jᵀ M r
+/// for the influence vector r = `influence` (the DoFs' motion under a unit
+/// base displacement).
+fn diagonal_mass_modes(
+    masses: &[f64],
+    kk: &[Vec<f64>],
+    damping_ratios: &[f64],
+    influence: &[f64],
+) -> Result<BuildingModes> {
+    let n = masses.len();
+    let inv_sqrt_m: Vec<f64> = masses.iter().map(|m| 1.0 / m.sqrt()).collect();
+    let a = Mat::<f64>::from_fn(n, n, |i, j| inv_sqrt_m[i] * kk[i][j] * inv_sqrt_m[j]);
+    let eig = a
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| Error::numerical(format!("building eigenproblem: {e:?}")))?;
+    let lambdas = eig.S().column_vector();
+    let psi = eig.U();
+    let mut frequencies_hz = Vec::with_capacity(n);
+    let mut circular = Vec::with_capacity(n);
+    let mut shapes = Vec::with_capacity(n);
+    let mut participation = Vec::with_capacity(n);
+    for j in 0..n {
+        let omega = lambdas[j].max(0.0).sqrt();
+        let mut phi: Vec<f64> = (0..n).map(|i| psi[(i, j)] * inv_sqrt_m[i]).collect();
+        if phi[n - 1] < 0.0 {
+            phi.iter_mut().for_each(|v| *v = -*v);
+        }
+        participation.push(
+            phi.iter()
+                .zip(masses)
+                .zip(influence)
+                .map(|((p, m), r)| p * m * r)
+                .sum(),
+        );
+        circular.push(omega);
+        frequencies_hz.push(omega / std::f64::consts::TAU);
+        shapes.push(phi);
+    }
+    let damping_ratios = (0..n)
+        .map(|j| damping_ratios[if damping_ratios.len() == 1 { 0 } else { j }])
+        .collect();
+    Ok(BuildingModes {
+        frequencies_hz,
+        circular_frequencies: circular,
+        damping_ratios,
+        shapes,
+        participation,
+    })
+}
+
+/// Time histories `[dof][sample]`.
+type Histories = Vec<Vec<f64>>;
+
+/// Response to independent Gaussian white-noise loads on every degree of
+/// freedom (ambient excitation), standard deviation `load_std[i]` on DoF i,
+/// held over each sample step: (displacements, relative accelerations,
+/// loads), each `[dof][sample]`, `n_samples` long.  A start-up stretch of ten
+/// times the slowest decay time 1/(ζω) is simulated first and discarded, so
+/// the output is stationary.
+fn ambient_response(
+    modes: &BuildingModes,
+    n_samples: usize,
+    dt: f64,
+    load_std: &[f64],
+    rng: &mut Rng,
+) -> (Histories, Histories, Histories) {
+    let slowest_decay_s = modes
+        .circular_frequencies
+        .iter()
+        .zip(&modes.damping_ratios)
+        .map(|(w, z)| 1.0 / (z.max(1e-3) * w.max(1e-9)))
+        .fold(0.0, f64::max);
+    let warm_up = ((10.0 * slowest_decay_s / dt).ceil() as usize).min(10 * n_samples.max(1));
+    let total = n_samples + warm_up;
+    let forces: Vec<Vec<f64>> = load_std
+        .iter()
+        .map(|&std| rng.normal_vec(total, std))
+        .collect();
+    let (disp, acc) = simulate_modal(modes, dt, total, |j, k| {
+        forces
+            .iter()
+            .zip(&modes.shapes[j])
+            .map(|(f, phi)| phi * f[k])
+            .sum::<f64>()
+    });
+    let cut = |v: Vec<Vec<f64>>| {
+        v.into_iter()
+            .map(|row| row[warm_up..].to_vec())
+            .collect::<Vec<_>>()
+    };
+    (cut(disp), cut(acc), cut(forces))
 }
 
 impl Response {
@@ -277,24 +336,37 @@ impl Response {
     /// (role output), in m/s², ids `{prefix}L0` … `{prefix}Ln`.
     pub fn to_records(&self, prefix: &str) -> Vec<Record> {
         let rate = 1.0 / self.dt;
-        let make = |level: usize, role: Role, samples: &[f64]| {
-            let source = SourceRef {
-                file: "synthetic".into(),
-                member: None,
-                column: None,
-                format: "synth".into(),
-            };
-            let mut ch = Channel::new(format!("{prefix}L{level}"), Units::MPerS2, rate, source);
-            ch.level = Some(level as i32);
-            ch.role = role;
-            Record::new(ch, samples.to_vec())
+        let make = |level: usize, samples: &[f64]| {
+            Record::new(
+                synthetic_channel(&format!("{prefix}L{level}"), rate, level),
+                samples.to_vec(),
+            )
         };
-        let mut out = vec![make(0, Role::Input, &self.base_acceleration)];
+        let mut out = vec![make(0, &self.base_acceleration)];
         for (i, acc) in self.absolute_acceleration.iter().enumerate() {
-            out.push(make(i + 1, Role::Output, acc));
+            out.push(make(i + 1, acc));
         }
         out
     }
+}
+
+/// A synthetic acceleration channel (m/s²) at `level`: role input at the
+/// base (level 0), output above.
+fn synthetic_channel(id: &str, rate_hz: f64, level: usize) -> Channel {
+    let source = SourceRef {
+        file: "synthetic".into(),
+        member: None,
+        column: None,
+        format: "synth".into(),
+    };
+    let mut ch = Channel::new(id, Units::MPerS2, rate_hz, source);
+    ch.level = Some(level as i32);
+    ch.role = if level == 0 {
+        Role::Input
+    } else {
+        Role::Output
+    };
+    ch
 }
 
 fn check_dt(dt: f64) -> Result<()> {

@@ -27,6 +27,7 @@ mod hysteresis_partial;
 mod hysteresis_real;
 mod metrics;
 mod modal;
+mod modal_synthetic;
 mod outdir;
 mod pipeline;
 mod plackett_luce;

@@ -188,3 +188,150 @@ fn streams_are_pinned() {
     assert_eq!(derived.next_u64(), 0xE373_9DAD_E59C_0FA5);
     assert_eq!(derived.below(1000), 321);
 }
+
+// ------------------------------------------------ the plan (x, y, θ) building
+
+use quaketwin::synth::{PlanBuilding, Sensor};
+use quaketwin::vocab::Axis;
+
+fn one_storey_plan(eccentricity: [f64; 2]) -> PlanBuilding {
+    PlanBuilding {
+        masses_kg: vec![2.0e5],
+        rotational_inertia_kg_m2: vec![1.5e7],
+        mass_eccentricity_m: eccentricity,
+        storey_stiffness_x_n_per_m: vec![3.0e8],
+        storey_stiffness_y_n_per_m: vec![4.0e8],
+        storey_torsional_stiffness_n_m_per_rad: vec![4.0e10],
+        damping_ratios: vec![0.02],
+    }
+}
+
+/// One storey, centre of mass at e = (e_x, 0) from the centre of stiffness:
+/// with the DoFs at the centre of mass K = [[k_x, 0, 0], [0, k_y, −k_y e],
+/// [0, −k_y e, k_θ + k_y e²]], so ω² = k_x/m for X and the roots of
+/// (k_y − ω²m)(k_θ + k_y e² − ω²J) = (k_y e)² for the coupled y–θ pair;
+/// the shapes solve K φ = ω² M φ and are mass-normalised.
+#[test]
+fn plan_building_one_storey_matches_closed_form() {
+    let e = 1.5;
+    let b = one_storey_plan([e, 0.0]);
+    let (m, j, kx, ky, kt) = (2.0e5, 1.5e7, 3.0e8, 4.0e8, 4.0e10);
+    let truth = b.modes().unwrap();
+    // Quadratic in λ = ω²: mJ λ² − (m(k_θ + k_y e²) + J k_y) λ + k_y k_θ = 0.
+    let (qa, qb, qc) = (m * j, -(m * (kt + ky * e * e) + j * ky), ky * kt);
+    let disc = (qb * qb - 4.0 * qa * qc).sqrt();
+    let mut expected = [kx / m, (-qb - disc) / (2.0 * qa), (-qb + disc) / (2.0 * qa)];
+    expected.sort_by(f64::total_cmp);
+    for (w, l) in truth.modes.circular_frequencies.iter().zip(expected) {
+        assert!((w * w / l - 1.0).abs() < 1e-12, "{} vs {l}", w * w);
+    }
+    let kk = b.stiffness_matrix();
+    let masses = [m, m, j];
+    for (w, phi) in truth
+        .modes
+        .circular_frequencies
+        .iter()
+        .zip(&truth.modes.shapes)
+    {
+        for r in 0..3 {
+            let kphi: f64 = (0..3).map(|c| kk[r][c] * phi[c]).sum();
+            assert!(
+                (kphi - w * w * masses[r] * phi[r]).abs()
+                    < 1e-8 * (kk[r][r] * phi[r]).abs().max(1.0)
+            );
+        }
+        let gen: f64 = (0..3).map(|r| masses[r] * phi[r] * phi[r]).sum();
+        assert!((gen - 1.0).abs() < 1e-12);
+    }
+    // The X mode has no rotation; the coupled pair shares it.
+    let shares = &truth.rotation_share;
+    assert!(shares.iter().any(|s| s.abs() < 1e-20));
+    assert!(
+        (shares.iter().sum::<f64>() - 1.0).abs() < 1e-12,
+        "{shares:?}"
+    );
+}
+
+/// Without eccentricity the three directions decouple: the X response of
+/// the plan building to a base motion along X is the shear building's, no
+/// floor rotates, and a sensor anywhere on the floor records the same.
+#[test]
+fn plan_building_without_eccentricity_is_two_shear_buildings() {
+    let plan = PlanBuilding {
+        masses_kg: vec![3.0e5, 2.5e5],
+        rotational_inertia_kg_m2: vec![2.0e7, 1.8e7],
+        mass_eccentricity_m: [0.0, 0.0],
+        storey_stiffness_x_n_per_m: vec![5.0e8, 4.0e8],
+        storey_stiffness_y_n_per_m: vec![6.0e8, 5.0e8],
+        storey_torsional_stiffness_n_m_per_rad: vec![6.0e10, 5.0e10],
+        damping_ratios: vec![0.03],
+    };
+    let shear_x = ShearBuilding {
+        masses_kg: plan.masses_kg.clone(),
+        storey_stiffness_n_per_m: plan.storey_stiffness_x_n_per_m.clone(),
+        damping_ratios: vec![0.03],
+    };
+    let spec = GroundMotionSpec {
+        duration_s: 10.0,
+        ..Default::default()
+    };
+    let ag = synthetic_ground_motion(&spec).unwrap();
+    let zeros = vec![0.0; ag.len()];
+    let r = plan.simulate_base_motion(&ag, &zeros, spec.dt()).unwrap();
+    let s = shear_x.simulate_base_motion(&ag, spec.dt()).unwrap();
+    let peak = s.absolute_acceleration[1]
+        .iter()
+        .fold(0.0f64, |a, v| a.max(v.abs()));
+    for level in 1..=2usize {
+        for position_m in [[0.0, 0.0], [12.0, -7.0]] {
+            let sensor = Sensor {
+                id: "s".into(),
+                level,
+                position_m,
+                axis: Axis::X,
+            };
+            let a = r.sensor_acceleration(&sensor).unwrap();
+            let worst = a
+                .iter()
+                .zip(&s.absolute_acceleration[level - 1])
+                .fold(0.0f64, |w, (x, y)| w.max((x - y).abs()));
+            assert!(worst < 1e-9 * peak, "level {level}: {worst}");
+        }
+        assert!(r.relative_acceleration[3 * (level - 1) + 2]
+            .iter()
+            .all(|t| t.abs() < 1e-12));
+    }
+}
+
+/// Rigid-floor kinematics of a sensor on an eccentric, twisting floor:
+/// a_y(P) − a_y(centre of mass) = θ̈ (P_x − e_x), a_x(P) − a_x(CM) = −θ̈ (P_y − e_y).
+#[test]
+fn plan_building_sensors_follow_the_floor_rotation() {
+    let b = one_storey_plan([1.5, -1.0]);
+    let mut rng = Rng::new(3);
+    let r = b
+        .simulate_ambient(2000, 0.01, 1.0e4, 0.0, &mut rng)
+        .unwrap();
+    let at = |p: [f64; 2], axis| {
+        r.sensor_acceleration(&Sensor {
+            id: "s".into(),
+            level: 1,
+            position_m: p,
+            axis,
+        })
+        .unwrap()
+    };
+    let theta = &r.relative_acceleration[2];
+    assert!(
+        theta.iter().any(|t| t.abs() > 0.0),
+        "eccentricity couples rotation"
+    );
+    let (cm_x, cm_y) = (at([1.5, -1.0], Axis::X), at([1.5, -1.0], Axis::Y));
+    let (cx, cy) = (at([11.5, 4.0], Axis::X), at([11.5, 4.0], Axis::Y));
+    for k in 0..theta.len() {
+        assert!((cy[k] - cm_y[k] - 10.0 * theta[k]).abs() < 1e-12 * (1.0 + cy[k].abs()));
+        assert!((cx[k] - cm_x[k] + 5.0 * theta[k]).abs() < 1e-12 * (1.0 + cx[k].abs()));
+    }
+    // No torque and no base motion: the CM x/y channels are the DoFs themselves.
+    assert_eq!(cm_x, r.relative_acceleration[0]);
+}
