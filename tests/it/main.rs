@@ -17,6 +17,7 @@ mod conditioning;
 mod dataset;
 mod design;
 mod design_io;
+mod determinism;
 mod end_to_end;
 mod event_folder;
 mod geometry;
