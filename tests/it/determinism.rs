@@ -53,8 +53,15 @@ fn outputs_are_byte_identical_with_one_and_three_threads() {
     run_with_threads(&out, 3);
     let names = files(&out);
     assert_eq!(names, files(&one), "the two runs wrote different files");
-    for expected in ["modes.parquet", "stabilization.parquet", "modal_spectrum.parquet"] {
-        assert!(names.iter().any(|n| n == expected), "no {expected}: {names:?}");
+    for expected in [
+        "modes.parquet",
+        "stabilization.parquet",
+        "modal_spectrum.parquet",
+    ] {
+        assert!(
+            names.iter().any(|n| n == expected),
+            "no {expected}: {names:?}"
+        );
     }
     let differing: Vec<&String> = names
         .iter()

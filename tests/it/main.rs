@@ -20,6 +20,7 @@ mod design_io;
 mod determinism;
 mod end_to_end;
 mod event_folder;
+mod exit_codes;
 mod geometry;
 mod hysteresis;
 mod hysteresis_masses;
