@@ -21,6 +21,7 @@ mod determinism;
 mod end_to_end;
 mod event_folder;
 mod exit_codes;
+mod fuzz;
 mod geometry;
 mod hysteresis;
 mod hysteresis_masses;
