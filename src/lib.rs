@@ -28,3 +28,16 @@ pub mod twin;
 pub mod vocab;
 
 pub use error::{Error, Location, Result};
+
+/// Makes every result independent of the number of threads (issue 14, item 7):
+/// faer's dense kernels (matrix products, QR, SVD, eigen-solvers) split their
+/// sums into one part per thread of their `Par` setting and add the parts up,
+/// so with the default `Par::rayon(0)` the 15th digit of modes, stabilization
+/// diagrams and twin updates followed `RAYON_NUM_THREADS`.  This sets faer's
+/// global parallelism to `Par::Seq` (a fixed summation order); the
+/// parallelism stays where it never changes a result: rayon `par_iter`s over
+/// channels, events, candidates, collected in index order.  Called by the
+/// CLI and by `pipeline::run`; cheap and idempotent.
+pub fn fixed_order_reductions() {
+    faer::set_global_parallelism(faer::Par::Seq);
+}

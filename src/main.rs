@@ -135,6 +135,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    quaketwin::fixed_order_reductions();
     let result = match &cli.command {
         Command::Inspect { event } => quaketwin::commands::inspect(event).map(|s| print!("{s}")),
         Command::Ingest { event, out, mcap } => {

@@ -122,7 +122,9 @@ fn assemble_motion(
     }
     let mut n = parts.iter().map(|p| p.4.len()).min().unwrap_or(0);
     if let Some(d) = spec.duration_s {
-        n = n.min((d / dt).round() as usize + 1);
+        // As many samples as the duration covers; a duration longer than any
+        // record (even 1e308 s) takes the whole record.
+        n = n.min(((d / dt).round() as usize).saturating_add(1));
     }
     if n < 2 {
         return Err(Error::input(

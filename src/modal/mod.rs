@@ -213,11 +213,24 @@ fn channel_location(input: &ModalInput, index: usize, id: &str) -> Location {
 
 /// Checks the signals: enough channels, equal lengths, finite and non-constant.
 fn validate(input: &ModalInput, method: Method) -> Result<()> {
+    // The channels' own conditions are data problems (exit 1) naming the
+    // file and channel; only a method the record cannot serve stays usage.
+    let first = || match input.output_ids.first() {
+        Some(id) => channel_location(input, 0, id),
+        None => input
+            .locations
+            .first()
+            .cloned()
+            .unwrap_or_else(|| Location::file("modal input")),
+    };
     if !(input.dt.is_finite() && input.dt > 0.0) {
-        return Err(Error::usage(format!(
-            "modal: sampling interval must be positive, got {}",
-            input.dt
-        )));
+        return Err(Error::input(
+            first(),
+            format!(
+                "modal: sampling interval must be positive, got {}",
+                input.dt
+            ),
+        ));
     }
     if input.output_ids.len() != input.outputs.len() || input.input_ids.len() != input.inputs.len()
     {
@@ -233,12 +246,15 @@ fn validate(input: &ModalInput, method: Method) -> Result<()> {
                 ));
             }
             if input.outputs.is_empty() {
-                return Err(Error::usage("modal: no response channel (role = output)"));
+                return Err(Error::input(
+                    first(),
+                    "modal: no response channel (role = output)",
+                ));
             }
         }
         _ => {
             if input.outputs.len() < 2 {
-                return Err(Error::usage(format!(
+                return Err(Error::input(first(), format!(
                     "modal: output-only identification needs at least two response channels (got {}); a single channel gives no mode shape",
                     input.outputs.len()
                 )));

@@ -28,7 +28,7 @@ pub fn spectral_overlay(
     let n = outputs.iter().map(|s| s.len()).min().unwrap_or(0);
     let seg = (segment_length / 2 * 2).max(16);
     if l == 0 || n < seg {
-        return Err(Error::usage(format!(
+        return Err(Error::numerical(format!(
             "spectral overlay: need channels of at least {seg} samples"
         )));
     }

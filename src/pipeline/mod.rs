@@ -220,6 +220,7 @@ pub fn run(
     out: &Path,
     quiet: bool,
 ) -> Result<Vec<(String, StageOutcome)>> {
+    crate::fixed_order_reductions();
     prepare_out_dir(out)?;
     let event_fp = fingerprint::path_fingerprint(event_path)?;
     let event = EventIdentity {

@@ -383,7 +383,11 @@ pub fn parse_start_time(s: &str) -> Option<(i64, String)> {
         let mm: u32 = t.next()?.parse().ok()?;
         let ss: f64 = t.next()?.parse().ok()?;
         let ms: f64 = parts.get(2).map(|x| x.parse().ok()).unwrap_or(Some(0.0))?;
-        epoch_ns_from_civil(y, m, day, hh, mm, ss)? + (ms * 1e6).round() as i64
+        let ms_ns = (ms * 1e6).round();
+        if !(0.0..1e12).contains(&ms_ns) {
+            return None;
+        }
+        epoch_ns_from_civil(y, m, day, hh, mm, ss)?.checked_add(ms_ns as i64)?
     } else {
         parse_iso8601_ns(stamp)?
     };
@@ -391,7 +395,7 @@ pub fn parse_start_time(s: &str) -> Option<(i64, String)> {
         Some(z) => format!("{z} = UTC{offset_h:+}"),
         None => "UTC".into(),
     };
-    Some((local - offset_h * 3_600_000_000_000, desc))
+    Some((local.checked_sub(offset_h * 3_600_000_000_000)?, desc))
 }
 
 /// How the time column counts.

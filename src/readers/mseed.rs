@@ -551,11 +551,17 @@ fn parse_records(bytes: &[u8], src: &SourceRef) -> Result<(Vec<DataRecord>, Vec<
                 format!("invalid record start time {year},{day} {hour}:{minute}:{second}"),
             )
         })?;
-        start_ns += fract_100us as i64 * 100_000 + microseconds * 1_000;
+        let mut shift = fract_100us as i64 * 100_000 + microseconds * 1_000;
         // Activity flag bit 1: time correction already applied to BTIME.
         if activity & 0x02 == 0 {
-            start_ns += time_correction as i64 * 100_000;
+            shift += time_correction as i64 * 100_000;
         }
+        start_ns = start_ns.checked_add(shift).ok_or_else(|| {
+            err(
+                offset,
+                format!("record start time {year},{day} {hour}:{minute}:{second} is out of range"),
+            )
+        })?;
         out.push(DataRecord {
             id,
             network,

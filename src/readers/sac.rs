@@ -69,7 +69,14 @@ impl SacHeader {
             m as u32,
             s as f64,
         )?;
-        Some(t0 + ms as i64 * 1_000_000 + (self.b.unwrap_or(0.0) * 1e9).round() as i64)
+        // B (the first sample's offset from the reference time) beyond the
+        // i64 nanosecond range is no time at all: refused, never saturated.
+        let b_ns = (self.b.unwrap_or(0.0) * 1e9).round();
+        if !(b_ns.abs() < 9e18) {
+            return None;
+        }
+        t0.checked_add(ms as i64 * 1_000_000)?
+            .checked_add(b_ns as i64)
     }
 }
 

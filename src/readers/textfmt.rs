@@ -431,7 +431,7 @@ pub fn us_datetime_ns(date: &str, time: &str, zone: &str) -> Option<i64> {
         "PST" => 8,
         _ => return None,
     };
-    Some(epoch_ns_from_civil(year, month, day, h, m, s)? + offset_h * 3_600_000_000_000)
+    epoch_ns_from_civil(year, month, day, h, m, s)?.checked_add(offset_h * 3_600_000_000_000)
 }
 
 /// Parses `hh:mm:ss.f`, tolerating blanks inside fields (`15:26: 1.0`).
@@ -471,11 +471,14 @@ pub(crate) fn number_after(line: &str, key: &str) -> Option<f64> {
 /// Latitude/longitude written `32.773N`, `115.448W`: signed decimal degrees.
 pub fn signed_degrees(s: &str) -> Option<f64> {
     let t = s.trim().trim_end_matches(',');
-    let (num, hemi) = t.split_at(t.len().checked_sub(1)?);
+    // The hemisphere letter is the last character (a damaged file may end
+    // the field in a multi-byte one: split at a character boundary).
+    let hemi = t.chars().last()?;
+    let num = &t[..t.len() - hemi.len_utf8()];
     let v: f64 = num.trim().parse().ok()?;
-    match hemi.to_ascii_uppercase().as_str() {
-        "N" | "E" => Some(v),
-        "S" | "W" => Some(-v),
+    match hemi.to_ascii_uppercase() {
+        'N' | 'E' => Some(v),
+        'S' | 'W' => Some(-v),
         _ => None,
     }
 }

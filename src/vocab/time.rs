@@ -30,7 +30,9 @@ fn civil_from_days(z: i64) -> (i64, i64, i64) {
 }
 
 /// Epoch nanoseconds for a UTC civil time; `second` may carry a fraction.
-/// Returns `None` for out-of-range fields.
+/// Returns `None` for out-of-range fields and for times that i64
+/// nanoseconds cannot hold (before 1677-09-21 or after 2262-04-11): a year
+/// read from a damaged header never wraps into another century.
 pub fn epoch_ns_from_civil(
     year: i64,
     month: u32,
@@ -47,13 +49,17 @@ pub fn epoch_ns_from_civil(
     {
         return None;
     }
+    // Years beyond ±10⁶ are far outside the i64 range below; bounding them
+    // first keeps the day arithmetic itself from overflowing.
+    if !(-1_000_000..=1_000_000).contains(&year) {
+        return None;
+    }
     let days = days_from_civil(year, month as i64, day as i64);
     let whole = second.floor();
     let frac_ns = ((second - whole) * 1e9).round() as i64;
-    Some(
-        (days * 86_400 + hour as i64 * 3600 + minute as i64 * 60 + whole as i64) * NS_PER_S
-            + frac_ns,
-    )
+    (days * 86_400 + hour as i64 * 3600 + minute as i64 * 60 + whole as i64)
+        .checked_mul(NS_PER_S)?
+        .checked_add(frac_ns)
 }
 
 /// Epoch nanoseconds from a day-of-year form (SEED, SAC): year, day 1..366.
@@ -68,7 +74,7 @@ pub fn epoch_ns_from_ordinal(
         return None;
     }
     let jan1 = epoch_ns_from_civil(year, 1, 1, hour, minute, second)?;
-    Some(jan1 + (day_of_year as i64 - 1) * 86_400 * NS_PER_S)
+    jan1.checked_add((day_of_year as i64 - 1) * 86_400 * NS_PER_S)
 }
 
 /// `2018-11-30T17:28:59.334500000Z`

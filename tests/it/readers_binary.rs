@@ -1390,6 +1390,23 @@ fn sac_short_file_is_an_error_with_offset() {
     assert!(message.contains("NPTS=5"), "{message}");
 }
 
+/// Issue 14 item 5: B = 3e38 s put the start ~1727 (the nanosecond sum
+/// wrapped; a panic in debug builds).  A start i64 nanoseconds cannot hold is
+/// unknown, and said so.
+#[test]
+fn sac_absurd_begin_offset_leaves_the_start_unknown() {
+    let mut bytes = sac_file(true, 3, &[1.0, -2.5, 3.25]);
+    bytes[20..24].copy_from_slice(&3e38f32.to_le_bytes());
+    let fc = readers::sac::read(&bytes, &src("x.sac"), &ReadOptions::default()).unwrap();
+    let ch = &fc.records[0].channel;
+    assert_eq!(ch.start_ns, None);
+    assert!(
+        ch.missing.contains(&"start_time".to_string()),
+        "{:?}",
+        ch.missing
+    );
+}
+
 /// One channel in two epochs (2010–2015 and from 2015) with different
 /// elevation, dip and sensitivity.
 const STATIONXML_EPOCHS: &str = r#"<?xml version="1.0"?>
