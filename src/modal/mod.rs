@@ -95,9 +95,22 @@ pub const SAMPLES_PER_TOP_PERIOD: f64 = 4.0;
 /// horizon of 0.10–0.15 s, below the 0.24 s period of the Painter St.
 /// transverse mode; counting outputs only gives it 0.37 s.
 pub const MAX_BLOCK_WIDTH: usize = 150;
+/// Automatic block rows may exceed [`MAX_BLOCK_WIDTH`] to reach half a
+/// period of the record's lowest clear spectral peak, up to p · l ≤ this:
+/// with 8 outputs the cost bound alone left a 1-Hz building a horizon of
+/// 0.18 s at 100 Hz and no pole column for its first two modes (issue 13,
+/// `modal_synthetic::weak_torsion_ambient`).
+pub const MAX_HORIZON_BLOCK_WIDTH: usize = 480;
 /// Automatic model orders: 2, 4, … up to this (thesis: 42), or what the
-/// subspace supports.
+/// subspace supports …
 pub const MAX_AUTO_ORDER: usize = 42;
+/// … or, with many outputs, up to this many per output channel: a building
+/// recorded in plan has three modes per floor in its band, and a mode's
+/// pole column only starts once the order can hold the modes below it (the
+/// torsion of a 5-storey building in plan appears at order 36) …
+pub const AUTO_ORDERS_PER_OUTPUT: usize = 8;
+/// … and never above this.
+pub const MAX_AUTO_ORDER_CAP: usize = 120;
 
 /// All settings of the modal stage (serialisable into the output metadata).
 /// `None` fields are resolved from the record by [`plan`] (issue 13).
@@ -445,8 +458,15 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
                 .and_then(|o| o.last().copied())
                 .unwrap_or(0);
             let p_order = want_order.div_ceil(columns_per_block) + 2;
-            // … bounded by the cost and by the data.
+            // … bounded by the cost, but at least half a period of the
+            // record's lowest clear spectral peak (up to a larger bound) …
             let p_cost = (MAX_BLOCK_WIDTH / l.max(1)).max(3);
+            let seg = ((2.0 * fs0 / lo).ceil() as usize).min(n0 / 4);
+            let lowest_peak = spectrum::lowest_spectral_peak_hz(&input.outputs, input.dt, seg, [lo, hi]);
+            let p_peak = lowest_peak.map_or(0, |f| {
+                ((fs / (2.0 * f)).ceil() as usize).min(MAX_HORIZON_BLOCK_WIDTH / l.max(1))
+            });
+            // … and by the data.
             let p_data = (2..=p_band.max(p_order).max(3))
                 .take_while(|&p| needed(p).1 <= n)
                 .last()
@@ -460,9 +480,12 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
                     ),
                 ));
             }
-            let p = p_band.max(p_order).min(p_cost).min(p_data).max(2);
+            let p = p_band.max(p_order).min(p_cost).max(p_peak).min(p_data).max(2);
+            let peak_note = lowest_peak.map_or(String::from("no clear spectral peak"), |f| {
+                format!("half a period of the lowest spectral peak {f:.3} Hz = {p_peak}")
+            });
             notes.push(format!(
-                "block rows {p} (automatic: half a period of {lo} Hz = {p_band}, highest order needs {p_order}, cost bound {p_cost}, data bound {p_data})"
+                "block rows {p} (automatic: half a period of {lo} Hz = {p_band}, highest order needs {p_order}, cost bound {p_cost}, {peak_note}, data bound {p_data})"
             ));
             p
         }
@@ -471,9 +494,12 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
     let orders = match explicit_orders {
         Some(o) => o,
         None => {
-            let top = MAX_AUTO_ORDER.min(supported - supported % 2).max(2);
+            let most = MAX_AUTO_ORDER
+                .max(AUTO_ORDERS_PER_OUTPUT * l)
+                .min(MAX_AUTO_ORDER_CAP);
+            let top = most.min(supported - supported % 2).max(2);
             notes.push(format!(
-                "model orders 2–{top} step 2 (automatic: at most {MAX_AUTO_ORDER}, subspace supports {supported})"
+                "model orders 2–{top} step 2 (automatic: at most {most} = max({MAX_AUTO_ORDER}, {AUTO_ORDERS_PER_OUTPUT} per output) ≤ {MAX_AUTO_ORDER_CAP}, subspace supports {supported})"
             ));
             (2..=top).step_by(2).collect()
         }

@@ -551,7 +551,13 @@ fn direction(
         Some(401) => direction = Some(Direction::Down),
         Some(_) => {} // Radial/transverse/longitudinal/H1/H2/other: no azimuth.
         None => {
-            let reference = header.int_at(19).or_else(|| header.int_at(20));
+            // A reference azimuth outside 0–360° is no azimuth (a damaged
+            // header); never summed unchecked (the long fuzz run found an
+            // integer overflow here).
+            let reference = header
+                .int_at(19)
+                .or_else(|| header.int_at(20))
+                .filter(|a| (0..=360).contains(a));
             if let (Some(rel), Some(reference)) = (
                 header.int_at(54).filter(|a| (0..=360).contains(a)),
                 reference,

@@ -264,27 +264,160 @@ fn record_length_limit(file_len: usize) -> usize {
         .min(1 << 30)
 }
 
-/// All messages of an in-memory MCAP file, in file order.
-fn read_messages(
-    bytes: &[u8],
-) -> std::result::Result<Vec<mcap::Message<'static>>, mcap::McapError> {
-    use mcap::sans_io::{LinearReaderOptions, MessageReadEvent, MessageReader};
+/// Checks the length-prefixed fields of a Schema, Channel or Message record
+/// against its body before the mcap crate parses it: its parser (binrw)
+/// reserves a string's claimed length up front, so one corrupt u32 inside a
+/// 40-byte Channel record asked for 4 GB (found by the long fuzz run,
+/// docs/robustness.md).  Field layouts: MCAP specification, "Records".
+fn check_record_fields(opcode: u8, body: &[u8]) -> std::result::Result<(), String> {
+    struct Fields<'a> {
+        body: &'a [u8],
+        pos: usize,
+    }
+    impl Fields<'_> {
+        fn skip(&mut self, n: u64, what: &str) -> std::result::Result<(), String> {
+            let left = (self.body.len() - self.pos) as u64;
+            if n > left {
+                return Err(format!(
+                    "{what} claims {n} bytes, only {left} remain in its record"
+                ));
+            }
+            self.pos += n as usize;
+            Ok(())
+        }
+        fn length(&mut self, what: &str) -> std::result::Result<u64, String> {
+            let at = self.pos;
+            self.skip(4, what)?;
+            let mut b = [0u8; 4];
+            b.copy_from_slice(&self.body[at..at + 4]);
+            Ok(u32::from_le_bytes(b) as u64)
+        }
+        /// A string or byte array with a u32 length prefix.
+        fn prefixed(&mut self, what: &str) -> std::result::Result<(), String> {
+            let n = self.length(what)?;
+            self.skip(n, what)
+        }
+        /// A map<string, string>: u32 byte length, then key/value strings.
+        fn string_map(&mut self, what: &str) -> std::result::Result<(), String> {
+            let n = self.length(what)?;
+            let start = self.pos;
+            self.skip(n, what)?;
+            let mut inner = Fields {
+                body: &self.body[start..self.pos],
+                pos: 0,
+            };
+            while inner.pos < inner.body.len() {
+                inner.prefixed(what)?;
+                inner.prefixed(what)?;
+            }
+            Ok(())
+        }
+    }
+    let mut f = Fields { body, pos: 0 };
+    match opcode {
+        SCHEMA => {
+            f.skip(2, "schema id")?;
+            f.prefixed("schema name")?;
+            f.prefixed("schema encoding")?;
+            f.prefixed("schema data")
+        }
+        CHANNEL => {
+            f.skip(4, "channel and schema ids")?;
+            f.prefixed("channel topic")?;
+            f.prefixed("channel message encoding")?;
+            f.string_map("channel metadata")
+        }
+        MESSAGE => f.skip(22, "message header"),
+        _ => Ok(()),
+    }
+}
+
+const SCHEMA: u8 = 0x03;
+const CHANNEL: u8 = 0x04;
+const MESSAGE: u8 = 0x05;
+const DATA_END: u8 = 0x0F;
+
+/// All messages of an in-memory MCAP file's data section, in file order.
+/// The crate's linear reader frames the records and decompresses chunks
+/// (with a record-length limit and chunk CRCs checked first); only the
+/// records messages need (schemas, channels, messages) are parsed, each
+/// after [`check_record_fields`]; the summary section after Data End is not
+/// read (a reader of messages needs nothing from it).
+fn read_messages(bytes: &[u8]) -> std::result::Result<Vec<mcap::Message<'static>>, String> {
+    use mcap::records::Record;
+    use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+    use std::borrow::Cow;
+    use std::collections::HashMap;
+    use std::sync::Arc;
     let options = LinearReaderOptions::default()
         .with_record_length_limit(record_length_limit(bytes.len()))
         .with_validate_chunk_crcs(true)
-        .with_prevalidate_chunk_crcs(true);
-    let mut reader = MessageReader::new_with_options(options);
+        .with_prevalidate_chunk_crcs(true)
+        .with_emit_chunks(false);
+    let mut reader = LinearReader::new_with_options(options);
     let mut rest = bytes;
+    let mut schemas: HashMap<u16, Arc<mcap::Schema<'static>>> = HashMap::new();
+    let mut channels: HashMap<u16, Arc<mcap::Channel<'static>>> = HashMap::new();
     let mut out = Vec::new();
     while let Some(event) = reader.next_event() {
-        match event? {
-            MessageReadEvent::ReadRequest(need) => {
+        let (opcode, data) = match event.map_err(|e| e.to_string())? {
+            LinearReadEvent::ReadRequest(need) => {
                 let n = need.min(rest.len());
                 reader.insert(n).copy_from_slice(&rest[..n]);
                 reader.notify_read(n);
                 rest = &rest[n..];
+                continue;
             }
-            MessageReadEvent::Message(m) => out.push(m),
+            LinearReadEvent::Record { opcode, data } => (opcode, data),
+        };
+        match opcode {
+            DATA_END => break,
+            SCHEMA | CHANNEL | MESSAGE => {}
+            _ => continue,
+        }
+        check_record_fields(opcode, data)?;
+        match mcap::parse_record(opcode, data).map_err(|e| e.to_string())? {
+            Record::Schema { header, data } => {
+                let schema = mcap::Schema {
+                    id: header.id,
+                    name: header.name,
+                    encoding: header.encoding,
+                    data: Cow::Owned(data.into_owned()),
+                };
+                schemas.insert(header.id, Arc::new(schema));
+            }
+            Record::Channel(c) => {
+                let schema = match c.schema_id {
+                    0 => None,
+                    id => Some(schemas.get(&id).cloned().ok_or_else(|| {
+                        format!("channel {} refers to schema {id}, which is not defined before it", c.id)
+                    })?),
+                };
+                let channel = mcap::Channel {
+                    id: c.id,
+                    topic: c.topic,
+                    schema,
+                    message_encoding: c.message_encoding,
+                    metadata: c.metadata,
+                };
+                channels.insert(c.id, Arc::new(channel));
+            }
+            Record::Message { header, data } => {
+                let channel = channels.get(&header.channel_id).cloned().ok_or_else(|| {
+                    format!(
+                        "message {} refers to channel {}, which is not defined before it",
+                        header.sequence, header.channel_id
+                    )
+                })?;
+                out.push(mcap::Message {
+                    channel,
+                    sequence: header.sequence,
+                    log_time: header.log_time,
+                    publish_time: header.publish_time,
+                    data: Cow::Owned(data.into_owned()),
+                });
+            }
+            _ => {}
         }
     }
     Ok(out)
@@ -311,8 +444,9 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     // The mcap 0.26 `MessageStream` sets no record-length limit: a corrupt
     // length inside a chunk makes it overflow or allocate exabytes (found by
     // the corruption test).  So the sans-io reader is driven here with a
-    // record-length limit and chunk CRCs checked before any chunk record is
-    // parsed; the panic guard is a last line of defence for parser bugs.
+    // record-length limit, chunk CRCs checked before any chunk record is
+    // parsed and every parsed record's fields checked (`read_messages`); the
+    // panic guard is a last line of defence for parser bugs.
     let messages = std::panic::catch_unwind(|| read_messages(bytes))
         .map_err(|_| {
             Error::input(

@@ -894,6 +894,41 @@ fn fuzz_long_run() {
     assert_clean("long run", &tally, t0);
 }
 
+/// Replays the cases of the first long run (10⁶ cases) that failed, by seed
+/// name and case number (seed numbers as in [`fuzz_long_run`]): an MCAP
+/// Channel record whose string length claimed up to 4 GB (the mcap crate
+/// reserves it before reading: 13 cases of up to 4.3 GB held), and a COSMOS
+/// reference azimuth of 10²¹ summed with the channel's (integer overflow,
+/// 6 cases).  All failed before their fix.
+#[test]
+fn fuzz_long_run_failures_replayed_shared() {
+    const FAILED: [(&str, &[u64]); 2] = [
+        (
+            "small.mcap",
+            &[
+                2098, 3609, 5116, 7873, 8954, 12704, 15927, 18299, 28419, 36705, 45345, 48920, 49620,
+            ],
+        ),
+        (
+            "NP8040-n.1000hyfh.HNE.01.V0c",
+            &[343, 10353, 13425, 13701, 18504, 34064],
+        ),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let mut seeds = sample_seeds(dir.path());
+    seeds.extend(shared_seeds());
+    let t0 = Instant::now();
+    let mut tally = Tally::default();
+    for (name, cases) in FAILED {
+        let i = seeds.iter().position(|s| s.name == name).unwrap();
+        for &case in cases {
+            tally.merge(fuzz_seed(i as u64, &seeds[i], case..case + 1, None));
+        }
+    }
+    assert_eq!(tally.cases, 19);
+    assert_clean("long-run failures", &tally, t0);
+}
+
 // ---------------------------------------------------------------------------
 // Reproducers of what mutation found (each failed before its fix).
 
