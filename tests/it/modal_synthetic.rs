@@ -487,22 +487,15 @@ fn identify_torsion(kind: &str, method: Method, truth: &PlanModes, event: &Event
 /// every floor's centre of mass and no torque (the torsion is excited only
 /// through the eccentricity), 20 dB noise; `ssi-cov` with default settings.
 ///
-/// Ignored because it fails (issue 13, not fixed here: `modal::plan` and
-/// `modal::selection`): with the defaults the automatic block rows are 18
-/// (the cost bound 150 / 8 outputs) at 100 Hz, a horizon of 0.18 s against
-/// the 1.0 s fundamental period: X₁ and Y₁ give no pole column at all and only
-/// two modes are selected (6.57 Hz X, ζ 4.4 %, and 8.26 Hz Y, ζ 3.7 %, for
-/// 6.72 and 8.30 Hz at 2 %).  The torsion IS in the stabilisation diagram,
-/// a column at 1.621 Hz (truth 1.628 Hz) present at every order from 30 to
-/// 42, and is rejected "only 7 poles (need 12)" by `min_relative_length`
-/// (60 % of the longest column).  With block rows 50 or 100, or a band of
-/// 0.2–5 Hz (decimation 5), the translational modes are found but the
-/// torsion column (1.633 Hz, 7–9 poles from order 26–30 to 42) is still
-/// rejected for its length.
-///
-/// Run: `cargo test --test it modal_synthetic::weak_torsion_ambient -- --ignored --nocapture`
+/// Failed before the plan's horizon rule (issue 13): the block rows were
+/// 18 (the cost bound 150 / 8 outputs), a horizon of 0.18 s against the
+/// 1.0 s fundamental period, and the orders stopped at 42 while the torsion
+/// column only starts at order 36: X₁ and Y₁ gave no column and the torsion
+/// (7 poles) was rejected for its length.  Now the block rows reach half a
+/// period of the lowest spectral peak (50) and the orders go to 8 per output
+/// (64): measured, 14 of the 15 modes of the building, the torsion at
+/// 1.6330 Hz (truth 1.6282 Hz, ζ 1.56 % for 2 %), orders 48–64.
 #[test]
-#[ignore]
 fn weak_torsion_ambient_is_selected_and_labelled() {
     let building = eccentric_building();
     let truth = building.modes().unwrap();
