@@ -148,7 +148,10 @@ def main():
         f.write("# CESMD bridges: modes with the shipped defaults\n\n")
         f.write("Made by `scripts/bridge_amplitude.py` (`quaketwin modal EVENT` with no option, every event of the\n")
         f.write("CESMD bridge records in `../shared/records`). Peak: largest PGA of the horizontal deck (output)\n")
-        f.write("channels after conditioning. Direction: the label of the mode shape (X/Y of the record's axes).\n\n")
+        f.write("channels after conditioning. Direction: the label of the mode shape (X/Y of the record's axes).\n")
+        f.write("Records of the 1980s give only azimuths (at Painter St. 360° transverse, 270° longitudinal) while\n")
+        f.write("later ones say `Tran`/`Long` (Long = X, Tran = Y): without an `event.toml` stating\n")
+        f.write("`x_axis_azimuth_deg = 270`, the transverse mode of the old records is labelled X. It is the same mode.\n\n")
         f.write("![frequency against peak acceleration](bridge-amplitude.svg)\n\n")
         f.write("| bridge | event | peak (g) | modes found | why none / warning |\n|---|---|---|---|---|\n")
         for bridge, name, peak_g, found, why in rows:
