@@ -95,19 +95,29 @@ pub const SAMPLES_PER_TOP_PERIOD: f64 = 4.0;
 /// horizon of 0.10–0.15 s, below the 0.24 s period of the Painter St.
 /// transverse mode; counting outputs only gives it 0.37 s.
 pub const MAX_BLOCK_WIDTH: usize = 150;
-/// Automatic block rows may exceed [`MAX_BLOCK_WIDTH`] to reach half a
-/// period of the record's lowest clear spectral peak, up to p · l ≤ this:
-/// with 8 outputs the cost bound alone left a 1-Hz building a horizon of
-/// 0.18 s at 100 Hz and no pole column for its first two modes (issue 13,
-/// `modal_synthetic::weak_torsion_ambient`).
+/// SSI-COV's automatic block rows may exceed [`MAX_BLOCK_WIDTH`] to reach
+/// half a period of the record's lowest clear spectral peak, up to p · l ≤
+/// this: with 8 outputs the cost bound alone left a 1-Hz building a horizon
+/// of 0.18 s at 100 Hz and no pole column for its first two modes (issue 13,
+/// `modal_synthetic::weak_torsion_ambient`).  Output-only covariances need
+/// the horizon (the lags must span the modes' periods) and stay cheap (an
+/// SVD of p·l × p·l); the data-driven methods factorise a matrix of
+/// 2 p (r + l) or 2 p (m + l) rows by the whole record, whose cost grows
+/// with the square of p (40 block rows made the 14-channel event of
+/// `benches/modal.rs` 12 × slower), and `io` takes the dynamics from the
+/// measured input rather than from long output lags: they keep the cost
+/// bound.
 pub const MAX_HORIZON_BLOCK_WIDTH: usize = 480;
 /// Automatic model orders: 2, 4, … up to this (thesis: 42), or what the
 /// subspace supports …
 pub const MAX_AUTO_ORDER: usize = 42;
-/// … or, with many outputs, up to this many per output channel: a building
-/// recorded in plan has three modes per floor in its band, and a mode's
-/// pole column only starts once the order can hold the modes below it (the
-/// torsion of a 5-storey building in plan appears at order 36) …
+/// … or, for SSI-COV with many outputs, up to this many per output
+/// channel: a building recorded in plan has three modes per floor in its
+/// band, and a mode's pole column only starts once the order can hold the
+/// modes below it (the torsion of a 5-storey building in plan appears at
+/// order 36).  Not for the data-driven methods: on the 14-channel event of
+/// `benches/modal.rs`, `io` with orders to 96 took 5–7 × longer and found
+/// no further mode …
 pub const AUTO_ORDERS_PER_OUTPUT: usize = 8;
 /// … and never above this.
 pub const MAX_AUTO_ORDER_CAP: usize = 120;
@@ -462,7 +472,11 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
             // record's lowest clear spectral peak (up to a larger bound) …
             let p_cost = (MAX_BLOCK_WIDTH / l.max(1)).max(3);
             let seg = ((2.0 * fs0 / lo).ceil() as usize).min(n0 / 4);
-            let lowest_peak = spectrum::lowest_spectral_peak_hz(&input.outputs, input.dt, seg, [lo, hi]);
+            let lowest_peak = (settings.method == Method::SsiCov)
+                .then(|| {
+                    spectrum::lowest_spectral_peak_hz(&input.outputs, input.dt, seg, [lo, hi])
+                })
+                .flatten();
             let p_peak = lowest_peak.map_or(0, |f| {
                 ((fs / (2.0 * f)).ceil() as usize).min(MAX_HORIZON_BLOCK_WIDTH / l.max(1))
             });
@@ -481,7 +495,7 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
                 ));
             }
             let p = p_band.max(p_order).min(p_cost).max(p_peak).min(p_data).max(2);
-            let peak_note = lowest_peak.map_or(String::from("no clear spectral peak"), |f| {
+            let peak_note = lowest_peak.map_or(String::from("no horizon from the spectrum"), |f| {
                 format!("half a period of the lowest spectral peak {f:.3} Hz = {p_peak}")
             });
             notes.push(format!(
@@ -494,12 +508,15 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
     let orders = match explicit_orders {
         Some(o) => o,
         None => {
-            let most = MAX_AUTO_ORDER
-                .max(AUTO_ORDERS_PER_OUTPUT * l)
-                .min(MAX_AUTO_ORDER_CAP);
+            let per_output = if settings.method == Method::SsiCov {
+                AUTO_ORDERS_PER_OUTPUT * l
+            } else {
+                0
+            };
+            let most = MAX_AUTO_ORDER.max(per_output).min(MAX_AUTO_ORDER_CAP);
             let top = most.min(supported - supported % 2).max(2);
             notes.push(format!(
-                "model orders 2–{top} step 2 (automatic: at most {most} = max({MAX_AUTO_ORDER}, {AUTO_ORDERS_PER_OUTPUT} per output) ≤ {MAX_AUTO_ORDER_CAP}, subspace supports {supported})"
+                "model orders 2–{top} step 2 (automatic: at most {most} = max({MAX_AUTO_ORDER}, {AUTO_ORDERS_PER_OUTPUT} per output for ssi-cov) ≤ {MAX_AUTO_ORDER_CAP}, subspace supports {supported})"
             ));
             (2..=top).step_by(2).collect()
         }
