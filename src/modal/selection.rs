@@ -18,7 +18,8 @@
 //!   `min_order_fraction` of the realised orders (default 0) and
 //!   `min_relative_length` of the poles of the longest coherent, mostly
 //!   physical column (default 60 %: a column's length depends on the record,
-//!   not on the number of orders), holds a
+//!   not on the number of orders) unless it holds `long_enough_poles` (12),
+//!   holds a
 //!   pole at ≥ `min_persistence` of the realised orders from its first order
 //!   to the highest order swept (a physical pole, once present, persists;
 //!   noise poles come and go), its shapes are coherent (mean MAC with the
@@ -111,6 +112,12 @@ pub struct SelectionSettings {
     /// mostly physical column of the same diagram.
     #[serde(default = "default_min_relative_length")]
     pub min_relative_length: f64,
+    /// …unless it holds at least this many poles: a column stable over this
+    /// many orders is long enough whatever the longest column (the 12.4 Hz
+    /// mode of the 5-storey earthquake, 12 poles over orders 12–34, was
+    /// rejected next to a 21-pole fundamental).
+    #[serde(default = "default_long_enough_poles")]
+    pub long_enough_poles: usize,
     /// Fraction of the realised orders from the column's first order to the
     /// highest order swept at which the column must hold a pole.
     pub min_persistence: f64,
@@ -134,6 +141,10 @@ fn default_min_relative_length() -> f64 {
     0.6
 }
 
+fn default_long_enough_poles() -> usize {
+    12
+}
+
 fn default_merge_disjoint_tolerance() -> f64 {
     0.03
 }
@@ -152,6 +163,7 @@ impl Default for SelectionSettings {
             min_poles: 5,
             min_order_fraction: 0.0,
             min_relative_length: default_min_relative_length(),
+            long_enough_poles: default_long_enough_poles(),
             min_persistence: 0.5,
             min_coherence: 0.95,
             min_physical_fraction: 0.5,
@@ -565,10 +577,15 @@ pub fn select_automatic(
         .map(|c| c.len())
         .max()
         .unwrap_or(0);
+    // A column as long as `long_enough_poles` is long enough whatever the
+    // longest one: the relative bar keeps short spurious columns out, not
+    // a mode whose column is merely shorter than the fundamental's.
+    let relative = ((settings.min_relative_length * longest as f64).ceil() as usize)
+        .min(settings.long_enough_poles.max(settings.min_poles));
     let min_poles = settings
         .min_poles
         .max((settings.min_order_fraction * orders.len() as f64).ceil() as usize)
-        .max((settings.min_relative_length * longest as f64).ceil() as usize);
+        .max(relative);
     let mut accepted: Vec<Accepted> = Vec::new();
     let mut rejected = Vec::new();
     for column in columns {
