@@ -705,3 +705,33 @@ mod direction_labels {
         assert_eq!(label(&real(&[1.0, 0.5]), &[], &[]), "");
     }
 }
+
+/// The plan's horizon rule rests on the lowest clear spectral peak: two
+/// sines in noise (1.0 Hz at half the amplitude of 3.0 Hz) give the lower
+/// one; a 1.0 Hz sine at 2 % of the power of the 3 Hz one (below the 10 %
+/// bar) is not a clear peak, so the 3 Hz one is the lowest; no peak in a
+/// band holding only noise-free silence.
+#[test]
+fn lowest_spectral_peak_is_the_lowest_clear_one() {
+    use quaketwin::modal::spectrum::lowest_spectral_peak_hz;
+    let dt = 0.01;
+    let mut rng = Rng::new(5);
+    let signal = |a1: f64, rng: &mut Rng| -> Vec<f64> {
+        let clean: Vec<f64> = (0..30_000)
+            .map(|k| {
+                let t = k as f64 * dt;
+                a1 * (std::f64::consts::TAU * 1.0 * t).sin()
+                    + (std::f64::consts::TAU * 3.0 * t + 0.3).sin()
+            })
+            .collect();
+        add_measurement_noise(&clean, 20.0, rng)
+    };
+    let both = vec![signal(0.5, &mut rng), signal(0.5, &mut rng)];
+    let f = lowest_spectral_peak_hz(&both, dt, 1000, [0.2, 20.0]).unwrap();
+    assert!((f - 1.0).abs() <= 0.1, "{f}");
+    let weak = vec![signal(0.14, &mut rng)];
+    let f = lowest_spectral_peak_hz(&weak, dt, 1000, [0.2, 20.0]).unwrap();
+    assert!((f - 3.0).abs() <= 0.1, "{f}");
+    let silent = vec![vec![0.0; 30_000]];
+    assert_eq!(lowest_spectral_peak_hz(&silent, dt, 1000, [0.2, 20.0]), None);
+}
