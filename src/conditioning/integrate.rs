@@ -22,6 +22,7 @@ use super::butterworth::{butter_sos, BandType};
 use super::sosfilt::sosfiltfilt;
 use crate::error::{Error, Result};
 use crate::numeric::cumulative_trapezoid;
+use crate::vocab::Samples;
 
 /// How integration drift is controlled.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -76,15 +77,16 @@ impl Default for DriftControl {
 }
 
 /// Acceleration (m/s²), velocity (m/s) and displacement (m) of one channel
-/// on the same time grid.
+/// on the same time grid (in memory, or parked in the run's sample store:
+/// [`crate::vocab::Samples`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Motion {
     pub channel_id: String,
     /// Sampling interval, s.
     pub dt: f64,
-    pub acceleration: Vec<f64>,
-    pub velocity: Vec<f64>,
-    pub displacement: Vec<f64>,
+    pub acceleration: Samples,
+    pub velocity: Samples,
+    pub displacement: Samples,
 }
 
 /// Removes a least-squares polynomial of `order` from `target` and its
@@ -163,8 +165,8 @@ pub fn integrate_motion(
     Ok(Motion {
         channel_id: channel_id.to_string(),
         dt,
-        acceleration: acc,
-        velocity: vel,
-        displacement: disp,
+        acceleration: acc.into(),
+        velocity: vel.into(),
+        displacement: disp.into(),
     })
 }

@@ -466,7 +466,9 @@ fn resample_step(event: &mut Event, target: f64) -> Result<()> {
     for r in event.records.iter_mut() {
         if r.channel.sampling_rate_hz != target {
             let from = r.channel.sampling_rate_hz;
-            r.samples = resample_to_rate(&r.samples, from, target).map_err(|e| in_record(r, e))?;
+            r.samples = resample_to_rate(&r.samples, from, target)
+                .map_err(|e| in_record(r, e))?
+                .into();
             r.channel.sampling_rate_hz = target;
             r.channel.qa.push(QaFlag::Resampled {
                 from: format!("{from} Hz"),
@@ -521,7 +523,8 @@ fn filter_step(event: &mut Event, f: &FilterSettings) -> Result<()> {
             } else {
                 sosfilt(&sos, &r.samples)
             }
-            .map_err(|e| in_record(r, e))?;
+            .map_err(|e| in_record(r, e))?
+            .into();
             Ok(())
         })
         .collect();

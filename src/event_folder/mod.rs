@@ -456,9 +456,7 @@ fn apply_entry(
         ch.source.column = Some(c.as_string());
     }
     if entry.reversed {
-        for v in &mut rec.samples {
-            *v = -*v;
-        }
+        rec.samples.negate();
         history.push((
             "reverse_sign".into(),
             serde_json::json!({ "channel": rec.channel.id, "reason": "manifest: reversed = true" }),

@@ -209,7 +209,7 @@ pub fn normalise_orientation(
                 .unwrap_or_default();
             let partner = records[other].channel.id.clone();
             let r = &mut records[idx];
-            r.samples = data;
+            r.samples = data.into();
             r.channel.direction = Some(Direction::Axis(axis));
             actions.push(OrientationAction {
                 channel: r.channel.id.clone(),

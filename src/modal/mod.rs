@@ -890,7 +890,7 @@ pub fn input_from_event(
             let samples = if k > 1 {
                 preprocess::decimate(&r.samples, k, &preprocess::antialias_taps(k))
             } else {
-                r.samples.clone()
+                r.samples.to_vec()
             };
             (*r, samples)
         })

@@ -204,8 +204,8 @@ pub fn write_samples(path: &Path, event: &Event, motions: &[Motion]) -> Result<(
             .map(|i| c.start_ns.map(|s| s + (i as f64 * dt * 1e9).round() as i64))
             .collect();
         let acc = motion
-            .map(|m| m.acceleration.clone())
-            .unwrap_or_else(|| r.samples.clone());
+            .map(|m| m.acceleration.to_vec())
+            .unwrap_or_else(|| r.samples.to_vec());
         let vel: Vec<Option<f64>> = match motion {
             Some(m) => m.velocity.iter().map(|v| Some(*v)).collect(),
             None => vec![None; n],
@@ -377,9 +377,9 @@ pub fn read_samples(path: &Path) -> Result<(Event, Vec<Motion>)> {
             motions.push(Motion {
                 channel_id: c.id.clone(),
                 dt: c.dt(),
-                acceleration: acc.clone(),
-                velocity: vel,
-                displacement: disp,
+                acceleration: acc.clone().into(),
+                velocity: vel.into(),
+                displacement: disp.into(),
             });
         }
         event.records.push(Record::new(c, acc));

@@ -212,7 +212,7 @@ pub fn identify_and_write(
     let outputs: Vec<Vec<f64>> = result
         .output_ids
         .iter()
-        .filter_map(|id| event.record(id).map(|r| r.samples.clone()))
+        .filter_map(|id| event.record(id).map(|r| r.samples.to_vec()))
         .collect();
     let dt = event
         .record(&result.output_ids[0])
