@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 
 use quaketwin::rng::Rng;
 use quaketwin::synth::{
-    synthetic_ground_motion, Envelope, GroundMotionSpec, Sampling, ShearBuilding, Shaping,
+    synthetic_ground_motion, Envelope, GroundMotionSpec, Sampling, Shaping, ShearBuilding,
     WhiteNoise,
 };
 
@@ -159,7 +159,8 @@ fn simulate_hour(hour: usize, seed: u64) -> Vec<Vec<f64>> {
         let mut ag = synthetic_ground_motion(&tremor).expect("microtremor");
         ag.truncate(n);
         if hour == 0 {
-            let quake = GroundMotionSpec::strong_50s(seed + 7 + i as u64, RATE_HZ, 1.5 - 0.3 * i as f64);
+            let quake =
+                GroundMotionSpec::strong_50s(seed + 7 + i as u64, RATE_HZ, 1.5 - 0.3 * i as f64);
             let q = synthetic_ground_motion(&quake).expect("earthquake");
             let at = (QUAKE_AT_S * RATE_HZ) as usize;
             for (k, v) in q.iter().enumerate() {
@@ -275,7 +276,7 @@ impl MseedChannel {
         r[39] = 1; // one blockette
         r[44..46].copy_from_slice(&64u16.to_be_bytes()); // data offset
         r[46..48].copy_from_slice(&48u16.to_be_bytes()); // first blockette
-        // Blockette 1000 at 48.
+                                                         // Blockette 1000 at 48.
         r[48..50].copy_from_slice(&1000u16.to_be_bytes());
         r[52] = 4; // float32
         r[53] = 1; // big-endian
@@ -302,7 +303,11 @@ fn main() {
     if args.mseed {
         // Channel codes: 3 characters, unique per file (the file name keeps the column name).
         let file_of = |name: &str| format!("{name}.mseed");
-        std::fs::write(args.out.join("event.toml"), manifest(file_of, true, args.structure)).expect("manifest");
+        std::fs::write(
+            args.out.join("event.toml"),
+            manifest(file_of, true, args.structure),
+        )
+        .expect("manifest");
         let mut writers: Vec<MseedChannel> = cols
             .iter()
             .enumerate()
@@ -322,8 +327,11 @@ fn main() {
             w.finish();
         }
     } else {
-        std::fs::write(args.out.join("event.toml"), manifest(|_| "rec.csv".into(), false, args.structure))
-            .expect("manifest");
+        std::fs::write(
+            args.out.join("event.toml"),
+            manifest(|_| "rec.csv".into(), false, args.structure),
+        )
+        .expect("manifest");
         let f = std::fs::File::create(args.out.join("rec.csv")).expect("create rec.csv");
         let mut w = std::io::BufWriter::with_capacity(1 << 20, f);
         let mut header = String::from("t");

@@ -9,6 +9,8 @@
 //! record of N samples costs O(channels² · shifts · N) instead of the
 //! O(rows² · N) of a Householder LQ on the 60 000-column matrix.
 
+use rayon::prelude::*;
+
 /// Dot product with four independent accumulators, so the compiler can keep
 /// the reduction in SIMD registers (floating-point sums are not reassociated
 /// automatically).
@@ -58,23 +60,22 @@ pub fn hankel_gram(signals: &[&[f64]], rows: &[HankelRow], columns: usize) -> Ve
             needed[(ra.signal * n_sig + rb.signal) * span + d as usize] = true;
         }
     }
-    for a in 0..n_sig {
-        for b in 0..n_sig {
-            for d in 0..span {
-                let idx = (a * n_sig + b) * span + d;
-                if !needed[idx] {
-                    continue;
-                }
-                let lag = d as isize - max_shift as isize;
-                let (sa, sb) = if lag >= 0 {
-                    (0, lag as usize)
-                } else {
-                    ((-lag) as usize, 0)
-                };
-                base[idx] = dot(&signals[a][sa..sa + columns], &signals[b][sb..sb + columns]);
-            }
-        }
-    }
+    // Each needed product is one dot product, computed in parallel (each the
+    // same sum whatever the threads).
+    base.par_iter_mut()
+        .zip(needed.par_iter())
+        .enumerate()
+        .filter(|(_, (_, needed))| **needed)
+        .for_each(|(idx, (value, _))| {
+            let (a, b, d) = (idx / span / n_sig, idx / span % n_sig, idx % span);
+            let lag = d as isize - max_shift as isize;
+            let (sa, sb) = if lag >= 0 {
+                (0, lag as usize)
+            } else {
+                ((-lag) as usize, 0)
+            };
+            *value = dot(&signals[a][sa..sa + columns], &signals[b][sb..sb + columns]);
+        });
     let mut g = vec![0.0; nr * nr];
     for (i, ra) in rows.iter().enumerate() {
         for (k, rb) in rows.iter().enumerate().skip(i) {
@@ -111,15 +112,15 @@ pub fn cross_covariances(outputs: &[&[f64]], refs: &[&[f64]], max_lag: usize) ->
         .map(|k| {
             let count = n.saturating_sub(k);
             let mut r = vec![0.0; outputs.len() * refs.len()];
-            for (o, y) in outputs.iter().enumerate() {
-                for (j, x) in refs.iter().enumerate() {
-                    r[o * refs.len() + j] = if count == 0 {
-                        0.0
-                    } else {
-                        dot(&y[k..k + count], &x[..count]) / count as f64
-                    };
-                }
-            }
+            // One dot product per entry, in parallel (each the same sum whatever the threads).
+            r.par_iter_mut().enumerate().for_each(|(i, v)| {
+                let (y, x) = (outputs[i / refs.len()], refs[i % refs.len()]);
+                *v = if count == 0 {
+                    0.0
+                } else {
+                    dot(&y[k..k + count], &x[..count]) / count as f64
+                };
+            });
             r
         })
         .collect()

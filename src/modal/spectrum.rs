@@ -19,11 +19,16 @@ pub struct SpectralOverlay {
 
 /// Welch PSD-matrix singular values of `outputs` (equal lengths) with
 /// segments of `segment_length` samples (rounded down to even, at least 16).
-pub fn spectral_overlay(
-    outputs: &[Vec<f64>],
+/// The segments' spectra are computed channel by channel and the PSD
+/// matrices accumulated bin by bin, in parallel over channels and bins (each
+/// sum in the same order: the result does not depend on the threads).
+pub fn spectral_overlay<S: AsRef<[f64]> + Sync>(
+    outputs: &[S],
     dt: f64,
     segment_length: usize,
 ) -> Result<SpectralOverlay> {
+    use rayon::prelude::*;
+    let outputs: Vec<&[f64]> = outputs.iter().map(|s| s.as_ref()).collect();
     let l = outputs.len();
     let n = outputs.iter().map(|s| s.len()).min().unwrap_or(0);
     let seg = (segment_length / 2 * 2).max(16);
@@ -41,44 +46,67 @@ pub fn spectral_overlay(
     let bins = seg / 2 + 1;
     let hop = seg / 2;
     let segments = (n - seg) / hop + 1;
+    // Segments go in blocks, so that the spectra held are a block's.
+    const BLOCK: usize = 64;
     let mut psd = vec![c64::new(0.0, 0.0); bins * l * l];
-    let mut spectra = vec![vec![c64::new(0.0, 0.0); bins]; l];
-    let mut buffer = fft.make_input_vec();
-    for s in 0..segments {
-        let start = s * hop;
-        for (c, signal) in outputs.iter().enumerate() {
-            let part = &signal[start..start + seg];
-            let mean = part.iter().sum::<f64>() / seg as f64;
-            for i in 0..seg {
-                buffer[i] = (part[i] - mean) * window[i];
-            }
-            let mut out = fft.make_output_vec();
-            fft.process(&mut buffer, &mut out)
-                .map_err(|e| Error::numerical(format!("FFT: {e}")))?;
-            for (k, z) in out.iter().enumerate() {
-                spectra[c][k] = c64::new(z.re, z.im);
-            }
-        }
-        for k in 0..bins {
-            for a in 0..l {
-                for b in 0..l {
-                    psd[(k * l + a) * l + b] += spectra[a][k] * spectra[b][k].conj();
+    for block in (0..segments).step_by(BLOCK) {
+        let count = BLOCK.min(segments - block);
+        // spectra[c][s * bins + k]: channel c, segment block + s, bin k.
+        let spectra: Vec<Vec<c64>> = outputs
+            .par_iter()
+            .map(|signal| {
+                let mut buffer = fft.make_input_vec();
+                let mut out = fft.make_output_vec();
+                let mut spec = Vec::with_capacity(count * bins);
+                for s in block..block + count {
+                    let part = &signal[s * hop..s * hop + seg];
+                    let mean = part.iter().sum::<f64>() / seg as f64;
+                    for i in 0..seg {
+                        buffer[i] = (part[i] - mean) * window[i];
+                    }
+                    fft.process(&mut buffer, &mut out)
+                        .map_err(|e| Error::numerical(format!("FFT: {e}")))?;
+                    spec.extend(out.iter().map(|z| c64::new(z.re, z.im)));
+                }
+                Ok(spec)
+            })
+            .collect::<Result<_>>()?;
+        // Segment by segment into each bin's matrix, as one running sum per
+        // entry; the upper triangle is the conjugate of the lower one exactly
+        // (the same products), so only the lower one is summed.
+        psd.par_chunks_mut(l * l).enumerate().for_each(|(k, m)| {
+            for s in 0..count {
+                for a in 0..l {
+                    let za = spectra[a][s * bins + k];
+                    for b in 0..=a {
+                        m[a * l + b] += za * spectra[b][s * bins + k].conj();
+                    }
                 }
             }
-        }
+        });
     }
     // One-sided density scaling: 2 Δt / (Σw² · segments), except DC and Nyquist.
-    let mut singular_values = Vec::with_capacity(bins);
-    for k in 0..bins {
-        let factor =
-            if k == 0 || k == bins - 1 { 1.0 } else { 2.0 } * dt / (window_power * segments as f64);
-        let m = Mat::<c64>::from_fn(l, l, |a, b| psd[(k * l + a) * l + b] * factor);
-        let mut ev = m
-            .self_adjoint_eigenvalues(Side::Lower)
-            .map_err(|e| Error::numerical(format!("PSD matrix eigenvalues: {e:?}")))?;
-        ev.reverse();
-        singular_values.push(ev.into_iter().map(|v| v.max(0.0)).collect());
-    }
+    let singular_values: Vec<Vec<f64>> = psd
+        .par_chunks(l * l)
+        .enumerate()
+        .map(|(k, m)| {
+            let factor = if k == 0 || k == bins - 1 { 1.0 } else { 2.0 } * dt
+                / (window_power * segments as f64);
+            let entry = |a: usize, b: usize| {
+                if b <= a {
+                    m[a * l + b]
+                } else {
+                    m[b * l + a].conj()
+                }
+            };
+            let mat = Mat::<c64>::from_fn(l, l, |a, b| entry(a, b) * factor);
+            let mut ev = mat
+                .self_adjoint_eigenvalues(Side::Lower)
+                .map_err(|e| Error::numerical(format!("PSD matrix eigenvalues: {e:?}")))?;
+            ev.reverse();
+            Ok(ev.into_iter().map(|v| v.max(0.0)).collect())
+        })
+        .collect::<Result<_>>()?;
     let frequencies_hz = (0..bins).map(|k| k as f64 / (seg as f64 * dt)).collect();
     Ok(SpectralOverlay {
         frequencies_hz,

@@ -223,9 +223,54 @@ pub fn write_parquet(
     batches: &[RecordBatch],
     metadata: &[(String, String)],
 ) -> Result<()> {
-    let Some(first) = batches.first() else {
+    write_parquet_stream(path, metadata, batches.iter().map(|b| Ok(b.clone())))
+}
+
+/// As [`write_parquet`], with the batches made one at a time by `batches`
+/// (issue 14 item 5): only the batch being written and the row group being
+/// encoded are in memory.  The file is the same as from `write_parquet`
+/// given the same batches.
+pub fn write_parquet_stream(
+    path: &Path,
+    metadata: &[(String, String)],
+    batches: impl Iterator<Item = Result<RecordBatch>>,
+) -> Result<()> {
+    let mut batches = batches.peekable();
+    if batches.peek().is_none() {
         return Err(Error::output(path, "no data to write"));
-    };
+    }
+    write_atomically(path, |file| {
+        let first = match batches.next() {
+            Some(b) => b?,
+            None => return Err(Error::output(path, "no data to write")),
+        };
+        let (schema, props) = writer_setup(path, &first, metadata)?;
+        let mut writer = ArrowWriter::try_new(file, schema.clone(), Some(props))
+            .map_err(|e| Error::output(path, e.to_string()))?;
+        for batch in std::iter::once(Ok(first)).chain(batches) {
+            let batch = batch?
+                .with_schema(schema.clone())
+                .map_err(|e| Error::output(path, e.to_string()))?;
+            writer
+                .write(&batch)
+                .map_err(|e| Error::output(path, e.to_string()))?;
+        }
+        writer
+            .close()
+            .map_err(|e| Error::output(path, e.to_string()))?;
+        Ok(())
+    })
+}
+
+/// The file's Arrow schema (the batch's, with every key/value entry) and the
+/// writer properties: zstd, row groups of 2²⁰ rows, the key/value metadata —
+/// `quaketwin.version`, then the batch schema's own (the declaration's name
+/// and description), then `metadata`.
+fn writer_setup(
+    path: &Path,
+    first: &RecordBatch,
+    metadata: &[(String, String)],
+) -> Result<(SchemaRef, WriterProperties)> {
     let mut kv: Vec<(String, String)> = vec![(
         VERSION_KEY.to_string(),
         env!("CARGO_PKG_VERSION").to_string(),
@@ -245,11 +290,6 @@ pub fn write_parquet(
             .clone()
             .with_metadata(kv.iter().cloned().collect::<BTreeMap<_, _>>()),
     );
-    let batches: Vec<RecordBatch> = batches
-        .iter()
-        .map(|b| b.clone().with_schema(schema.clone()))
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|e| Error::output(path, e.to_string()))?;
     let props = WriterProperties::builder()
         .set_compression(Compression::ZSTD(
             ZstdLevel::try_new(3).map_err(|e| Error::output(path, e.to_string()))?,
@@ -259,19 +299,7 @@ pub fn write_parquet(
             kv.into_iter().map(|(k, v)| KeyValue::new(k, v)).collect(),
         ))
         .build();
-    write_atomically(path, |file| {
-        let mut writer = ArrowWriter::try_new(file, schema.clone(), Some(props))
-            .map_err(|e| Error::output(path, e.to_string()))?;
-        for b in &batches {
-            writer
-                .write(b)
-                .map_err(|e| Error::output(path, e.to_string()))?;
-        }
-        writer
-            .close()
-            .map_err(|e| Error::output(path, e.to_string()))?;
-        Ok(())
-    })
+    Ok((schema, props))
 }
 
 /// The atomic write helpers live in [`super::atomic`]; re-exported here
@@ -284,11 +312,31 @@ pub use super::atomic::{write_atomically, write_bytes_atomically};
 pub struct ReadTable {
     pub path: PathBuf,
     pub batches: Vec<RecordBatch>,
+    /// Rows of the file (from its footer).
+    pub rows: usize,
     metadata: Vec<(String, Option<String>)>,
 }
 
 impl ReadTable {
     pub fn open(path: &Path) -> Result<ReadTable> {
+        let (mut table, reader) = Self::open_stream(path, None)?;
+        let loc = || crate::error::Location::file(path.display().to_string());
+        table.batches = reader
+            .collect::<std::result::Result<Vec<_>, _>>()
+            .map_err(|e| Error::input(loc(), e.to_string()))?;
+        Ok(table)
+    }
+
+    /// The file's metadata (a table without batches, for [`ReadTable::declared`])
+    /// and a reader of its record batches, to go through a big file a batch at
+    /// a time; `batch_rows` sets the rows per batch (default: the reader's).
+    pub fn open_stream(
+        path: &Path,
+        batch_rows: Option<usize>,
+    ) -> Result<(
+        ReadTable,
+        parquet::arrow::arrow_reader::ParquetRecordBatchReader,
+    )> {
         use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
         let loc = || crate::error::Location::file(path.display().to_string());
         let file = File::open(path).map_err(|e| Error::io(path, e))?;
@@ -304,16 +352,23 @@ impl ReadTable {
                     .collect()
             })
             .unwrap_or_default();
-        let batches = builder
+        let rows = usize::try_from(builder.metadata().file_metadata().num_rows()).unwrap_or(0);
+        let builder = match batch_rows {
+            Some(n) => builder.with_batch_size(n),
+            None => builder,
+        };
+        let reader = builder
             .build()
-            .map_err(|e| Error::input(loc(), e.to_string()))?
-            .collect::<std::result::Result<Vec<_>, _>>()
             .map_err(|e| Error::input(loc(), e.to_string()))?;
-        Ok(ReadTable {
-            path: path.to_path_buf(),
-            batches,
-            metadata,
-        })
+        Ok((
+            ReadTable {
+                path: path.to_path_buf(),
+                batches: Vec::new(),
+                rows,
+                metadata,
+            },
+            reader,
+        ))
     }
 
     /// Value of a key/value metadata entry.

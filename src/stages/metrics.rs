@@ -38,9 +38,10 @@ impl Stage for Metrics {
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let out = ctx.out_dir.clone();
         let Conditioned { event, motions } = ctx.input(ProductKind::ConditionedEvent)?;
+        // Parked motions are read back one channel at a time.
         let metrics = motions
             .par_iter()
-            .map(|m| strong_motion_metrics(m, &self.settings))
+            .map(|m| strong_motion_metrics(&*m.in_memory()?, &self.settings))
             .collect::<Result<Vec<_>>>()?;
         let drift = storey_drift(event, motions)?;
         event_tables::write_channels(&out.join(CHANNELS_FILE), event, &metrics)?;

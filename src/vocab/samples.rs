@@ -136,6 +136,33 @@ impl Samples {
         }
     }
 
+    /// As [`Samples::load`], with an error naming the store.
+    pub fn get(&self) -> crate::error::Result<Cow<'_, [f64]>> {
+        self.load().map_err(|e| self.read_error(e))
+    }
+
+    /// As [`Samples::into_vec`], with an error naming the store.
+    pub fn take(self) -> crate::error::Result<Vec<f64>> {
+        let store = self.store_name();
+        self.into_vec().map_err(|e| {
+            crate::error::Error::io(format!("{store} (reading back parked samples)"), e)
+        })
+    }
+
+    fn store_name(&self) -> String {
+        match &self.0 {
+            Repr::Memory(_) => "memory".into(),
+            Repr::Parked(p) => p.store.describe(),
+        }
+    }
+
+    fn read_error(&self, e: std::io::Error) -> crate::error::Error {
+        crate::error::Error::io(
+            format!("{} (reading back parked samples)", self.store_name()),
+            e,
+        )
+    }
+
     /// The samples as a vector (read from the store when parked).
     pub fn into_vec(self) -> std::io::Result<Vec<f64>> {
         match self.0 {
