@@ -124,7 +124,7 @@ pub fn normalise_orientation(
             Some(Direction::Azimuth(az)) => match match_axis(az, x_az, y_az, tol) {
                 Some((axis, sign)) => {
                     if sign < 0.0 {
-                        r.samples.iter_mut().for_each(|v| *v = -*v);
+                        r.samples.negate();
                     }
                     actions.push(OrientationAction {
                         channel: r.channel.id.clone(),

@@ -61,13 +61,20 @@ pub fn hankel_gram(signals: &[&[f64]], rows: &[HankelRow], columns: usize) -> Ve
         }
     }
     // Each needed product is one dot product, computed in parallel (each the
-    // same sum whatever the threads).
+    // same sum whatever the threads).  (a, b, d) and (b, a, −d) multiply the
+    // same pairs of samples in the same order: the second is copied from the
+    // first, bit for bit.
+    let split = |idx: usize| (idx / span / n_sig, idx / span % n_sig, idx % span);
+    let mirror = |(a, b, d): (usize, usize, usize)| (b * n_sig + a) * span + (span - 1 - d);
+    let canonical = |(a, b, d): (usize, usize, usize)| a < b || (a == b && d <= max_shift);
     base.par_iter_mut()
-        .zip(needed.par_iter())
         .enumerate()
-        .filter(|(_, (_, needed))| **needed)
-        .for_each(|(idx, (value, _))| {
-            let (a, b, d) = (idx / span / n_sig, idx / span % n_sig, idx % span);
+        .filter(|(idx, _)| {
+            let abd = split(*idx);
+            canonical(abd) && (needed[*idx] || needed[mirror(abd)])
+        })
+        .for_each(|(idx, value)| {
+            let (a, b, d) = split(idx);
             let lag = d as isize - max_shift as isize;
             let (sa, sb) = if lag >= 0 {
                 (0, lag as usize)
@@ -76,6 +83,12 @@ pub fn hankel_gram(signals: &[&[f64]], rows: &[HankelRow], columns: usize) -> Ve
             };
             *value = dot(&signals[a][sa..sa + columns], &signals[b][sb..sb + columns]);
         });
+    for idx in 0..base.len() {
+        let abd = split(idx);
+        if needed[idx] && !canonical(abd) {
+            base[idx] = base[mirror(abd)];
+        }
+    }
     let mut g = vec![0.0; nr * nr];
     for (i, ra) in rows.iter().enumerate() {
         for (k, rb) in rows.iter().enumerate().skip(i) {

@@ -90,12 +90,33 @@ impl<'p> RunContext<'p> {
     /// channel at a time.
     pub fn loaded_event(&mut self) -> Result<&LoadedEvent> {
         if self.event.is_none() {
-            let mut loaded = crate::event_folder::load(&self.event_path)?;
-            let total: usize = loaded.event.records.iter().map(|r| r.samples.len()).sum();
-            if total > self.park_above {
-                let spill = self.spill()?;
+            // Records are parked as they are read once the event is past the
+            // threshold; those read before, and what the building geometry
+            // formed or read back (floor motions), are parked at the end.
+            let (threshold, out_dir) = (self.park_above, self.out_dir.clone());
+            let mut spill: Option<Arc<dyn SampleStore>> = self.spill.clone();
+            let mut total = 0usize;
+            let mut loaded = crate::event_folder::load_parking(
+                &self.event_path,
+                &Default::default(),
+                &mut |r| {
+                    total += r.samples.len();
+                    if total <= threshold {
+                        return Ok(());
+                    }
+                    if spill.is_none() {
+                        spill = Some(super::spill::SpillFile::create(&out_dir)?);
+                    }
+                    match &spill {
+                        Some(s) => park(&mut r.samples, s),
+                        None => Ok(()),
+                    }
+                },
+            )?;
+            self.spill = spill;
+            if let Some(s) = &self.spill {
                 for r in loaded.event.records.iter_mut() {
-                    park(&mut r.samples, &spill)?;
+                    park(&mut r.samples, s)?;
                 }
             }
             self.event = Some(loaded);

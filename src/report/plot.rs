@@ -425,7 +425,11 @@ impl MinMaxDecimator {
 
     fn flush(&mut self) {
         if let Some((min, max)) = self.extremes.take() {
-            let (first, second) = if min.0 <= max.0 { (min, max) } else { (max, min) };
+            let (first, second) = if min.0 <= max.0 {
+                (min, max)
+            } else {
+                (max, min)
+            };
             self.out.push(first.1);
             if second.0 != first.0 {
                 self.out.push(second.1);

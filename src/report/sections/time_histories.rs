@@ -55,7 +55,11 @@ fn for_each_point(
     ids: &mut Vec<String>,
     mut each: impl FnMut(usize, f64, f64),
 ) -> crate::error::Result<()> {
-    let cols = [samples::CHANNEL_ID.name, samples::T_S.name, samples::ACC_M_S2.name];
+    let cols = [
+        samples::CHANNEL_ID.name,
+        samples::T_S.name,
+        samples::ACC_M_S2.name,
+    ];
     let mut index: BTreeMap<String, usize> = ids.iter().cloned().zip(0..).collect();
     let mut last: Option<(String, usize)> = None;
     table::for_each_batch(path, Some(&cols), BATCH_ROWS, |batch: &RecordBatch| {
