@@ -89,27 +89,6 @@ pub struct Motion {
     pub displacement: Samples,
 }
 
-impl Motion {
-    /// The motion with its samples in memory: itself, or a copy read back
-    /// from the sample store when parked (dropped after use, so that a stage
-    /// going through parked motions one by one holds one at a time).
-    pub fn in_memory(&self) -> crate::error::Result<std::borrow::Cow<'_, Motion>> {
-        if !(self.acceleration.is_parked()
-            || self.velocity.is_parked()
-            || self.displacement.is_parked())
-        {
-            return Ok(std::borrow::Cow::Borrowed(self));
-        }
-        Ok(std::borrow::Cow::Owned(Motion {
-            channel_id: self.channel_id.clone(),
-            dt: self.dt,
-            acceleration: self.acceleration.get()?.into_owned().into(),
-            velocity: self.velocity.get()?.into_owned().into(),
-            displacement: self.displacement.get()?.into_owned().into(),
-        }))
-    }
-}
-
 /// Removes a least-squares polynomial of `order` from `target` and its
 /// time derivatives from `lower` (first derivative) and `lowest` (second).
 fn remove_consistent_polynomial(
@@ -149,12 +128,22 @@ pub fn integrate_motion(
     dt: f64,
     drift: &DriftControl,
 ) -> Result<Motion> {
+    integrate_motion_of(channel_id, acceleration.to_vec(), dt, drift)
+}
+
+/// As [`integrate_motion`], taking the acceleration (no copy of a long record).
+pub fn integrate_motion_of(
+    channel_id: &str,
+    acceleration: Vec<f64>,
+    dt: f64,
+    drift: &DriftControl,
+) -> Result<Motion> {
     if !(dt.is_finite() && dt > 0.0) {
         return Err(Error::usage(format!(
             "sampling interval must be positive, got {dt}"
         )));
     }
-    let mut acc = acceleration.to_vec();
+    let mut acc = acceleration;
     let mut vel = cumulative_trapezoid(&acc, dt);
     let disp;
     match drift {

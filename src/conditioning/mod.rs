@@ -14,7 +14,7 @@ pub mod sosfilt;
 
 pub use baseline::{cosine_taper, remove_linear_trend, remove_mean, remove_polynomial};
 pub use butterworth::{butter_sos, BandType, Section};
-pub use integrate::{integrate_motion, DriftControl, Motion};
+pub use integrate::{integrate_motion, integrate_motion_of, DriftControl, Motion};
 pub use qa::{quality_flags, QaSettings};
 pub use resample::{align_records, resample_to_rate, Alignment};
 pub use sosfilt::{sosfilt, sosfilt_zi, sosfiltfilt, sosfiltfilt_channels, sosfiltfilt_padlen};
@@ -383,17 +383,23 @@ pub fn condition_event_each(
     done: &ChannelDone<'_>,
 ) -> Result<Vec<Motion>> {
     let records = std::mem::take(&mut event.records);
+    // Channels of more than LONG_CHANNEL samples (a day at 200 Hz) are
+    // conditioned one at a time: two in flight would double the memory.
+    let long = records.iter().any(|r| r.samples.len() > LONG_CHANNEL);
     let channels = if settings.step("align").is_some() {
         condition_step_by_step(records, settings, done)?
     } else {
-        let results: Vec<std::result::Result<Channel1, Failure>> = records
-            .into_par_iter()
-            .map(|r| {
-                let mut c = condition_channel(r, settings)?;
-                done(&mut c.record, c.motion.as_mut()).map_err(|e| (usize::MAX, e))?;
-                Ok(c)
-            })
-            .collect();
+        let one = |r: Record| -> std::result::Result<Channel1, Failure> {
+            let mut c = condition_channel(r, settings)?;
+            done(&mut c.record, c.motion.as_mut()).map_err(|e| (usize::MAX, e))?;
+            share_acceleration(&mut c.record, c.motion.as_ref());
+            Ok(c)
+        };
+        let results: Vec<std::result::Result<Channel1, Failure>> = if long {
+            records.into_iter().map(one).collect()
+        } else {
+            records.into_par_iter().map(one).collect()
+        };
         earliest_failure(results)?
     };
     let alignment = channels.alignment;
@@ -406,6 +412,20 @@ pub fn condition_event_each(
     }
     push_history(event, settings, &traces, alignment);
     Ok(motions)
+}
+
+/// Channels longer than this (samples) are conditioned one at a time: 2²³,
+/// 64 MiB of f64, about 12 h at 200 Hz.
+pub const LONG_CHANNEL: usize = 1 << 23;
+
+/// After integration the record's samples are the motion's acceleration
+/// (moved into the motion): shared back (a parked motion's without a copy).
+fn share_acceleration(record: &mut Record, motion: Option<&Motion>) {
+    if let Some(m) = motion {
+        if record.samples.is_empty() && !m.acceleration.is_empty() {
+            record.samples = m.acceleration.clone();
+        }
+    }
 }
 
 /// A failure: the phase it happened in (0 the checks, 1 units, 2 + i the
@@ -509,6 +529,7 @@ fn condition_step_by_step(
     let mut list = Vec::with_capacity(records.len());
     for ((mut record, mut motion), trace) in records.into_iter().zip(motions).zip(traces) {
         done(&mut record, motion.as_mut())?;
+        share_acceleration(&mut record, motion.as_ref());
         list.push(Channel1 {
             record,
             motion,
@@ -623,14 +644,12 @@ fn apply_step(
             .into();
         }
         Step::Integrate(integration) => {
-            let m = integrate_motion(
-                &r.channel.id,
-                &r.samples,
-                r.channel.dt(),
-                &integration.drift,
-            )
-            .map_err(|e| in_record(r, e))?;
-            r.samples = m.acceleration.clone();
+            // The record's samples become the motion's acceleration: moved in,
+            // given back by `share_acceleration` once the channel is done.
+            let dt = r.channel.dt();
+            let acc = std::mem::take(r.samples.as_mut_vec());
+            let m = integrate_motion_of(&r.channel.id, acc, dt, &integration.drift)
+                .map_err(|e| in_record(r, e))?;
             return Ok(Some(m));
         }
     }

@@ -150,11 +150,15 @@ fn sdof_peaks_lanes(
             let vn = a10[j] * ui[j] + a11[j] * vi[j] + b10[j] * w[0] + b11[j] * w[1];
             ui[j] = un;
             vi[j] = vn;
-            du[j] = du[j].max(ui[j].abs());
-            dv[j] = dv[j].max(vi[j].abs());
+            // Running peaks: `if x > peak` is `peak.max(x)` here (a peak starts
+            // at 0 and is never NaN; a NaN x is skipped by both), and maps to
+            // one max instruction.
+            let (au, av) = (ui[j].abs(), vi[j].abs());
+            du[j] = if au > du[j] { au } else { du[j] };
+            dv[j] = if av > dv[j] { av } else { dv[j] };
             // Absolute acceleration ü + a_g = −2ζω u̇ − ω² u.
-            da[j] =
-                da[j].max((2.0 * damping * omega[j] * vi[j] + omega[j] * omega[j] * ui[j]).abs());
+            let aa = (2.0 * damping * omega[j] * vi[j] + omega[j] * omega[j] * ui[j]).abs();
+            da[j] = if aa > da[j] { aa } else { da[j] };
         }
     }
     (0..omegas.len()).map(|j| (du[j], dv[j], da[j])).collect()

@@ -80,11 +80,11 @@ impl SampleStore for SpillFile {
         Ok(position)
     }
 
-    fn get(&self, position: u64, out: &mut [f64]) -> std::io::Result<()> {
+    fn get(&self, position: u64, offset: usize, out: &mut [f64]) -> std::io::Result<()> {
         let mut bytes = vec![0u8; 8 * out.len().min(CHUNK)];
         let mut guard = self.lock()?;
         let (file, _) = &mut *guard;
-        file.seek(SeekFrom::Start(position))?;
+        file.seek(SeekFrom::Start(position + 8 * offset as u64))?;
         for chunk in out.chunks_mut(CHUNK) {
             let b = &mut bytes[..8 * chunk.len()];
             file.read_exact(b)?;

@@ -206,36 +206,57 @@ pub fn write_samples(path: &Path, event: &Event, motions: &[Motion]) -> Result<(
         CHANNELS_KEY.into(),
         serde_json::to_string(&channels).map_err(|e| Error::output(path, e.to_string()))?,
     ));
-    let batches = event.records.iter().map(|r| samples_batch(r, motions));
+    let batches = event.records.iter().flat_map(|r| {
+        let n = r.samples.len();
+        (0..n.div_ceil(SAMPLES_BATCH_ROWS).max(1))
+            .map(move |k| samples_batch(r, motions, k * SAMPLES_BATCH_ROWS))
+    });
     write_parquet_stream(path, &meta, batches)
 }
 
-/// The rows of one channel of `samples.parquet`.
-fn samples_batch(r: &Record, motions: &[Motion]) -> Result<arrow_array::RecordBatch> {
+/// Rows of `samples.parquet` built at a time: a channel longer than this
+/// (about 87 minutes at 200 Hz) is written in several batches, so that a day
+/// of a channel is not built in memory as one table.
+pub const SAMPLES_BATCH_ROWS: usize = 1 << 20;
+
+/// The rows of one channel of `samples.parquet`, from sample `from` on (at
+/// most [`SAMPLES_BATCH_ROWS`]).
+fn samples_batch(r: &Record, motions: &[Motion], from: usize) -> Result<arrow_array::RecordBatch> {
     let c = &r.channel;
-    let n = r.samples.len();
-    let dt = c.dt();
+    let total = r.samples.len();
     let motion = motions
         .iter()
-        .find(|m| m.channel_id == c.id && m.acceleration.len() == n);
-    let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
-    let abs_time: Vec<Option<i64>> = (0..n)
+        .find(|m| m.channel_id == c.id && m.acceleration.len() == total);
+    let n = SAMPLES_BATCH_ROWS.min(total - from.min(total));
+    let rows = from..from + n;
+    let dt = c.dt();
+    let t: Vec<f64> = rows.clone().map(|i| i as f64 * dt).collect();
+    let abs_time: Vec<Option<i64>> = rows
+        .clone()
         .map(|i| c.start_ns.map(|s| s + (i as f64 * dt * 1e9).round() as i64))
         .collect();
     let acc = match motion {
-        Some(m) => m.acceleration.get()?.into_owned(),
-        None => r.samples.get()?.into_owned(),
+        Some(m) => m.acceleration.get_range(from, n)?.into_owned(),
+        None => r.samples.get_range(from, n)?.into_owned(),
     };
     let (vel, disp): (Vec<Option<f64>>, Vec<Option<f64>>) = match motion {
         Some(m) => (
-            m.velocity.get()?.iter().map(|v| Some(*v)).collect(),
-            m.displacement.get()?.iter().map(|v| Some(*v)).collect(),
+            m.velocity
+                .get_range(from, n)?
+                .iter()
+                .map(|v| Some(*v))
+                .collect(),
+            m.displacement
+                .get_range(from, n)?
+                .iter()
+                .map(|v| Some(*v))
+                .collect(),
         ),
         None => (vec![None; n], vec![None; n]),
     };
     TableBuilder::new(&SAMPLES)
         .str(samples::CHANNEL_ID, &vec![c.id.as_str(); n])
-        .i64(samples::SAMPLE, (0..n as i64).collect())
+        .i64(samples::SAMPLE, rows.map(|i| i as i64).collect())
         .f64(samples::T_S, t)
         .opt_timestamp_ns(samples::TIME, abs_time)
         .f64(samples::ACC_M_S2, acc)

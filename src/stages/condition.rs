@@ -74,17 +74,14 @@ impl Stage for Condition {
             let Some(spill) = &spill else {
                 return Ok(());
             };
-            match motion {
-                // The record's samples are the motion's acceleration: parked once, shared.
-                Some(m) => {
-                    park(&mut m.acceleration, spill)?;
-                    park(&mut m.velocity, spill)?;
-                    park(&mut m.displacement, spill)?;
-                    record.samples = m.acceleration.clone();
-                    Ok(())
-                }
-                None => park(&mut record.samples, spill),
+            // An integrated record's samples are its motion's acceleration
+            // (shared once parked, `conditioning::condition_event_each`).
+            if let Some(m) = motion {
+                park(&mut m.acceleration, spill)?;
+                park(&mut m.velocity, spill)?;
+                park(&mut m.displacement, spill)?;
             }
+            park(&mut record.samples, spill)
         })?;
         event_tables::write_samples(&ctx.out_dir.join(&self.samples_file), &event, &motions)?;
         Ok(Some(Box::new(Conditioned { event, motions })))

@@ -27,8 +27,9 @@ use std::sync::{Arc, OnceLock};
 pub trait SampleStore: Send + Sync {
     /// Stores `values`; returns the position to read them back from.
     fn put(&self, values: &[f64]) -> std::io::Result<u64>;
-    /// Reads `out.len()` values stored at `position` by [`SampleStore::put`].
-    fn get(&self, position: u64, out: &mut [f64]) -> std::io::Result<()>;
+    /// Reads `out.len()` values stored at `position` by [`SampleStore::put`],
+    /// from the `offset`-th value on.
+    fn get(&self, position: u64, offset: usize, out: &mut [f64]) -> std::io::Result<()>;
     /// What the store is, for error messages (e.g. the spill file's directory).
     fn describe(&self) -> String;
 }
@@ -46,8 +47,11 @@ struct Parked {
 
 impl Parked {
     fn read(&self) -> std::io::Result<Vec<f64>> {
-        let mut v = vec![0.0; self.len];
-        self.store.get(self.position, &mut v)?;
+        self.read_range(0, self.len)
+    }
+    fn read_range(&self, start: usize, len: usize) -> std::io::Result<Vec<f64>> {
+        let mut v = vec![0.0; len];
+        self.store.get(self.position, start, &mut v)?;
         if self.negate {
             v.iter_mut().for_each(|x| *x = -*x);
         }
@@ -132,6 +136,23 @@ impl Samples {
             Repr::Parked(p) => match p.cache.get() {
                 Some(v) => Ok(Cow::Borrowed(v)),
                 None => p.read().map(Cow::Owned),
+            },
+        }
+    }
+
+    /// Samples `start..start + len` (as [`Samples::get`]: read from the store
+    /// when parked, not kept).  Out-of-range bounds are cut to the samples.
+    pub fn get_range(&self, start: usize, len: usize) -> crate::error::Result<Cow<'_, [f64]>> {
+        let start = start.min(self.len());
+        let end = start.saturating_add(len).min(self.len());
+        match &self.0 {
+            Repr::Memory(v) => Ok(Cow::Borrowed(&v[start..end])),
+            Repr::Parked(p) => match p.cache.get() {
+                Some(v) => Ok(Cow::Borrowed(&v[start..end])),
+                None => p
+                    .read_range(start, end - start)
+                    .map(Cow::Owned)
+                    .map_err(|e| self.read_error(e)),
             },
         }
     }
