@@ -18,7 +18,11 @@
 //! adds `storey_heights_m` and `masses_kg` (3.5 m, 600 t per storey), which
 //! narrows the modal band and lets the Bouc-Wen identification run.
 //!
-//! Usage: `bigload --hours 1 --out /tmp/big1h [--seed 1] [--format csv|mseed] [--structure]`
+//! `--channels N` keeps the first N channels (base X, base Y, floors in X…):
+//! a day of all 64 needs more disk than a small machine has for its outputs,
+//! and a run's memory grows with a channel's length, not with their number.
+//!
+//! Usage: `bigload --hours 1 --out /tmp/big1h [--seed 1] [--format csv|mseed] [--structure] [--channels N]`
 //! (see scripts/bigload.sh, which builds it, generates and measures).
 //!
 //! `--format mseed` writes the same channels as MiniSEED 2 (one file per
@@ -52,6 +56,7 @@ struct Args {
     seed: u64,
     mseed: bool,
     structure: bool,
+    channels: usize,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -60,6 +65,7 @@ fn parse_args() -> Result<Args, String> {
     let mut seed = 1u64;
     let mut mseed = false;
     let mut structure = false;
+    let mut channels = 64;
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
         let mut value = || it.next().ok_or(format!("{a} needs a value"));
@@ -75,6 +81,12 @@ fn parse_args() -> Result<Args, String> {
                 }
             }
             "--structure" => structure = true,
+            "--channels" => {
+                channels = value()?.parse().map_err(|e| format!("--channels: {e}"))?;
+                if !(1..=64).contains(&channels) {
+                    return Err("--channels must be 1..=64".into());
+                }
+            }
             _ => return Err(format!("unknown argument {a}")),
         }
     }
@@ -87,6 +99,7 @@ fn parse_args() -> Result<Args, String> {
         seed,
         mseed,
         structure,
+        channels,
     })
 }
 
@@ -101,7 +114,12 @@ fn columns() -> Vec<(String, usize, &'static str)> {
     c
 }
 
-fn manifest(file_of: impl Fn(&str) -> String, mseed: bool, structure: bool) -> String {
+fn manifest(
+    file_of: impl Fn(&str) -> String,
+    mseed: bool,
+    structure: bool,
+    channels: usize,
+) -> String {
     let mut m = String::new();
     let _ = writeln!(
         m,
@@ -116,7 +134,7 @@ fn manifest(file_of: impl Fn(&str) -> String, mseed: bool, structure: bool) -> S
         );
     }
     m.push('\n');
-    for (name, level, dir) in columns() {
+    for (name, level, dir) in columns().into_iter().take(channels) {
         let role = if level == 0 { "input" } else { "output" };
         let _ = writeln!(
             m,
@@ -293,19 +311,20 @@ fn main() {
     let args = match parse_args() {
         Ok(a) => a,
         Err(e) => {
-            eprintln!("bigload: {e}\nusage: bigload --hours H --out DIR [--seed S] [--format csv|mseed] [--structure]");
+            eprintln!("bigload: {e}\nusage: bigload --hours H --out DIR [--seed S] [--format csv|mseed] [--structure] [--channels N]");
             std::process::exit(2);
         }
     };
     std::fs::create_dir_all(&args.out).expect("create the output directory");
-    let cols = columns();
+    // `--channels N`: the first N columns (base X, base Y, floors in X…).
+    let cols: Vec<_> = columns().into_iter().take(args.channels).collect();
     let mut rng = Rng::new(args.seed);
     if args.mseed {
         // Channel codes: 3 characters, unique per file (the file name keeps the column name).
         let file_of = |name: &str| format!("{name}.mseed");
         std::fs::write(
             args.out.join("event.toml"),
-            manifest(file_of, true, args.structure),
+            manifest(file_of, true, args.structure, args.channels),
         )
         .expect("manifest");
         let mut writers: Vec<MseedChannel> = cols
@@ -317,6 +336,7 @@ fn main() {
             .collect();
         for h in 0..args.hours {
             let mut chans = simulate_hour(h, args.seed);
+            chans.truncate(args.channels);
             add_noise(&mut chans, &mut rng);
             for (w, c) in writers.iter_mut().zip(&chans) {
                 w.push(c);
@@ -329,7 +349,7 @@ fn main() {
     } else {
         std::fs::write(
             args.out.join("event.toml"),
-            manifest(|_| "rec.csv".into(), false, args.structure),
+            manifest(|_| "rec.csv".into(), false, args.structure, args.channels),
         )
         .expect("manifest");
         let f = std::fs::File::create(args.out.join("rec.csv")).expect("create rec.csv");
@@ -342,6 +362,7 @@ fn main() {
         w.write_all(header.as_bytes()).expect("write CSV");
         for h in 0..args.hours {
             let mut chans = simulate_hour(h, args.seed);
+            chans.truncate(args.channels);
             add_noise(&mut chans, &mut rng);
             write_csv_hour(&mut w, &chans, h);
             eprintln!("bigload: hour {} of {} written", h + 1, args.hours);

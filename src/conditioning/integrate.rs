@@ -17,7 +17,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::baseline::{evaluate_polynomial_with_derivatives, fit_polynomial};
+use super::baseline::{fit_polynomial, for_each_polynomial_value};
 use super::butterworth::{butter_sos, BandType};
 use super::sosfilt::sosfiltfilt;
 use crate::error::{Error, Result};
@@ -100,22 +100,20 @@ fn remove_consistent_polynomial(
 ) -> Result<()> {
     let n = target.len();
     let coefficients = fit_polynomial(target, order)?;
-    let [value, d1, d2] = evaluate_polynomial_with_derivatives(&coefficients, n);
     // Scaled time s = 2 i/(n−1) − 1 ⇒ ds/dt = 2 / ((n−1) dt).
     let ds_dt = if n > 1 {
         2.0 / ((n - 1) as f64 * dt)
     } else {
         0.0
     };
-    for i in 0..n {
-        target[i] -= value[i];
-        lower[i] -= d1[i] * ds_dt;
-    }
-    if let Some(lowest) = lowest {
-        for i in 0..n {
-            lowest[i] -= d2[i] * ds_dt * ds_dt;
+    let mut lowest = lowest;
+    for_each_polynomial_value(&coefficients, n, |i, value, d1, d2| {
+        target[i] -= value;
+        lower[i] -= d1 * ds_dt;
+        if let Some(lowest) = lowest.as_deref_mut() {
+            lowest[i] -= d2 * ds_dt * ds_dt;
         }
-    }
+    });
     Ok(())
 }
 
