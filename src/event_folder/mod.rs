@@ -10,7 +10,7 @@ mod referenced;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-pub use archive::{collect, ArchiveLimits, EventFile};
+pub use archive::{collect, ArchiveLimits, EventFile, READ_LATER_ABOVE};
 pub use manifest::{
     ChannelEntry, ColumnRef, DirectionEntry, FormatEntry, Manifest, RoleEntry, UnitsEntry,
 };

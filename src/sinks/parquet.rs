@@ -227,13 +227,13 @@ pub fn write_parquet(
 }
 
 /// As [`write_parquet`], with the batches made one at a time by `batches`
-/// (issue 14 item 5): only the batch being written and the row group being
-/// encoded are in memory.  The file is the same as from `write_parquet`
-/// given the same batches.
+/// (issue 14 item 5): only the batch being written, the next one (made while
+/// this one is encoded) and the row group being encoded are in memory.  The
+/// file is the same as from `write_parquet` given the same batches.
 pub fn write_parquet_stream(
     path: &Path,
     metadata: &[(String, String)],
-    batches: impl Iterator<Item = Result<RecordBatch>>,
+    batches: impl Iterator<Item = Result<RecordBatch>> + Send,
 ) -> Result<()> {
     let mut batches = batches.peekable();
     if batches.peek().is_none() {
@@ -247,11 +247,15 @@ pub fn write_parquet_stream(
         let (schema, props) = writer_setup(path, &first, metadata)?;
         let out = |e: parquet::errors::ParquetError| Error::output(path, e.to_string());
         let mut writer = ColumnParallelWriter::new(file, schema.clone(), props).map_err(out)?;
-        for batch in std::iter::once(Ok(first)).chain(batches) {
+        let mut next = Some(Ok(first));
+        while let Some(batch) = next.take() {
             let batch = batch?
                 .with_schema(schema.clone())
                 .map_err(|e| Error::output(path, e.to_string()))?;
-            writer.write(&batch).map_err(out)?;
+            let (written, following) =
+                rayon::join(|| writer.write(&batch).map_err(out), || batches.next());
+            written?;
+            next = following;
         }
         writer.close().map_err(out)
     })

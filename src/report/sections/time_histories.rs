@@ -1,9 +1,11 @@
 //! Section 5, acceleration time histories (samples.parquet) as small multiples.
 //!
 //! samples.parquet holds every sample of every channel (46 M rows for 64
-//! channels × 1 h at 200 Hz): it is gone through twice a batch of rows at a
-//! time — to count each trace's points, then to decimate them as they come —
-//! never loaded whole.
+//! channels × 1 h at 200 Hz): it is gone through a batch of rows at a time,
+//! never loaded whole.  A trace's points are gathered while its rows last and
+//! decimated when they end (our files keep a channel's rows together); a
+//! file whose traces are interleaved is read again — counting each trace's
+//! points, then decimating them as they come.
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -48,12 +50,13 @@ impl Keys<'_> {
     }
 }
 
-/// Calls `each(trace, t, a)` for every row of samples.parquet holding both
-/// a time and an acceleration, traces numbered in order of first appearance.
-fn for_each_point(
+/// Calls `each(trace, point)` for every row of samples.parquet, the point
+/// when the row holds both a time and an acceleration; traces numbered in
+/// order of first appearance.
+fn for_each_row(
     path: &Path,
     ids: &mut Vec<String>,
-    mut each: impl FnMut(usize, f64, f64),
+    mut each: impl FnMut(usize, Option<(f64, f64)>),
 ) -> crate::error::Result<()> {
     let cols = [
         samples::CHANNEL_ID.name,
@@ -91,8 +94,9 @@ fn for_each_point(
                     g
                 }
             };
-            if let (Some(&Some(x)), Some(&Some(y))) = (t.get(row), a.get(row)) {
-                each(trace, x, y);
+            match (t.get(row), a.get(row)) {
+                (Some(&Some(x)), Some(&Some(y))) => each(trace, Some((x, y))),
+                _ => each(trace, None),
             }
         }
         Ok(())
@@ -149,38 +153,15 @@ pub(super) fn time_history_section(
             .collect(),
         _ => BTreeMap::new(),
     };
-    // Points per trace, then each trace decimated as its points come.
-    let mut ids: Vec<String> = Vec::new();
-    let mut counts: Vec<usize> = Vec::new();
-    let counted = for_each_point(&path, &mut ids, |g, _, _| {
-        if g == counts.len() {
-            counts.push(0);
+    let traces = match decimated_traces(&path, settings.max_points_per_trace) {
+        Ok(t) => t,
+        Err(e) => {
+            body.push_str(&note(&format!(
+                "samples.parquet: could not be read for the plots: {e}."
+            )));
+            return body;
         }
-        counts[g] += 1;
-    });
-    counts.resize(ids.len(), 0);
-    let mut decimators: Vec<MinMaxDecimator> = counts
-        .iter()
-        .map(|&n| MinMaxDecimator::new(n, settings.max_points_per_trace))
-        .collect();
-    let read = counted.and_then(|_| {
-        for_each_point(&path, &mut ids, |g, x, y| {
-            if let Some(d) = decimators.get_mut(g) {
-                d.push((x, y));
-            }
-        })
-    });
-    if let Err(e) = read {
-        body.push_str(&note(&format!(
-            "samples.parquet: could not be read for the plots: {e}."
-        )));
-        return body;
-    }
-    let traces: Vec<(String, Vec<(f64, f64)>)> = ids
-        .into_iter()
-        .zip(decimators)
-        .map(|(k, d)| (k, d.finish()))
-        .collect();
+    };
     // Common symmetric y-axis so amplitudes compare across the multiples.
     let peak = traces
         .iter()
@@ -212,4 +193,71 @@ pub(super) fn time_history_section(
     }
     body.push_str("</div>");
     body
+}
+
+/// Each trace of samples.parquet (by channel id, in order of first
+/// appearance) decimated to at most `max_points` (see the module doc).
+fn decimated_traces(
+    path: &Path,
+    max_points: usize,
+) -> crate::error::Result<Vec<(String, Vec<(f64, f64)>)>> {
+    let finish = |points: Vec<(f64, f64)>| plot::decimate_min_max(&points, max_points);
+    // One pass: the trace being read, and those finished.
+    let mut ids: Vec<String> = Vec::new();
+    let mut finished: Vec<Option<Vec<(f64, f64)>>> = Vec::new();
+    let mut current: Option<(usize, Vec<(f64, f64)>)> = None;
+    let mut interleaved = false;
+    for_each_row(path, &mut ids, |g, point| {
+        if interleaved {
+            return;
+        }
+        if current.as_ref().is_none_or(|(c, _)| *c != g) {
+            if let Some((c, points)) = current.take() {
+                finished[c] = Some(finish(points));
+            }
+            if g < finished.len() {
+                interleaved = true; // seen before: its rows are not together
+                return;
+            }
+            finished.resize(g + 1, None);
+            current = Some((g, Vec::new()));
+        }
+        if let (Some((_, points)), Some(p)) = (current.as_mut(), point) {
+            points.push(p);
+        }
+    })?;
+    if !interleaved {
+        if let Some((c, points)) = current.take() {
+            finished[c] = Some(finish(points));
+        }
+        return Ok(ids
+            .into_iter()
+            .zip(finished)
+            .map(|(k, d)| (k, d.unwrap_or_default()))
+            .collect());
+    }
+    // Interleaved traces: points per trace, then each decimated as they come.
+    let mut ids: Vec<String> = Vec::new();
+    let mut counts: Vec<usize> = Vec::new();
+    for_each_row(path, &mut ids, |g, point| {
+        if g >= counts.len() {
+            counts.resize(g + 1, 0);
+        }
+        counts[g] += usize::from(point.is_some());
+    })?;
+    counts.resize(ids.len(), 0);
+    let mut decimators: Vec<MinMaxDecimator> = counts
+        .iter()
+        .map(|&n| MinMaxDecimator::new(n, max_points))
+        .collect();
+    for_each_row(path, &mut ids, |g, point| {
+        if let (Some(d), Some(p)) = (decimators.get_mut(g), point) {
+            d.push(p);
+        }
+    })?;
+    Ok(ids
+        .into_iter()
+        .zip(decimators)
+        .map(|(k, d)| (k, d.finish()))
+        .collect())
 }
