@@ -110,17 +110,37 @@ fn rows<'a>(
                 .trim(csv::Trim::All)
                 .delimiter(b)
                 .from_reader(text.as_bytes());
+            // Where a record starts, and its line: the csv crate's position of
+            // a record is taken before the line ends that precede it (the `\n`
+            // of a `\r\n`, empty lines), so its line number lagged by one in
+            // CRLF files and after empty lines.  Counted here from the bytes.
+            let bytes = text.as_bytes();
+            let mut counted = (0usize, 0usize); // (byte, line ends before it)
             Box::new(rdr.into_records().filter_map(move |r| match r {
                 Ok(fields) => {
+                    let raw = fields
+                        .position()
+                        .map_or(0, |p| p.byte() as usize)
+                        .min(bytes.len());
+                    let start = raw
+                        + bytes[raw..]
+                            .iter()
+                            .take_while(|&&b| b == b'\n' || b == b'\r')
+                            .count();
+                    let (from, before) = counted;
+                    let line = before
+                        + bytes[from.min(start)..start]
+                            .iter()
+                            .filter(|&&b| b == b'\n')
+                            .count();
+                    counted = (start, line);
                     // The csv crate skips empty lines but not lines of spaces.
                     if fields.len() == 1 && fields[0].is_empty() {
                         return None;
                     }
-                    let line = fields.position().map_or(1, |p| p.line()) as usize - 1;
-                    let byte = fields.position().map(|p| p.byte() as usize);
                     Some(Ok(Row {
                         line: first_line + line,
-                        byte,
+                        byte: Some(start),
                         fields,
                     }))
                 }
