@@ -382,25 +382,34 @@ pub fn condition_event_each(
     settings: &ConditioningSettings,
     done: &ChannelDone<'_>,
 ) -> Result<Vec<Motion>> {
-    let records = std::mem::take(&mut event.records);
-    // Channels of more than LONG_CHANNEL samples (a day at 200 Hz) are
-    // conditioned one at a time: two in flight would double the memory.
-    let long = records.iter().any(|r| r.samples.len() > LONG_CHANNEL);
     let channels = if settings.step("align").is_some() {
-        condition_step_by_step(records, settings, done)?
+        condition_step_by_step(&mut event.records, settings, done)?
     } else {
-        let one = |r: Record| -> std::result::Result<Channel1, Failure> {
+        let records = std::mem::take(&mut event.records);
+        // Channels of more than LONG_CHANNEL samples (a day at 200 Hz) are
+        // conditioned one at a time: two in flight would double the memory.
+        let long = records.iter().any(|r| r.samples.len() > LONG_CHANNEL);
+        let one = |r: Record| -> std::result::Result<Channel1, Failed> {
             let mut c = condition_channel(r, settings)?;
-            done(&mut c.record, c.motion.as_mut()).map_err(|e| (usize::MAX, e))?;
+            if let Err(e) = done(&mut c.record, c.motion.as_mut()) {
+                return Err((usize::MAX, e, c.record));
+            }
             share_acceleration(&mut c.record, c.motion.as_ref());
             Ok(c)
         };
-        let results: Vec<std::result::Result<Channel1, Failure>> = if long {
+        let results: Vec<std::result::Result<Channel1, Failed>> = if long {
             records.into_iter().map(one).collect()
         } else {
             records.into_par_iter().map(one).collect()
         };
-        earliest_failure(results)?
+        match earliest_failure(results) {
+            Ok(c) => c,
+            // The records go back to the event, as conditioned so far.
+            Err((e, records)) => {
+                event.records = records;
+                return Err(e);
+            }
+        }
     };
     let alignment = channels.alignment;
     let mut motions = Vec::new();
@@ -432,6 +441,9 @@ fn share_acceleration(record: &mut Record, motion: Option<&Motion>) {
 /// declared step i; `usize::MAX` after conditioning) and the error.
 type Failure = (usize, Error);
 
+/// A channel's failure, with its record (as conditioned so far).
+type Failed = (usize, Error, Record);
+
 /// One conditioned channel.
 struct Channel1 {
     record: Record,
@@ -455,39 +467,52 @@ struct Conditioned1 {
     alignment: Option<serde_json::Value>,
 }
 
-/// The channels, or the error of the earliest phase and, in it, of the first channel.
-fn earliest_failure(results: Vec<std::result::Result<Channel1, Failure>>) -> Result<Conditioned1> {
-    let mut list = Vec::with_capacity(results.len());
+/// The channels, or the error of the earliest phase and, in it, of the
+/// first channel, with every record.
+fn earliest_failure(
+    results: Vec<std::result::Result<Channel1, Failed>>,
+) -> std::result::Result<Conditioned1, (Error, Vec<Record>)> {
+    if results.iter().all(|r| r.is_ok()) {
+        return Ok(Conditioned1 {
+            list: results.into_iter().flatten().collect(),
+            alignment: None,
+        });
+    }
+    let mut records = Vec::with_capacity(results.len());
     let mut first: Option<Failure> = None;
     for r in results {
         match r {
-            Ok(c) => list.push(c),
-            Err((phase, e)) => {
+            Ok(c) => records.push(c.record),
+            Err((phase, e, record)) => {
+                records.push(record);
                 if first.as_ref().is_none_or(|(p, _)| phase < *p) {
                     first = Some((phase, e));
                 }
             }
         }
     }
-    match first {
-        Some((_, e)) => Err(e),
-        None => Ok(Conditioned1 {
-            list,
-            alignment: None,
-        }),
-    }
+    let e = first.map(|(_, e)| e);
+    Err((
+        e.unwrap_or_else(|| Error::numerical("conditioning failed")),
+        records,
+    ))
 }
 
 /// Every step of one channel (no `align`: see [`condition_event_each`]).
 fn condition_channel(
     mut record: Record,
     settings: &ConditioningSettings,
-) -> std::result::Result<Channel1, Failure> {
-    let mut trace = check_qa_units(&mut record, settings)?;
+) -> std::result::Result<Channel1, Failed> {
+    let mut trace = match check_qa_units(&mut record, settings) {
+        Ok(t) => t,
+        Err((phase, e)) => return Err((phase, e, record)),
+    };
     let mut motion = None;
     for (i, step) in settings.steps.iter().enumerate() {
-        if let Some(m) = apply_step(&mut record, i, step, &mut trace).map_err(|e| (2 + i, e))? {
-            motion = Some(m);
+        match apply_step(&mut record, i, step, &mut trace) {
+            Ok(Some(m)) => motion = Some(m),
+            Ok(None) => {}
+            Err(e) => return Err((2 + i, e, record)),
         }
     }
     Ok(Channel1 {
@@ -497,21 +522,33 @@ fn condition_channel(
     })
 }
 
-/// The steps one after the other over all records (for `align`).
+/// The steps one after the other over all records (for `align`), in place.
 fn condition_step_by_step(
-    mut records: Vec<Record>,
+    records: &mut Vec<Record>,
     settings: &ConditioningSettings,
     done: &ChannelDone<'_>,
 ) -> Result<Conditioned1> {
+    // The checks and units of every record; the earliest failure, as above.
     let mut traces = Vec::with_capacity(records.len());
+    let mut first: Option<Failure> = None;
     for r in records.iter_mut() {
-        traces.push(check_qa_units(r, settings).map_err(|(_, e)| e)?);
+        match check_qa_units(r, settings) {
+            Ok(t) => traces.push(t),
+            Err((phase, e)) => {
+                if first.as_ref().is_none_or(|(p, _)| phase < *p) {
+                    first = Some((phase, e));
+                }
+            }
+        }
+    }
+    if let Some((_, e)) = first {
+        return Err(e);
     }
     let mut motions: Vec<Option<Motion>> = (0..records.len()).map(|_| None).collect();
     let mut alignment = None;
     for (i, step) in settings.steps.iter().enumerate() {
         if let Step::Align = step {
-            let a = align_records(&mut records)?;
+            let a = align_records(records)?;
             alignment = Some(serde_json::to_value(&a).unwrap_or_default());
             continue;
         }
@@ -527,6 +564,7 @@ fn condition_step_by_step(
         }
     }
     let mut list = Vec::with_capacity(records.len());
+    let records = std::mem::take(records);
     for ((mut record, mut motion), trace) in records.into_iter().zip(motions).zip(traces) {
         done(&mut record, motion.as_mut())?;
         share_acceleration(&mut record, motion.as_ref());

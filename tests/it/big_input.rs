@@ -478,3 +478,51 @@ fn report_time_histories_of_interleaved_rows_are_those_of_contiguous_rows() {
     assert!(contiguous.matches("<figure>").count() == 2, "{contiguous}");
     assert_eq!(contiguous, interleaved);
 }
+
+/// Conditioning a channel at a time reports the error of running each step
+/// over all records: the earliest step that failed, and in it the first
+/// channel — with or without an `align` step — and gives the records back.
+#[test]
+fn channel_at_a_time_conditioning_reports_the_earliest_step_that_failed() {
+    use quaketwin::conditioning::{condition_event, ConditioningSettings};
+    use quaketwin::vocab::{Channel, Event, Record, Units};
+    let channel = |id: &str, rate: f64| {
+        let mut c = Channel::new(id, Units::MPerS2, rate, csv_source());
+        c.start_ns = Some(0);
+        c
+    };
+    let wave = |n: usize| (0..n).map(|i| (i as f64 * 0.1).sin()).collect::<Vec<_>>();
+    let mut bad = wave(4000);
+    bad[7] = f64::NAN;
+    for align in [false, true] {
+        let mut settings = ConditioningSettings::default();
+        if align {
+            settings
+                .steps
+                .insert(0, quaketwin::conditioning::Step::Align);
+        }
+        // A: its filter corner (20 Hz) is above the Nyquist frequency of 30 Hz
+        // sampling — a filter-step failure; B: a non-finite sample — a check failure.
+        let mut event = Event::default();
+        event
+            .records
+            .push(Record::new(channel("A", 30.0), wave(4000)));
+        event
+            .records
+            .push(Record::new(channel("B", 30.0), bad.clone()));
+        let e = condition_event(&mut event, &settings)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("B") && e.contains("non-finite"),
+            "align {align}: {e}"
+        );
+        assert_eq!(event.records.len(), 2, "the records are given back");
+        // Without B's fault, A's filter failure is the one reported.
+        event.records[1] = Record::new(channel("B", 30.0), wave(4000));
+        let e = condition_event(&mut event, &settings)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("A"), "align {align}: {e}");
+    }
+}
