@@ -742,26 +742,9 @@ pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<File
         let fields = &row.fields;
         let i = row.line;
         if fields.len() != layout.fields {
-            return Err(Error::input(
-                loc(i),
-                format!(
-                    "expected {} fields as in the header, found {}",
-                    layout.fields,
-                    fields.len()
-                ),
-            ));
+            return Err(width_error(loc(i), layout.fields, fields.len()));
         }
-        let cell = |c: usize| -> Result<f64> {
-            fields[c].parse::<f64>().map_err(|_| {
-                Error::input(
-                    loc(i).with_channel(names[c].clone()),
-                    format!(
-                        "cell {:?} in column {} ({}) is not a number",
-                        &fields[c], c, names[c]
-                    ),
-                )
-            })
-        };
+        let cell = |c: usize| number_cell(&fields[c], c, &names[c], || loc(i));
         if let Some((tc, _)) = time_col {
             let tcell = &fields[tc];
             let cells = time_cells.get_or_insert_with(|| {
@@ -1202,26 +1185,9 @@ fn parse_chunk(
                 .map(|f| std::str::from_utf8(trim_space(f)).unwrap_or("")),
         );
         if fields.len() != cells.fields {
-            return Err(Error::input(
-                (cells.loc)(at),
-                format!(
-                    "expected {} fields as in the header, found {}",
-                    cells.fields,
-                    fields.len()
-                ),
-            ));
+            return Err(width_error((cells.loc)(at), cells.fields, fields.len()));
         }
-        let cell = |c: usize| -> Result<f64> {
-            fields[c].parse::<f64>().map_err(|_| {
-                Error::input(
-                    (cells.loc)(at).with_channel(cells.names[c].clone()),
-                    format!(
-                        "cell {:?} in column {} ({}) is not a number",
-                        fields[c], c, cells.names[c]
-                    ),
-                )
-            })
-        };
+        let cell = |c: usize| number_cell(fields[c], c, &cells.names[c], || (cells.loc)(at));
         if let Some(tc) = cells.time {
             times[row] = cell(tc)?;
             decimals = decimals.max(fraction_digits(fields[tc]));
@@ -1233,4 +1199,28 @@ fn parse_chunk(
         row += 1;
     }
     Ok(decimals)
+}
+
+/// A data row of another width than the table's.
+fn width_error(at: crate::error::Location, expected: usize, found: usize) -> Error {
+    Error::input(
+        at,
+        format!("expected {expected} fields as in the header, found {found}"),
+    )
+}
+
+/// Cell `cell` of column `c` (named `name`) as a number; the error names
+/// the line (`at`), the column and the cell.
+fn number_cell(
+    cell: &str,
+    c: usize,
+    name: &str,
+    at: impl FnOnce() -> crate::error::Location,
+) -> Result<f64> {
+    cell.parse::<f64>().map_err(|_| {
+        Error::input(
+            at().with_channel(name.to_string()),
+            format!("cell {cell:?} in column {c} ({name}) is not a number"),
+        )
+    })
 }

@@ -5,45 +5,51 @@
 //! response spectra run several oscillators at a time.  The figures
 //! themselves are measured by `scripts/bigload.sh` (docs/performance.md).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
+use arrow_array::RecordBatch;
 use quaketwin::readers::{self, ReadOptions};
 use quaketwin::vocab::{SampleStore, Samples, SourceRef};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use crate::common::{output_files as files, run_sample_pipeline};
 
-/// Runs `pipeline` on sample event `event` into `out` with the CLI; with
-/// `park`, every event is parked in the spill file however small.
+/// Runs `pipeline` on sample event `event` into `out`; with `park`, every
+/// event is parked in the spill file however small.
 fn run(pipeline: &str, event: &str, out: &Path, park: bool) {
-    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_quaketwin"));
-    c.arg("--quiet")
-        .arg("run")
-        .arg(root().join("pipelines").join(pipeline))
-        .arg(root().join("sample-records").join(event))
-        .arg("--out")
-        .arg(out);
-    if park {
-        c.env(quaketwin::pipeline::context::PARK_ABOVE_ENV, "0");
-    }
-    let o = c.output().unwrap();
-    assert!(
-        o.status.success(),
-        "{pipeline} on {event} (park {park}): {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let env: &[(&str, &str)] = if park {
+        &[(quaketwin::pipeline::context::PARK_ABOVE_ENV, "0")]
+    } else {
+        &[]
+    };
+    run_sample_pipeline(pipeline, event, out, env);
 }
 
-fn files(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
+/// Rows `from..from + n` of channel `id` of a samples table: acceleration
+/// `acc(i)`, velocity `vel(i)` (null when `None`).
+fn samples_rows(
+    id: &str,
+    from: usize,
+    n: usize,
+    acc: impl Fn(usize) -> f64,
+    vel: impl Fn(usize) -> Option<f64>,
+) -> RecordBatch {
+    use quaketwin::sinks::parquet::TableBuilder;
+    use quaketwin::vocab::tables::{samples, SAMPLES};
+    let rows = from..from + n;
+    TableBuilder::new(&SAMPLES)
+        .str(samples::CHANNEL_ID, &vec![id; n])
+        .i64(samples::SAMPLE, rows.clone().map(|i| i as i64).collect())
+        .f64(
+            samples::T_S,
+            rows.clone().map(|i| i as f64 * 0.005).collect(),
+        )
+        .opt_timestamp_ns(samples::TIME, vec![None; n])
+        .f64(samples::ACC_M_S2, rows.clone().map(&acc).collect())
+        .opt_f64(samples::VEL_M_S, rows.map(&vel).collect())
+        .opt_f64(samples::DISP_M, vec![None; n])
+        .build()
         .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n != ".quaketwin.lock")
-        .collect();
-    names.sort();
-    names
 }
 
 /// Every output of a run whose samples were parked in the spill file (read
@@ -331,28 +337,9 @@ fn spectra_in_lanes_match_one_oscillator_at_a_time() {
 /// writer is the file `ArrowWriter` writes from the same batches.
 #[test]
 fn column_parallel_parquet_is_the_file_arrow_writer_writes() {
-    use quaketwin::sinks::parquet::{write_parquet, TableBuilder};
-    use quaketwin::vocab::tables::{samples, SAMPLES};
+    use quaketwin::sinks::parquet::write_parquet;
     let batch = |from: usize, n: usize| {
-        TableBuilder::new(&SAMPLES)
-            .str(samples::CHANNEL_ID, &vec!["A"; n])
-            .i64(samples::SAMPLE, (from as i64..(from + n) as i64).collect())
-            .f64(
-                samples::T_S,
-                (from..from + n).map(|i| i as f64 * 0.005).collect(),
-            )
-            .opt_timestamp_ns(samples::TIME, vec![None; n])
-            .f64(
-                samples::ACC_M_S2,
-                (from..from + n).map(|i| (i as f64).sin()).collect(),
-            )
-            .opt_f64(
-                samples::VEL_M_S,
-                (from..from + n).map(|i| Some(i as f64)).collect(),
-            )
-            .opt_f64(samples::DISP_M, vec![None; n])
-            .build()
-            .unwrap()
+        samples_rows("A", from, n, |i| (i as f64).sin(), |i| Some(i as f64))
     };
     // Batches straddling the 2²⁰-row row groups at odd places.
     let sizes = [700_001usize, 3, 600_000, 1_000_000];
@@ -438,29 +425,13 @@ fn big_files_of_a_folder_are_read_when_their_records_are() {
 /// interleaves them: the figures are the same.
 #[test]
 fn report_time_histories_of_interleaved_rows_are_those_of_contiguous_rows() {
-    use quaketwin::sinks::parquet::{write_parquet, TableBuilder};
-    use quaketwin::vocab::tables::{samples, SAMPLES};
+    use quaketwin::sinks::parquet::write_parquet;
+    use quaketwin::vocab::tables::SAMPLES;
     let rows = |id: &str, from: usize, n: usize| {
-        TableBuilder::new(&SAMPLES)
-            .str(samples::CHANNEL_ID, &vec![id; n])
-            .i64(samples::SAMPLE, (from as i64..(from + n) as i64).collect())
-            .f64(
-                samples::T_S,
-                (from..from + n).map(|i| i as f64 * 0.01).collect(),
-            )
-            .opt_timestamp_ns(samples::TIME, vec![None; n])
-            .f64(
-                samples::ACC_M_S2,
-                (from..from + n)
-                    .map(|i| (i as f64 * if id == "A" { 0.1 } else { 0.37 }).sin())
-                    .collect(),
-            )
-            .opt_f64(samples::VEL_M_S, vec![None; n])
-            .opt_f64(samples::DISP_M, vec![None; n])
-            .build()
-            .unwrap()
+        let w = if id == "A" { 0.1 } else { 0.37 };
+        samples_rows(id, from, n, |i| (i as f64 * w).sin(), |_| None)
     };
-    let section = |batches: Vec<arrow_array::RecordBatch>| {
+    let section = |batches: Vec<RecordBatch>| {
         let dir = tempfile::tempdir().unwrap();
         write_parquet(&dir.path().join(SAMPLES.file), &batches, &[]).unwrap();
         let html = quaketwin::report::render_report(dir.path(), &Default::default()).unwrap();
