@@ -90,8 +90,27 @@ pub fn evaluate_polynomial(coefficients: &[f64], n: usize) -> Vec<f64> {
 /// P''_{k+1} = P''_{k−1} + (2k+1) P'_k).
 pub fn evaluate_polynomial_with_derivatives(coefficients: &[f64], n: usize) -> [Vec<f64>; 3] {
     let mut out = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+    for_each_polynomial_value(coefficients, n, |i, v, d1, d2| {
+        out[0][i] = v;
+        out[1][i] = d1;
+        out[2][i] = d2;
+    });
+    out
+}
+
+/// [`evaluate_polynomial_with_derivatives`] a sample at a time: `each(i,
+/// value, first, second)` for i = 0..n, without arrays of n values (a day
+/// at 200 Hz is 17 M samples).
+pub fn for_each_polynomial_value(
+    coefficients: &[f64],
+    n: usize,
+    mut each: impl FnMut(usize, f64, f64, f64),
+) {
     if coefficients.is_empty() {
-        return out;
+        for i in 0..n {
+            each(i, 0.0, 0.0, 0.0);
+        }
+        return;
     }
     let order = coefficients.len() - 1;
     let mut p = vec![0.0; order + 1];
@@ -110,11 +129,13 @@ pub fn evaluate_polynomial_with_derivatives(coefficients: &[f64], n: usize) -> [
                 _ => ddp[k - 2] + (2 * k - 1) as f64 * dp[k - 1],
             };
         }
-        out[0][i] = p.iter().zip(coefficients).map(|(b, c)| b * c).sum();
-        out[1][i] = dp.iter().zip(coefficients).map(|(b, c)| b * c).sum();
-        out[2][i] = ddp.iter().zip(coefficients).map(|(b, c)| b * c).sum();
+        each(
+            i,
+            p.iter().zip(coefficients).map(|(b, c)| b * c).sum(),
+            dp.iter().zip(coefficients).map(|(b, c)| b * c).sum(),
+            ddp.iter().zip(coefficients).map(|(b, c)| b * c).sum(),
+        );
     }
-    out
 }
 
 /// Solves A x = b (A m×m row-major, overwritten; x returned in b).

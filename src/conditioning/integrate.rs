@@ -17,11 +17,12 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::baseline::{evaluate_polynomial_with_derivatives, fit_polynomial};
+use super::baseline::{fit_polynomial, for_each_polynomial_value};
 use super::butterworth::{butter_sos, BandType};
 use super::sosfilt::sosfiltfilt;
 use crate::error::{Error, Result};
 use crate::numeric::cumulative_trapezoid;
+use crate::vocab::Samples;
 
 /// How integration drift is controlled.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -76,15 +77,16 @@ impl Default for DriftControl {
 }
 
 /// Acceleration (m/s²), velocity (m/s) and displacement (m) of one channel
-/// on the same time grid.
+/// on the same time grid (in memory, or parked in the run's sample store:
+/// [`crate::vocab::Samples`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Motion {
     pub channel_id: String,
     /// Sampling interval, s.
     pub dt: f64,
-    pub acceleration: Vec<f64>,
-    pub velocity: Vec<f64>,
-    pub displacement: Vec<f64>,
+    pub acceleration: Samples,
+    pub velocity: Samples,
+    pub displacement: Samples,
 }
 
 /// Removes a least-squares polynomial of `order` from `target` and its
@@ -98,22 +100,20 @@ fn remove_consistent_polynomial(
 ) -> Result<()> {
     let n = target.len();
     let coefficients = fit_polynomial(target, order)?;
-    let [value, d1, d2] = evaluate_polynomial_with_derivatives(&coefficients, n);
     // Scaled time s = 2 i/(n−1) − 1 ⇒ ds/dt = 2 / ((n−1) dt).
     let ds_dt = if n > 1 {
         2.0 / ((n - 1) as f64 * dt)
     } else {
         0.0
     };
-    for i in 0..n {
-        target[i] -= value[i];
-        lower[i] -= d1[i] * ds_dt;
-    }
-    if let Some(lowest) = lowest {
-        for i in 0..n {
-            lowest[i] -= d2[i] * ds_dt * ds_dt;
+    let mut lowest = lowest;
+    for_each_polynomial_value(&coefficients, n, |i, value, d1, d2| {
+        target[i] -= value;
+        lower[i] -= d1 * ds_dt;
+        if let Some(lowest) = lowest.as_deref_mut() {
+            lowest[i] -= d2 * ds_dt * ds_dt;
         }
-    }
+    });
     Ok(())
 }
 
@@ -126,12 +126,22 @@ pub fn integrate_motion(
     dt: f64,
     drift: &DriftControl,
 ) -> Result<Motion> {
+    integrate_motion_of(channel_id, acceleration.to_vec(), dt, drift)
+}
+
+/// As [`integrate_motion`], taking the acceleration (no copy of a long record).
+pub fn integrate_motion_of(
+    channel_id: &str,
+    acceleration: Vec<f64>,
+    dt: f64,
+    drift: &DriftControl,
+) -> Result<Motion> {
     if !(dt.is_finite() && dt > 0.0) {
         return Err(Error::usage(format!(
             "sampling interval must be positive, got {dt}"
         )));
     }
-    let mut acc = acceleration.to_vec();
+    let mut acc = acceleration;
     let mut vel = cumulative_trapezoid(&acc, dt);
     let disp;
     match drift {
@@ -163,8 +173,8 @@ pub fn integrate_motion(
     Ok(Motion {
         channel_id: channel_id.to_string(),
         dt,
-        acceleration: acc,
-        velocity: vel,
-        displacement: disp,
+        acceleration: acc.into(),
+        velocity: vel.into(),
+        displacement: disp.into(),
     })
 }

@@ -14,7 +14,7 @@ pub mod sosfilt;
 
 pub use baseline::{cosine_taper, remove_linear_trend, remove_mean, remove_polynomial};
 pub use butterworth::{butter_sos, BandType, Section};
-pub use integrate::{integrate_motion, DriftControl, Motion};
+pub use integrate::{integrate_motion, integrate_motion_of, DriftControl, Motion};
 pub use qa::{quality_flags, QaSettings};
 pub use resample::{align_records, resample_to_rate, Alignment};
 pub use sosfilt::{sosfilt, sosfilt_zi, sosfiltfilt, sosfiltfilt_channels, sosfiltfilt_padlen};
@@ -360,160 +360,317 @@ pub fn condition_event_with_motion(
     event: &mut Event,
     settings: &ConditioningSettings,
 ) -> Result<Vec<Motion>> {
-    // 1. Non-finite values: flag and refuse.
-    for r in event.records.iter_mut() {
-        let (count, first) = qa::count_non_finite(&r.samples);
-        if count > 0 {
-            let flag = QaFlag::NonFinite { count };
-            if !r.channel.qa.contains(&flag) {
-                r.channel.qa.push(flag);
+    condition_event_each(event, settings, &|_, _| Ok(()))
+}
+
+/// What `done` receives: a conditioned record and, for an acceleration
+/// channel when integration is configured, its motion.
+pub type ChannelDone<'a> = dyn Fn(&mut Record, Option<&mut Motion>) -> Result<()> + Sync + 'a;
+
+/// As [`condition_event_with_motion`], a channel at a time (issue 14 item 5):
+/// each record goes through every step — the checks, QA, units, then the
+/// declared steps — in one task, channels in parallel, and `done` is called
+/// on it (and its motion) as soon as it is conditioned; the condition stage
+/// parks them there, so only the channels in flight are in memory.  The
+/// records, motions, history and the error reported (the earliest step
+/// that failed, and in it the first channel) are those of running each step
+/// over all records before the next.  An `align` step needs every record at
+/// once: with one, the steps run one after the other over all records, and
+/// `done` is called at the end.
+pub fn condition_event_each(
+    event: &mut Event,
+    settings: &ConditioningSettings,
+    done: &ChannelDone<'_>,
+) -> Result<Vec<Motion>> {
+    let channels = if settings.step("align").is_some() {
+        condition_step_by_step(&mut event.records, settings, done)?
+    } else {
+        let records = std::mem::take(&mut event.records);
+        // Channels of more than LONG_CHANNEL samples (a day at 200 Hz) are
+        // conditioned one at a time: two in flight would double the memory.
+        let long = records.iter().any(|r| r.samples.len() > LONG_CHANNEL);
+        let one = |r: Record| -> std::result::Result<Channel1, Failed> {
+            let mut c = condition_channel(r, settings)?;
+            if let Err(e) = done(&mut c.record, c.motion.as_mut()) {
+                return Err((usize::MAX, e, c.record));
             }
-            return Err(Error::input(
+            share_acceleration(&mut c.record, c.motion.as_ref());
+            Ok(c)
+        };
+        let results: Vec<std::result::Result<Channel1, Failed>> = if long {
+            records.into_iter().map(one).collect()
+        } else {
+            records.into_par_iter().map(one).collect()
+        };
+        match earliest_failure(results) {
+            Ok(c) => c,
+            // The records go back to the event, as conditioned so far.
+            Err((e, records)) => {
+                event.records = records;
+                return Err(e);
+            }
+        }
+    };
+    let alignment = channels.alignment;
+    let mut motions = Vec::new();
+    let mut traces = Vec::with_capacity(channels.list.len());
+    for c in channels.list {
+        event.records.push(c.record);
+        motions.extend(c.motion);
+        traces.push(c.trace);
+    }
+    push_history(event, settings, &traces, alignment);
+    Ok(motions)
+}
+
+/// Channels longer than this (samples) are conditioned one at a time: 2²³,
+/// 64 MiB of f64, about 12 h at 200 Hz.
+pub const LONG_CHANNEL: usize = 1 << 23;
+
+/// After integration the record's samples are the motion's acceleration
+/// (moved into the motion): shared back (a parked motion's without a copy).
+fn share_acceleration(record: &mut Record, motion: Option<&Motion>) {
+    if let Some(m) = motion {
+        if record.samples.is_empty() && !m.acceleration.is_empty() {
+            record.samples = m.acceleration.clone();
+        }
+    }
+}
+
+/// A failure: the phase it happened in (0 the checks, 1 units, 2 + i the
+/// declared step i; `usize::MAX` after conditioning) and the error.
+type Failure = (usize, Error);
+
+/// A channel's failure, with its record (as conditioned so far).
+type Failed = (usize, Error, Record);
+
+/// One conditioned channel.
+struct Channel1 {
+    record: Record,
+    motion: Option<Motion>,
+    trace: Trace,
+}
+
+/// What a channel's conditioning leaves for the history.
+struct Trace {
+    /// QA codes of the channel after the checks (empty: not listed).
+    qa_codes: Vec<&'static str>,
+    units_from: &'static str,
+    factor: f64,
+    /// Indices of the resample steps that changed the record.
+    resampled: Vec<usize>,
+}
+
+/// The conditioned channels, in record order, and the alignment when there was one.
+struct Conditioned1 {
+    list: Vec<Channel1>,
+    alignment: Option<serde_json::Value>,
+}
+
+/// The channels, or the error of the earliest phase and, in it, of the
+/// first channel, with every record.
+fn earliest_failure(
+    results: Vec<std::result::Result<Channel1, Failed>>,
+) -> std::result::Result<Conditioned1, (Error, Vec<Record>)> {
+    if results.iter().all(|r| r.is_ok()) {
+        return Ok(Conditioned1 {
+            list: results.into_iter().flatten().collect(),
+            alignment: None,
+        });
+    }
+    let mut records = Vec::with_capacity(results.len());
+    let mut first: Option<Failure> = None;
+    for r in results {
+        match r {
+            Ok(c) => records.push(c.record),
+            Err((phase, e, record)) => {
+                records.push(record);
+                if first.as_ref().is_none_or(|(p, _)| phase < *p) {
+                    first = Some((phase, e));
+                }
+            }
+        }
+    }
+    let e = first.map(|(_, e)| e);
+    Err((
+        e.unwrap_or_else(|| Error::numerical("conditioning failed")),
+        records,
+    ))
+}
+
+/// Every step of one channel (no `align`: see [`condition_event_each`]).
+fn condition_channel(
+    mut record: Record,
+    settings: &ConditioningSettings,
+) -> std::result::Result<Channel1, Failed> {
+    let mut trace = match check_qa_units(&mut record, settings) {
+        Ok(t) => t,
+        Err((phase, e)) => return Err((phase, e, record)),
+    };
+    let mut motion = None;
+    for (i, step) in settings.steps.iter().enumerate() {
+        match apply_step(&mut record, i, step, &mut trace) {
+            Ok(Some(m)) => motion = Some(m),
+            Ok(None) => {}
+            Err(e) => return Err((2 + i, e, record)),
+        }
+    }
+    Ok(Channel1 {
+        record,
+        motion,
+        trace,
+    })
+}
+
+/// The steps one after the other over all records (for `align`), in place.
+fn condition_step_by_step(
+    records: &mut Vec<Record>,
+    settings: &ConditioningSettings,
+    done: &ChannelDone<'_>,
+) -> Result<Conditioned1> {
+    // The checks and units of every record; the earliest failure, as above.
+    let mut traces = Vec::with_capacity(records.len());
+    let mut first: Option<Failure> = None;
+    for r in records.iter_mut() {
+        match check_qa_units(r, settings) {
+            Ok(t) => traces.push(t),
+            Err((phase, e)) => {
+                if first.as_ref().is_none_or(|(p, _)| phase < *p) {
+                    first = Some((phase, e));
+                }
+            }
+        }
+    }
+    if let Some((_, e)) = first {
+        return Err(e);
+    }
+    let mut motions: Vec<Option<Motion>> = (0..records.len()).map(|_| None).collect();
+    let mut alignment = None;
+    for (i, step) in settings.steps.iter().enumerate() {
+        if let Step::Align = step {
+            let a = align_records(records)?;
+            alignment = Some(serde_json::to_value(&a).unwrap_or_default());
+            continue;
+        }
+        let results: Vec<Result<Option<Motion>>> = records
+            .par_iter_mut()
+            .zip(traces.par_iter_mut())
+            .map(|(r, t)| apply_step(r, i, step, t))
+            .collect();
+        for (k, m) in results.into_iter().enumerate() {
+            if let Some(m) = m? {
+                motions[k] = Some(m);
+            }
+        }
+    }
+    let mut list = Vec::with_capacity(records.len());
+    let records = std::mem::take(records);
+    for ((mut record, mut motion), trace) in records.into_iter().zip(motions).zip(traces) {
+        done(&mut record, motion.as_mut())?;
+        share_acceleration(&mut record, motion.as_ref());
+        list.push(Channel1 {
+            record,
+            motion,
+            trace,
+        });
+    }
+    Ok(Conditioned1 { list, alignment })
+}
+
+/// The checks (finite samples, a positive rate), QA flags on the data as
+/// recorded (clipping is best seen in raw values) and the conversion to SI.
+fn check_qa_units(
+    r: &mut Record,
+    settings: &ConditioningSettings,
+) -> std::result::Result<Trace, Failure> {
+    let (count, first) = qa::count_non_finite(&r.samples);
+    if count > 0 {
+        let flag = QaFlag::NonFinite { count };
+        if !r.channel.qa.contains(&flag) {
+            r.channel.qa.push(flag);
+        }
+        return Err((
+            0,
+            Error::input(
                 record_location(r),
                 format!(
                     "{count} non-finite sample(s), first at index {}: refusing to condition",
                     first.unwrap_or(0)
                 ),
-            ));
-        }
-        if !(r.channel.sampling_rate_hz.is_finite() && r.channel.sampling_rate_hz > 0.0) {
-            return Err(Error::input(
+            ),
+        ));
+    }
+    if !(r.channel.sampling_rate_hz.is_finite() && r.channel.sampling_rate_hz > 0.0) {
+        return Err((
+            0,
+            Error::input(
                 record_location(r),
                 format!(
                     "sampling rate must be positive, got {}",
                     r.channel.sampling_rate_hz
                 ),
-            ));
+            ),
+        ));
+    }
+    for f in quality_flags(&r.samples, r.channel.dt(), &settings.qa) {
+        if !r.channel.qa.contains(&f) {
+            r.channel.qa.push(f);
         }
     }
-    // 2. Quality flags on the data as recorded (clipping is best seen in raw values).
-    let mut qa_summary = serde_json::Map::new();
-    for r in event.records.iter_mut() {
-        let flags = quality_flags(&r.samples, r.channel.dt(), &settings.qa);
-        for f in flags {
-            if !r.channel.qa.contains(&f) {
-                r.channel.qa.push(f);
+    let qa_codes = r.channel.qa.iter().map(|f| f.code()).collect();
+    let units_from = r.channel.units.name();
+    let factor = units_to_si(r).map_err(|e| (1, e))?;
+    Ok(Trace {
+        qa_codes,
+        units_from,
+        factor,
+        resampled: Vec::new(),
+    })
+}
+
+/// Declared step `index` on one record; the motion when it integrates.
+fn apply_step(
+    r: &mut Record,
+    index: usize,
+    step: &Step,
+    trace: &mut Trace,
+) -> Result<Option<Motion>> {
+    match step {
+        Step::Resample { rate_hz } => {
+            let target = *rate_hz;
+            if r.channel.sampling_rate_hz != target {
+                let from = r.channel.sampling_rate_hz;
+                r.samples = resample_to_rate(&r.samples, from, target)
+                    .map_err(|e| in_record(r, e))?
+                    .into();
+                r.channel.sampling_rate_hz = target;
+                r.channel.qa.push(QaFlag::Resampled {
+                    from: format!("{from} Hz"),
+                });
+                trace.resampled.push(index);
             }
         }
-        let codes: Vec<&str> = r.channel.qa.iter().map(|f| f.code()).collect();
-        if !codes.is_empty() {
-            qa_summary.insert(r.channel.id.clone(), json!(codes));
-        }
-    }
-    event.history.push(
-        "qa",
-        json!({ "settings": settings.qa, "flags": qa_summary }),
-    );
-    // 3. Units.
-    let mut factors = serde_json::Map::new();
-    for r in event.records.iter_mut() {
-        let from = r.channel.units.name();
-        let factor = units_to_si(r)?;
-        factors.insert(
-            r.channel.id.clone(),
-            json!({ "from": from, "factor": factor }),
-        );
-    }
-    event
-        .history
-        .push("units_to_si", json!({ "channels": factors }));
-    // 4. The declared steps, in order.
-    let mut motions = Vec::new();
-    for step in &settings.steps {
-        match step {
-            Step::Resample { rate_hz } => resample_step(event, *rate_hz)?,
-            Step::Align => {
-                let a = align_records(&mut event.records)?;
-                event
-                    .history
-                    .push("align", serde_json::to_value(&a).unwrap_or_default());
-            }
-            Step::Detrend(method) => detrend_step(event, method)?,
-            Step::Taper { fraction } => {
-                for r in event.records.iter_mut().filter(|r| is_acceleration(r)) {
-                    cosine_taper(&mut r.samples, *fraction)?;
+        // Needs every record: `condition_step_by_step`.
+        Step::Align => {}
+        _ if !is_acceleration(r) => {}
+        Step::Detrend(method) => {
+            let result = match method {
+                Detrend::None => Ok(()),
+                Detrend::Mean => {
+                    remove_mean(&mut r.samples);
+                    Ok(())
                 }
-                let ids = acceleration_ids(event);
-                event.history.push_for(
-                    "taper",
-                    ids,
-                    json!({ "window": "cosine (Tukey)", "fraction_each_end": fraction }),
-                );
-            }
-            Step::Filter(f) => filter_step(event, f)?,
-            Step::Integrate(integration) => motions = integrate_step(event, integration)?,
+                Detrend::Linear => remove_linear_trend(&mut r.samples).map(|_| ()),
+                Detrend::Polynomial { order } => {
+                    remove_polynomial(&mut r.samples, *order).map(|_| ())
+                }
+            };
+            result.map_err(|e| in_record(r, e))?;
         }
-    }
-    Ok(motions)
-}
-
-fn is_acceleration(r: &Record) -> bool {
-    r.channel.units.is_acceleration()
-}
-
-fn acceleration_ids(event: &Event) -> Vec<String> {
-    event
-        .records
-        .iter()
-        .filter(|r| is_acceleration(r))
-        .map(|r| r.channel.id.clone())
-        .collect()
-}
-
-/// Every record (all units) to `target` Hz; records already there are left alone.
-fn resample_step(event: &mut Event, target: f64) -> Result<()> {
-    let mut changed = Vec::new();
-    for r in event.records.iter_mut() {
-        if r.channel.sampling_rate_hz != target {
-            let from = r.channel.sampling_rate_hz;
-            r.samples = resample_to_rate(&r.samples, from, target).map_err(|e| in_record(r, e))?;
-            r.channel.sampling_rate_hz = target;
-            r.channel.qa.push(QaFlag::Resampled {
-                from: format!("{from} Hz"),
-            });
-            changed.push(r.channel.id.clone());
+        Step::Taper { fraction } => {
+            cosine_taper(&mut r.samples, *fraction)?;
         }
-    }
-    event.history.push_for(
-        "resample",
-        changed,
-        json!({ "target_hz": target, "method": "rational polyphase, Kaiser-windowed sinc (beta 5, 20*max(up,down)+1 taps), cut-off at the lower Nyquist" }),
-    );
-    Ok(())
-}
-
-fn detrend_step(event: &mut Event, method: &Detrend) -> Result<()> {
-    if *method == Detrend::None {
-        return Ok(());
-    }
-    for r in event.records.iter_mut().filter(|r| is_acceleration(r)) {
-        let result = match method {
-            Detrend::None => Ok(()),
-            Detrend::Mean => {
-                remove_mean(&mut r.samples);
-                Ok(())
-            }
-            Detrend::Linear => remove_linear_trend(&mut r.samples).map(|_| ()),
-            Detrend::Polynomial { order } => remove_polynomial(&mut r.samples, *order).map(|_| ()),
-        };
-        result.map_err(|e| in_record(r, e))?;
-    }
-    let ids = acceleration_ids(event);
-    event.history.push_for(
-        "detrend",
-        ids,
-        serde_json::to_value(method).unwrap_or_default(),
-    );
-    Ok(())
-}
-
-/// Butterworth filter of every acceleration record (channels in parallel).
-fn filter_step(event: &mut Event, f: &FilterSettings) -> Result<()> {
-    let results: Vec<Result<()>> = event
-        .records
-        .par_iter_mut()
-        .filter(|r| is_acceleration(r))
-        .map(|r| {
+        Step::Filter(f) => {
             let sos = butter_sos(f.order, f.band, &f.corners_hz, r.channel.sampling_rate_hz)
                 .map_err(|e| in_record(r, e))?;
             r.samples = if f.zero_phase {
@@ -521,53 +678,104 @@ fn filter_step(event: &mut Event, f: &FilterSettings) -> Result<()> {
             } else {
                 sosfilt(&sos, &r.samples)
             }
-            .map_err(|e| in_record(r, e))?;
-            Ok(())
-        })
-        .collect();
-    results.into_iter().collect::<Result<Vec<()>>>()?;
-    let ids = acceleration_ids(event);
-    event.history.push_for(
-        "filter",
-        ids,
-        json!({
-            "design": "butterworth (scipy.signal.butter, output='sos')",
-            "order": f.order,
-            "band": f.band,
-            "corners_hz": f.corners_hz,
-            "zero_phase": f.zero_phase,
-            "edge_handling": if f.zero_phase { "odd extension, padlen = 3*(2*n_sections+1), sosfilt_zi initial conditions (scipy sosfiltfilt)" } else { "causal, zero initial state" },
-        }),
-    );
-    Ok(())
+            .map_err(|e| in_record(r, e))?
+            .into();
+        }
+        Step::Integrate(integration) => {
+            // The record's samples become the motion's acceleration: moved in,
+            // given back by `share_acceleration` once the channel is done.
+            let dt = r.channel.dt();
+            let acc = std::mem::take(r.samples.as_mut_vec());
+            let m = integrate_motion_of(&r.channel.id, acc, dt, &integration.drift)
+                .map_err(|e| in_record(r, e))?;
+            return Ok(Some(m));
+        }
+    }
+    Ok(None)
 }
 
-/// Acceleration, velocity and displacement of every acceleration record
-/// (with polynomial drift control the records take the consistently
-/// corrected acceleration).
-fn integrate_step(event: &mut Event, integration: &IntegrationSettings) -> Result<Vec<Motion>> {
-    let results: Vec<Result<Motion>> = event
-        .records
-        .par_iter_mut()
-        .filter(|r| is_acceleration(r))
-        .map(|r| {
-            let m = integrate_motion(
-                &r.channel.id,
-                &r.samples,
-                r.channel.dt(),
-                &integration.drift,
-            )
-            .map_err(|e| in_record(r, e))?;
-            r.samples.clone_from(&m.acceleration);
-            Ok(m)
-        })
-        .collect();
-    let motions = results.into_iter().collect::<Result<Vec<Motion>>>()?;
-    let ids = acceleration_ids(event);
-    event.history.push_for(
-        "integrate",
-        ids,
-        json!({ "rule": "cumulative trapezoid from rest", "drift_control": integration.drift }),
+fn is_acceleration(r: &Record) -> bool {
+    r.channel.units.is_acceleration()
+}
+
+/// The history of the conditioning: QA, units, then each declared step.
+fn push_history(
+    event: &mut Event,
+    settings: &ConditioningSettings,
+    traces: &[Trace],
+    alignment: Option<serde_json::Value>,
+) {
+    let mut qa_summary = serde_json::Map::new();
+    let mut factors = serde_json::Map::new();
+    for (r, t) in event.records.iter().zip(traces) {
+        if !t.qa_codes.is_empty() {
+            qa_summary.insert(r.channel.id.clone(), json!(t.qa_codes));
+        }
+        factors.insert(
+            r.channel.id.clone(),
+            json!({ "from": t.units_from, "factor": t.factor }),
+        );
+    }
+    event.history.push(
+        "qa",
+        json!({ "settings": settings.qa, "flags": qa_summary }),
     );
-    Ok(motions)
+    event
+        .history
+        .push("units_to_si", json!({ "channels": factors }));
+    let ids: Vec<String> = event
+        .records
+        .iter()
+        .filter(|r| is_acceleration(r))
+        .map(|r| r.channel.id.clone())
+        .collect();
+    for (i, step) in settings.steps.iter().enumerate() {
+        match step {
+            Step::Resample { rate_hz } => {
+                let changed = event
+                    .records
+                    .iter()
+                    .zip(traces)
+                    .filter(|(_, t)| t.resampled.contains(&i))
+                    .map(|(r, _)| r.channel.id.clone())
+                    .collect();
+                event.history.push_for(
+                    "resample",
+                    changed,
+                    json!({ "target_hz": rate_hz, "method": "rational polyphase, Kaiser-windowed sinc (beta 5, 20*max(up,down)+1 taps), cut-off at the lower Nyquist" }),
+                );
+            }
+            Step::Align => event
+                .history
+                .push("align", alignment.clone().unwrap_or_default()),
+            Step::Detrend(Detrend::None) => {}
+            Step::Detrend(method) => event.history.push_for(
+                "detrend",
+                ids.clone(),
+                serde_json::to_value(method).unwrap_or_default(),
+            ),
+            Step::Taper { fraction } => event.history.push_for(
+                "taper",
+                ids.clone(),
+                json!({ "window": "cosine (Tukey)", "fraction_each_end": fraction }),
+            ),
+            Step::Filter(f) => event.history.push_for(
+                "filter",
+                ids.clone(),
+                json!({
+                    "design": "butterworth (scipy.signal.butter, output='sos')",
+                    "order": f.order,
+                    "band": f.band,
+                    "corners_hz": f.corners_hz,
+                    "zero_phase": f.zero_phase,
+                    "edge_handling": if f.zero_phase { "odd extension, padlen = 3*(2*n_sections+1), sosfilt_zi initial conditions (scipy sosfiltfilt)" } else { "causal, zero initial state" },
+                }),
+            ),
+            Step::Integrate(integration) => event.history.push_for(
+                "integrate",
+                ids.clone(),
+                json!({ "rule": "cumulative trapezoid from rest", "drift_control": integration.drift }),
+            ),
+        }
+    }
 }

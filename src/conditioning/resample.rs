@@ -186,7 +186,7 @@ pub fn align_records(records: &mut [Record]) -> Result<Alignment> {
     if with_start == 0 {
         let n = records.iter().map(|r| r.samples.len()).min().unwrap_or(0);
         for r in records.iter_mut() {
-            r.samples.truncate(n);
+            r.samples.as_mut_vec().truncate(n);
         }
         return Ok(Alignment {
             common_start_ns: None,
@@ -227,8 +227,9 @@ pub fn align_records(records: &mut [Record]) -> Result<Alignment> {
         return Err(Error::usage("records overlap by less than one sample"));
     }
     for (r, &offset) in records.iter_mut().zip(&trimmed) {
-        r.samples.drain(..offset);
-        r.samples.truncate(n_common);
+        let v = r.samples.as_mut_vec();
+        v.drain(..offset);
+        v.truncate(n_common);
         r.channel.start_ns = Some(start(r) + (offset as f64 * dt_ns).round() as i64);
     }
     Ok(Alignment {

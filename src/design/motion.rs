@@ -227,7 +227,7 @@ pub fn base_motion_from_event(
                 )
             })?,
         };
-        parts.push((id, axis, sign, r.channel.dt(), r.samples.clone()));
+        parts.push((id, axis, sign, r.channel.dt(), r.samples.to_vec()));
     }
     parts.sort_by_key(|p| p.1);
     assemble_motion(
@@ -472,7 +472,7 @@ pub fn recorded_response_from_event(
         let integrated =
             integrate_motion(&sensor.channel, &relative, dt, &DriftControl::default())?;
         dofs.push((node, dof.clone()));
-        displacement.push(integrated.displacement);
+        displacement.push(integrated.displacement.to_vec());
         used.push(sensor.channel.clone());
     }
     Ok(RecordedResponse {

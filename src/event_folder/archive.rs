@@ -30,6 +30,15 @@ impl Default for ArchiveLimits {
     }
 }
 
+/// Files of a directory above this size are read when their records are
+/// (one at a time), not when the folder is listed: only their head is kept
+/// for recognising the format (issue 14 item 5).
+pub const READ_LATER_ABOVE: u64 = 1 << 20;
+
+/// Bytes of a file's head kept for recognising its format (one more than
+/// `readers` looks at, which tells it that the head was cut).
+pub const HEAD_BYTES: usize = crate::readers::SNIFF_BYTES + 1;
+
 /// One file of the event, with where it came from.
 #[derive(Debug, Clone)]
 pub struct EventFile {
@@ -37,10 +46,24 @@ pub struct EventFile {
     pub file: String,
     /// Member path inside the zip(s), nested zips joined with `:`.
     pub member: Option<String>,
-    pub bytes: Vec<u8>,
+    /// The file's content — or, for a big file of a directory (read later,
+    /// [`EventFile::content`]), its first [`HEAD_BYTES`]: enough to recognise the format.
+    pub head: Vec<u8>,
+    /// A big file of a directory, read when its content is asked for.
+    on_disk: Option<std::path::PathBuf>,
 }
 
 impl EventFile {
+    /// The whole content (a big file of a directory is read now).
+    pub fn content(&self) -> Result<std::borrow::Cow<'_, [u8]>> {
+        match &self.on_disk {
+            None => Ok(std::borrow::Cow::Borrowed(&self.head)),
+            Some(path) => std::fs::read(path)
+                .map(std::borrow::Cow::Owned)
+                .map_err(|e| Error::io(path, e)),
+        }
+    }
+
     /// Name the manifest uses: `file` or `file:member`.
     pub fn display_name(&self) -> String {
         match &self.member {
@@ -78,9 +101,23 @@ pub fn collect(root: &Path, limits: &ArchiveLimits) -> Result<Vec<EventFile>> {
         paths.sort();
         for rel in paths {
             let full = root.join(&rel);
-            let bytes = read_bounded(&full, limits)?;
             let name = rel.to_string_lossy().replace('\\', "/");
-            push_file(name, None, bytes, 0, limits, &mut total, &mut out)?;
+            let (bytes, whole) = read_head_bounded(&full, limits)?;
+            if whole || is_zip(&name, &bytes) {
+                let bytes = if whole {
+                    bytes
+                } else {
+                    read_bounded(&full, limits)?
+                };
+                push_file(name, None, bytes, 0, limits, &mut total, &mut out)?;
+            } else {
+                out.push(EventFile {
+                    file: name,
+                    member: None,
+                    head: bytes,
+                    on_disk: Some(full),
+                });
+            }
         }
     } else if meta.is_file() {
         let bytes = read_bounded(root, limits)?;
@@ -106,8 +143,31 @@ pub fn collect(root: &Path, limits: &ArchiveLimits) -> Result<Vec<EventFile>> {
     Ok(out)
 }
 
+/// The content of a regular file up to [`READ_LATER_ABOVE`] bytes, else its
+/// head (whether it is the whole file is the flag); the size is checked
+/// first against the member limit.
+fn read_head_bounded(path: &Path, limits: &ArchiveLimits) -> Result<(Vec<u8>, bool)> {
+    let size = checked_size(path, limits)?;
+    if size <= READ_LATER_ABOVE {
+        return std::fs::read(path)
+            .map(|b| (b, true))
+            .map_err(|e| Error::io(path, e));
+    }
+    let mut head = Vec::with_capacity(HEAD_BYTES);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(HEAD_BYTES as u64).read_to_end(&mut head))
+        .map_err(|e| Error::io(path, e))?;
+    Ok((head, false))
+}
+
 /// Reads a regular file whose size is checked first against the member limit.
 fn read_bounded(path: &Path, limits: &ArchiveLimits) -> Result<Vec<u8>> {
+    checked_size(path, limits)?;
+    std::fs::read(path).map_err(|e| Error::io(path, e))
+}
+
+/// The size of a regular file, refused above the member limit.
+fn checked_size(path: &Path, limits: &ArchiveLimits) -> Result<u64> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if !meta.is_file() {
         return Err(Error::input(
@@ -125,7 +185,7 @@ fn read_bounded(path: &Path, limits: &ArchiveLimits) -> Result<Vec<u8>> {
             ),
         ));
     }
-    std::fs::read(path).map_err(|e| Error::io(path, e))
+    Ok(meta.len())
 }
 
 fn walk(root: &Path, dir: &Path, out: &mut Vec<std::path::PathBuf>) -> Result<()> {
@@ -162,7 +222,8 @@ fn push_file(
         out.push(EventFile {
             file,
             member,
-            bytes,
+            head: bytes,
+            on_disk: None,
         });
         return Ok(());
     }

@@ -10,7 +10,7 @@ mod referenced;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-pub use archive::{collect, ArchiveLimits, EventFile};
+pub use archive::{collect, ArchiveLimits, EventFile, READ_LATER_ABOVE};
 pub use manifest::{
     ChannelEntry, ColumnRef, DirectionEntry, FormatEntry, Manifest, RoleEntry, UnitsEntry,
 };
@@ -52,11 +52,23 @@ pub fn load(path: &Path) -> Result<LoadedEvent> {
 }
 
 pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEvent> {
+    load_parking(path, limits, &mut |_| Ok(()))
+}
+
+/// As [`load_with_limits`], handing each record to `park` as soon as its
+/// file is read (a pipeline run parks a big event's samples there, so the
+/// files are read in the memory of one: issue 14 item 5).
+pub fn load_parking(
+    path: &Path,
+    limits: &ArchiveLimits,
+    park: &mut dyn FnMut(&mut Record) -> Result<()>,
+) -> Result<LoadedEvent> {
     let files = collect(path, limits)?;
     let manifest_file = files.iter().find(|f| is_manifest(f));
     let manifest = match manifest_file {
         Some(f) => {
-            let text = std::str::from_utf8(&f.bytes)
+            let bytes = f.content()?;
+            let text = std::str::from_utf8(&bytes)
                 .map_err(|e| Error::input(f.location(), format!("manifest is not UTF-8: {e}")))?;
             Some(Manifest::parse(text, &f.display_name())?)
         }
@@ -105,7 +117,7 @@ pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEve
             };
             let format = match entries.iter().find_map(|e| e.format) {
                 Some(f) => f.0,
-                None => match readers::classify(file.base_name(), &file.bytes) {
+                None => match readers::classify(file.base_name(), &file.head) {
                     readers::Sniffed::Record(f) => f,
                     readers::Sniffed::Skip(reason) => {
                         return Err(Error::input(
@@ -138,23 +150,38 @@ pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEve
             });
             spectra.extend(contents.spectra.iter().cloned());
             hints.push(contents.event.clone());
+            // The CSV reader returns one record per requested column, in
+            // the order asked: the k-th record is the k-th entry's.  Matching
+            // by name instead fails for an index (`column = 2`) or a name
+            // without its unit suffix (`acc_x` for `acc_x [g]`).
+            let mut picks: Vec<Result<usize>> = entries
+                .iter()
+                .enumerate()
+                .map(|(k, entry)| match &opts.columns {
+                    Some(cols) if contents.records.len() == cols.len() => Ok(k),
+                    _ => pick_record(&contents, entry, file),
+                })
+                .collect();
+            let mut slots: Vec<Option<Record>> = contents.records.into_iter().map(Some).collect();
             for (k, entry) in entries.iter().enumerate() {
-                // The CSV reader returns one record per requested column, in
-                // the order asked: the k-th record is the k-th entry's.  Matching
-                // by name instead fails for an index (`column = 2`) or a name
-                // without its unit suffix (`acc_x` for `acc_x [g]`).
-                let rec = match &opts.columns {
-                    Some(cols) if contents.records.len() == cols.len() => {
-                        contents.records[k].clone()
-                    }
-                    _ => pick_record(&contents, entry, file)?,
+                let i = std::mem::replace(&mut picks[k], Ok(usize::MAX))?;
+                // Taken, unless a later entry names the same record.
+                let shared = picks[k + 1..]
+                    .iter()
+                    .any(|p| p.as_ref().is_ok_and(|j| *j == i));
+                let rec = match (shared, slots[i].as_ref()) {
+                    (true, Some(r)) => r.clone(),
+                    _ => slots[i].take().ok_or_else(|| {
+                        Error::input(file.location(), "record already taken (internal error)")
+                    })?,
                 };
                 let order = m
                     .channels
                     .iter()
                     .position(|c| std::ptr::eq(c, *entry))
                     .unwrap_or(usize::MAX);
-                let rec = apply_entry(rec, entry, &mut history_notes, file)?;
+                let mut rec = apply_entry(rec, entry, &mut history_notes, file)?;
+                park(&mut rec)?;
                 picked.push((order, rec));
             }
         }
@@ -167,19 +194,19 @@ pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEve
             if is_manifest(file) {
                 continue;
             }
-            let format =
-                match readers::classify_in_folder(&file.display_name(), &file.bytes, &names) {
-                    readers::Sniffed::Record(f) => f,
-                    readers::Sniffed::Skip(reason) => {
-                        reports.push(FileReport {
-                            name: file.display_name(),
-                            format: None,
-                            channels: 0,
-                            skipped: Some(reason),
-                        });
-                        continue;
-                    }
-                };
+            let format = match readers::classify_in_folder(&file.display_name(), &file.head, &names)
+            {
+                readers::Sniffed::Record(f) => f,
+                readers::Sniffed::Skip(reason) => {
+                    reports.push(FileReport {
+                        name: file.display_name(),
+                        format: None,
+                        channels: 0,
+                        skipped: Some(reason),
+                    });
+                    continue;
+                }
+            };
             if format == Format::StationXml {
                 reports.push(FileReport {
                     name: file.display_name(),
@@ -198,7 +225,10 @@ pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEve
             });
             spectra.extend(contents.spectra.iter().cloned());
             hints.push(contents.event.clone());
-            records.extend(contents.records);
+            for mut rec in contents.records {
+                park(&mut rec)?;
+                records.push(rec);
+            }
         }
     }
 
@@ -206,7 +236,7 @@ pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEve
     let mut station_meta = Vec::new();
     for f in files
         .iter()
-        .filter(|f| readers::sniff(f.base_name(), &f.bytes) == Some(Format::StationXml))
+        .filter(|f| readers::sniff(f.base_name(), &f.head) == Some(Format::StationXml))
     {
         let source = SourceRef {
             file: f.file.clone(),
@@ -214,7 +244,7 @@ pub fn load_with_limits(path: &Path, limits: &ArchiveLimits) -> Result<LoadedEve
             column: None,
             format: "stationxml".into(),
         };
-        station_meta.extend(readers::stationxml::parse(&f.bytes, &source)?);
+        station_meta.extend(readers::stationxml::parse(&f.content()?, &source)?);
     }
     if !station_meta.is_empty() {
         readers::stationxml::apply(&mut records, &station_meta);
@@ -313,7 +343,7 @@ fn read_file(file: &EventFile, format: Format, opts: &ReadOptions) -> Result<Fil
         column: None,
         format: format.name().into(),
     };
-    let contents = readers::read(format, &file.bytes, &source, opts)?;
+    let contents = readers::read(format, &file.content()?, &source, opts)?;
     for r in &contents.records {
         if !(r.channel.sampling_rate_hz.is_finite() && r.channel.sampling_rate_hz > 0.0) {
             return Err(Error::input(
@@ -331,8 +361,8 @@ fn read_file(file: &EventFile, format: Format, opts: &ReadOptions) -> Result<Fil
     Ok(contents)
 }
 
-/// The record a manifest entry designates in a file.
-fn pick_record(contents: &FileContents, entry: &ChannelEntry, file: &EventFile) -> Result<Record> {
+/// The index of the record a manifest entry designates in a file.
+fn pick_record(contents: &FileContents, entry: &ChannelEntry, file: &EventFile) -> Result<usize> {
     let recs = &contents.records;
     let err = |msg: String| {
         Error::input(
@@ -342,7 +372,7 @@ fn pick_record(contents: &FileContents, entry: &ChannelEntry, file: &EventFile) 
         )
     };
     match &entry.column {
-        None if recs.len() == 1 => Ok(recs[0].clone()),
+        None if recs.len() == 1 => Ok(0),
         None => Err(err(format!(
             "file holds {} channels ({}); say which with `column`",
             recs.len(),
@@ -353,7 +383,7 @@ fn pick_record(contents: &FileContents, entry: &ChannelEntry, file: &EventFile) 
         ))),
         Some(col) => {
             let by_name = |name: &str| {
-                recs.iter().find(|r| {
+                recs.iter().position(|r| {
                     r.channel.source.column.as_deref() == Some(name)
                         || r.channel.id == name
                         || r.channel.channel_code.as_deref() == Some(name)
@@ -362,9 +392,11 @@ fn pick_record(contents: &FileContents, entry: &ChannelEntry, file: &EventFile) 
             };
             let found = match col {
                 ColumnRef::Name(n) => by_name(n),
-                ColumnRef::Index(i) => by_name(&i.to_string()).or_else(|| recs.get(*i)),
+                ColumnRef::Index(i) => {
+                    by_name(&i.to_string()).or_else(|| (*i < recs.len()).then_some(*i))
+                }
             };
-            found.cloned().ok_or_else(|| {
+            found.ok_or_else(|| {
                 err(format!(
                     "column {:?} not found; the file has {}",
                     col.as_string(),
@@ -456,9 +488,7 @@ fn apply_entry(
         ch.source.column = Some(c.as_string());
     }
     if entry.reversed {
-        for v in &mut rec.samples {
-            *v = -*v;
-        }
+        rec.samples.negate();
         history.push((
             "reverse_sign".into(),
             serde_json::json!({ "channel": rec.channel.id, "reason": "manifest: reversed = true" }),

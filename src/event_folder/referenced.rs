@@ -101,7 +101,7 @@ impl ReferencedFiles {
                 if let Some(parent) = dest.parent() {
                     std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
                 }
-                std::fs::write(&dest, &f.bytes).map_err(|e| Error::io(&dest, e))?;
+                std::fs::write(&dest, &*f.content()?).map_err(|e| Error::io(&dest, e))?;
             }
             self.extracted = Some(tree);
         }

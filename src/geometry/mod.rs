@@ -146,7 +146,7 @@ pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
     for r in &mut event.records {
         match r.channel.direction {
             Some(Direction::Down) => {
-                r.samples.iter_mut().for_each(|v| *v = -*v);
+                r.samples.negate();
                 r.channel.direction = Some(Direction::Axis(Axis::Z));
                 report
                     .actions

@@ -124,7 +124,7 @@ pub fn normalise_orientation(
             Some(Direction::Azimuth(az)) => match match_axis(az, x_az, y_az, tol) {
                 Some((axis, sign)) => {
                     if sign < 0.0 {
-                        r.samples.iter_mut().for_each(|v| *v = -*v);
+                        r.samples.negate();
                     }
                     actions.push(OrientationAction {
                         channel: r.channel.id.clone(),
@@ -209,7 +209,7 @@ pub fn normalise_orientation(
                 .unwrap_or_default();
             let partner = records[other].channel.id.clone();
             let r = &mut records[idx];
-            r.samples = data;
+            r.samples = data.into();
             r.channel.direction = Some(Direction::Axis(axis));
             actions.push(OrientationAction {
                 channel: r.channel.id.clone(),

@@ -53,7 +53,9 @@ pub fn storey_drift(event: &Event, motions: &[Motion]) -> Result<Vec<DriftRow>> 
                 continue; // not on a common time base: alignment was not configured
             }
             let h = heights[*l1 as usize - 1];
-            let ratio = super::interstorey_drift(&m0.displacement, &m1.displacement, h)?;
+            // Read a storey's two displacements at a time (parked motions).
+            let ratio =
+                super::interstorey_drift(&m0.displacement.get()?, &m1.displacement.get()?, h)?;
             rows.push(DriftRow {
                 direction: dir.clone(),
                 storey: *l1,

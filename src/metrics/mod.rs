@@ -191,16 +191,35 @@ pub fn strong_motion_metrics(
     motion: &Motion,
     settings: &MetricsSettings,
 ) -> Result<StrongMotionMetrics> {
-    let a = &motion.acceleration;
-    let (d5_95, _) = significant_duration(a, motion.dt, 0.05, 0.95)?;
+    metrics_of_parts(
+        &motion.channel_id,
+        motion.dt,
+        &motion.acceleration,
+        peak_abs(&motion.velocity),
+        peak_abs(&motion.displacement),
+        settings,
+    )
+}
+
+/// As [`strong_motion_metrics`], given the acceleration and the peaks of the
+/// velocity and displacement (a long parked motion is read a series at a time).
+pub fn metrics_of_parts(
+    channel_id: &str,
+    dt: f64,
+    a: &[f64],
+    pgv_m_per_s: f64,
+    pgd_m: f64,
+    settings: &MetricsSettings,
+) -> Result<StrongMotionMetrics> {
+    let (d5_95, _) = significant_duration(a, dt, 0.05, 0.95)?;
     Ok(StrongMotionMetrics {
-        channel_id: motion.channel_id.clone(),
+        channel_id: channel_id.to_string(),
         pga_m_per_s2: peak_abs(a),
-        pgv_m_per_s: peak_abs(&motion.velocity),
-        pgd_m: peak_abs(&motion.displacement),
-        arias_m_per_s: arias_intensity(a, motion.dt),
+        pgv_m_per_s,
+        pgd_m,
+        arias_m_per_s: arias_intensity(a, dt),
         d5_95_s: d5_95,
-        cav_m_per_s: cumulative_absolute_velocity(a, motion.dt),
-        spectrum: response_spectrum(a, motion.dt, &settings.periods_s, settings.damping)?,
+        cav_m_per_s: cumulative_absolute_velocity(a, dt),
+        spectrum: response_spectrum(a, dt, &settings.periods_s, settings.damping)?,
     })
 }

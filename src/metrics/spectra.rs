@@ -115,22 +115,53 @@ pub fn sdof_response(
     Ok((u, v))
 }
 
-/// Peaks of one oscillator: (max |u|, max |u̇|, max |ü + a_g|).
-fn sdof_peaks(ground_acceleration: &[f64], dt: f64, omega: f64, damping: f64) -> (f64, f64, f64) {
-    let rec = Recurrence::new(omega, damping, dt);
-    let (mut ui, mut vi) = (0.0f64, 0.0f64);
-    let (mut du, mut dv, mut da) = (0.0f64, 0.0f64, 0.0f64);
-    for w in ground_acceleration.windows(2) {
-        let un = rec.a[0][0] * ui + rec.a[0][1] * vi + rec.b[0][0] * w[0] + rec.b[0][1] * w[1];
-        let vn = rec.a[1][0] * ui + rec.a[1][1] * vi + rec.b[1][0] * w[0] + rec.b[1][1] * w[1];
-        ui = un;
-        vi = vn;
-        du = du.max(ui.abs());
-        dv = dv.max(vi.abs());
-        // Absolute acceleration ü + a_g = −2ζω u̇ − ω² u.
-        da = da.max((2.0 * damping * omega * vi + omega * omega * ui).abs());
+/// Oscillators run side by side by [`sdof_peaks_lanes`].
+const LANES: usize = 8;
+
+/// Peaks (max |u|, max |u̇|, max |ü + a_g|) of up to [`LANES`] oscillators
+/// (`omegas`, from rest) in one pass over the record: the lanes' recurrences
+/// are independent, so the processor overlaps them (one oscillator alone
+/// waits on its own previous step).  Each lane's operations are those of one
+/// oscillator on its own, so its peaks do not depend on its neighbours.
+fn sdof_peaks_lanes(
+    ground_acceleration: &[f64],
+    dt: f64,
+    omegas: &[f64],
+    damping: f64,
+) -> Vec<(f64, f64, f64)> {
+    let mut omega = [0.0f64; LANES];
+    let (mut a00, mut a01, mut a10, mut a11) =
+        ([0.0f64; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
+    let (mut b00, mut b01, mut b10, mut b11) =
+        ([0.0f64; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
+    for j in 0..LANES {
+        // Unused lanes repeat the last oscillator (their peaks are dropped).
+        let w = omegas[j.min(omegas.len() - 1)];
+        let rec = Recurrence::new(w, damping, dt);
+        omega[j] = w;
+        (a00[j], a01[j], a10[j], a11[j]) = (rec.a[0][0], rec.a[0][1], rec.a[1][0], rec.a[1][1]);
+        (b00[j], b01[j], b10[j], b11[j]) = (rec.b[0][0], rec.b[0][1], rec.b[1][0], rec.b[1][1]);
     }
-    (du, dv, da)
+    let (mut ui, mut vi) = ([0.0f64; LANES], [0.0f64; LANES]);
+    let (mut du, mut dv, mut da) = ([0.0f64; LANES], [0.0f64; LANES], [0.0f64; LANES]);
+    for w in ground_acceleration.windows(2) {
+        for j in 0..LANES {
+            let un = a00[j] * ui[j] + a01[j] * vi[j] + b00[j] * w[0] + b01[j] * w[1];
+            let vn = a10[j] * ui[j] + a11[j] * vi[j] + b10[j] * w[0] + b11[j] * w[1];
+            ui[j] = un;
+            vi[j] = vn;
+            // Running peaks: `if x > peak` is `peak.max(x)` here (a peak starts
+            // at 0 and is never NaN; a NaN x is skipped by both), and maps to
+            // one max instruction.
+            let (au, av) = (ui[j].abs(), vi[j].abs());
+            du[j] = if au > du[j] { au } else { du[j] };
+            dv[j] = if av > dv[j] { av } else { dv[j] };
+            // Absolute acceleration ü + a_g = −2ζω u̇ − ω² u.
+            let aa = (2.0 * damping * omega[j] * vi[j] + omega[j] * omega[j] * ui[j]).abs();
+            da[j] = if aa > da[j] { aa } else { da[j] };
+        }
+    }
+    (0..omegas.len()).map(|j| (du[j], dv[j], da[j])).collect()
 }
 
 /// Response spectrum of one record. Entry 0 is T = 0 (all spectral
@@ -164,16 +195,13 @@ pub fn response_spectrum(
     let pga = ground_acceleration
         .iter()
         .fold(0.0f64, |m, v| m.max(v.abs()));
-    let peaks: Vec<(f64, f64, f64)> = periods
-        .par_iter()
-        .map(|&t| {
-            sdof_peaks(
-                ground_acceleration,
-                dt,
-                2.0 * std::f64::consts::PI / t,
-                damping,
-            )
-        })
+    let omegas: Vec<f64> = periods
+        .iter()
+        .map(|&t| 2.0 * std::f64::consts::PI / t)
+        .collect();
+    let peaks: Vec<(f64, f64, f64)> = omegas
+        .par_chunks(LANES)
+        .flat_map_iter(|w| sdof_peaks_lanes(ground_acceleration, dt, w, damping))
         .collect();
     let mut s = ResponseSpectrum {
         damping,

@@ -9,6 +9,8 @@
 //! record of N samples costs O(channels² · shifts · N) instead of the
 //! O(rows² · N) of a Householder LQ on the 60 000-column matrix.
 
+use rayon::prelude::*;
+
 /// Dot product with four independent accumulators, so the compiler can keep
 /// the reduction in SIMD registers (floating-point sums are not reassociated
 /// automatically).
@@ -58,21 +60,33 @@ pub fn hankel_gram(signals: &[&[f64]], rows: &[HankelRow], columns: usize) -> Ve
             needed[(ra.signal * n_sig + rb.signal) * span + d as usize] = true;
         }
     }
-    for a in 0..n_sig {
-        for b in 0..n_sig {
-            for d in 0..span {
-                let idx = (a * n_sig + b) * span + d;
-                if !needed[idx] {
-                    continue;
-                }
-                let lag = d as isize - max_shift as isize;
-                let (sa, sb) = if lag >= 0 {
-                    (0, lag as usize)
-                } else {
-                    ((-lag) as usize, 0)
-                };
-                base[idx] = dot(&signals[a][sa..sa + columns], &signals[b][sb..sb + columns]);
-            }
+    // Each needed product is one dot product, computed in parallel (each the
+    // same sum whatever the threads).  (a, b, d) and (b, a, −d) multiply the
+    // same pairs of samples in the same order: the second is copied from the
+    // first, bit for bit.
+    let split = |idx: usize| (idx / span / n_sig, idx / span % n_sig, idx % span);
+    let mirror = |(a, b, d): (usize, usize, usize)| (b * n_sig + a) * span + (span - 1 - d);
+    let canonical = |(a, b, d): (usize, usize, usize)| a < b || (a == b && d <= max_shift);
+    base.par_iter_mut()
+        .enumerate()
+        .filter(|(idx, _)| {
+            let abd = split(*idx);
+            canonical(abd) && (needed[*idx] || needed[mirror(abd)])
+        })
+        .for_each(|(idx, value)| {
+            let (a, b, d) = split(idx);
+            let lag = d as isize - max_shift as isize;
+            let (sa, sb) = if lag >= 0 {
+                (0, lag as usize)
+            } else {
+                ((-lag) as usize, 0)
+            };
+            *value = dot(&signals[a][sa..sa + columns], &signals[b][sb..sb + columns]);
+        });
+    for idx in 0..base.len() {
+        let abd = split(idx);
+        if needed[idx] && !canonical(abd) {
+            base[idx] = base[mirror(abd)];
         }
     }
     let mut g = vec![0.0; nr * nr];
@@ -111,15 +125,15 @@ pub fn cross_covariances(outputs: &[&[f64]], refs: &[&[f64]], max_lag: usize) ->
         .map(|k| {
             let count = n.saturating_sub(k);
             let mut r = vec![0.0; outputs.len() * refs.len()];
-            for (o, y) in outputs.iter().enumerate() {
-                for (j, x) in refs.iter().enumerate() {
-                    r[o * refs.len() + j] = if count == 0 {
-                        0.0
-                    } else {
-                        dot(&y[k..k + count], &x[..count]) / count as f64
-                    };
-                }
-            }
+            // One dot product per entry, in parallel (each the same sum whatever the threads).
+            r.par_iter_mut().enumerate().for_each(|(i, v)| {
+                let (y, x) = (outputs[i / refs.len()], refs[i % refs.len()]);
+                *v = if count == 0 {
+                    0.0
+                } else {
+                    dot(&y[k..k + count], &x[..count]) / count as f64
+                };
+            });
             r
         })
         .collect()

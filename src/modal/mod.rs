@@ -602,11 +602,12 @@ fn selection_warnings(
 pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalResult> {
     validate(input, settings.method)?;
     let plan = plan(input, settings)?;
-    // Pre-processing on outputs and inputs together (same filter for both).
-    let mut all: Vec<Vec<f64>> = input.outputs.clone();
+    // Pre-processing on outputs and inputs together (same filter for both),
+    // decimated to the band before any Hankel or covariance matrix is formed.
+    let mut all: Vec<&[f64]> = input.outputs.iter().map(Vec::as_slice).collect();
     let use_inputs = settings.method == Method::Io;
     if use_inputs {
-        all.extend(input.inputs.iter().cloned());
+        all.extend(input.inputs.iter().map(Vec::as_slice));
     }
     let pre = Preprocessing {
         decimation: Some(plan.decimation),
@@ -925,19 +926,21 @@ pub fn input_from_event(
             dropped.join(", ")
         ));
     }
+    // A channel at a time (parked samples are read back, not kept).
     let resampled: Vec<(&Record, Vec<f64>)> = outputs
         .iter()
         .chain(&inputs)
         .map(|r| {
             let k = factor(r).unwrap_or(1);
+            let data = r.samples.get()?;
             let samples = if k > 1 {
-                preprocess::decimate(&r.samples, k, &preprocess::antialias_taps(k))
+                preprocess::decimate(&data, k, &preprocess::antialias_taps(k))
             } else {
-                r.samples.clone()
+                data.into_owned()
             };
-            (*r, samples)
+            Ok((*r, samples))
         })
-        .collect();
+        .collect::<Result<_>>()?;
     let decimated: Vec<&str> = resampled
         .iter()
         .filter(|(r, _)| factor(r).unwrap_or(1) > 1)
@@ -1010,12 +1013,19 @@ pub fn input_from_event(
             n as f64 * dt
         ));
     }
-    let cut: Vec<Vec<f64>> = resampled
-        .iter()
+    let mut cut: Vec<Vec<f64>> = resampled
+        .into_iter()
         .zip(&offsets)
-        .map(|((_, s), &o)| s[o..o + n].to_vec())
+        .map(|((_, mut s), &o)| {
+            if o > 0 {
+                s.drain(..o);
+            }
+            s.truncate(n);
+            s
+        })
         .collect();
     let lo = outputs.len();
+    let cut_inputs = cut.split_off(lo);
     let locations: Vec<Location> = outputs
         .iter()
         .chain(&inputs)
@@ -1025,9 +1035,9 @@ pub fn input_from_event(
         ModalInput {
             dt,
             output_ids: outputs.iter().map(|r| r.channel.id.clone()).collect(),
-            outputs: cut[..lo].to_vec(),
+            outputs: cut,
             input_ids: inputs.iter().map(|r| r.channel.id.clone()).collect(),
-            inputs: cut[lo..].to_vec(),
+            inputs: cut_inputs,
             locations,
             output_directions: outputs
                 .iter()

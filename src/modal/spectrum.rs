@@ -19,11 +19,16 @@ pub struct SpectralOverlay {
 
 /// Welch PSD-matrix singular values of `outputs` (equal lengths) with
 /// segments of `segment_length` samples (rounded down to even, at least 16).
-pub fn spectral_overlay(
-    outputs: &[Vec<f64>],
+/// The segments' spectra are computed channel by channel and the PSD
+/// matrices accumulated bin by bin, in parallel over channels and bins (each
+/// sum in the same order: the result does not depend on the threads).
+pub fn spectral_overlay<S: AsRef<[f64]> + Sync>(
+    outputs: &[S],
     dt: f64,
     segment_length: usize,
 ) -> Result<SpectralOverlay> {
+    use rayon::prelude::*;
+    let outputs: Vec<&[f64]> = outputs.iter().map(|s| s.as_ref()).collect();
     let l = outputs.len();
     let n = outputs.iter().map(|s| s.len()).min().unwrap_or(0);
     let seg = (segment_length / 2 * 2).max(16);
@@ -32,47 +37,6 @@ pub fn spectral_overlay(
             "spectral overlay: need channels of at least {seg} samples"
         )));
     }
-    let bins = seg / 2 + 1;
-    let mut psd = vec![c64::new(0.0, 0.0); bins * l * l];
-    let (segments, window_power) = welch_segments(outputs, seg, |spectra| {
-        for k in 0..bins {
-            for a in 0..l {
-                for b in 0..l {
-                    psd[(k * l + a) * l + b] += spectra[a][k] * spectra[b][k].conj();
-                }
-            }
-        }
-    })?;
-    // One-sided density scaling: 2 Δt / (Σw² · segments), except DC and Nyquist.
-    let mut singular_values = Vec::with_capacity(bins);
-    for k in 0..bins {
-        let factor =
-            if k == 0 || k == bins - 1 { 1.0 } else { 2.0 } * dt / (window_power * segments as f64);
-        let m = Mat::<c64>::from_fn(l, l, |a, b| psd[(k * l + a) * l + b] * factor);
-        let mut ev = m
-            .self_adjoint_eigenvalues(Side::Lower)
-            .map_err(|e| Error::numerical(format!("PSD matrix eigenvalues: {e:?}")))?;
-        ev.reverse();
-        singular_values.push(ev.into_iter().map(|v| v.max(0.0)).collect());
-    }
-    let frequencies_hz = (0..bins).map(|k| k as f64 / (seg as f64 * dt)).collect();
-    Ok(SpectralOverlay {
-        frequencies_hz,
-        singular_values,
-        segment_length: seg,
-    })
-}
-
-/// Welch's segments (Hann window, 50 % overlap, each segment's mean
-/// removed) of equal-length `outputs`: `each` receives the FFT of every
-/// channel of one segment (`seg / 2 + 1` bins per channel).  Returns the
-/// number of segments and the window's power Σw² (the density scaling).
-fn welch_segments(
-    outputs: &[Vec<f64>],
-    seg: usize,
-    mut each: impl FnMut(&[Vec<c64>]),
-) -> Result<(usize, f64)> {
-    let n = outputs.iter().map(|s| s.len()).min().unwrap_or(0);
     let window: Vec<f64> = (0..seg)
         .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / seg as f64).cos())
         .collect();
@@ -82,30 +46,78 @@ fn welch_segments(
     let bins = seg / 2 + 1;
     let hop = seg / 2;
     let segments = (n - seg) / hop + 1;
-    let mut spectra = vec![vec![c64::new(0.0, 0.0); bins]; outputs.len()];
-    let mut buffer = fft.make_input_vec();
-    let mut out = fft.make_output_vec();
-    for s in 0..segments {
-        let start = s * hop;
-        for (c, signal) in outputs.iter().enumerate() {
-            let part = &signal[start..start + seg];
-            let mean = part.iter().sum::<f64>() / seg as f64;
-            for i in 0..seg {
-                buffer[i] = (part[i] - mean) * window[i];
+    // Segments go in blocks, so that the spectra held are a block's.
+    const BLOCK: usize = 64;
+    let mut psd = vec![c64::new(0.0, 0.0); bins * l * l];
+    for block in (0..segments).step_by(BLOCK) {
+        let count = BLOCK.min(segments - block);
+        // spectra[c][s * bins + k]: channel c, segment block + s, bin k.
+        let spectra: Vec<Vec<c64>> = outputs
+            .par_iter()
+            .map(|signal| {
+                let mut buffer = fft.make_input_vec();
+                let mut out = fft.make_output_vec();
+                let mut spec = Vec::with_capacity(count * bins);
+                for s in block..block + count {
+                    let part = &signal[s * hop..s * hop + seg];
+                    let mean = part.iter().sum::<f64>() / seg as f64;
+                    for i in 0..seg {
+                        buffer[i] = (part[i] - mean) * window[i];
+                    }
+                    fft.process(&mut buffer, &mut out)
+                        .map_err(|e| Error::numerical(format!("FFT: {e}")))?;
+                    spec.extend(out.iter().map(|z| c64::new(z.re, z.im)));
+                }
+                Ok(spec)
+            })
+            .collect::<Result<_>>()?;
+        // Segment by segment into each bin's matrix, as one running sum per
+        // entry; the upper triangle is the conjugate of the lower one exactly
+        // (the same products), so only the lower one is summed.
+        psd.par_chunks_mut(l * l).enumerate().for_each(|(k, m)| {
+            for s in 0..count {
+                for a in 0..l {
+                    let za = spectra[a][s * bins + k];
+                    for b in 0..=a {
+                        m[a * l + b] += za * spectra[b][s * bins + k].conj();
+                    }
+                }
             }
-            fft.process(&mut buffer, &mut out)
-                .map_err(|e| Error::numerical(format!("FFT: {e}")))?;
-            for (k, z) in out.iter().enumerate() {
-                spectra[c][k] = c64::new(z.re, z.im);
-            }
-        }
-        each(&spectra);
+        });
     }
-    Ok((segments, window_power))
+    // One-sided density scaling: 2 Δt / (Σw² · segments), except DC and Nyquist.
+    let singular_values: Vec<Vec<f64>> = psd
+        .par_chunks(l * l)
+        .enumerate()
+        .map(|(k, m)| {
+            let factor = if k == 0 || k == bins - 1 { 1.0 } else { 2.0 } * dt
+                / (window_power * segments as f64);
+            let entry = |a: usize, b: usize| {
+                if b <= a {
+                    m[a * l + b]
+                } else {
+                    m[b * l + a].conj()
+                }
+            };
+            let mat = Mat::<c64>::from_fn(l, l, |a, b| entry(a, b) * factor);
+            let mut ev = mat
+                .self_adjoint_eigenvalues(Side::Lower)
+                .map_err(|e| Error::numerical(format!("PSD matrix eigenvalues: {e:?}")))?;
+            ev.reverse();
+            Ok(ev.into_iter().map(|v| v.max(0.0)).collect())
+        })
+        .collect::<Result<_>>()?;
+    let frequencies_hz = (0..bins).map(|k| k as f64 / (seg as f64 * dt)).collect();
+    Ok(SpectralOverlay {
+        frequencies_hz,
+        singular_values,
+        segment_length: seg,
+    })
 }
 
 /// Frequency of the lowest clear peak of the summed output auto-spectra
-/// (the trace of the Welch PSD matrix, segments of `seg` samples) inside
+/// (the trace of the Welch PSD matrix of [`spectral_overlay`], segments of
+/// `seg` samples) inside
 /// `band_hz`: the lowest local maximum (over ±2 bins) that reaches
 /// `PEAK_FRACTION` of the band's largest value.  `None` when the record is
 /// shorter than two segments or nothing in the band is a peak.  Used by the
@@ -124,16 +136,14 @@ pub fn lowest_spectral_peak_hz(
     if outputs.is_empty() || n < 2 * seg {
         return None;
     }
-    let bins = seg / 2 + 1;
-    let mut trace = vec![0.0f64; bins];
-    welch_segments(outputs, seg, |spectra| {
-        for channel in spectra {
-            for (t, z) in trace.iter_mut().zip(channel) {
-                *t += z.norm_sqr();
-            }
-        }
-    })
-    .ok()?;
+    // The trace of the PSD matrix is the sum of its eigenvalues.
+    let overlay = spectral_overlay(outputs, dt, seg).ok()?;
+    let trace: Vec<f64> = overlay
+        .singular_values
+        .iter()
+        .map(|sv| sv.iter().sum())
+        .collect();
+    let bins = trace.len();
     let df = 1.0 / (seg as f64 * dt);
     let lo = ((band_hz[0] / df).ceil() as usize).max(2);
     let hi = ((band_hz[1] / df).floor() as usize).min(bins - 3);

@@ -4,10 +4,17 @@
 
 use std::path::{Path, PathBuf};
 
+use std::sync::Arc;
+
 use super::config::Pipeline;
 use super::stage::{Product, ProductKind};
 use crate::error::{Error, Result};
 use crate::event_folder::{LoadedEvent, ReferencedFiles};
+use crate::vocab::SampleStore;
+
+/// Environment variable overriding [`super::spill::PARK_ABOVE_SAMPLES`]
+/// (the tests set it to 0 to run the parked paths on small events).
+pub const PARK_ABOVE_ENV: &str = "QUAKETWIN_PARK_ABOVE_SAMPLES";
 
 pub struct RunContext<'p> {
     pub event_path: PathBuf,
@@ -21,6 +28,10 @@ pub struct RunContext<'p> {
     event: Option<LoadedEvent>,
     /// Product of each stage (by index), once it ran or was restored.
     products: Vec<Option<Product>>,
+    /// Events with more samples than this are parked in the spill file.
+    park_above: usize,
+    /// The spill file, once an event was big enough to need it.
+    spill: Option<Arc<dyn SampleStore>>,
 }
 
 impl<'p> RunContext<'p> {
@@ -34,6 +45,11 @@ impl<'p> RunContext<'p> {
             current: 0,
             event: None,
             products: (0..pipeline.stages.len()).map(|_| None).collect(),
+            park_above: std::env::var(PARK_ABOVE_ENV)
+                .ok()
+                .and_then(|v| v.trim().parse().ok())
+                .unwrap_or(super::spill::PARK_ABOVE_SAMPLES),
+            spill: None,
         }
     }
 
@@ -69,11 +85,67 @@ impl<'p> RunContext<'p> {
     }
 
     /// The event as read from the event folder (or zip), loaded on first use.
+    /// A big event (more samples than the park threshold, [`PARK_ABOVE_ENV`])
+    /// has its samples parked in the run's spill file: stages read them a
+    /// channel at a time.
     pub fn loaded_event(&mut self) -> Result<&LoadedEvent> {
         if self.event.is_none() {
-            self.event = Some(crate::event_folder::load(&self.event_path)?);
+            // Records are parked as they are read once the event is past the
+            // threshold; those read before, and what the building geometry
+            // formed or read back (floor motions), are parked at the end.
+            let (threshold, out_dir) = (self.park_above, self.out_dir.clone());
+            let mut spill: Option<Arc<dyn SampleStore>> = self.spill.clone();
+            let mut total = 0usize;
+            let mut loaded = crate::event_folder::load_parking(
+                &self.event_path,
+                &Default::default(),
+                &mut |r| {
+                    total += r.samples.len();
+                    if total <= threshold {
+                        return Ok(());
+                    }
+                    if spill.is_none() {
+                        spill = Some(super::spill::SpillFile::create(&out_dir)?);
+                    }
+                    match &spill {
+                        Some(s) => park(&mut r.samples, s),
+                        None => Ok(()),
+                    }
+                },
+            )?;
+            self.spill = spill;
+            if let Some(s) = &self.spill {
+                for r in loaded.event.records.iter_mut() {
+                    park(&mut r.samples, s)?;
+                }
+            }
+            self.event = Some(loaded);
         }
         Ok(self.event.as_ref().expect("just set")) // ok: set above
+    }
+
+    /// The run's spill file, when the event is parked (stages park what they
+    /// produce there too); `None` for an event held in memory.
+    pub fn parked(&self) -> Option<Arc<dyn SampleStore>> {
+        self.spill.clone()
+    }
+
+    /// The spill file when `samples` (of an event or a product read back)
+    /// are more than the park threshold, or when the event is parked.
+    pub fn spill_above(&mut self, samples: usize) -> Result<Option<Arc<dyn SampleStore>>> {
+        if samples > self.park_above {
+            self.spill().map(Some)
+        } else {
+            Ok(self.spill.clone())
+        }
+    }
+
+    /// The spill file, created on first use.
+    fn spill(&mut self) -> Result<Arc<dyn SampleStore>> {
+        if self.spill.is_none() {
+            self.spill = Some(super::spill::SpillFile::create(&self.out_dir)?);
+        }
+        Ok(self.spill.clone().expect("just set")) // ok: set above
     }
 
     /// The product `kind` of the current stage's input that provides it (the
@@ -109,4 +181,14 @@ impl<'p> RunContext<'p> {
                 ))
             })
     }
+}
+
+/// Parks `samples` in `store`; an error names the store.
+pub fn park(samples: &mut crate::vocab::Samples, store: &Arc<dyn SampleStore>) -> Result<()> {
+    samples.park(store).map_err(|e| {
+        Error::output(
+            std::path::Path::new(&store.describe()),
+            format!("parking samples: {e}"),
+        )
+    })
 }

@@ -23,6 +23,7 @@ pub mod context;
 pub mod fingerprint;
 pub mod lock;
 pub mod manifest;
+pub mod spill;
 pub mod stage;
 
 use std::path::Path;

@@ -154,7 +154,7 @@ const DOC_EXTENSIONS: [&str; 16] = [
 
 /// Bytes of the head used for content sniffing (every header structure
 /// checked fits: SMC 17 lines, COSMOS ~15, CSMIP ≤ 40, AT2 ≤ 12 + data).
-const SNIFF_BYTES: usize = 16 * 1024;
+pub const SNIFF_BYTES: usize = 16 * 1024;
 
 /// Guesses a file's format from its name and first bytes.  `None` means "not
 /// a record file" (README, event.json, V3 spectra…); [`classify`] says why.

@@ -358,41 +358,90 @@ pub fn legend(series: &[Series]) -> String {
 /// buckets and keeps each bucket's minimum and maximum in time order, so
 /// peaks survive.  Plot-only: every reported number comes from the tables.
 pub fn decimate_min_max(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f64)> {
-    let max_points = max_points.max(2);
-    if points.len() <= max_points {
-        return points.to_vec();
+    let mut d = MinMaxDecimator::new(points.len(), max_points);
+    for &p in points {
+        d.push(p);
     }
-    let buckets = max_points / 2;
-    let mut out = Vec::with_capacity(buckets * 2);
-    for b in 0..buckets {
-        let lo = b * points.len() / buckets;
-        let hi = ((b + 1) * points.len() / buckets).min(points.len());
-        let Some(chunk) = points.get(lo..hi) else {
-            continue;
-        };
-        let (mut imin, mut imax) = (0usize, 0usize);
-        for (i, p) in chunk.iter().enumerate() {
-            if p.1 < chunk[imin].1 {
-                imin = i;
-            }
-            if p.1 > chunk[imax].1 {
-                imax = i;
-            }
-        }
-        if chunk.is_empty() {
-            continue;
-        }
-        let (first, second) = if imin <= imax {
-            (imin, imax)
-        } else {
-            (imax, imin)
-        };
-        out.push(chunk[first]);
-        if second != first {
-            out.push(chunk[second]);
+    d.finish()
+}
+
+/// [`decimate_min_max`] fed a point at a time, the number of points known
+/// up front: a trace read from a big table in batches is decimated without
+/// being held (the result is the same).
+pub struct MinMaxDecimator {
+    len: usize,
+    buckets: usize,
+    /// Few enough points to keep them all.
+    keep_all: bool,
+    out: Vec<(f64, f64)>,
+    /// Index of the next point, the current bucket and where it ends.
+    next: usize,
+    bucket: usize,
+    end: usize,
+    /// The current bucket's first minimum and first maximum (index, point).
+    extremes: Option<((usize, (f64, f64)), (usize, (f64, f64)))>,
+}
+
+impl MinMaxDecimator {
+    pub fn new(len: usize, max_points: usize) -> Self {
+        let max_points = max_points.max(2);
+        let buckets = max_points / 2;
+        MinMaxDecimator {
+            len,
+            buckets,
+            keep_all: len <= max_points,
+            out: Vec::new(),
+            next: 0,
+            bucket: 0,
+            end: len / buckets.max(1),
+            extremes: None,
         }
     }
-    out
+
+    pub fn push(&mut self, p: (f64, f64)) {
+        let i = self.next;
+        self.next += 1;
+        if self.keep_all {
+            self.out.push(p);
+            return;
+        }
+        while i >= self.end && self.bucket < self.buckets {
+            self.flush();
+            self.bucket += 1;
+            self.end = ((self.bucket + 1) * self.len / self.buckets).min(self.len);
+        }
+        match &mut self.extremes {
+            None => self.extremes = Some(((i, p), (i, p))),
+            Some((min, max)) => {
+                if p.1 < min.1 .1 {
+                    *min = (i, p);
+                }
+                if p.1 > max.1 .1 {
+                    *max = (i, p);
+                }
+            }
+        }
+    }
+
+    fn flush(&mut self) {
+        if let Some((min, max)) = self.extremes.take() {
+            let (first, second) = if min.0 <= max.0 {
+                (min, max)
+            } else {
+                (max, min)
+            };
+            self.out.push(first.1);
+            if second.0 != first.0 {
+                self.out.push(second.1);
+            }
+        }
+    }
+
+    /// The decimated trace.
+    pub fn finish(mut self) -> Vec<(f64, f64)> {
+        self.flush();
+        self.out
+    }
 }
 
 /// Decimation of a parametric x–y curve (a force–drift loop) for display:

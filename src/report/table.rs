@@ -64,6 +64,73 @@ fn location(path: &Path) -> Location {
 /// Loads `path`; with `only`, loads just those top-level columns (those that
 /// exist) to keep big long-format tables cheap.
 pub fn load(path: &Path, only: Option<&[&str]>) -> Result<Table> {
+    let (mut table, reader) = open(path, only, None)?;
+    for batch in reader {
+        let batch = batch.map_err(|e| Error::input(location(path), e.to_string()))?;
+        table.rows += batch.num_rows();
+        for (field, array) in batch.schema().fields().iter().zip(batch.columns()) {
+            let name = field.name().clone();
+            if !table.columns.contains_key(&name) {
+                table.names.push(name.clone());
+            }
+            let part = convert(array);
+            match table.columns.get_mut(&name) {
+                Some(existing) => append(existing, part),
+                None => {
+                    table.columns.insert(name, part);
+                }
+            }
+        }
+    }
+    Ok(table)
+}
+
+/// The table of `path` without its rows: metadata, schema, the number of
+/// rows (from the footer) and the columns of `only` that exist, empty but of
+/// their kind — what [`Table::missing`] and the type checks need — for a
+/// table too big to load, gone through with [`for_each_batch`].
+pub fn load_head(path: &Path, only: Option<&[&str]>) -> Result<Table> {
+    let (mut table, reader) = open(path, only, None)?;
+    table.rows = usize::try_from(reader.metadata_rows).unwrap_or(0);
+    for field in reader.schema.fields() {
+        let empty = arrow_array::new_empty_array(field.data_type());
+        table.names.push(field.name().clone());
+        table.columns.insert(field.name().clone(), convert(&empty));
+    }
+    Ok(table)
+}
+
+/// Calls `each` on every record batch of `path` (the columns of `only`, at
+/// most `batch_rows` rows at a time), in file order.
+pub fn for_each_batch(
+    path: &Path,
+    only: Option<&[&str]>,
+    batch_rows: usize,
+    mut each: impl FnMut(&arrow_array::RecordBatch) -> Result<()>,
+) -> Result<()> {
+    let (_, reader) = open(path, only, Some(batch_rows))?;
+    for batch in reader.reader {
+        each(&batch.map_err(|e| Error::input(location(path), e.to_string()))?)?;
+    }
+    Ok(())
+}
+
+/// A reader of the projected columns, its schema and the file's row count.
+struct Batches {
+    reader: parquet::arrow::arrow_reader::ParquetRecordBatchReader,
+    schema: SchemaRef,
+    metadata_rows: i64,
+}
+
+impl Iterator for Batches {
+    type Item = std::result::Result<arrow_array::RecordBatch, arrow_schema::ArrowError>;
+    fn next(&mut self) -> Option<Self::Item> {
+        self.reader.next()
+    }
+}
+
+/// An empty table (metadata and schema of `path`) and a reader of its rows.
+fn open(path: &Path, only: Option<&[&str]>, batch_rows: Option<usize>) -> Result<(Table, Batches)> {
     let file = File::open(path).map_err(|e| Error::io(path, e))?;
     let builder = ParquetRecordBatchReaderBuilder::try_new(file)
         .map_err(|e| Error::input(location(path), format!("not a readable Parquet file: {e}")))?;
@@ -78,6 +145,11 @@ pub fn load(path: &Path, only: Option<&[&str]>) -> Result<Table> {
         })
         .unwrap_or_default();
     let schema = builder.schema().clone();
+    let metadata_rows = builder.metadata().file_metadata().num_rows();
+    let builder = match batch_rows {
+        Some(n) => builder.with_batch_size(n),
+        None => builder,
+    };
     let builder = match only {
         Some(wanted) => {
             let roots: Vec<usize> = schema
@@ -95,34 +167,22 @@ pub fn load(path: &Path, only: Option<&[&str]>) -> Result<Table> {
     let reader = builder
         .build()
         .map_err(|e| Error::input(location(path), e.to_string()))?;
-    let mut names: Vec<String> = Vec::new();
-    let mut columns: BTreeMap<String, Column> = BTreeMap::new();
-    let mut rows = 0usize;
-    for batch in reader {
-        let batch = batch.map_err(|e| Error::input(location(path), e.to_string()))?;
-        rows += batch.num_rows();
-        for (field, array) in batch.schema().fields().iter().zip(batch.columns()) {
-            let name = field.name().clone();
-            if !columns.contains_key(&name) {
-                names.push(name.clone());
-            }
-            let part = convert(array);
-            match columns.get_mut(&name) {
-                Some(existing) => append(existing, part),
-                None => {
-                    columns.insert(name, part);
-                }
-            }
-        }
-    }
-    Ok(Table {
-        path: path.to_path_buf(),
-        rows,
-        names,
-        columns,
-        metadata,
-        schema,
-    })
+    let projected = arrow_array::RecordBatchReader::schema(&reader);
+    Ok((
+        Table {
+            path: path.to_path_buf(),
+            rows: 0,
+            names: Vec::new(),
+            columns: BTreeMap::new(),
+            metadata,
+            schema,
+        },
+        Batches {
+            reader,
+            schema: projected,
+            metadata_rows,
+        },
+    ))
 }
 
 fn append(into: &mut Column, part: Column) {
@@ -148,7 +208,8 @@ macro_rules! numbers {
     }};
 }
 
-fn number_values(array: &ArrayRef) -> Option<Vec<Option<f64>>> {
+/// The values of a numeric array (`None` for another kind).
+pub fn number_values(array: &ArrayRef) -> Option<Vec<Option<f64>>> {
     match convert(array) {
         Column::Number { values, .. } => Some(values),
         _ => None,
@@ -156,7 +217,7 @@ fn number_values(array: &ArrayRef) -> Option<Vec<Option<f64>>> {
 }
 
 /// Converts one Arrow array to a display column.
-fn convert(array: &ArrayRef) -> Column {
+pub fn convert(array: &ArrayRef) -> Column {
     match array.data_type() {
         DataType::Float64 => numbers!(array, Float64Type, false),
         DataType::Float32 => numbers!(array, Float32Type, false),
@@ -280,18 +341,7 @@ impl Table {
     /// Text of a cell whatever the column kind (numbers as their exact
     /// decimal form); used for grouping keys such as `direction`.
     pub fn key(&self, name: &str, row: usize) -> Option<String> {
-        match self.columns.get(name)? {
-            Column::Text(v) => v.get(row).cloned().flatten(),
-            Column::Number { values, .. } => values.get(row).copied().flatten().map(|x| {
-                if x.fract() == 0.0 && x.abs() < 1e15 {
-                    format!("{}", x as i64)
-                } else {
-                    format!("{x}")
-                }
-            }),
-            Column::Bool(v) => v.get(row).copied().flatten().map(|b| b.to_string()),
-            _ => None,
-        }
+        column_key(self.columns.get(name)?, row)
     }
     /// Expected columns absent from the file (or present with a kind the
     /// caller cannot use — `kinds_ok` decides).
@@ -334,5 +384,21 @@ impl Table {
             }
         }
         out
+    }
+}
+
+/// [`Table::key`] of a column.
+pub fn column_key(column: &Column, row: usize) -> Option<String> {
+    match column {
+        Column::Text(v) => v.get(row).cloned().flatten(),
+        Column::Number { values, .. } => values.get(row).copied().flatten().map(|x| {
+            if x.fract() == 0.0 && x.abs() < 1e15 {
+                format!("{}", x as i64)
+            } else {
+                format!("{x}")
+            }
+        }),
+        Column::Bool(v) => v.get(row).copied().flatten().map(|b| b.to_string()),
+        _ => None,
     }
 }

@@ -10,12 +10,13 @@ use std::path::Path;
 
 use arrow_array::{Array, Float64Array, StringArray};
 
-use super::parquet::{write_parquet, ReadTable, TableBuilder};
+use super::parquet::{write_parquet, write_parquet_stream, ReadTable, TableBuilder};
 use crate::conditioning::Motion;
 use crate::error::{Error, Result};
 use crate::metrics::{DriftRow, StrongMotionMetrics};
 use crate::vocab::tables::{channels, drift, samples, spectra, CHANNELS, DRIFT, SAMPLES, SPECTRA};
-use crate::vocab::{Channel, Direction, Event, ProcessingHistory, Record};
+use crate::vocab::{Channel, Direction, Event, ProcessingHistory, Record, SampleStore, Samples};
+use std::sync::Arc;
 
 pub use crate::vocab::schema::SCHEMA_KEY;
 pub const HISTORY_KEY: &str = "quaketwin.history";
@@ -61,8 +62,14 @@ pub fn write_channels(path: &Path, event: &Event, metrics: &[StrongMotionMetrics
     let noise_window_s = crate::conditioning::QaSettings::default().snr_noise_window_s;
     let snr: Vec<Option<f64>> = recs
         .iter()
-        .map(|r| crate::conditioning::qa::snr_db(&r.samples, r.channel.dt(), noise_window_s))
-        .collect();
+        .map(|r| {
+            Ok(crate::conditioning::qa::snr_db(
+                &r.samples.get()?,
+                r.channel.dt(),
+                noise_window_s,
+            ))
+        })
+        .collect::<Result<_>>()?;
     let batch = TableBuilder::new(&CHANNELS)
         .str(
             channels::CHANNEL_ID,
@@ -190,49 +197,72 @@ pub fn write_channels(path: &Path, event: &Event, metrics: &[StrongMotionMetrics
 /// `samples.parquet`: long format, one row per channel and sample.
 /// `motions` give velocity/displacement (matched by channel id); channels
 /// without a motion carry their samples as acceleration and null vel/disp.
+/// Written a channel at a time (parked samples are read back one channel
+/// at a time too).
 pub fn write_samples(path: &Path, event: &Event, motions: &[Motion]) -> Result<()> {
-    let mut batches = Vec::new();
-    for r in &event.records {
-        let c = &r.channel;
-        let n = r.samples.len();
-        let dt = c.dt();
-        let motion = motions
-            .iter()
-            .find(|m| m.channel_id == c.id && m.acceleration.len() == n);
-        let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
-        let abs_time: Vec<Option<i64>> = (0..n)
-            .map(|i| c.start_ns.map(|s| s + (i as f64 * dt * 1e9).round() as i64))
-            .collect();
-        let acc = motion
-            .map(|m| m.acceleration.clone())
-            .unwrap_or_else(|| r.samples.clone());
-        let vel: Vec<Option<f64>> = match motion {
-            Some(m) => m.velocity.iter().map(|v| Some(*v)).collect(),
-            None => vec![None; n],
-        };
-        let disp: Vec<Option<f64>> = match motion {
-            Some(m) => m.displacement.iter().map(|v| Some(*v)).collect(),
-            None => vec![None; n],
-        };
-        batches.push(
-            TableBuilder::new(&SAMPLES)
-                .str(samples::CHANNEL_ID, &vec![c.id.as_str(); n])
-                .i64(samples::SAMPLE, (0..n as i64).collect())
-                .f64(samples::T_S, t)
-                .opt_timestamp_ns(samples::TIME, abs_time)
-                .f64(samples::ACC_M_S2, acc)
-                .opt_f64(samples::VEL_M_S, vel)
-                .opt_f64(samples::DISP_M, disp)
-                .build()?,
-        );
-    }
     let channels: Vec<&Channel> = event.records.iter().map(|r| &r.channel).collect();
     let mut meta = event_metadata(event);
     meta.push((
         CHANNELS_KEY.into(),
         serde_json::to_string(&channels).map_err(|e| Error::output(path, e.to_string()))?,
     ));
-    write_parquet(path, &batches, &meta)
+    let batches = event.records.iter().flat_map(|r| {
+        let n = r.samples.len();
+        (0..n.div_ceil(SAMPLES_BATCH_ROWS).max(1))
+            .map(move |k| samples_batch(r, motions, k * SAMPLES_BATCH_ROWS))
+    });
+    write_parquet_stream(path, &meta, batches)
+}
+
+/// Rows of `samples.parquet` built at a time: a channel longer than this
+/// (about 87 minutes at 200 Hz) is written in several batches, so that a day
+/// of a channel is not built in memory as one table.
+pub const SAMPLES_BATCH_ROWS: usize = 1 << 20;
+
+/// The rows of one channel of `samples.parquet`, from sample `from` on (at
+/// most [`SAMPLES_BATCH_ROWS`]).
+fn samples_batch(r: &Record, motions: &[Motion], from: usize) -> Result<arrow_array::RecordBatch> {
+    let c = &r.channel;
+    let total = r.samples.len();
+    let motion = motions
+        .iter()
+        .find(|m| m.channel_id == c.id && m.acceleration.len() == total);
+    let n = SAMPLES_BATCH_ROWS.min(total - from.min(total));
+    let rows = from..from + n;
+    let dt = c.dt();
+    let t: Vec<f64> = rows.clone().map(|i| i as f64 * dt).collect();
+    let abs_time: Vec<Option<i64>> = rows
+        .clone()
+        .map(|i| c.start_ns.map(|s| s + (i as f64 * dt * 1e9).round() as i64))
+        .collect();
+    let acc = match motion {
+        Some(m) => m.acceleration.get_range(from, n)?.into_owned(),
+        None => r.samples.get_range(from, n)?.into_owned(),
+    };
+    let (vel, disp): (Vec<Option<f64>>, Vec<Option<f64>>) = match motion {
+        Some(m) => (
+            m.velocity
+                .get_range(from, n)?
+                .iter()
+                .map(|v| Some(*v))
+                .collect(),
+            m.displacement
+                .get_range(from, n)?
+                .iter()
+                .map(|v| Some(*v))
+                .collect(),
+        ),
+        None => (vec![None; n], vec![None; n]),
+    };
+    TableBuilder::new(&SAMPLES)
+        .str(samples::CHANNEL_ID, &vec![c.id.as_str(); n])
+        .i64(samples::SAMPLE, rows.map(|i| i as i64).collect())
+        .f64(samples::T_S, t)
+        .opt_timestamp_ns(samples::TIME, abs_time)
+        .f64(samples::ACC_M_S2, acc)
+        .opt_f64(samples::VEL_M_S, vel)
+        .opt_f64(samples::DISP_M, disp)
+        .build()
 }
 
 /// `spectra.parquet`: one row per channel and period.
@@ -301,8 +331,43 @@ pub fn write_drift(path: &Path, event: &Event, rows: &[DriftRow]) -> Result<()> 
 /// Loads a conditioned event back from `samples.parquet` (channels and
 /// history from its metadata, samples from its columns).
 pub fn read_samples(path: &Path) -> Result<(Event, Vec<Motion>)> {
-    let table = ReadTable::open(path)?;
+    read_samples_parked(path, |_| Ok(None))
+}
+
+/// One channel's columns as read so far.
+#[derive(Default)]
+struct ReadColumns {
+    acc: Samples,
+    vel: Samples,
+    disp: Samples,
+    /// Every velocity and displacement value is present (not null).
+    complete: bool,
+}
+
+impl ReadColumns {
+    fn park(&mut self, store: Option<&Arc<dyn SampleStore>>) -> std::io::Result<()> {
+        if let Some(store) = store {
+            self.acc.park(store)?;
+            self.vel.park(store)?;
+            self.disp.park(store)?;
+        }
+        Ok(())
+    }
+}
+
+/// As [`read_samples`], a batch of rows at a time; when `store_for` (given
+/// the file's number of rows) returns a sample store, the columns of each
+/// channel are parked there as soon as its rows end, so a big file is read
+/// back in the memory of a channel.
+pub fn read_samples_parked(
+    path: &Path,
+    store_for: impl FnOnce(usize) -> Result<Option<Arc<dyn SampleStore>>>,
+) -> Result<(Event, Vec<Motion>)> {
+    let (table, reader) = ReadTable::open_stream(path, Some(1 << 16))?;
+    let store = store_for(table.rows)?;
+    let store = store.as_ref();
     let loc = || table.location();
+    let parking = |e: std::io::Error| Error::output(path, format!("parking samples: {e}"));
     let get = |k: &str| table.metadata(k).map(String::from);
     if get(SCHEMA_KEY).as_deref() != Some(SAMPLES.name) {
         return Err(Error::input(
@@ -316,27 +381,46 @@ pub fn read_samples(path: &Path) -> Result<(Event, Vec<Motion>)> {
         serde_json::from_str(&get(HISTORY_KEY).unwrap_or_default()).unwrap_or_default();
     let ev: serde_json::Value =
         serde_json::from_str(&get(EVENT_KEY).unwrap_or_default()).unwrap_or_default();
-    let mut cols: std::collections::BTreeMap<String, (Vec<f64>, Vec<f64>, Vec<f64>)> =
-        Default::default();
-    for batch in &table.batches {
-        let ids: StringArray = table.declared(batch, &samples::CHANNEL_ID)?;
-        let acc: Float64Array = table.declared(batch, &samples::ACC_M_S2)?;
-        let vel: Float64Array = table.declared(batch, &samples::VEL_M_S)?;
-        let disp: Float64Array = table.declared(batch, &samples::DISP_M)?;
+    // Rows of one channel are contiguous in our files; the channel being
+    // read is `current`, the others are done (parked when there is a store).
+    let mut cols: std::collections::BTreeMap<String, ReadColumns> = Default::default();
+    let mut current: Option<(String, ReadColumns)> = None;
+    for batch in reader {
+        let batch = batch.map_err(|e| Error::input(loc(), e.to_string()))?;
+        let ids: StringArray = table.declared(&batch, &samples::CHANNEL_ID)?;
+        let acc: Float64Array = table.declared(&batch, &samples::ACC_M_S2)?;
+        let vel: Float64Array = table.declared(&batch, &samples::VEL_M_S)?;
+        let disp: Float64Array = table.declared(&batch, &samples::DISP_M)?;
         for i in 0..batch.num_rows() {
-            let e = cols.entry(ids.value(i).to_string()).or_default();
-            e.0.push(acc.value(i));
-            e.1.push(if vel.is_null(i) {
-                f64::NAN
-            } else {
-                vel.value(i)
-            });
-            e.2.push(if disp.is_null(i) {
-                f64::NAN
-            } else {
-                disp.value(i)
-            });
+            let id = ids.value(i);
+            if current.as_ref().is_none_or(|(c, _)| c != id) {
+                if let Some((c, mut done)) = current.take() {
+                    done.park(store).map_err(parking)?;
+                    cols.insert(c, done);
+                }
+                let resumed = cols.remove(id).unwrap_or(ReadColumns {
+                    complete: true,
+                    ..Default::default()
+                });
+                current = Some((id.to_string(), resumed));
+            }
+            let Some((_, e)) = current.as_mut() else {
+                continue;
+            };
+            e.acc.as_mut_vec().push(acc.value(i));
+            let (v, d) = (vel.is_valid(i), disp.is_valid(i));
+            e.complete &= v && d && vel.value(i).is_finite() && disp.value(i).is_finite();
+            e.vel
+                .as_mut_vec()
+                .push(if v { vel.value(i) } else { f64::NAN });
+            e.disp
+                .as_mut_vec()
+                .push(if d { disp.value(i) } else { f64::NAN });
         }
+    }
+    if let Some((c, mut done)) = current.take() {
+        done.park(store).map_err(parking)?;
+        cols.insert(c, done);
     }
     let mut event = Event {
         name: ev
@@ -367,22 +451,22 @@ pub fn read_samples(path: &Path) -> Result<(Event, Vec<Motion>)> {
     };
     let mut motions = Vec::new();
     for c in channels {
-        let Some((acc, vel, disp)) = cols.remove(&c.id) else {
+        let Some(cols) = cols.remove(&c.id) else {
             return Err(Error::input(
                 loc().with_channel(c.id.clone()),
                 "channel listed in metadata has no samples",
             ));
         };
-        if vel.iter().all(|v| v.is_finite()) && disp.iter().all(|v| v.is_finite()) {
+        if cols.complete {
             motions.push(Motion {
                 channel_id: c.id.clone(),
                 dt: c.dt(),
-                acceleration: acc.clone(),
-                velocity: vel,
-                displacement: disp,
+                acceleration: cols.acc.clone(),
+                velocity: cols.vel,
+                displacement: cols.disp,
             });
         }
-        event.records.push(Record::new(c, acc));
+        event.records.push(Record::new(c, cols.acc));
     }
     Ok((event, motions))
 }

@@ -2,7 +2,8 @@
 //! (resampling/alignment, detrend, taper, zero-phase band-pass, integration;
 //! METHODS §1) → `samples.parquet`.
 
-use crate::conditioning::{condition_event_with_motion, ConditioningSettings, Motion};
+use crate::conditioning::{condition_event_each, ConditioningSettings, Motion};
+use crate::pipeline::context::park;
 use serde::Deserialize;
 
 use crate::error::Result;
@@ -31,7 +32,8 @@ struct OutputParams {
 }
 
 /// The product: the conditioned event and, per acceleration channel, its
-/// acceleration, velocity and displacement.
+/// acceleration, velocity and displacement — parked in the run's spill file
+/// when the event is (`RunContext::parked`).
 pub struct Conditioned {
     pub event: Event,
     pub motions: Vec<Motion>,
@@ -62,14 +64,33 @@ impl Stage for Condition {
     fn outputs(&self) -> Vec<String> {
         vec![self.samples_file.clone()]
     }
+    /// A channel at a time: a parked event's channels are read back, conditioned
+    /// and parked again one by one (issue 14 item 5).
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
+        // Cloning a parked event copies its channels' descriptions, not their samples.
         let mut event = ctx.loaded_event()?.event.clone();
-        let motions = condition_event_with_motion(&mut event, &self.settings)?;
+        let spill = ctx.parked();
+        let motions = condition_event_each(&mut event, &self.settings, &|record, motion| {
+            let Some(spill) = &spill else {
+                return Ok(());
+            };
+            // An integrated record's samples are its motion's acceleration
+            // (shared once parked, `conditioning::condition_event_each`).
+            if let Some(m) = motion {
+                park(&mut m.acceleration, spill)?;
+                park(&mut m.velocity, spill)?;
+                park(&mut m.displacement, spill)?;
+            }
+            park(&mut record.samples, spill)
+        })?;
         event_tables::write_samples(&ctx.out_dir.join(&self.samples_file), &event, &motions)?;
         Ok(Some(Box::new(Conditioned { event, motions })))
     }
     fn restore(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
-        let (event, motions) = event_tables::read_samples(&ctx.out_dir.join(&self.samples_file))?;
+        let path = ctx.out_dir.join(&self.samples_file);
+        // Samples read back are parked as the event's would be (by their number).
+        let (event, motions) =
+            event_tables::read_samples_parked(&path, |rows| ctx.spill_above(rows))?;
         Ok(Some(Box::new(Conditioned { event, motions })))
     }
 }

@@ -4,10 +4,12 @@
 use rayon::prelude::*;
 
 use super::condition::Conditioned;
+use crate::conditioning::{Motion, LONG_CHANNEL};
 use crate::error::Result;
-use crate::metrics::{storey_drift, strong_motion_metrics, MetricsSettings};
+use crate::metrics::{metrics_of_parts, peak_abs, storey_drift, MetricsSettings};
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::event_tables;
+use crate::vocab::Samples;
 
 pub const KIND: StageKind = StageKind {
     kind: "metrics",
@@ -38,10 +40,20 @@ impl Stage for Metrics {
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let out = ctx.out_dir.clone();
         let Conditioned { event, motions } = ctx.input(ProductKind::ConditionedEvent)?;
-        let metrics = motions
-            .par_iter()
-            .map(|m| strong_motion_metrics(m, &self.settings))
-            .collect::<Result<Vec<_>>>()?;
+        // Parked motions are read back a channel — a series — at a time; long
+        // channels one after the other (two in flight would double the memory).
+        let one = |m: &Motion| {
+            let peak = |s: &Samples| s.get().map(|v| peak_abs(&v));
+            let (pgv, pgd) = (peak(&m.velocity)?, peak(&m.displacement)?);
+            let a = m.acceleration.get()?;
+            metrics_of_parts(&m.channel_id, m.dt, &a, pgv, pgd, &self.settings)
+        };
+        let long = motions.iter().any(|m| m.acceleration.len() > LONG_CHANNEL);
+        let metrics = if long {
+            motions.iter().map(one).collect::<Result<Vec<_>>>()?
+        } else {
+            motions.par_iter().map(one).collect::<Result<Vec<_>>>()?
+        };
         let drift = storey_drift(event, motions)?;
         event_tables::write_channels(&out.join(CHANNELS_FILE), event, &metrics)?;
         event_tables::write_spectra(&out.join(SPECTRA_FILE), event, &metrics)?;

@@ -209,11 +209,16 @@ pub fn identify_and_write(
     }
     tables::write_stabilization(&out.join(STABILIZATION_FILE), &result, &settings_json)?;
     tables::write_modes(&out.join(MODES_FILE), &result, &settings_json)?;
+    // Read after the identification freed its signals (parked samples are read back).
     let outputs: Vec<Vec<f64>> = result
         .output_ids
         .iter()
-        .filter_map(|id| event.record(id).map(|r| r.samples.clone()))
-        .collect();
+        .filter_map(|id| {
+            event
+                .record(id)
+                .map(|r| r.samples.get().map(|s| s.into_owned()))
+        })
+        .collect::<Result<_>>()?;
     let dt = event
         .record(&result.output_ids[0])
         .map(|r| r.channel.dt())

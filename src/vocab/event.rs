@@ -1,18 +1,22 @@
 use serde::{Deserialize, Serialize};
 
-use super::{Channel, ProcessingHistory};
+use super::{Channel, ProcessingHistory, Samples};
 
 /// One channel's samples on a uniform time grid (`channel.sampling_rate_hz`,
 /// first sample at `channel.start_ns` when known).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Record {
     pub channel: Channel,
-    pub samples: Vec<f64>,
+    /// In memory, or parked in the run's sample store ([`Samples`]).
+    pub samples: Samples,
 }
 
 impl Record {
-    pub fn new(channel: Channel, samples: Vec<f64>) -> Self {
-        Record { channel, samples }
+    pub fn new(channel: Channel, samples: impl Into<Samples>) -> Self {
+        Record {
+            channel,
+            samples: samples.into(),
+        }
     }
     pub fn len(&self) -> usize {
         self.samples.len()

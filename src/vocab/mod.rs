@@ -1,10 +1,12 @@
 //! The shared vocabulary every stage speaks: channels, records, events,
 //! structures, the processing history, and the schemas of the tables we
-//! write (`schema`, `tables`).  Nothing here does I/O.
+//! write (`schema`, `tables`).  Nothing here does I/O (parked samples are
+//! read through the [`SampleStore`] interface the pipeline implements).
 
 mod channel;
 mod event;
 mod history;
+mod samples;
 pub mod schema;
 pub mod tables;
 mod time;
@@ -13,6 +15,7 @@ mod units;
 pub use channel::{Axis, Channel, Direction, QaFlag, Role, SourceRef};
 pub use event::{Event, Record, Structure};
 pub use history::{ProcessingHistory, ProcessingStep};
+pub use samples::{SampleStore, Samples};
 pub use time::{epoch_ns_from_civil, epoch_ns_from_ordinal, format_epoch_ns, parse_iso8601_ns};
 pub use units::Units;
 

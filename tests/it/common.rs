@@ -15,6 +15,44 @@ pub fn shared_records() -> PathBuf {
     p
 }
 
+/// Runs `pipelines/<pipeline>` on `sample-records/<event>` into `out` with
+/// the CLI binary (so the process-wide settings of `main` apply), with the
+/// environment variables `env`; panics with the run's stderr when it fails.
+pub fn run_sample_pipeline(
+    pipeline: &str,
+    event: &str,
+    out: &std::path::Path,
+    env: &[(&str, &str)],
+) {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_quaketwin"))
+        .arg("--quiet")
+        .arg("run")
+        .arg(root.join("pipelines").join(pipeline))
+        .arg(root.join("sample-records").join(event))
+        .arg("--out")
+        .arg(out)
+        .envs(env.iter().copied())
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{pipeline} on {event} with {env:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// The files of an output directory, sorted, without its lock.
+pub fn output_files(dir: &std::path::Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n != ".quaketwin.lock")
+        .collect();
+    names.sort();
+    names
+}
+
 /// A file or folder under `../shared/records`, checked to exist.
 pub fn shared_record(rel: &str) -> PathBuf {
     let p = shared_records().join(rel);

@@ -456,8 +456,8 @@ fn alignment_trims_to_common_window_and_rejects_disjoint_records() {
     let mut b = channel("B", Units::MPerS2, 100.0);
     b.start_ns = Some(1_500_000_000); // starts 50 samples later
     let mut records = vec![
-        Record::new(a.clone(), (0..1000).map(|i| i as f64).collect()),
-        Record::new(b.clone(), (0..800).map(|i| i as f64).collect()),
+        Record::new(a.clone(), (0..1000).map(|i| i as f64).collect::<Vec<_>>()),
+        Record::new(b.clone(), (0..800).map(|i| i as f64).collect::<Vec<_>>()),
     ];
     let al = align_records(&mut records).unwrap();
     assert_eq!(al.samples, 800.min(1000 - 50));

@@ -2,41 +2,20 @@
 //! README's main job run with one rayon thread and with three writes the same
 //! bytes in every file, Parquet tables, run manifest and report alike.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use crate::common::{output_files as files, run_sample_pipeline};
 
 /// Runs the post-earthquake pipeline on the sample quake into `out` with
-/// `threads` rayon threads (the CLI binary, so the process-wide settings of
-/// `main` apply).
+/// `threads` rayon threads.
 fn run_with_threads(out: &Path, threads: usize) {
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_quaketwin"))
-        .arg("--quiet")
-        .arg("run")
-        .arg(root().join("pipelines/post-earthquake.toml"))
-        .arg(root().join("sample-records/synthetic-4storey-quake"))
-        .arg("--out")
-        .arg(out)
-        .env("RAYON_NUM_THREADS", threads.to_string())
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "run with {threads} threads: {}",
-        String::from_utf8_lossy(&o.stderr)
+    let threads = threads.to_string();
+    run_sample_pipeline(
+        "post-earthquake.toml",
+        "synthetic-4storey-quake",
+        out,
+        &[("RAYON_NUM_THREADS", &threads)],
     );
-}
-
-fn files(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n != ".quaketwin.lock")
-        .collect();
-    names.sort();
-    names
 }
 
 /// Regression: `modes`, `stabilization`, `modal_spectrum` (and the twin update

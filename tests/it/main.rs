@@ -13,6 +13,7 @@ mod common;
 
 mod architecture;
 
+mod big_input;
 mod bridge_consistency;
 mod conditioning;
 mod dataset;

@@ -317,7 +317,7 @@ fn xsens_column(path: &std::path::Path, column: &str) -> (Vec<f64>, f64) {
     };
     let contents = readers::csv::read(&bytes, &source, &opts).unwrap();
     let record = contents.records.into_iter().next().unwrap();
-    (record.samples, record.channel.sampling_rate_hz)
+    (record.samples.to_vec(), record.channel.sampling_rate_hz)
 }
 
 fn rms_about_mean(v: &[f64]) -> f64 {

@@ -386,7 +386,7 @@ fn plan_event(response: &PlanResponse, base: bool, snr_db: f64, seed: u64) -> Ev
         .collect();
     let mut records = response.to_records(&sensors).unwrap();
     for r in records.iter_mut() {
-        r.samples = add_measurement_noise(&r.samples, snr_db, &mut rng);
+        r.samples = add_measurement_noise(&r.samples, snr_db, &mut rng).into();
     }
     Event {
         name: "eccentric-5storey".into(),

@@ -647,7 +647,7 @@ fn mcap_round_trip_lz4_and_uncompressed_with_nan_and_unknown_start() {
     rec.channel.id = "synthetic".into();
     rec.channel.start_ns = None;
     rec.channel.sampling_rate_hz = 120.0;
-    rec.samples.truncate(1000);
+    rec.samples.as_mut_vec().truncate(1000);
     rec.samples[17] = f64::NAN;
     let ev2 = Event {
         name: "s".into(),
@@ -992,7 +992,7 @@ fn readers_never_panic_on_corrupted_bytes() {
     let csv = csv_full[..6000].to_vec();
     let mut small = anchorage_event();
     for r in &mut small.records {
-        r.samples.truncate(400);
+        r.samples.as_mut_vec().truncate(400);
     }
     let mcap_bytes = mcap_writer::write_event_to(
         &small,

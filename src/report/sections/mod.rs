@@ -77,11 +77,16 @@ fn listed(dir: &Path, file: &str) -> bool {
     }
 }
 
+/// A file that is not [`listed`]: absent, with the reason when its stage did not apply.
+fn not_loaded(dir: &Path, file: &str) -> Loaded {
+    Loaded::Absent(crate::pipeline::not_applicable_reason(dir, stage_of(file)))
+}
+
 fn load(dir: &Path, declared: &TableSchema, only: Option<&[&str]>) -> Loaded {
     let file = declared.file;
     let path = dir.join(file);
     if !listed(dir, file) {
-        return Loaded::Absent(crate::pipeline::not_applicable_reason(dir, stage_of(file)));
+        return not_loaded(dir, file);
     }
     match table::load(&path, only) {
         Ok(t) => Loaded::Ok(Box::new(t)),

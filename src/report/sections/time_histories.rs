@@ -1,14 +1,107 @@
 //! Section 5, acceleration time histories (samples.parquet) as small multiples.
+//!
+//! samples.parquet holds every sample of every channel (46 M rows for 64
+//! channels × 1 h at 200 Hz): it is gone through a batch of rows at a time,
+//! never loaded whole.  A trace's points are gathered while its rows last and
+//! decimated when they end (our files keep a channel's rows together); a
+//! file whose traces are interleaved is read again — counting each trace's
+//! points, then decimating them as they come.
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use super::{channel_info, figure, load, require, rows_points, Loaded};
+use arrow_array::cast::AsArray;
+use arrow_array::{Array, ArrayRef, RecordBatch};
+use arrow_schema::DataType;
+
+use super::{channel_info, figure, listed, not_loaded, require, Loaded};
 use crate::report::format_number;
 use crate::report::html::note;
-use crate::report::plot::{self, Chart, Mark, Series};
+use crate::report::plot::{self, Chart, Mark, MinMaxDecimator, Series};
+use crate::report::table::{self, Column};
 use crate::report::ReportSettings;
 use crate::vocab::tables::{self, channels, samples};
+
+/// Rows per batch read.
+const BATCH_ROWS: usize = 1 << 16;
+
+/// A batch's trace keys (channel ids): strings read in place, any other
+/// kind through the report's display conversion.
+enum Keys<'a> {
+    Utf8(&'a arrow_array::StringArray),
+    Other(Column),
+}
+
+impl Keys<'_> {
+    fn of(array: &ArrayRef) -> Keys<'_> {
+        match array.data_type() {
+            DataType::Utf8 => Keys::Utf8(array.as_string::<i32>()),
+            _ => Keys::Other(table::convert(array)),
+        }
+    }
+    /// The key of `row`, as `Table::groups` makes it.
+    fn get(&self, row: usize) -> Cow<'_, str> {
+        match self {
+            Keys::Utf8(a) if a.is_valid(row) => Cow::Borrowed(a.value(row)),
+            Keys::Utf8(_) => Cow::Borrowed("—"),
+            Keys::Other(c) => Cow::Owned(table::column_key(c, row).unwrap_or_else(|| "—".into())),
+        }
+    }
+}
+
+/// Calls `each(trace, point)` for every row of samples.parquet, the point
+/// when the row holds both a time and an acceleration; traces numbered in
+/// order of first appearance.
+fn for_each_row(
+    path: &Path,
+    ids: &mut Vec<String>,
+    mut each: impl FnMut(usize, Option<(f64, f64)>),
+) -> crate::error::Result<()> {
+    let cols = [
+        samples::CHANNEL_ID.name,
+        samples::T_S.name,
+        samples::ACC_M_S2.name,
+    ];
+    let mut index: BTreeMap<String, usize> = ids.iter().cloned().zip(0..).collect();
+    let mut last: Option<(String, usize)> = None;
+    table::for_each_batch(path, Some(&cols), BATCH_ROWS, |batch: &RecordBatch| {
+        let column = |name: &str| batch.column_by_name(name);
+        let (Some(id), Some(t), Some(a)) = (column(cols[0]), column(cols[1]), column(cols[2]))
+        else {
+            return Ok(());
+        };
+        let keys = Keys::of(id);
+        // Columns of another kind give no points (their traces stay empty).
+        let (t, a) = (
+            table::number_values(t).unwrap_or_default(),
+            table::number_values(a).unwrap_or_default(),
+        );
+        for row in 0..batch.num_rows() {
+            let key = keys.get(row);
+            let trace = match &last {
+                Some((k, g)) if *k == key => *g,
+                _ => {
+                    let g = match index.get(key.as_ref()) {
+                        Some(&g) => g,
+                        None => {
+                            ids.push(key.to_string());
+                            index.insert(key.to_string(), ids.len() - 1);
+                            ids.len() - 1
+                        }
+                    };
+                    last = Some((key.into_owned(), g));
+                    g
+                }
+            };
+            match (t.get(row), a.get(row)) {
+                (Some(&Some(x)), Some(&Some(y))) => each(trace, Some((x, y))),
+                _ => each(trace, None),
+            }
+        }
+        Ok(())
+    })
+}
 
 pub(super) fn time_history_section(
     dir: &Path,
@@ -16,15 +109,20 @@ pub(super) fn time_history_section(
     settings: &ReportSettings,
 ) -> String {
     let mut body = String::new();
-    let loaded = load(
-        dir,
-        &tables::SAMPLES,
-        Some(&[
-            samples::CHANNEL_ID.name,
-            samples::T_S.name,
-            samples::ACC_M_S2.name,
-        ]),
-    );
+    let path = dir.join(tables::SAMPLES.file);
+    let only = [
+        samples::CHANNEL_ID.name,
+        samples::T_S.name,
+        samples::ACC_M_S2.name,
+    ];
+    let loaded = if !listed(dir, tables::SAMPLES.file) {
+        not_loaded(dir, tables::SAMPLES.file)
+    } else {
+        match table::load_head(&path, Some(&only)) {
+            Ok(t) => Loaded::Ok(Box::new(t)),
+            Err(e) => Loaded::Unreadable(e.to_string()),
+        }
+    };
     let Some(t) = require(&loaded, &tables::SAMPLES, &mut body) else {
         return body;
     };
@@ -55,17 +153,15 @@ pub(super) fn time_history_section(
             .collect(),
         _ => BTreeMap::new(),
     };
-    let groups = t.groups(&[samples::CHANNEL_ID.name]);
-    let traces: Vec<(String, Vec<(f64, f64)>)> = groups
-        .into_iter()
-        .map(|(k, rows)| {
-            let pts = rows_points(t, &rows, samples::T_S.name, samples::ACC_M_S2.name);
-            (
-                k.join(""),
-                plot::decimate_min_max(&pts, settings.max_points_per_trace),
-            )
-        })
-        .collect();
+    let traces = match decimated_traces(&path, settings.max_points_per_trace) {
+        Ok(t) => t,
+        Err(e) => {
+            body.push_str(&note(&format!(
+                "samples.parquet: could not be read for the plots: {e}."
+            )));
+            return body;
+        }
+    };
     // Common symmetric y-axis so amplitudes compare across the multiples.
     let peak = traces
         .iter()
@@ -97,4 +193,71 @@ pub(super) fn time_history_section(
     }
     body.push_str("</div>");
     body
+}
+
+/// Each trace of samples.parquet (by channel id, in order of first
+/// appearance) decimated to at most `max_points` (see the module doc).
+fn decimated_traces(
+    path: &Path,
+    max_points: usize,
+) -> crate::error::Result<Vec<(String, Vec<(f64, f64)>)>> {
+    let finish = |points: Vec<(f64, f64)>| plot::decimate_min_max(&points, max_points);
+    // One pass: the trace being read, and those finished.
+    let mut ids: Vec<String> = Vec::new();
+    let mut finished: Vec<Option<Vec<(f64, f64)>>> = Vec::new();
+    let mut current: Option<(usize, Vec<(f64, f64)>)> = None;
+    let mut interleaved = false;
+    for_each_row(path, &mut ids, |g, point| {
+        if interleaved {
+            return;
+        }
+        if current.as_ref().is_none_or(|(c, _)| *c != g) {
+            if let Some((c, points)) = current.take() {
+                finished[c] = Some(finish(points));
+            }
+            if g < finished.len() {
+                interleaved = true; // seen before: its rows are not together
+                return;
+            }
+            finished.resize(g + 1, None);
+            current = Some((g, Vec::new()));
+        }
+        if let (Some((_, points)), Some(p)) = (current.as_mut(), point) {
+            points.push(p);
+        }
+    })?;
+    if !interleaved {
+        if let Some((c, points)) = current.take() {
+            finished[c] = Some(finish(points));
+        }
+        return Ok(ids
+            .into_iter()
+            .zip(finished)
+            .map(|(k, d)| (k, d.unwrap_or_default()))
+            .collect());
+    }
+    // Interleaved traces: points per trace, then each decimated as they come.
+    let mut ids: Vec<String> = Vec::new();
+    let mut counts: Vec<usize> = Vec::new();
+    for_each_row(path, &mut ids, |g, point| {
+        if g >= counts.len() {
+            counts.resize(g + 1, 0);
+        }
+        counts[g] += usize::from(point.is_some());
+    })?;
+    counts.resize(ids.len(), 0);
+    let mut decimators: Vec<MinMaxDecimator> = counts
+        .iter()
+        .map(|&n| MinMaxDecimator::new(n, max_points))
+        .collect();
+    for_each_row(path, &mut ids, |g, point| {
+        if let (Some(d), Some(p)) = (decimators.get_mut(g), point) {
+            d.push(p);
+        }
+    })?;
+    Ok(ids
+        .into_iter()
+        .zip(decimators)
+        .map(|(k, d)| (k, d.finish()))
+        .collect())
 }
