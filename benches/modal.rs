@@ -150,7 +150,7 @@ fn fourteen_channel_event(storey_heights: bool) -> Event {
     assert_eq!(records.len(), 14);
     let mut rng = Rng::new(33);
     for r in records.iter_mut() {
-        r.samples = add_measurement_noise(&r.samples, 20.0, &mut rng);
+        r.samples = add_measurement_noise(&r.samples, 20.0, &mut rng).into();
     }
     Event {
         name: "bench 14 channels".into(),

@@ -7,12 +7,14 @@
 # `quaketwin ingest` and, optionally, `quaketwin run pipelines/post-earthquake.toml`
 # with /usr/bin/time -v: wall time and peak resident memory.
 #
-# Usage: scripts/bigload.sh [--hours H] [--format csv|mseed] [--work DIR]
-#                           [--structure] [--no-run] [--no-ingest] [--keep]
+# Usage: scripts/bigload.sh [--hours H] [--format csv|mseed] [--channels N]
+#                           [--work DIR] [--structure] [--no-run] [--no-ingest] [--keep]
 #   --hours H       record length (default 1)
 #   --format F      csv (one 582 MB-per-hour CSV, default) or mseed (one
 #                   float32 MiniSEED file per channel, 276 MB per hour: a day
 #                   fits a small disk)
+#   --channels N    the first N of the 64 channels (a day of all 64 needs about
+#                   70 GB of disk for the outputs and the spill file)
 #   --work DIR      where the event and outputs go (default: a new directory
 #                   under ${TMPDIR:-/tmp}); never inside the repository
 #   --structure     state storey heights and masses in event.toml
@@ -27,6 +29,7 @@ set -euo pipefail
 
 hours=1
 format=csv
+channels=64
 work=""
 structure=""
 do_run=1
@@ -36,12 +39,13 @@ while [ $# -gt 0 ]; do
     case "$1" in
         --hours) hours="$2"; shift 2 ;;
         --format) format="$2"; shift 2 ;;
+        --channels) channels="$2"; shift 2 ;;
         --work) work="$2"; shift 2 ;;
         --structure) structure="--structure"; shift ;;
         --no-run) do_run=0; shift ;;
         --no-ingest) do_ingest=0; shift ;;
         --keep) keep=1; shift ;;
-        -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,28p' "$0"; exit 0 ;;
         *) echo "bigload.sh: unknown argument $1" >&2; exit 2 ;;
     esac
 done
@@ -60,12 +64,13 @@ mkdir -p "$work"
 (cd "$repo" && cargo build --release --quiet --bin quaketwin \
     && cargo build --release --quiet -p quaketwin-benches --bin bigload)
 qt="$target/release/quaketwin"
-event="$work/event-${hours}h-$format"
+event="$work/event-${hours}h-${channels}ch-$format"
 if [ ! -f "$event/event.toml" ]; then
-    "$target/release/bigload" --hours "$hours" --out "$event" --format "$format" $structure
+    "$target/release/bigload" --hours "$hours" --out "$event" --format "$format" \
+        --channels "$channels" $structure
 fi
 in_mb=$(du -sm "$event" | cut -f1)
-echo "bigload event hours=$hours format=$format channels=64 rate_hz=200 input_mb=$in_mb dir=$event"
+echo "bigload event hours=$hours format=$format channels=$channels rate_hz=200 input_mb=$in_mb dir=$event"
 
 measure() { # name, output dir, command…
     local name="$1" out="$2"
@@ -80,7 +85,7 @@ measure() { # name, output dir, command…
     wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n = split($2, p, ":"); s = 0; for (i = 1; i <= n; i++) s = s * 60 + p[i]; print s}' "$work/$name.time")
     rss=$(awk -F': ' '/Maximum resident set size/ {printf "%.0f", $2 / 1024}' "$work/$name.time")
     out_mb=$(du -sm "$out" | cut -f1)
-    echo "bigload $name hours=$hours format=$format wall_s=$wall peak_rss_mb=$rss out_mb=$out_mb"
+    echo "bigload $name hours=$hours channels=$channels format=$format wall_s=$wall peak_rss_mb=$rss out_mb=$out_mb"
     grep -E '^\[[^]]*\] +[a-z-]+ +(done|not applicable)' "$work/$name.log" | sed 's/^/    /' || true
 }
 

@@ -22,35 +22,64 @@ pub fn peak_abs(data: &[f64]) -> f64 {
 /// Cumulative trapezoid integral of a², scaled by π/(2g): the Husid curve
 /// of Arias intensity, m/s. Ia(t) = π/(2g) ∫₀ᵗ a² dτ.
 pub fn arias_husid(acceleration: &[f64], dt: f64) -> Vec<f64> {
-    let scale = std::f64::consts::PI / (2.0 * STANDARD_GRAVITY);
     let mut out = Vec::with_capacity(acceleration.len());
+    walk_husid(acceleration, dt, |_, v| {
+        out.push(v);
+        true
+    });
+    out
+}
+
+/// The values of [`arias_husid`] in order, handed to `each(index, value)`
+/// without being stored (a day at 200 Hz is 17 M of them); stops when
+/// `each` returns false.
+fn walk_husid(acceleration: &[f64], dt: f64, mut each: impl FnMut(usize, f64) -> bool) {
+    let scale = std::f64::consts::PI / (2.0 * STANDARD_GRAVITY);
     let mut acc = 0.0;
     if let Some(&first) = acceleration.first() {
-        out.push(0.0);
+        if !each(0, 0.0) {
+            return;
+        }
         let mut prev = first * first;
-        for &a in &acceleration[1..] {
+        for (i, &a) in acceleration[1..].iter().enumerate() {
             let sq = a * a;
             acc += 0.5 * dt * (prev + sq) * scale;
-            out.push(acc);
+            if !each(i + 1, acc) {
+                return;
+            }
             prev = sq;
         }
     }
-    out
 }
 
 /// Arias intensity Ia = π/(2g) ∫ a² dt, m/s (trapezoid rule).
 pub fn arias_intensity(acceleration: &[f64], dt: f64) -> f64 {
-    arias_husid(acceleration, dt).last().copied().unwrap_or(0.0)
+    let mut last = 0.0;
+    walk_husid(acceleration, dt, |_, v| {
+        last = v;
+        true
+    });
+    last
 }
 
-/// Time at which a non-decreasing cumulative curve first reaches `level`,
-/// with linear interpolation between samples.
-fn crossing_time(cumulative: &[f64], level: f64, dt: f64) -> f64 {
-    match cumulative.iter().position(|&c| c >= level) {
-        None => (cumulative.len().saturating_sub(1)) as f64 * dt,
-        Some(0) => 0.0,
-        Some(i) => {
-            let (c0, c1) = (cumulative[i - 1], cumulative[i]);
+/// Time at which the Husid curve first reaches `level`, with linear
+/// interpolation between samples.
+fn crossing_time(acceleration: &[f64], level: f64, dt: f64) -> f64 {
+    let (mut count, mut previous) = (0usize, 0.0);
+    let mut found: Option<(usize, f64, f64)> = None;
+    walk_husid(acceleration, dt, |i, c| {
+        count = i + 1;
+        if c >= level {
+            found = Some((i, previous, c));
+            return false;
+        }
+        previous = c;
+        true
+    });
+    match found {
+        None => (count.saturating_sub(1)) as f64 * dt,
+        Some((0, _, _)) => 0.0,
+        Some((i, c0, c1)) => {
             let frac = if c1 > c0 {
                 (level - c0) / (c1 - c0)
             } else {
@@ -74,13 +103,13 @@ pub fn significant_duration(
             "significant duration fractions must satisfy 0 ≤ from < to ≤ 1, got {from}, {to}"
         )));
     }
-    let husid = arias_husid(acceleration, dt);
-    let total = husid.last().copied().unwrap_or(0.0);
+    // The curve is walked again for each crossing, not stored.
+    let total = arias_intensity(acceleration, dt);
     if total <= 0.0 {
         return Ok((0.0, 0.0));
     }
-    let t0 = crossing_time(&husid, from * total, dt);
-    let t1 = crossing_time(&husid, to * total, dt);
+    let t0 = crossing_time(acceleration, from * total, dt);
+    let t1 = crossing_time(acceleration, to * total, dt);
     Ok((t1 - t0, t0))
 }
 
