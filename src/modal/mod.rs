@@ -473,9 +473,7 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
             let p_cost = (MAX_BLOCK_WIDTH / l.max(1)).max(3);
             let seg = ((2.0 * fs0 / lo).ceil() as usize).min(n0 / 4);
             let lowest_peak = (settings.method == Method::SsiCov)
-                .then(|| {
-                    spectrum::lowest_spectral_peak_hz(&input.outputs, input.dt, seg, [lo, hi])
-                })
+                .then(|| spectrum::lowest_spectral_peak_hz(&input.outputs, input.dt, seg, [lo, hi]))
                 .flatten();
             let p_peak = lowest_peak.map_or(0, |f| {
                 ((fs / (2.0 * f)).ceil() as usize).min(MAX_HORIZON_BLOCK_WIDTH / l.max(1))
@@ -494,7 +492,12 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
                     ),
                 ));
             }
-            let p = p_band.max(p_order).min(p_cost).max(p_peak).min(p_data).max(2);
+            let p = p_band
+                .max(p_order)
+                .min(p_cost)
+                .max(p_peak)
+                .min(p_data)
+                .max(2);
             let peak_note = lowest_peak.map_or(String::from("no horizon from the spectrum"), |f| {
                 format!("half a period of the lowest spectral peak {f:.3} Hz = {p_peak}")
             });

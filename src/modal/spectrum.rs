@@ -155,8 +155,6 @@ pub fn lowest_spectral_peak_hz(
         return None;
     }
     (lo..=hi)
-        .find(|&k| {
-            trace[k] >= PEAK_FRACTION * top && (k - 2..=k + 2).all(|j| trace[j] <= trace[k])
-        })
+        .find(|&k| trace[k] >= PEAK_FRACTION * top && (k - 2..=k + 2).all(|j| trace[j] <= trace[k]))
         .map(|k| k as f64 * df)
 }

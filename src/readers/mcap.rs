@@ -390,7 +390,10 @@ fn read_messages(bytes: &[u8]) -> std::result::Result<Vec<mcap::Message<'static>
                 let schema = match c.schema_id {
                     0 => None,
                     id => Some(schemas.get(&id).cloned().ok_or_else(|| {
-                        format!("channel {} refers to schema {id}, which is not defined before it", c.id)
+                        format!(
+                            "channel {} refers to schema {id}, which is not defined before it",
+                            c.id
+                        )
                     })?),
                 };
                 let channel = mcap::Channel {

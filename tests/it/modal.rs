@@ -733,5 +733,8 @@ fn lowest_spectral_peak_is_the_lowest_clear_one() {
     let f = lowest_spectral_peak_hz(&weak, dt, 1000, [0.2, 20.0]).unwrap();
     assert!((f - 3.0).abs() <= 0.1, "{f}");
     let silent = vec![vec![0.0; 30_000]];
-    assert_eq!(lowest_spectral_peak_hz(&silent, dt, 1000, [0.2, 20.0]), None);
+    assert_eq!(
+        lowest_spectral_peak_hz(&silent, dt, 1000, [0.2, 20.0]),
+        None
+    );
 }
