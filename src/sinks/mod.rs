@@ -9,4 +9,5 @@ pub mod matrix_market;
 pub mod mcap_writer;
 pub mod modal_tables;
 pub mod parquet;
+pub mod provenance;
 pub mod twin_tables;

@@ -22,6 +22,7 @@ use crate::hysteresis::{
 };
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::hysteresis_tables::{self as tables, DirectionOutcome};
+use crate::sinks::provenance::Provenance;
 use crate::vocab::Event;
 
 pub const KIND: StageKind = StageKind {
@@ -48,6 +49,9 @@ pub const DAMAGE_FILE: &str = crate::vocab::tables::DAMAGE.file;
 /// The product: the identification of every direction.
 pub struct Identification {
     pub outcomes: Vec<DirectionOutcome>,
+    /// The event's provenance followed by the identification step: what the
+    /// damage table, made from these outcomes, carries.
+    pub provenance: Provenance,
 }
 
 /// Parameters of the `hysteresis` stage (docs/pipelines.md).
@@ -151,19 +155,10 @@ pub fn identify_event_at(
     identify_event(event, event_dir, &settings)
 }
 
-/// Writes the three identification tables.
-pub fn write_identification(
-    dir: &std::path::Path,
-    outcomes: &[DirectionOutcome],
-    masses: &[MassResolution],
-    p: &HysteresisParams,
-) -> Result<()> {
-    let settings_json = serde_json::json!({
-        "form": p.form, "band_low_hz": p.band_low_hz, "exponent_min": p.exponent_min,
-        "exponent_max": p.exponent_max, "exponent_resolution": p.exponent_resolution,
-        "velocity_drift": p.velocity_drift, "reduced_mass_step": p.reduced_mass_step,
-        "mass_lumping": p.mass_lumping,
-    });
+/// The provenance of the identification tables: `event`'s history followed
+/// by one `bouc_wen_identification` step whose parameters are the processing
+/// of each identified direction (band, exponent search, segments).
+pub fn identification_provenance(event: &Event, outcomes: &[DirectionOutcome]) -> Provenance {
     let processing: serde_json::Map<String, serde_json::Value> = outcomes
         .iter()
         .filter_map(|o| match o {
@@ -174,20 +169,37 @@ pub fn write_identification(
             _ => None,
         })
         .collect();
-    let meta = vec![
+    Provenance::of_event(event).then_step(
+        "bouc_wen_identification",
+        serde_json::Value::Object(processing),
+    )
+}
+
+/// Writes the three identification tables.
+pub fn write_identification(
+    dir: &std::path::Path,
+    outcomes: &[DirectionOutcome],
+    masses: &[MassResolution],
+    p: &HysteresisParams,
+    provenance: &Provenance,
+) -> Result<()> {
+    let settings_json = serde_json::json!({
+        "form": p.form, "band_low_hz": p.band_low_hz, "exponent_min": p.exponent_min,
+        "exponent_max": p.exponent_max, "exponent_resolution": p.exponent_resolution,
+        "velocity_drift": p.velocity_drift, "reduced_mass_step": p.reduced_mass_step,
+        "mass_lumping": p.mass_lumping,
+    });
+    let mut meta = provenance.metadata();
+    meta.extend([
         ("quaketwin.settings".to_string(), settings_json.to_string()),
-        (
-            "quaketwin.history".to_string(),
-            serde_json::Value::Object(processing).to_string(),
-        ),
         (
             "quaketwin.masses".to_string(),
             serde_json::to_string(masses).unwrap_or_default(),
         ),
-    ];
+    ]);
     tables::write_bouc_wen(&dir.join(BOUC_WEN_FILE), outcomes, &meta)?;
-    tables::write_instantaneous(&dir.join(INSTANTANEOUS_FILE), outcomes)?;
-    tables::write_fit(&dir.join(FIT_FILE), outcomes, p.output_decimation)
+    tables::write_instantaneous(&dir.join(INSTANTANEOUS_FILE), outcomes, &meta)?;
+    tables::write_fit(&dir.join(FIT_FILE), outcomes, p.output_decimation, &meta)
 }
 
 fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
@@ -204,10 +216,12 @@ impl Hysteresis {
     fn identify(
         &self,
         ctx: &mut RunContext,
-    ) -> Result<(Vec<DirectionOutcome>, Vec<MassResolution>)> {
+    ) -> Result<(Vec<DirectionOutcome>, Vec<MassResolution>, Provenance)> {
         let event_dir = ctx.event_path.clone();
         let Conditioned { event, .. } = ctx.input(ProductKind::ConditionedEvent)?;
-        identify_event_at(event, Some(&event_dir), &self.params)
+        let (outcomes, masses) = identify_event_at(event, Some(&event_dir), &self.params)?;
+        let provenance = identification_provenance(event, &outcomes);
+        Ok((outcomes, masses, provenance))
     }
 }
 
@@ -232,7 +246,7 @@ impl Stage for Hysteresis {
         }))
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
-        let (outcomes, masses) = self.identify(ctx)?;
+        let (outcomes, masses, provenance) = self.identify(ctx)?;
         if !ctx.quiet {
             for m in &masses {
                 eprintln!("[hysteresis] {}", m.message());
@@ -246,15 +260,21 @@ impl Stage for Hysteresis {
                 }
             }
         }
-        write_identification(&ctx.out_dir, &outcomes, &masses, &self.params)?;
-        Ok(Some(Box::new(Identification { outcomes })))
+        write_identification(&ctx.out_dir, &outcomes, &masses, &self.params, &provenance)?;
+        Ok(Some(Box::new(Identification {
+            outcomes,
+            provenance,
+        })))
     }
     /// The identification is not stored in a form that can be loaded back
     /// whole: when the stage was skipped it is recomputed in memory (its
     /// outputs are not rewritten).
     fn restore(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
-        let (outcomes, _) = self.identify(ctx)?;
-        Ok(Some(Box::new(Identification { outcomes })))
+        let (outcomes, _, provenance) = self.identify(ctx)?;
+        Ok(Some(Box::new(Identification {
+            outcomes,
+            provenance,
+        })))
     }
 }
 
@@ -282,8 +302,20 @@ impl Stage for Damage {
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let out = ctx.out_dir.join(DAMAGE_FILE);
-        let Identification { outcomes } = ctx.input(ProductKind::Hysteresis)?;
-        tables::write_damage(&out, outcomes, self.params.output_decimation.max(1))?;
+        let Identification {
+            outcomes,
+            provenance,
+        } = ctx.input(ProductKind::Hysteresis)?;
+        let provenance = provenance.clone().then_step(
+            "damage_index",
+            serde_json::json!({ "output_decimation": self.params.output_decimation.max(1) }),
+        );
+        tables::write_damage(
+            &out,
+            outcomes,
+            self.params.output_decimation.max(1),
+            &provenance.metadata(),
+        )?;
         Ok(None)
     }
 }

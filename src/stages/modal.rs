@@ -16,6 +16,7 @@ use crate::modal::{
 };
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::modal_tables as tables;
+use crate::sinks::provenance::Provenance;
 use crate::vocab::{Event, Role};
 
 pub const KIND: StageKind = StageKind {
@@ -207,8 +208,14 @@ pub fn identify_and_write(
     for w in &result.warnings {
         eprintln!("quaketwin: warning: modal ({}): {w}", event.name);
     }
-    tables::write_stabilization(&out.join(STABILIZATION_FILE), &result, &settings_json)?;
-    tables::write_modes(&out.join(MODES_FILE), &result, &settings_json)?;
+    let provenance = Provenance::of_event(event);
+    tables::write_stabilization(
+        &out.join(STABILIZATION_FILE),
+        &result,
+        &settings_json,
+        &provenance,
+    )?;
+    tables::write_modes(&out.join(MODES_FILE), &result, &settings_json, &provenance)?;
     // Read after the identification freed its signals (parked samples are read back).
     let outputs: Vec<Vec<f64>> = result
         .output_ids
@@ -229,9 +236,11 @@ pub fn identify_and_write(
         &result,
         overlay.as_ref(),
         &settings_json,
+        &provenance,
     )?;
     if let Some(reference) = &reference {
-        prepost::compare_and_write(reference, &result, out, &event.name)?;
+        let provenance = provenance.then(result.preprocessing.iter().cloned());
+        prepost::compare_and_write(reference, &result, out, &event.name, &provenance)?;
     }
     Ok(result)
 }

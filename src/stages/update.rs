@@ -179,10 +179,23 @@ pub fn update_from_files(
         "modes": modes_path.display().to_string(),
     })
     .to_string();
-    let meta = vec![
+    // The measured modes' provenance (event, conditioning, modal
+    // pre-processing) followed by this update.
+    let mut meta = modes_file
+        .provenance
+        .clone()
+        .map(|p| {
+            p.then_step(
+                "twin_update",
+                serde_json::json!({ "twin": twin_path.display().to_string() }),
+            )
+            .metadata()
+        })
+        .unwrap_or_default();
+    meta.extend([
         ("quaketwin.settings".to_string(), settings),
         ("quaketwin.inputs".to_string(), inputs),
-    ];
+    ]);
     let update_path = out_dir.join(TWIN_UPDATE_FILE);
     let modes_path_out = out_dir.join(TWIN_MODES_FILE);
     let twin_out = out_dir.join(UPDATED_TWIN_FILE);
