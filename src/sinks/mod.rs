@@ -2,6 +2,7 @@
 //! I/O lives here, at the edge; stages hand over plain data.
 
 pub mod atomic;
+pub mod dataset;
 pub mod design_tables;
 pub mod event_tables;
 pub mod hysteresis_tables;
