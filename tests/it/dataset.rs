@@ -225,3 +225,52 @@ print(m.get(b"quaketwin.schema", b"?").decode(), unit, b"quaketwin.version" in m
     };
     assert_eq!(stdout.trim(), "channels m/s^2 True True");
 }
+
+/// Issue 15 item 5: the MCAP of `ingest --mcap` reads back with the Python
+/// `mcap` reader (what Foxglove-side scripts use): one topic per channel,
+/// one JSON message per sample with a numeric `value`, log times from the
+/// record start or, as for this sample (no record start), the origin time —
+/// not 1970 — and as many messages as samples.
+#[test]
+fn python_mcap_reader_reads_the_mcap_output_one_topic_per_channel() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let out = tempfile::tempdir().unwrap();
+    let mcap = out.path().join("event.mcap");
+    let status = Command::new(env!("CARGO_BIN_EXE_quaketwin"))
+        .args(["ingest", "-q"])
+        .arg(root.join("sample-records/synthetic-4storey-quake"))
+        .arg("--out")
+        .arg(out.path().join("out"))
+        .arg("--mcap")
+        .arg(&mcap)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let inventory: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.path().join("out/event.json")).unwrap()).unwrap();
+    let mut expected: Vec<String> = inventory["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| format!("/accel/{}:{}", c["id"].as_str().unwrap(), c["npts"]))
+        .collect();
+    expected.sort();
+    let script = r#"
+import sys, json
+from mcap.reader import make_reader
+counts, bad, first = {}, 0, None
+with open(sys.argv[1], "rb") as f:
+    for schema, channel, message in make_reader(f).iter_messages():
+        v = json.loads(message.data)
+        if not isinstance(v.get("value"), (int, float)) or v["t_ns"] != message.log_time:
+            bad += 1
+        counts[channel.topic] = counts.get(channel.topic, 0) + 1
+        first = message.log_time if first is None else min(first, message.log_time)
+print(" ".join(f"{t}:{n}" for t, n in sorted(counts.items())))
+print(bad, first >= 1_000_000_000 * 10**9)
+"#;
+    let Some(stdout) = python(script, &mcap) else {
+        return;
+    };
+    assert_eq!(stdout.trim(), format!("{}\n0 True", expected.join(" ")));
+}
