@@ -22,6 +22,9 @@
 //! The long run (docs/robustness.md):
 //! `QUAKETWIN_FUZZ_CASES=1000000 cargo test --release --test it fuzz_long_run -- --ignored --nocapture`
 //! (`QUAKETWIN_FUZZ_SAVE=DIR` keeps every failing input).
+//!
+//! The same seeds start the cargo-fuzz targets of `fuzz/`
+//! ([`fuzz_cargo_fuzz_corpus_shared`], run by `scripts/fuzz-corpus.sh`).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
