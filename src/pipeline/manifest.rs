@@ -14,7 +14,7 @@ use super::fingerprint::Fnv64;
 use crate::error::{Error, Result};
 
 /// File name of the manifest inside the output directory.
-pub const MANIFEST_FILE: &str = "run.json";
+pub const MANIFEST_FILE: &str = crate::event_folder::RUN_MANIFEST_FILE;
 /// Version of the manifest's layout.
 pub const FORMAT: u32 = 1;
 

@@ -6,12 +6,36 @@
 use std::path::Path;
 
 use super::parquet::{write_parquet, TableBuilder};
+use super::provenance::Provenance;
 use crate::error::Result;
 pub use crate::hysteresis::DirectionOutcome;
 use crate::vocab::tables::{
     bouc_wen, bouc_wen_instantaneous, damage, hysteresis_fit, BOUC_WEN, BOUC_WEN_INSTANTANEOUS,
     DAMAGE, HYSTERESIS_FIT,
 };
+
+/// The provenance of the identification tables: `event`'s history followed
+/// by one `bouc_wen_identification` step whose parameters are the processing
+/// of each identified direction (band, exponent search, segments).
+pub fn identification_provenance(
+    event: &crate::vocab::Event,
+    outcomes: &[DirectionOutcome],
+) -> Provenance {
+    let processing: serde_json::Map<String, serde_json::Value> = outcomes
+        .iter()
+        .filter_map(|o| match o {
+            DirectionOutcome::Identified(d) => Some((
+                d.direction.clone(),
+                serde_json::to_value(&d.processing).unwrap_or_default(),
+            )),
+            _ => None,
+        })
+        .collect();
+    Provenance::of_event(event).then_step(
+        "bouc_wen_identification",
+        serde_json::Value::Object(processing),
+    )
+}
 
 /// `bouc_wen.parquet`: one row per direction, DoF and parameter (a direction
 /// that could not be identified has one row with `status` saying why).

@@ -155,26 +155,6 @@ pub fn identify_event_at(
     identify_event(event, event_dir, &settings)
 }
 
-/// The provenance of the identification tables: `event`'s history followed
-/// by one `bouc_wen_identification` step whose parameters are the processing
-/// of each identified direction (band, exponent search, segments).
-pub fn identification_provenance(event: &Event, outcomes: &[DirectionOutcome]) -> Provenance {
-    let processing: serde_json::Map<String, serde_json::Value> = outcomes
-        .iter()
-        .filter_map(|o| match o {
-            DirectionOutcome::Identified(d) => Some((
-                d.direction.clone(),
-                serde_json::to_value(&d.processing).unwrap_or_default(),
-            )),
-            _ => None,
-        })
-        .collect();
-    Provenance::of_event(event).then_step(
-        "bouc_wen_identification",
-        serde_json::Value::Object(processing),
-    )
-}
-
 /// Writes the three identification tables.
 pub fn write_identification(
     dir: &std::path::Path,
@@ -220,7 +200,7 @@ impl Hysteresis {
         let event_dir = ctx.event_path.clone();
         let Conditioned { event, .. } = ctx.input(ProductKind::ConditionedEvent)?;
         let (outcomes, masses) = identify_event_at(event, Some(&event_dir), &self.params)?;
-        let provenance = identification_provenance(event, &outcomes);
+        let provenance = tables::identification_provenance(event, &outcomes);
         Ok((outcomes, masses, provenance))
     }
 }
@@ -306,16 +286,12 @@ impl Stage for Damage {
             outcomes,
             provenance,
         } = ctx.input(ProductKind::Hysteresis)?;
+        let decimation = self.params.output_decimation.max(1);
         let provenance = provenance.clone().then_step(
             "damage_index",
-            serde_json::json!({ "output_decimation": self.params.output_decimation.max(1) }),
+            serde_json::json!({ "output_decimation": decimation }),
         );
-        tables::write_damage(
-            &out,
-            outcomes,
-            self.params.output_decimation.max(1),
-            &provenance.metadata(),
-        )?;
+        tables::write_damage(&out, outcomes, decimation, &provenance.metadata())?;
         Ok(None)
     }
 }

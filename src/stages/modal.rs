@@ -208,14 +208,9 @@ pub fn identify_and_write(
     for w in &result.warnings {
         eprintln!("quaketwin: warning: modal ({}): {w}", event.name);
     }
-    let provenance = Provenance::of_event(event);
-    tables::write_stabilization(
-        &out.join(STABILIZATION_FILE),
-        &result,
-        &settings_json,
-        &provenance,
-    )?;
-    tables::write_modes(&out.join(MODES_FILE), &result, &settings_json, &provenance)?;
+    let (json, provenance) = (settings_json.as_str(), Provenance::of_event(event));
+    tables::write_stabilization(&out.join(STABILIZATION_FILE), &result, json, &provenance)?;
+    tables::write_modes(&out.join(MODES_FILE), &result, json, &provenance)?;
     // Read after the identification freed its signals (parked samples are read back).
     let outputs: Vec<Vec<f64>> = result
         .output_ids
@@ -231,13 +226,8 @@ pub fn identify_and_write(
         .map(|r| r.channel.dt())
         .unwrap_or(result.dt);
     let overlay = spectral_overlay(&outputs, dt, p.psd_segment).ok();
-    tables::write_spectrum(
-        &out.join(SPECTRUM_FILE),
-        &result,
-        overlay.as_ref(),
-        &settings_json,
-        &provenance,
-    )?;
+    let spectrum = out.join(SPECTRUM_FILE);
+    tables::write_spectrum(&spectrum, &result, overlay.as_ref(), json, &provenance)?;
     if let Some(reference) = &reference {
         let provenance = provenance.then(result.preprocessing.iter().cloned());
         prepost::compare_and_write(reference, &result, out, &event.name, &provenance)?;

@@ -14,10 +14,9 @@ use std::sync::OnceLock;
 
 use quaketwin::geometry::{combine_floors, FloorSettings};
 use quaketwin::hysteresis::*;
+use quaketwin::sinks::hysteresis_tables::identification_provenance;
 use quaketwin::sinks::hysteresis_tables::DirectionOutcome;
-use quaketwin::stages::hysteresis::{
-    identification_provenance, identify_event_at, write_identification, HysteresisParams,
-};
+use quaketwin::stages::hysteresis::{identify_event_at, write_identification, HysteresisParams};
 use quaketwin::synth::{synthetic_ground_motion, GroundMotionSpec};
 use quaketwin::vocab::{Event, Record, Structure};
 
