@@ -1,13 +1,13 @@
-//! Section 1, event and structure: event.json's facts, notes and files, the
-//! processing history and the status of every output file.
+//! Event and structure: event.json's facts, notes and files (the
+//! processing history and the output files are in the appendix).
 
 use std::path::Path;
 
 use serde_json::Value;
 
-use super::{listed, Loaded, OUTPUTS};
+use super::listed;
 use crate::report::format_number;
-use crate::report::html::{absent, escape, note, table, unreadable, Cell};
+use crate::report::html::{absent, escape, note, table, time_text, unreadable, Cell};
 
 pub(super) fn read_event(dir: &Path) -> Result<Value, String> {
     let path = dir.join("event.json");
@@ -18,7 +18,7 @@ pub(super) fn read_event(dir: &Path) -> Result<Value, String> {
     serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
 }
 
-fn json_text(v: Option<&Value>) -> String {
+pub(super) fn json_text(v: Option<&Value>) -> String {
     match v {
         None | Some(Value::Null) => "—".to_string(),
         Some(Value::String(s)) => s.clone(),
@@ -36,11 +36,15 @@ fn json_text(v: Option<&Value>) -> String {
     }
 }
 
-pub(super) fn summary_section(
-    dir: &Path,
-    event: &Result<Value, String>,
-    channels: &Loaded,
-) -> String {
+/// Magnitude as seismology writes it: one decimal ("6.0", not "6.000").
+pub(super) fn magnitude_text(v: Option<&Value>) -> String {
+    match v.and_then(Value::as_f64) {
+        Some(m) => format!("{m:.1}"),
+        None => json_text(v),
+    }
+}
+
+pub(super) fn event_section(event: &Result<Value, String>) -> String {
     let mut body = String::new();
     match event {
         Err(e) if e.is_empty() => body.push_str(&absent("event.json", "ingest")),
@@ -51,8 +55,8 @@ pub(super) fn summary_section(
             let mut dl = String::from("<dl class=\"facts\">");
             for (k, v) in [
                 ("Event", json_text(ev.get("name"))),
-                ("Origin time (UTC)", json_text(ev.get("origin_time"))),
-                ("Magnitude", json_text(ev.get("magnitude"))),
+                ("Origin time", time_text(&json_text(ev.get("origin_time")))),
+                ("Magnitude", magnitude_text(ev.get("magnitude"))),
                 ("Structure", json_text(s("name"))),
                 ("Storey heights (m)", json_text(s("storey_heights_m"))),
                 ("Masses (kg)", json_text(s("masses_kg"))),
@@ -109,67 +113,5 @@ pub(super) fn summary_section(
             }
         }
     }
-    // Processing history: the most complete copy is in channels.parquet's metadata.
-    let history = match channels {
-        Loaded::Ok(t) => t
-            .metadata
-            .get("quaketwin.history")
-            .and_then(|h| serde_json::from_str::<Value>(h).ok()),
-        _ => None,
-    }
-    .or_else(|| event.as_ref().ok().and_then(|e| e.get("history").cloned()));
-    body.push_str("<h3>Processing history</h3>");
-    let steps: Vec<String> = history
-        .as_ref()
-        .and_then(|h| h.get("steps"))
-        .and_then(Value::as_array)
-        .map(|a| {
-            a.iter()
-                .map(|s| {
-                    let name = json_text(s.get("step"));
-                    let params = s.get("params").map(|p| p.to_string()).unwrap_or_default();
-                    format!(
-                        "<li><b>{}</b> <code>{}</code></li>",
-                        escape(&name),
-                        escape(&params)
-                    )
-                })
-                .collect()
-        })
-        .unwrap_or_default();
-    if steps.is_empty() {
-        body.push_str(&note("No processing steps recorded."));
-    } else {
-        body.push_str(&format!("<ol class=\"history\">{}</ol>", steps.join("")));
-    }
-    body.push_str("<h3>Output files</h3>");
-    let rows: Vec<Vec<Cell>> = OUTPUTS
-        .iter()
-        .map(|(f, stage)| {
-            // report.html is this page: its status must not depend on
-            // whether an older copy exists (the page is deterministic).
-            let size = if *f == "report.html" {
-                Some(0)
-            } else {
-                listed(dir, f)
-                    .then(|| std::fs::metadata(dir.join(f)).ok().map(|m| m.len()))
-                    .flatten()
-            };
-            vec![
-                Cell::raw(format!("<code>{}</code>", escape(f))),
-                Cell::text(stage),
-                match size {
-                    Some(_) if *f == "report.html" => Cell::text("this page"),
-                    Some(n) => Cell::text(&format!("present, {n} bytes")),
-                    None => Cell::raw("<span class=\"absent-inline\">absent</span>".into()),
-                },
-            ]
-        })
-        .collect();
-    body.push_str(&table(
-        Some("output-files"),
-        &["file", "stage", "status"].map(String::from),
-        &rows,
-    ));
     body
 }
