@@ -289,7 +289,7 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
     let twin = twin::twin_section(&o, settings);
     let design = design::design_section(dir, settings);
     let rating = rating::rating_section(&assessments, &o, settings);
-    let summary = summary::summary_section(&event, &o, settings);
+    let summary = summary::summary_section(dir, &event, &o, settings);
     let appendix = appendix::appendix_section(dir, &event, &o, settings);
 
     let event_name = match &event {
@@ -458,6 +458,9 @@ th,td{padding:1px 4px}
 .multiples,.grid2{grid-template-columns:repeat(2,minmax(0,1fr))}
 .glance{grid-template-columns:repeat(2,minmax(0,1fr))}
 ol.history code{font-size:8.5px}
+.meta,.note,figcaption,ul.legend,dl.facts{font-size:9.5px}
+.lead{font-size:12px}
+.rating-box .big{font-size:16px}
 .badge,.r-green,.r-yellow,.r-red,.rating-box,th,.absent{-webkit-print-color-adjust:exact;print-color-adjust:exact}
 }
 "#;

@@ -50,6 +50,7 @@ fn ok(loaded: &Loaded) -> Option<&Table> {
 }
 
 pub(super) fn summary_section(
+    dir: &std::path::Path,
     event: &Result<Value, String>,
     o: &Outputs,
     settings: &ReportSettings,
@@ -78,6 +79,14 @@ pub(super) fn summary_section(
     body.push_str(&card_wide("Storeys: drift", &storeys(&o.drift, settings)));
     body.push_str(&card("Modes", &modes_card(&o.modes, &o.shifts)));
     body.push_str(&card("Twin update", &twin_card(o)));
+    // A test-design run: the design in facts.
+    let design = super::design::design_facts(dir);
+    if !design.is_empty() {
+        body.push_str(&card_wide(
+            "Hybrid-test design",
+            &super::design::facts_list(&design),
+        ));
+    }
     body.push_str("</div>");
     body
 }
