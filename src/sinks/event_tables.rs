@@ -313,6 +313,26 @@ pub fn write_drift(path: &Path, event: &Event, rows: &[DriftRow]) -> Result<()> 
             drift::PEAK_DRIFT_RATIO,
             rows.iter().map(|r| r.peak_drift_ratio).collect(),
         )
+        .opt_f64(
+            drift::RESIDUAL_DRIFT_M,
+            rows.iter().map(|r| r.residual.map(|x| x.drift_m)).collect(),
+        )
+        .opt_f64(
+            drift::RESIDUAL_DRIFT_STD_M,
+            rows.iter().map(|r| r.residual.map(|x| x.std_m)).collect(),
+        )
+        .opt_f64(
+            drift::RESIDUAL_DRIFT_RATIO,
+            rows.iter()
+                .map(|r| r.residual.map(|x| x.drift_m / r.storey_height_m))
+                .collect(),
+        )
+        .opt_f64(
+            drift::RESIDUAL_WINDOW_START_S,
+            rows.iter()
+                .map(|r| r.residual.map(|x| x.window_start_s))
+                .collect(),
+        )
         .build()?;
     write_parquet(path, &[batch], &event_metadata(event))
 }

@@ -473,7 +473,7 @@ fn report_draws_the_measured_loop_of_a_not_identified_direction() {
     let provenance = identification_provenance(&ev, &outcomes);
     write_identification(out.path(), &outcomes, &masses, &p, &provenance).unwrap();
     let settings = quaketwin::report::ReportSettings::default();
-    let budget = settings.max_points_per_trace;
+    let budget = settings.max_points_per_loop;
     let html = quaketwin::report::render_report(out.path(), &settings).unwrap();
     let loops = html
         .matches("Measured force–drift loop, direction X")

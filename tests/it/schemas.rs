@@ -244,6 +244,10 @@ fn drift_columns(b: TableBuilder) -> TableBuilder {
 fn the_writer_refuses_a_table_that_does_not_match_its_declaration() {
     let ok = drift_columns(TableBuilder::new(&DRIFT))
         .f64(drift::PEAK_DRIFT_RATIO, vec![0.01])
+        .opt_f64(drift::RESIDUAL_DRIFT_M, vec![Some(0.002)])
+        .opt_f64(drift::RESIDUAL_DRIFT_STD_M, vec![Some(0.001)])
+        .opt_f64(drift::RESIDUAL_DRIFT_RATIO, vec![Some(0.002 / 3.0)])
+        .opt_f64(drift::RESIDUAL_WINDOW_START_S, vec![None])
         .build()
         .unwrap();
     let unit = |name: &str| {
