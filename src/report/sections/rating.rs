@@ -40,8 +40,8 @@ fn residual_gap(drift: &Loaded) -> String {
     }
     let widest = values.iter().filter_map(|v| v.std_m).fold(0.0f64, f64::max);
     format!(
-        "not resolved at any storey: |D| < 2σ (σ up to {} mm: sensor noise integrated twice)",
-        format_number(1000.0 * widest)
+        "not resolved at any storey: |D| < 2σ (σ up to {} m: sensor noise integrated twice)",
+        format_number(widest)
     )
 }
 
