@@ -31,7 +31,7 @@ fn residual_gap(drift: &Loaded) -> String {
         return String::new();
     };
     if !t.has(tables::drift::RESIDUAL_DRIFT_M.name) {
-        return "drift.parquet has no residual_drift_m column (written by an older quaketwin: run the metrics stage again)"
+        return "drift.parquet has no residual_drift_m column (written by an earlier quaketwin: remove it and run the pipeline again)"
             .into();
     }
     let values: Vec<_> = (0..t.rows).filter_map(|r| residual(t, r)).collect();
