@@ -18,6 +18,14 @@ pub fn inspect(event: &Path) -> Result<String> {
     Ok(render_inventory(&loaded))
 }
 
+/// `quaketwin inspect EVENT --json`: the inventory as JSON (the same
+/// document the ingest stage writes as `event.json`).
+pub fn inspect_json(event: &Path) -> Result<String> {
+    let loaded = event_folder::load(event)?;
+    let bytes = crate::stages::ingest::inventory_json(&loaded)?;
+    Ok(String::from_utf8_lossy(&bytes).into_owned() + "\n")
+}
+
 /// Human-readable inventory of a loaded event.
 pub fn render_inventory(loaded: &LoadedEvent) -> String {
     let e = &loaded.event;
@@ -386,7 +394,12 @@ impl ModalFlags {
 /// `quaketwin modal EVENT --out DIR [--method M] [--band LO,HI] [--decimate N]
 /// [--block-rows N] [--orders MIN,MAX] [--inputs ID,…] [--reference EARLIER_RUN]`:
 /// ingest + condition + modal (+ frequency_shifts.parquet).
-pub fn modal(event: &Path, out: &Path, flags: &ModalFlags, quiet: bool) -> Result<()> {
+pub fn modal(
+    event: &Path,
+    out: &Path,
+    flags: &ModalFlags,
+    quiet: bool,
+) -> Result<Vec<(String, StageOutcome)>> {
     let mut params = flags.params_toml()?;
     if let Some(r) = &flags.reference {
         let file = path_text(&check_reference(r, out)?)?;
@@ -400,20 +413,20 @@ pub fn modal(event: &Path, out: &Path, flags: &ModalFlags, quiet: bool) -> Resul
         "{INGEST_PIPELINE}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\n{params}"
     );
     let p = parse_pipeline(&text, "built-in modal pipeline")?;
-    pipeline::run(&p, event, out, quiet).map(|_| ())
+    pipeline::run(&p, event, out, quiet)
 }
 
 /// `quaketwin hysteresis EVENT --out DIR`: Bouc-Wen identification and damage
 /// index on the records as recorded (SI units only).  A direction that cannot
 /// be identified is not a failure: its reason goes to bouc_wen.parquet
 /// (`status = not_identifiable`) and to stderr, and the command exits 0.
-pub fn hysteresis(event: &Path, out: &Path, quiet: bool) -> Result<()> {
+pub fn hysteresis(event: &Path, out: &Path, quiet: bool) -> Result<Vec<(String, StageOutcome)>> {
     let text = "[pipeline]\nname = \"hysteresis\"\n[[stage]]\nname = \"ingest\"\nkind = \"ingest\"\n\
                 [[stage]]\nname = \"as-recorded\"\nkind = \"condition\"\ninputs = [\"ingest\"]\n[stage.params]\nsteps = []\nsamples_file = \"samples_as_recorded.parquet\"\n\
                 [[stage]]\nname = \"hysteresis\"\nkind = \"hysteresis\"\ninputs = [\"as-recorded\"]\n\
                 [[stage]]\nname = \"damage\"\nkind = \"damage\"\ninputs = [\"hysteresis\"]\n";
     let p = parse_pipeline(text, "built-in hysteresis pipeline")?;
-    pipeline::run(&p, event, out, quiet).map(|_| ())
+    pipeline::run(&p, event, out, quiet)
 }
 
 /// `quaketwin update TWIN --modes modes.parquet --out DIR`: ensemble updating
@@ -431,7 +444,13 @@ pub fn update(
             crate::stages::update::UpdateParams::from_toml(&text, &p.display().to_string())?
         }
     };
-    crate::stages::update::update_from_files(twin, modes, out, &params)
+    // `--modes` may name a run's output directory: its modes.parquet.
+    let modes = if modes.is_dir() {
+        modes.join(crate::vocab::tables::MODES.file)
+    } else {
+        modes.to_path_buf()
+    };
+    crate::stages::update::update_from_files(twin, &modes, out, &params)
 }
 
 /// `quaketwin design DESIGN.toml --out DIR`: hybrid-test design (METHODS §5–6) from the
@@ -495,18 +514,30 @@ pub fn event_partition(event: &Path) -> Result<std::path::PathBuf> {
     Ok(dataset::partition(&structure, &folder))
 }
 
+/// One event of a many-event run: where it ran and how it ended.
+#[derive(Debug)]
+pub struct EventRun {
+    pub event: std::path::PathBuf,
+    /// Its run directory `DIR/runs/structure=…/event=…/` (`None` when the
+    /// event could not be read far enough to name its partition).
+    pub run_dir: Option<std::path::PathBuf>,
+    pub result: Result<Vec<(String, StageOutcome)>>,
+}
+
 /// `quaketwin run PIPELINE EVENT1 EVENT2 … --out DIR`: events in parallel on
 /// all cores, each into its run directory `DIR/runs/structure=…/event=…/`,
 /// its tables then published table-first, `DIR/<table>/structure=…/event=…/
 /// part-0.parquet` ([`dataset`]), so that one table of a whole network reads
-/// as one dataset (pyarrow, DuckDB, polars).  Every event is attempted; the
-/// first failure is returned after all have run.
+/// as one dataset (pyarrow, DuckDB, polars).  Every event is attempted; each
+/// one's result is returned, in the order given.  On a terminal each event
+/// running shows its own bar (its stage lines with `-v`), and a line when it
+/// ends.
 pub fn run_many(
     pipeline_path: &Path,
     events: &[std::path::PathBuf],
     out: &Path,
     quiet: bool,
-) -> Result<Vec<(std::path::PathBuf, Result<()>)>> {
+) -> Result<Vec<EventRun>> {
     run_many_with(pipeline_path, events, out, None, quiet)
 }
 
@@ -517,25 +548,39 @@ pub fn run_many_with(
     out: &Path,
     reference: Option<&Path>,
     quiet: bool,
-) -> Result<Vec<(std::path::PathBuf, Result<()>)>> {
+) -> Result<Vec<EventRun>> {
     use rayon::prelude::*;
     let p = load_run_pipeline(pipeline_path, out, reference)?;
-    let results: Vec<(std::path::PathBuf, Result<()>)> = events
+    let name = &p.pipeline.name;
+    let runs: Vec<EventRun> = events
         .par_iter()
         .map(|e| {
-            let r = event_partition(e).and_then(|partition| {
+            let mut run_dir = None;
+            let result = event_partition(e).and_then(|partition| {
                 let dir = dataset::run_dir(out, &partition);
-                pipeline::run(&p, e, &dir, true)?;
-                dataset::publish_tables(out, &partition, &dir).map(|_| ())
+                run_dir = Some(dir.clone());
+                let progress = pipeline::Progress {
+                    quiet,
+                    label: Some(partition.display().to_string()),
+                };
+                let outcomes = pipeline::run_showing(&p, e, &dir, &progress)?;
+                dataset::publish_tables(out, &partition, &dir)?;
+                Ok(outcomes)
             });
             if !quiet {
-                match &r {
-                    Ok(()) => eprintln!("[{}] {} done", p.pipeline.name, e.display()),
-                    Err(err) => eprintln!("[{}] {} failed: {err}", p.pipeline.name, e.display()),
+                match &result {
+                    Ok(_) => crate::console::info(format!("[{name}] {} done", e.display())),
+                    Err(err) => {
+                        crate::console::info(format!("[{name}] {} failed: {err}", e.display()))
+                    }
                 }
             }
-            (e.clone(), r)
+            EventRun {
+                event: e.clone(),
+                run_dir,
+                result,
+            }
         })
         .collect();
-    Ok(results)
+    Ok(runs)
 }

@@ -8,6 +8,7 @@
 
 pub mod commands;
 pub mod conditioning;
+pub mod console;
 pub mod design;
 pub mod error;
 pub mod event_folder;
@@ -23,6 +24,7 @@ pub mod rng;
 pub mod sinks;
 pub mod stages;
 pub mod stats;
+pub mod summary;
 pub mod synth;
 pub mod twin;
 pub mod vocab;

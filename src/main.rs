@@ -1,21 +1,40 @@
 //! The `quaketwin` command: a thin clap front end over the library.
 //! Exit codes: 0 success, 1 bad input or failed processing, 2 usage error.
+//! Standard output carries results (`--json` summaries, `inspect`'s table);
+//! standard error carries progress, warnings and errors.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use quaketwin::commands;
+use quaketwin::console::{self, Verbosity};
+use quaketwin::error::Result;
+use quaketwin::summary::{to_json, RunSummary};
 
 #[derive(Parser)]
 #[command(
     name = "quaketwin",
     version,
-    about = "From a building's earthquake records to damage decisions"
+    about = "From a building's earthquake records to damage decisions",
+    after_help = "Examples:
+  quaketwin inspect sample-records/synthetic-4storey-quake
+  quaketwin run pipelines/post-earthquake.toml sample-records/synthetic-4storey-quake --out out/quake
+  quaketwin run pipelines/post-earthquake.toml sample-records --out out/network --json
+
+Documentation: docs/cli.md (commands), docs/pipelines.md, docs/formats.md."
 )]
 struct Cli {
-    /// No progress output on stderr.
-    #[arg(long, short, global = true)]
+    /// Only warnings and errors on stderr: no progress bars, no stage lines.
+    #[arg(long, short, global = true, conflicts_with = "verbose")]
     quiet: bool,
+    /// More on stderr: each stage's start, time and files.
+    #[arg(long, short, global = true)]
+    verbose: bool,
+    /// Print a machine-readable summary (JSON) on stdout when the command
+    /// ends, also when a run fails (`"ok": false`); see docs/cli.md.
+    #[arg(long, global = true)]
+    json: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -23,66 +42,84 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// List the channels of an event folder (or zip): what was read, inferred, missing.
+    #[command(after_help = "Examples:
+  quaketwin inspect sample-records/synthetic-4storey-quake
+  quaketwin inspect event.zip --json | jq '.channels[].id'")]
     Inspect {
         /// Event folder or zip.
         event: PathBuf,
     },
     /// Read an event folder, condition it and compute strong-motion metrics
     /// (channels.parquet, samples.parquet, spectra.parquet, drift.parquet).
+    #[command(after_help = "Examples:
+  quaketwin ingest sample-records/synthetic-4storey-quake --out out/quake
+  quaketwin ingest sample-records/synthetic-4storey-quake --out out/quake --mcap out/quake/event.mcap")]
     Ingest {
         /// Event folder or zip.
         event: PathBuf,
-        /// Output directory.
+        /// Output directory (created; holds the results of this event only).
         #[arg(long)]
         out: PathBuf,
         /// Also write the conditioned event as MCAP (replay, Foxglove).
-        #[arg(long)]
+        #[arg(long, value_name = "FILE")]
         mcap: Option<PathBuf>,
     },
     /// Update a digital twin against measured modes (ensemble + Plackett–Luce).
+    #[command(after_help = "Examples:
+  quaketwin update sample-records/synthetic-4storey-quake/twin.toml --modes out/quake/modes.parquet --out out/update
+  quaketwin update twin.toml --modes out/quake --out out/update --settings update.toml --json")]
     Update {
         /// Twin file (TOML, docs/twin.md).
         twin: PathBuf,
-        /// modes.parquet from the modal stage.
-        #[arg(long)]
+        /// modes.parquet from the modal stage (or the output directory holding it).
+        #[arg(long, value_name = "FILE_OR_DIR")]
         modes: PathBuf,
+        /// Output directory for twin_update.parquet, twin_modes.parquet, twin_updated.toml.
         #[arg(long)]
         out: PathBuf,
         /// Update settings (TOML: solvers, seed, max_rounds, tolerance, selection…).
-        #[arg(long)]
+        #[arg(long, value_name = "FILE")]
         settings: Option<PathBuf>,
     },
     /// Write DIR/report.html from the outputs of a pipeline run in DIR.
+    #[command(after_help = "Examples:
+  quaketwin report out/quake
+  quaketwin report out/quake --settings report.toml")]
     Report {
         /// Output directory of a run.
         dir: PathBuf,
         /// Report settings (TOML: rating thresholds…), see docs/report.md.
-        #[arg(long)]
+        #[arg(long, value_name = "FILE")]
         settings: Option<PathBuf>,
     },
     /// Subspace modal identification (writes modes.parquet, stabilization.parquet…).
+    #[command(after_help = "Examples:
+  quaketwin modal sample-records/synthetic-4storey-ambient --out out/ambient
+  quaketwin modal EVENT --out out/m --method ssi-cov --band 0.5,15 --orders 2,40
+  quaketwin modal EVENT_AFTER --out out/after --reference out/before --json")]
     Modal {
         /// Event folder or zip.
         event: PathBuf,
+        /// Output directory (created; holds the results of this event only).
         #[arg(long)]
         out: PathBuf,
         /// auto (input–output when base channels exist), ssi-cov, ssi-data or io.
         #[arg(long, default_value = "auto")]
         method: String,
         /// Band of interest LO,HI in Hz (default: from the structure, else 0.2,20).
-        #[arg(long)]
+        #[arg(long, value_name = "LO,HI")]
         band: Option<String>,
         /// Decimation factor (default: automatic, ≈ 4 × the band's top).
-        #[arg(long)]
+        #[arg(long, value_name = "N")]
         decimate: Option<String>,
         /// Block rows (default: automatic).
-        #[arg(long)]
+        #[arg(long, value_name = "N")]
         block_rows: Option<String>,
         /// Model orders MIN,MAX[,STEP] (default: 2 to what the data support).
-        #[arg(long)]
+        #[arg(long, value_name = "MIN,MAX[,STEP]")]
         orders: Option<String>,
         /// Input channel ids ID,ID,… for io (default: horizontal base channels).
-        #[arg(long)]
+        #[arg(long, value_name = "ID,…")]
         inputs: Option<String>,
         /// An earlier run of the same structure (its output directory, or its
         /// modes.parquet): pair the modes and write frequency_shifts.parquet.
@@ -90,14 +127,21 @@ enum Command {
         reference: Option<PathBuf>,
     },
     /// Bouc-Wen identification and damage index (bouc_wen.parquet, damage.parquet…).
+    #[command(after_help = "Examples:
+  quaketwin hysteresis sample-records/synthetic-2storey-yielding --out out/yielding
+  quaketwin hysteresis EVENT --out out/h --json | jq '.bouc_wen'")]
     Hysteresis {
         /// Event folder or zip.
         event: PathBuf,
+        /// Output directory (created; holds the results of this event only).
         #[arg(long)]
         out: PathBuf,
     },
     /// Hybrid-test design from recorded response: actuator layout (POD), Guyan + rigid-body
     /// reduction, Craig–Bampton prototype (docs/test-design.md).
+    #[command(after_help = "Examples:
+  quaketwin design sample-records/synthetic-facade/design.toml --out out/design
+  quaketwin design design.toml --out out/design --json | jq '.time_scale'")]
     Design {
         /// Design file (TOML: twin, PS node set, base motion, settings).
         design: PathBuf,
@@ -106,6 +150,9 @@ enum Command {
         out: PathBuf,
     },
     /// Generate the synthetic sample events (known model, with truth files).
+    #[command(after_help = "Examples:
+  quaketwin synth
+  quaketwin synth --out /tmp/samples --seed 7")]
     Synth {
         /// Directory to write the event folders into.
         #[arg(long, default_value = "sample-records")]
@@ -118,13 +165,17 @@ enum Command {
     /// event folders) run in parallel into a table-first Hive dataset:
     /// DIR/<table>/structure=…/event=…/part-0.parquet, each event's run
     /// (run.json, event.json, report.html) in DIR/runs/structure=…/event=…/.
+    #[command(after_help = "Examples:
+  quaketwin run pipelines/post-earthquake.toml sample-records/synthetic-4storey-quake --out out/quake
+  quaketwin run pipelines/post-earthquake.toml EVENT_AFTER --out out/after --reference out/before
+  quaketwin run pipelines/post-earthquake.toml sample-records --out out/network --json")]
     Run {
         /// Pipeline file (pipelines/*.toml).
         pipeline: PathBuf,
-        /// Event folder(s) or zip(s).
+        /// Event folder(s) or zip(s), or one folder of event folders.
         #[arg(required = true)]
         event: Vec<PathBuf>,
-        /// Output directory.
+        /// Output directory (one event: its results; several: the dataset).
         #[arg(long)]
         out: PathBuf,
         /// An earlier run of the same structure (its output directory, holding
@@ -135,30 +186,71 @@ enum Command {
     },
 }
 
-fn main() -> ExitCode {
-    let cli = Cli::parse();
-    quaketwin::fixed_order_reductions();
-    let result = match &cli.command {
-        Command::Inspect { event } => quaketwin::commands::inspect(event).map(|s| print!("{s}")),
+/// Prints `value` as JSON on stdout when `--json` was given.
+fn print_json<T: serde::Serialize>(json: bool, value: &T) -> Result<()> {
+    if json {
+        print!("{}", to_json(value)?);
+    }
+    Ok(())
+}
+
+/// A pipeline run's summary on stdout (`--json`), then its result.
+fn summarise_run(
+    json: bool,
+    pipeline: &str,
+    event: &Path,
+    out: &Path,
+    result: Result<Vec<(String, quaketwin::pipeline::StageOutcome)>>,
+) -> Result<()> {
+    if json {
+        print_json(true, &RunSummary::of_run(pipeline, event, out, &result))?;
+    }
+    result.map(|_| ())
+}
+
+fn run_command(cli: &Cli) -> Result<()> {
+    let (quiet, json) = (cli.quiet, cli.json);
+    match &cli.command {
+        Command::Inspect { event } => {
+            let text = if json {
+                commands::inspect_json(event)?
+            } else {
+                commands::inspect(event)?
+            };
+            print!("{text}");
+            Ok(())
+        }
         Command::Ingest { event, out, mcap } => {
-            quaketwin::commands::ingest(event, out, mcap.as_deref(), cli.quiet).map(|_| ())
+            let result = commands::ingest(event, out, mcap.as_deref(), quiet);
+            summarise_run(json, "ingest (built-in)", event, out, result)
         }
         Command::Update {
             twin,
             modes,
             out,
             settings,
-        } => quaketwin::commands::update(twin, modes, out, settings.as_deref()).map(|s| {
-            if !cli.quiet {
-                eprintln!("{}", serde_json::to_string_pretty(&s).unwrap_or_default());
-            }
-        }),
-        Command::Report { dir, settings } => quaketwin::commands::report(dir, settings.as_deref())
-            .map(|p| {
-                if !cli.quiet {
-                    eprintln!("wrote {}", p.display());
-                }
-            }),
+        } => {
+            let s = commands::update(twin, modes, out, settings.as_deref())?;
+            console::info(format!(
+                "update: {} parameters in {} rounds ({}), objective {:.3e} -> {:.3e}, mean |Δf|/f {:.2} % -> {:.2} %, mean 1−MAC {:.3} -> {:.3}; wrote {}",
+                s.parameter_names.len(),
+                s.rounds,
+                if s.converged { "converged" } else { "not converged" },
+                s.objective_initial,
+                s.objective_updated,
+                100.0 * s.frequency_error_initial,
+                100.0 * s.frequency_error_updated,
+                s.shape_error_initial,
+                s.shape_error_updated,
+                out.display()
+            ));
+            print_json(json, &s)
+        }
+        Command::Report { dir, settings } => {
+            let path = commands::report(dir, settings.as_deref())?;
+            console::info(format!("wrote {}", path.display()));
+            print_json(json, &serde_json::json!({ "report": path }))
+        }
         Command::Modal {
             event,
             out,
@@ -170,7 +262,7 @@ fn main() -> ExitCode {
             inputs,
             reference,
         } => {
-            let flags = quaketwin::commands::ModalFlags {
+            let flags = commands::ModalFlags {
                 method: method.clone(),
                 band: band.clone(),
                 decimate: decimate.clone(),
@@ -179,47 +271,90 @@ fn main() -> ExitCode {
                 inputs: inputs.clone(),
                 reference: reference.clone(),
             };
-            quaketwin::commands::modal(event, out, &flags, cli.quiet)
+            let result = commands::modal(event, out, &flags, quiet);
+            summarise_run(json, "modal (built-in)", event, out, result)
         }
         Command::Hysteresis { event, out } => {
-            quaketwin::commands::hysteresis(event, out, cli.quiet)
+            let result = commands::hysteresis(event, out, quiet);
+            summarise_run(json, "hysteresis (built-in)", event, out, result)
         }
-        Command::Design { design, out } => quaketwin::commands::design(design, out).map(|s| {
-            if !cli.quiet {
-                eprintln!("{}", serde_json::to_string_pretty(&s).unwrap_or_default());
+        Command::Design { design, out } => {
+            let s = commands::design(design, out)?;
+            console::info(format!(
+                "design: {} actuators ({} force-controlled), {} POMs, WNRMSE {:.2e}, {} NS modes, λ = {}, bandwidth {:.3} Hz; wrote {}",
+                s.actuators,
+                s.force_controlled,
+                s.retained_poms,
+                s.wnrmse,
+                s.ns_modes,
+                s.time_scale,
+                s.bandwidth_hz,
+                out.display()
+            ));
+            print_json(json, &s)
+        }
+        Command::Synth { out, seed } => {
+            let dirs = commands::synth(out, *seed)?;
+            if json {
+                print_json(true, &serde_json::json!({ "written": dirs }))
+            } else {
+                for d in dirs {
+                    println!("wrote {}", d.display());
+                }
+                Ok(())
             }
-        }),
-        Command::Synth { out, seed } => quaketwin::commands::synth(out, *seed).map(|dirs| {
-            for d in dirs {
-                println!("wrote {}", d.display());
-            }
-        }),
+        }
         Command::Run {
             pipeline,
             event,
             out,
             reference,
         } => {
-            let events = quaketwin::commands::expand_events(event);
+            let events = commands::expand_events(event);
             let reference = reference.as_deref();
+            let label = pipeline.display().to_string();
             if event.len() == 1 && events.len() == 1 && events[0] == event[0] {
-                quaketwin::commands::run_pipeline_with(
-                    pipeline, &events[0], out, reference, cli.quiet,
-                )
-                .map(|_| ())
-            } else {
-                quaketwin::commands::run_many_with(pipeline, &events, out, reference, cli.quiet)
-                    .and_then(|results| {
-                        results
-                            .into_iter()
-                            .map(|(_, r)| r)
-                            .find(|r| r.is_err())
-                            .unwrap_or(Ok(()))
+                let result =
+                    commands::run_pipeline_with(pipeline, &events[0], out, reference, quiet);
+                return summarise_run(json, &label, &events[0], out, result);
+            }
+            let runs = commands::run_many_with(pipeline, &events, out, reference, quiet)?;
+            if json {
+                let summaries: Vec<RunSummary> = runs
+                    .iter()
+                    .map(|r| {
+                        let dir = r.run_dir.clone().unwrap_or_else(|| out.clone());
+                        RunSummary::of_run(&label, &r.event, &dir, &r.result)
                     })
+                    .collect();
+                print_json(
+                    true,
+                    &serde_json::json!({
+                        "summary_version": quaketwin::summary::SUMMARY_VERSION,
+                        "dataset": out,
+                        "events": summaries,
+                    }),
+                )?;
+            }
+            match runs.into_iter().find(|r| r.result.is_err()) {
+                Some(failed) => failed.result.map(|_| ()),
+                None => Ok(()),
             }
         }
-    };
-    match result {
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    console::set_verbosity(if cli.quiet {
+        Verbosity::Quiet
+    } else if cli.verbose {
+        Verbosity::Verbose
+    } else {
+        Verbosity::Normal
+    });
+    quaketwin::fixed_order_reductions();
+    match run_command(&cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!(

@@ -19,7 +19,8 @@ pub const PARK_ABOVE_ENV: &str = "QUAKETWIN_PARK_ABOVE_SAMPLES";
 pub struct RunContext<'p> {
     pub event_path: PathBuf,
     pub out_dir: PathBuf,
-    pub quiet: bool,
+    /// How the run shows its progress (quiet, or an event's label).
+    pub progress: super::Progress,
     /// Files the event refers to (twin, design file), read from a zipped event too.
     pub referenced: ReferencedFiles,
     pipeline: &'p Pipeline,
@@ -39,7 +40,7 @@ impl<'p> RunContext<'p> {
         RunContext {
             event_path: event_path.to_path_buf(),
             out_dir: out_dir.to_path_buf(),
-            quiet,
+            progress: super::Progress { quiet, label: None },
             referenced: ReferencedFiles::new(event_path),
             pipeline,
             current: 0,
@@ -51,6 +52,12 @@ impl<'p> RunContext<'p> {
                 .unwrap_or(super::spill::PARK_ABOVE_SAMPLES),
             spill: None,
         }
+    }
+
+    /// A stage's progress line: shown by default for a one-event run, with
+    /// `-v` (labelled) in a many-event run, never when the run is quiet.
+    pub fn info(&self, line: impl std::fmt::Display) {
+        self.progress.line(line);
     }
 
     /// Uses `loaded` as the run's event instead of reading `event_path`

@@ -52,7 +52,30 @@ pub enum StageOutcome {
 /// Notes for the user about what a run removes or takes over, on stderr
 /// (shown even with `--quiet`: they say why files disappeared).
 fn note(msg: &str) {
-    eprintln!("quaketwin: note: {msg}");
+    crate::console::note(msg);
+}
+
+/// How a run shows its progress on stderr ([`crate::console`]).
+#[derive(Debug, Clone, Default)]
+pub struct Progress {
+    /// No bar and no stage lines for this run (warnings and notes still show).
+    pub quiet: bool,
+    /// The event's label in a many-event run: its bar is prefixed with it,
+    /// and its stage lines (prefixed too) are shown with `-v` only, so that
+    /// parallel events do not interleave their lines.
+    pub label: Option<String>,
+}
+
+impl Progress {
+    /// A progress line: shown by default for a one-event run, with `-v`
+    /// (labelled) in a many-event run, never when the run is quiet.
+    pub fn line(&self, line: impl std::fmt::Display) {
+        match (&self.label, self.quiet) {
+            (_, true) => {}
+            (None, false) => crate::console::info(line),
+            (Some(label), false) => crate::console::detail(format!("{label}: {line}")),
+        }
+    }
 }
 
 /// The stamp directory of quaketwin versions before the run manifest.
@@ -221,6 +244,17 @@ pub fn run(
     out: &Path,
     quiet: bool,
 ) -> Result<Vec<(String, StageOutcome)>> {
+    let progress = Progress { quiet, label: None };
+    run_showing(pipeline, event_path, out, &progress)
+}
+
+/// [`run`], showing its progress as `progress` says.
+pub fn run_showing(
+    pipeline: &Pipeline,
+    event_path: &Path,
+    out: &Path,
+    progress: &Progress,
+) -> Result<Vec<(String, StageOutcome)>> {
     crate::fixed_order_reductions();
     prepare_out_dir(out)?;
     let event_fp = fingerprint::path_fingerprint(event_path)?;
@@ -235,7 +269,7 @@ pub fn run(
     if let Some(said) = &lock.took_over {
         note(said);
     }
-    let result = run_locked(pipeline, event_path, &event, out, quiet);
+    let result = run_locked(pipeline, event_path, &event, out, progress);
     drop(lock);
     result
 }
@@ -371,29 +405,24 @@ fn run_locked(
     event_path: &Path,
     event: &EventIdentity,
     out: &Path,
-    quiet: bool,
+    progress: &Progress,
 ) -> Result<Vec<(String, StageOutcome)>> {
     let mut current = clean_out_dir(out, pipeline, event)?;
-    let mut ctx = RunContext::new(pipeline, event_path, out, quiet);
+    let mut ctx = RunContext::new(pipeline, event_path, out, progress.quiet);
+    ctx.progress = progress.clone();
     let mut outcomes = Vec::new();
-    // One bar over the stages; indicatif hides it when stderr is not a terminal.
-    let bar = if quiet {
-        indicatif::ProgressBar::hidden()
-    } else {
-        let b = indicatif::ProgressBar::new(pipeline.stages.len() as u64);
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} stages: {msg}",
-        ) {
-            b.set_style(style);
-        }
-        b.enable_steady_tick(std::time::Duration::from_millis(200));
-        b
-    };
+    // One bar over the stages (indicatif hides it when stderr is not a terminal).
+    let bar = crate::console::bar(
+        pipeline.stages.len() as u64,
+        progress.label.as_deref().unwrap_or(""),
+        "stages",
+        progress.quiet,
+    );
     let result = run_stages(
         pipeline,
         event,
         out,
-        quiet,
+        progress,
         &bar,
         &mut ctx,
         &mut current,
@@ -431,17 +460,15 @@ fn run_stages(
     pipeline: &Pipeline,
     event: &EventIdentity,
     out: &Path,
-    quiet: bool,
+    progress: &Progress,
     bar: &indicatif::ProgressBar,
     ctx: &mut RunContext,
     current: &mut RunManifest,
     outcomes: &mut Vec<(String, StageOutcome)>,
 ) -> Result<()> {
-    let log = |line: String| {
-        if !quiet {
-            bar.suspend(|| eprintln!("{line}"));
-        }
-    };
+    // A stage line: shown by default for one event; with `-v` only (and
+    // labelled) for one of many events running in parallel.
+    let log = |line: String| progress.line(line);
     let name = &pipeline.pipeline.name;
     for (index, planned) in pipeline.stages.iter().enumerate() {
         let stage = &planned.decl;
@@ -541,10 +568,10 @@ fn run_stages(
         );
         manifest::write(out, current)?;
         let t0 = Instant::now();
-        log(format!(
-            "[{name}] {:<12} running ({})",
-            stage.name, stage.kind
-        ));
+        let running = format!("[{name}] {:<12} running ({})", stage.name, stage.kind);
+        if progress.label.is_none() && !progress.quiet {
+            crate::console::detail(running);
+        }
         let product = planned.stage.run(ctx).map_err(|e| match e {
             Error::Usage(m) => Error::Usage(format!("stage {:?}: {m}", stage.name)),
             Error::Numerical(m) => Error::Numerical(format!("stage {:?}: {m}", stage.name)),
@@ -569,11 +596,15 @@ fn run_stages(
         );
         manifest::write(out, current)?;
         let secs = t0.elapsed().as_secs_f64();
+        // The files written are a detail (`-v`); the stage and its time are not.
+        let files = if crate::console::verbosity() >= crate::console::Verbosity::Verbose {
+            format!(" -> {}", outputs.join(", "))
+        } else {
+            String::new()
+        };
         log(format!(
-            "[{name}] {:<12} done in {:.2} s -> {}",
-            stage.name,
-            secs,
-            outputs.join(", ")
+            "[{name}] {:<12} done in {:.2} s{files}",
+            stage.name, secs
         ));
         bar.inc(1);
         outcomes.push((stage.name.clone(), StageOutcome::Ran { seconds: secs }));
@@ -628,9 +659,6 @@ pub fn write_extra_output<T>(
     Ok(value)
 }
 
-/// The files a pipeline run lists as results of `dir` (the `done` stages of
-/// its run manifest); `None` when `dir` has no run manifest (a directory
-/// not written by `quaketwin run`: every file counts).
 /// Why the stage of kind `kind` did not apply in the run recorded in `dir`
 /// (run.json), when it did not.
 pub fn not_applicable_reason(dir: &Path, kind: &str) -> Option<String> {
@@ -641,6 +669,9 @@ pub fn not_applicable_reason(dir: &Path, kind: &str) -> Option<String> {
         .and_then(|s| s.reason.clone())
 }
 
+/// The files a pipeline run lists as results of `dir` (the `done` stages of
+/// its run manifest); `None` when `dir` has no run manifest (a directory
+/// not written by `quaketwin run`: every file counts).
 pub fn listed_results(dir: &Path) -> Option<Vec<String>> {
     match manifest::read(dir) {
         Ok(Some(m)) => Some(m.done_files()),

@@ -153,7 +153,8 @@ impl ReportSettings {
 }
 
 /// Traffic-light rating, ordered from best to worst.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Rating {
     Green,
     Yellow,
@@ -204,7 +205,7 @@ impl Rating {
 }
 
 /// One rated value: criterion, where, the tabled value and its rating.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Assessment {
     pub criterion: String,
     pub subject: String,
@@ -212,6 +213,44 @@ pub struct Assessment {
     pub rating: Rating,
     /// The file the value comes from.
     pub source: String,
+}
+
+/// The overall rating of a run's outputs: the worst rating of every rated
+/// value, and what drives it (per criterion, its largest value at that
+/// rating).  `rating` is `None` when no criterion could be rated.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Verdict {
+    pub rating: Option<Rating>,
+    pub drivers: Vec<Assessment>,
+    /// Every rated value, in page order.
+    pub assessments: Vec<Assessment>,
+}
+
+impl Verdict {
+    pub fn of(assessments: Vec<Assessment>) -> Verdict {
+        let rating = assessments.iter().map(|a| a.rating).max();
+        let mut drivers: Vec<Assessment> = Vec::new();
+        for a in assessments.iter().filter(|a| Some(a.rating) == rating) {
+            match drivers.iter_mut().find(|d| d.criterion == a.criterion) {
+                Some(d) if a.value > d.value => *d = a.clone(),
+                Some(_) => {}
+                None => drivers.push(a.clone()),
+            }
+        }
+        drivers.sort_by(|a, b| a.criterion.cmp(&b.criterion));
+        Verdict {
+            rating,
+            drivers,
+            assessments,
+        }
+    }
+}
+
+/// The rating the report of `dir` opens with, without drawing the page
+/// (the `--json` summaries of `run`, `hysteresis`…).
+pub fn verdict(dir: &Path, settings: &ReportSettings) -> Result<Verdict> {
+    settings.validate()?;
+    Ok(Verdict::of(sections::assessments(dir, settings)))
 }
 
 /// Renders `dir/report.html`'s content.  Errors only for bad settings or a

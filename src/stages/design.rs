@@ -233,8 +233,7 @@ impl Stage for Design {
             MotionSource::File { .. } => design_inputs(&design, None)?,
         };
         let summary = run_design(&design, &motion, recorded.as_ref(), &ctx.out_dir)?;
-        if !ctx.quiet {
-            eprintln!(
+        ctx.info(format!(
                 "design: {} actuators ({} force-controlled), {} POMs retained, WNRMSE {:.2e}, {} NS modes, λ = {}, bandwidth {:.3} Hz",
                 summary.actuators,
                 summary.force_controlled,
@@ -243,8 +242,7 @@ impl Stage for Design {
                 summary.ns_modes,
                 summary.time_scale,
                 summary.bandwidth_hz
-            );
-        }
+        ));
         Ok(None)
     }
 }

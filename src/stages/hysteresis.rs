@@ -227,17 +227,17 @@ impl Stage for Hysteresis {
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let (outcomes, masses, provenance) = self.identify(ctx)?;
-        if !ctx.quiet {
-            for m in &masses {
-                eprintln!("[hysteresis] {}", m.message());
-            }
-            for o in &outcomes {
-                if let DirectionOutcome::NotIdentifiable {
-                    direction, reason, ..
-                } = o
-                {
-                    eprintln!("[hysteresis] direction {direction}: not identifiable: {reason}");
-                }
+        for m in &masses {
+            ctx.info(format!("[hysteresis] {}", m.message()));
+        }
+        for o in &outcomes {
+            if let DirectionOutcome::NotIdentifiable {
+                direction, reason, ..
+            } = o
+            {
+                ctx.info(format!(
+                    "[hysteresis] direction {direction}: not identifiable: {reason}"
+                ));
             }
         }
         write_identification(&ctx.out_dir, &outcomes, &masses, &self.params, &provenance)?;

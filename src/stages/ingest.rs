@@ -73,6 +73,8 @@ struct EventJson<'a> {
     files: Vec<FileJson<'a>>,
     channels: Vec<ChannelJson<'a>>,
     history: &'a crate::vocab::ProcessingHistory,
+    /// The building geometry applied at ingest (axes, rotations, floors).
+    geometry: &'a crate::geometry::GeometryReport,
 }
 
 /// The inventory of a loaded event as pretty JSON.
@@ -104,6 +106,7 @@ pub fn inventory_json(loaded: &LoadedEvent) -> Result<Vec<u8>> {
             })
             .collect(),
         history: &e.history,
+        geometry: &loaded.geometry,
     };
     serde_json::to_vec_pretty(&doc)
         .map_err(|err| Error::numerical(format!("serialising the inventory: {err}")))

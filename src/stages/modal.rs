@@ -206,7 +206,7 @@ pub fn identify_and_write(
     };
     let result = identify_event(event, &settings, &choice)?;
     for w in &result.warnings {
-        eprintln!("quaketwin: warning: modal ({}): {w}", event.name);
+        crate::console::warn(format!("modal ({}): {w}", event.name));
     }
     let (json, provenance) = (settings_json.as_str(), Provenance::of_event(event));
     tables::write_stabilization(&out.join(STABILIZATION_FILE), &result, json, &provenance)?;

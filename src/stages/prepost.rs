@@ -162,11 +162,11 @@ pub fn compare_and_write(
         pairing,
     );
     if c.shifts.is_empty() {
-        eprintln!(
-            "quaketwin: warning: modal ({event_name}): no mode pairs with the reference {}: {}",
+        crate::console::warn(format!(
+            "modal ({event_name}): no mode pairs with the reference {}: {}",
             file.display(),
             c.notes.join("; ")
-        );
+        ));
     }
     tables::write_shifts(&out.join(SHIFTS_FILE), &c, pairing, file, provenance)?;
     Ok(c)

@@ -73,8 +73,13 @@ fn events_run_in_parallel_into_a_table_first_dataset_that_pyarrow_duckdb_and_pol
         true,
     )
     .unwrap();
-    for (e, r) in &results {
-        assert!(r.is_ok(), "{}: {:?}", e.display(), r.as_ref().err());
+    for run in &results {
+        assert!(
+            run.result.is_ok(),
+            "{}: {:?}",
+            run.event.display(),
+            run.result.as_ref().err()
+        );
     }
     let quake = Path::new("structure=Sample_4-storey_frame/event=synthetic-4storey-quake");
     let run = out.path().join("runs").join(quake);

@@ -261,6 +261,25 @@ struct Outputs {
     time_axis: Option<(f64, f64)>,
 }
 
+/// Every rated value of the outputs in `dir` (the drift and damage
+/// criteria), as the page rates them.
+pub fn assessments(dir: &Path, settings: &ReportSettings) -> Vec<Assessment> {
+    let mut out = Vec::new();
+    drift::drift_section(&load(dir, &tables::DRIFT, None), settings, &mut out);
+    let o = Outputs {
+        channels: Loaded::Absent(None),
+        drift: Loaded::Absent(None),
+        damage: load(dir, &tables::DAMAGE, None),
+        modes: Loaded::Absent(None),
+        shifts: Loaded::Absent(None),
+        twin_update: Loaded::Absent(None),
+        twin_modes: Loaded::Absent(None),
+        time_axis: None,
+    };
+    damage::damage_section(&o, settings, &mut out);
+    out
+}
+
 /// The whole page.
 pub fn page(dir: &Path, settings: &ReportSettings) -> String {
     let event = event::read_event(dir);

@@ -2,8 +2,6 @@
 //! the values that drive it, every criterion with its thresholds and what it
 //! rated, and the criteria that could not be used and why.
 
-use std::collections::BTreeMap;
-
 use super::drift::{residual, PEAK_CRITERION, RESIDUAL_CRITERION};
 use super::{stage_of, Loaded, Outputs};
 use crate::report::format_number;
@@ -59,24 +57,18 @@ pub(super) fn rating_section(
     settings: &ReportSettings,
 ) -> String {
     let mut body = String::new();
-    let worst = assessments.iter().map(|a| a.rating).max();
-    match worst {
+    let verdict = crate::report::Verdict::of(assessments.to_vec());
+    match verdict.rating {
         None => {
             body.push_str(
                 "<div class=\"rating-box r-none\" id=\"overall-rating\"><p class=\"big\">NOT RATED</p><p>No rating criterion is available (see below).</p></div>",
             );
         }
         Some(w) => {
-            // The criterion values that reach the worst rating, largest first.
-            let mut drivers: Vec<&Assessment> =
-                assessments.iter().filter(|a| a.rating == w).collect();
-            drivers.sort_by(|a, b| b.value.total_cmp(&a.value));
-            let mut by_criterion: BTreeMap<&str, &Assessment> = BTreeMap::new();
-            for d in &drivers {
-                by_criterion.entry(d.criterion.as_str()).or_insert(d);
-            }
-            let driven: Vec<String> = by_criterion
-                .values()
+            // The criterion values that reach the worst rating (the largest per criterion).
+            let driven: Vec<String> = verdict
+                .drivers
+                .iter()
                 .map(|a| {
                     format!(
                         "{} = {} at {} ({})",
