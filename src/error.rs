@@ -79,7 +79,13 @@ pub enum Error {
     /// A method could not produce a trustworthy answer from valid data
     /// (e.g. a non-yielding response for Bouc-Wen identification).
     #[error("{stage}: {message}")]
-    NotIdentifiable { stage: String, message: String },
+    NotIdentifiable {
+        stage: String,
+        message: String,
+        /// The F-test of the hysteretic terms (F, p) when that is what
+        /// failed (bouc_wen.parquet tables it on the not-identifiable row).
+        f_test: Option<(f64, f64)>,
+    },
     #[error("{path}: {source}")]
     Io {
         path: PathBuf,
@@ -128,9 +134,14 @@ impl Error {
                 message: message.clone(),
             },
             Error::Usage(m) => Error::Usage(m.clone()),
-            Error::NotIdentifiable { stage, message } => Error::NotIdentifiable {
+            Error::NotIdentifiable {
+                stage,
+                message,
+                f_test,
+            } => Error::NotIdentifiable {
                 stage: stage.clone(),
                 message: message.clone(),
+                f_test: *f_test,
             },
             Error::Io { path, source } => Error::Io {
                 path: path.clone(),

@@ -740,6 +740,7 @@ impl DofProblem {
                     "DoF {}: storey shear is identically zero; nothing to identify",
                     d + 1
                 ),
+                f_test: None,
             });
         }
         let log_shear: Vec<f64> = shear.iter().map(|v| (v.abs() / shear_ref).ln()).collect();

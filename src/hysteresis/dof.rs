@@ -67,10 +67,23 @@ fn sum_squares(x: &[f64]) -> f64 {
     x.iter().map(|a| a * a).sum()
 }
 
+/// `e` carrying the F-test (F, p) that made the DoF not identifiable.
+fn with_f_test(e: Error, test: (f64, f64)) -> Error {
+    match e {
+        Error::NotIdentifiable { stage, message, .. } => Error::NotIdentifiable {
+            stage,
+            message,
+            f_test: Some(test),
+        },
+        other => other,
+    }
+}
+
 fn not_identifiable(direction: &str, dof: usize, message: String) -> Error {
     Error::NotIdentifiable {
         stage: "hysteresis".into(),
         message: format!("direction {direction}, DoF {}: {message}", dof + 1),
+        f_test: None,
     }
 }
 
@@ -287,7 +300,8 @@ fn check_identifiable(
         ));
     }
     if !(d.significance.p_value < settings.significance_level) {
-        return Err(not_identifiable(
+        let f_test = (d.significance.f_statistic, d.significance.p_value);
+        return Err(with_f_test(not_identifiable(
             direction,
             dof,
             format!(
@@ -300,7 +314,7 @@ fn check_identifiable(
                 d.significance.p_value,
                 settings.significance_level
             ),
-        ));
+        ), f_test));
     }
     let edge = settings.exponent_resolution * 1.5;
     if (d.exponent - settings.exponent_min).abs() < edge

@@ -38,6 +38,8 @@ pub enum DirectionOutcome {
         /// The measured force–drift response, when the records and masses
         /// allow it (the identification itself failed).
         measured: Option<Box<MeasuredResponse>>,
+        /// The F-test of the hysteretic terms (F, p) when it is what failed.
+        f_test: Option<(f64, f64)>,
     },
 }
 
@@ -112,6 +114,7 @@ pub fn auto_directions(event: &Event) -> (Vec<DirectionSpec>, Vec<DirectionOutco
                 direction: dir,
                 reason: not_combined_reason(event, *level, ids),
                 measured: None,
+                f_test: None,
             });
             continue;
         }
@@ -130,6 +133,7 @@ pub fn auto_directions(event: &Event) -> (Vec<DirectionSpec>, Vec<DirectionOutco
                 direction: dir,
                 reason: "no base (level 0, role input) channel in this direction".into(),
                 measured: None,
+                f_test: None,
             });
             continue;
         };
@@ -138,6 +142,7 @@ pub fn auto_directions(event: &Event) -> (Vec<DirectionSpec>, Vec<DirectionOutco
                 direction: dir,
                 reason: "no floor channel (level > 0) in this direction".into(),
                 measured: None,
+                f_test: None,
             });
             continue;
         }
@@ -194,6 +199,10 @@ pub fn identify_event(
             Ok(d) => outcomes.push(DirectionOutcome::Identified(Box::new(d))),
             Err(e) if !p.fail_on_error => outcomes.push(DirectionOutcome::NotIdentifiable {
                 direction,
+                f_test: match &e {
+                    Error::NotIdentifiable { f_test, .. } => *f_test,
+                    _ => None,
+                },
                 reason: e.to_string(),
                 measured: measured.map(Box::new),
             }),
@@ -218,6 +227,7 @@ pub fn identify_event(
         return Err(Error::NotIdentifiable {
             stage: "hysteresis".into(),
             message: reasons.join("; "),
+            f_test: None,
         });
     }
     let resolved: Vec<MassResolution> = masses.into_iter().filter_map(|m| m.ok()).collect();

@@ -125,6 +125,7 @@ pub fn identify_kinematics(
                 "direction {direction}: the parameter estimates are unstable over time at every DoF (model-adequacy check): \
                  not identifiable from this record"
             ),
+            f_test: None,
         });
     }
     let (k0, k0_delta) = stiffness_matrices(&identified);

@@ -733,6 +733,7 @@ pub fn select_manual(
                     "manual pick {target} Hz: no stable physical pole within ±{:.1} %",
                     100.0 * relative_band
                 ),
+                f_test: None,
             });
         }
         modes.push(summarise(poles, &members, true));

@@ -48,7 +48,10 @@ pub fn write_bouc_wen(
     for o in outcomes {
         match o {
             DirectionOutcome::NotIdentifiable {
-                direction, reason, ..
+                direction,
+                reason,
+                f_test,
+                ..
             } => {
                 c.push_row(
                     direction,
@@ -65,7 +68,7 @@ pub fn write_bouc_wen(
                     "not_identifiable",
                     reason,
                 );
-                c.fill_dof(None, None);
+                c.fill_dof(*f_test, None);
             }
             DirectionOutcome::Identified(d) => {
                 for dof in &d.dofs {

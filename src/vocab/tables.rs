@@ -194,7 +194,7 @@ declare!(BOUC_WEN, bouc_wen, "bouc_wen", "bouc_wen.parquet",
     HYSTERETIC_SHARE: "hysteretic_share", F64, required, "1", "share of the record explained by the hysteretic terms";
     STATUS: "status", Utf8, required, "", "`identified`, `identified_unstable` (estimates unstable over time at this DoF), `not_identifiable` (one row per direction: `dof` −1, `parameter` `none`, `value` NaN)";
     REASON: "reason", Utf8, required, "", "empty unless `not_identifiable`: why (no base or floor channel, a level whose channels could not be combined, masses missing, the response stays (nearly) linear …), naming level, channel or file";
-    F_STATISTIC: "f_statistic", F64, nullable, "1", "F-test of the hysteretic terms (β, γ, N) against the nested linear model at this DoF: [(J_lin − J)/3] / [J/(n_eff − p)], n_eff = non-overlapping STFT windows; null on not-identifiable rows";
+    F_STATISTIC: "f_statistic", F64, nullable, "1", "F-test of the hysteretic terms (β, γ, N) against the nested linear model at this DoF: [(J_lin − J)/3] / [J/(n_eff − p)], n_eff = non-overlapping STFT windows; on a not-identifiable row: the test of the DoF that failed it (null when another check failed)";
     P_VALUE: "p_value", F64, nullable, "1", "its p-value; a DoF is identifiable when p < `significance_level` (default 1e-3)";
 });
 

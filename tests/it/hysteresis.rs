@@ -838,7 +838,7 @@ fn non_yielding_response_is_not_identifiable() {
     let synthetic = Synthetic::new(chain);
     let (records, _) = synthetic.records(4);
     match identify_direction(&records, &fast_settings(BasisForm::Jerk)) {
-        Err(Error::NotIdentifiable { stage, message }) => {
+        Err(Error::NotIdentifiable { stage, message, .. }) => {
             assert_eq!(stage, "hysteresis");
             assert!(
                 message.contains("not identifiable") && message.contains("DoF 1"),

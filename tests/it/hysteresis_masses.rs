@@ -221,13 +221,26 @@ fn uninstrumented_floor_uses_reduced_masses_from_the_twin() {
             eprintln!("reduced model identified: ω1(0) {w0:.3} rad/s vs truth {w1:.3}");
             assert!((w0 / w1 - 1.0).abs() < 0.05, "ω1(0) {w0} vs {w1}");
         }
-        DirectionOutcome::NotIdentifiable { reason, .. } => {
+        DirectionOutcome::NotIdentifiable { reason, f_test, .. } => {
             eprintln!("reduced model: {reason}");
             assert!(
                 reason.contains("DoF 1")
                     && reason.contains("not improve the linear fit significantly"),
                 "{reason}"
             );
+            // The failed F-test is tabled, not only told: bouc_wen.parquet's
+            // not-identifiable row carries F and p.
+            let (f, p) = f_test.expect("the F-test that failed travels with the outcome");
+            assert!(
+                f.is_finite() && f >= 0.0 && p >= 1e-3 && p <= 1.0,
+                "F {f}, p {p}"
+            );
+            let tmp = tempfile::tempdir().unwrap();
+            let path = tmp.path().join("bouc_wen.parquet");
+            quaketwin::sinks::hysteresis_tables::write_bouc_wen(&path, &outcomes, &[]).unwrap();
+            let t = quaketwin::report::table::load(&path, None).unwrap();
+            assert_eq!(t.number("f_statistic").unwrap()[0], Some(f));
+            assert_eq!(t.number("p_value").unwrap()[0], Some(p));
         }
     }
 }

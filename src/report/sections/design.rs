@@ -110,6 +110,24 @@ pub(super) fn facts_list(facts: &[(String, String)]) -> String {
 
 pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
     let mut body = String::new();
+    // A run without any design output (a post-earthquake run): one line,
+    // not one "absent" line per design table.
+    let design_tables = [
+        &tables::POD,
+        &tables::ACTUATOR_LAYOUT,
+        &tables::REDUCTION_VALIDATION,
+        &tables::INTERFACE_REFINEMENT,
+        &tables::HYBRID_PROTOTYPE,
+    ];
+    if design_tables
+        .iter()
+        .all(|t| matches!(load(dir, t, Some(&[])), Loaded::Absent(None)))
+    {
+        return crate::report::html::note(
+            "No hybrid-test design in this run: its pipeline has no design stage (pipelines/test-design.toml or \
+             `quaketwin design` make one; docs/test-design.md).",
+        );
+    }
     let facts = design_facts(dir);
     if !facts.is_empty() {
         body.push_str(&facts_list(&facts));

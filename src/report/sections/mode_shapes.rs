@@ -30,11 +30,19 @@ pub(super) fn output_channels(t: &Table) -> Vec<String> {
 }
 
 fn shapes(t: &Table) -> Option<&[Option<Vec<f64>>]> {
-    match t.columns.get(modes::SHAPE_RE.name) {
+    list_column(t, modes::SHAPE_RE.name)
+}
+
+fn list_column<'a>(t: &'a Table, name: &str) -> Option<&'a [Option<Vec<f64>>]> {
+    match t.columns.get(name) {
         Some(Column::NumberList(v)) => Some(v),
         _ => None,
     }
 }
+
+/// Below this modal phase collinearity a shape is markedly complex: its
+/// real part (what is drawn) misrepresents it, and the caption says so.
+const COMPLEX_MPC: f64 = 0.9;
 
 /// The shape charts and the components table.
 pub(super) fn mode_shapes(t: &Table, channels: &Loaded) -> String {
@@ -82,8 +90,22 @@ pub(super) fn mode_shapes(t: &Table, channels: &Loaded) -> String {
             None => list_chart(shape, &names),
         };
         let direction = t.key(modes::DIRECTION.name, r).unwrap_or_default();
+        let mpc = num(modes::MPC.name, r);
+        let complexity = match (mpc, num(modes::MPD_DEG.name, r)) {
+            (Some(c), Some(d)) => format!(
+                "; MPC {}, MPD {}°{}",
+                format_number(c),
+                format_number(d),
+                if c < COMPLEX_MPC {
+                    " — a complex shape: the real part drawn misrepresents it (see the imaginary parts below)"
+                } else {
+                    ""
+                }
+            ),
+            _ => String::new(),
+        };
         let caption = format!(
-            "Mode {mode}: {} Hz, ζ = {} %{}",
+            "Mode {mode}: {} Hz, ζ = {} %{}{complexity}",
             num(modes::FREQUENCY_HZ.name, r)
                 .map(format_number)
                 .unwrap_or_else(|| "—".into()),
@@ -108,19 +130,25 @@ pub(super) fn mode_shapes(t: &Table, channels: &Loaded) -> String {
     // The numbers under their channel names.
     let mut headers = vec!["mode".to_string()];
     headers.extend(names.iter().cloned());
-    let rows: Vec<Vec<Cell>> = shapes
-        .iter()
-        .enumerate()
-        .map(|(r, s)| {
-            let mut row = vec![Cell::of(t, modes::MODE.name, r)];
+    let imaginary = list_column(t, modes::SHAPE_IM.name);
+    let mut rows: Vec<Vec<Cell>> = Vec::new();
+    for (r, s) in shapes.iter().enumerate() {
+        let mode = t
+            .key(modes::MODE.name, r)
+            .unwrap_or_else(|| (r + 1).to_string());
+        let parts = [("Re", Some(s)), ("Im", imaginary.and_then(|v| v.get(r)))];
+        for (part, values) in parts {
+            let Some(values) = values else { continue };
+            let mut row = vec![Cell::text(&format!("{mode} ({part})"))];
             row.extend(
-                (0..names.len()).map(|i| Cell::number(s.as_ref().and_then(|s| s.get(i).copied()))),
+                (0..names.len())
+                    .map(|i| Cell::number(values.as_ref().and_then(|v| v.get(i).copied()))),
             );
-            row
-        })
-        .collect();
+            rows.push(row);
+        }
+    }
     body.push_str(&format!(
-        "<details><summary>Shape components (real part) by channel</summary><div class=\"scroll\">{}</div></details>",
+        "<details><summary>Shape components (real and imaginary parts) by channel</summary><div class=\"scroll\">{}</div></details>",
         table(Some("mode-shape-table"), &headers, &rows)
     ));
     body
