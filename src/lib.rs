@@ -14,6 +14,7 @@ pub mod error;
 pub mod event_folder;
 pub mod geometry;
 pub mod hysteresis;
+pub mod in_memory;
 pub mod metrics;
 pub mod modal;
 pub mod numeric;

@@ -67,22 +67,7 @@ pub fn run_dir(root: &Path, partition: &Path) -> PathBuf {
 /// folders hold exactly this run's tables for this event.  Only files named
 /// after a declared table are published.  Returns the published paths.
 pub fn publish_tables(root: &Path, partition: &Path, run_dir: &Path) -> Result<Vec<PathBuf>> {
-    let mut produced: Vec<&'static str> = Vec::new();
-    for entry in std::fs::read_dir(run_dir).map_err(|e| Error::io(run_dir, e))? {
-        let path = entry.map_err(|e| Error::io(run_dir, e))?.path();
-        let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
-            continue;
-        };
-        let declared = name
-            .strip_suffix(".parquet")
-            .and_then(tables::by_name)
-            .filter(|t| t.file == name);
-        let is_file = std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file());
-        if let (Some(t), true) = (declared, is_file) {
-            produced.push(t.name);
-        }
-    }
-    produced.sort_unstable();
+    let produced: Vec<&'static str> = produced_tables(run_dir)?;
     let mut published = Vec::with_capacity(produced.len());
     for name in &produced {
         let from = run_dir.join(format!("{name}.parquet"));
@@ -119,6 +104,39 @@ pub fn publish_tables(root: &Path, partition: &Path, run_dir: &Path) -> Result<V
         }
     }
     Ok(published)
+}
+
+/// The declared tables a run directory holds (regular files named as their
+/// declaration), sorted by table name.
+fn produced_tables(run_dir: &Path) -> Result<Vec<&'static str>> {
+    let mut produced: Vec<&'static str> = Vec::new();
+    for entry in std::fs::read_dir(run_dir).map_err(|e| Error::io(run_dir, e))? {
+        let path = entry.map_err(|e| Error::io(run_dir, e))?.path();
+        let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
+            continue;
+        };
+        let declared = name
+            .strip_suffix(".parquet")
+            .and_then(tables::by_name)
+            .filter(|t| t.file == name);
+        let is_file = std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file());
+        if let (Some(t), true) = (declared, is_file) {
+            produced.push(t.name);
+        }
+    }
+    produced.sort_unstable();
+    Ok(produced)
+}
+
+/// The tables of a run directory as (file, table) pairs, for a publisher
+/// other than [`publish_tables`] (the Python fleet writes them to any
+/// fsspec file system): the run's `DIR/<file>` goes to
+/// `ROOT/<table>/<partition>/part-0.parquet`.
+pub fn run_tables(run_dir: &Path) -> Result<Vec<(String, String)>> {
+    Ok(produced_tables(run_dir)?
+        .into_iter()
+        .map(|t| (format!("{t}.parquet"), t.to_string()))
+        .collect())
 }
 
 /// Puts a hard link to `from` (a copy where linking fails) at `to`: made

@@ -189,18 +189,39 @@ pub fn write_channels(path: &Path, event: &Event, metrics: &[StrongMotionMetrics
 /// Written a channel at a time (parked samples are read back one channel
 /// at a time too).
 pub fn write_samples(path: &Path, event: &Event, motions: &[Motion]) -> Result<()> {
+    let meta = samples_metadata(event).map_err(|e| Error::output(path, e))?;
+    write_parquet_stream(path, &meta, samples_batches(event, motions))
+}
+
+/// The metadata of `samples.parquet`: the event's, and the channels.
+fn samples_metadata(event: &Event) -> std::result::Result<Vec<(String, String)>, String> {
     let channels: Vec<&Channel> = event.records.iter().map(|r| &r.channel).collect();
     let mut meta = event_metadata(event);
     meta.push((
         CHANNELS_KEY.into(),
-        serde_json::to_string(&channels).map_err(|e| Error::output(path, e.to_string()))?,
+        serde_json::to_string(&channels).map_err(|e| e.to_string())?,
     ));
-    let batches = event.records.iter().flat_map(|r| {
+    Ok(meta)
+}
+
+/// The rows of `samples.parquet`, a batch at a time.
+fn samples_batches<'a>(
+    event: &'a Event,
+    motions: &'a [Motion],
+) -> impl Iterator<Item = Result<arrow_array::RecordBatch>> + Send + 'a {
+    event.records.iter().flat_map(move |r| {
         let n = r.samples.len();
         (0..n.div_ceil(SAMPLES_BATCH_ROWS).max(1))
             .map(move |k| samples_batch(r, motions, k * SAMPLES_BATCH_ROWS))
-    });
-    write_parquet_stream(path, &meta, batches)
+    })
+}
+
+/// The `samples` table in memory (the batches of [`write_samples`], with
+/// the metadata a file would carry in its Arrow schema).
+pub fn samples_table(event: &Event, motions: &[Motion]) -> Result<Vec<arrow_array::RecordBatch>> {
+    let meta = samples_metadata(event).map_err(Error::numerical)?;
+    let batches = samples_batches(event, motions).collect::<Result<Vec<_>>>()?;
+    crate::sinks::parquet::with_table_metadata(batches, &meta)
 }
 
 /// Rows of `samples.parquet` built at a time: a channel longer than this
@@ -374,7 +395,30 @@ pub fn read_samples_parked(
 ) -> Result<(Event, Vec<Motion>)> {
     let (table, reader) = ReadTable::open_stream(path, Some(1 << 16))?;
     let store = store_for(table.rows)?;
-    let store = store.as_ref();
+    samples_from(&table, reader, store.as_ref())
+}
+
+/// A `samples` table handed over in memory (its schema's metadata and its
+/// batches; `label` names it in errors) as the event it holds.
+pub fn samples_from_batches(
+    label: &str,
+    metadata: Vec<(String, String)>,
+    batches: Vec<arrow_array::RecordBatch>,
+) -> Result<(Event, Vec<Motion>)> {
+    let table = ReadTable::in_memory(label, metadata, Vec::new());
+    samples_from(&table, batches.into_iter().map(Ok), None)
+}
+
+/// The event of a `samples` table: `table` gives its metadata and names it
+/// in errors; `reader` its batches.
+fn samples_from(
+    table: &ReadTable,
+    reader: impl Iterator<
+        Item = std::result::Result<arrow_array::RecordBatch, arrow_schema::ArrowError>,
+    >,
+    store: Option<&Arc<dyn SampleStore>>,
+) -> Result<(Event, Vec<Motion>)> {
+    let path = table.path.as_path();
     let loc = || table.location();
     let parking = |e: std::io::Error| Error::output(path, format!("parking samples: {e}"));
     let get = |k: &str| table.metadata(k).map(String::from);

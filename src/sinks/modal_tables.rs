@@ -23,7 +23,7 @@ pub const WARNINGS_KEY: &str = "quaketwin.warnings";
 /// Metadata of every modal table (the schema name comes from the declaration).
 /// The provenance comes first: the event's history followed by the modal
 /// pre-processing (mean removal, decimation, band limits).
-fn meta(
+pub fn modal_metadata(
     result: &ModalResult,
     settings_json: &str,
     provenance: &Provenance,
@@ -91,8 +91,18 @@ pub fn write_stabilization(
     settings_json: &str,
     provenance: &Provenance,
 ) -> Result<()> {
+    let batch = stabilization_batch(r)?;
+    write_parquet(
+        path,
+        &[batch],
+        &modal_metadata(r, settings_json, provenance),
+    )
+}
+
+/// The rows of `stabilization.parquet` (every pole of every order).
+pub fn stabilization_batch(r: &ModalResult) -> Result<arrow_array::RecordBatch> {
     let p = &r.poles;
-    let batch = TableBuilder::new(&STABILIZATION)
+    TableBuilder::new(&STABILIZATION)
         .u32(
             stabilization::ORDER,
             p.iter().map(|x| x.order as u32).collect(),
@@ -132,8 +142,7 @@ pub fn write_stabilization(
                 .map(|x| x.mode.map(|m| m as i32 + 1).unwrap_or(-1))
                 .collect(),
         )
-        .build()?;
-    write_parquet(path, &[batch], &meta(r, settings_json, provenance))
+        .build()
 }
 
 pub fn write_modes(
@@ -142,8 +151,18 @@ pub fn write_modes(
     settings_json: &str,
     provenance: &Provenance,
 ) -> Result<()> {
+    let batch = modes_batch(r)?;
+    write_parquet(
+        path,
+        &[batch],
+        &modal_metadata(r, settings_json, provenance),
+    )
+}
+
+/// The rows of `modes.parquet` (one per selected mode).
+pub fn modes_batch(r: &ModalResult) -> Result<arrow_array::RecordBatch> {
     let m = &r.modes;
-    let batch = TableBuilder::new(&MODES)
+    TableBuilder::new(&MODES)
         .u32(modes::MODE, (1..=m.len() as u32).collect())
         .f64(
             modes::FREQUENCY_HZ,
@@ -197,8 +216,7 @@ pub fn write_modes(
             modes::SHAPE_STD,
             &m.iter().map(|x| x.shape_std.clone()).collect::<Vec<_>>(),
         )
-        .build()?;
-    write_parquet(path, &[batch], &meta(r, settings_json, provenance))
+        .build()
 }
 
 /// Singular values of the factorisation and of the PSD matrix, long format.
@@ -232,7 +250,11 @@ pub fn write_spectrum(
         .opt_f64(modal_spectrum::FREQUENCY_HZ, freq)
         .f64(modal_spectrum::VALUE, value)
         .build()?;
-    write_parquet(path, &[batch], &meta(r, settings_json, provenance))
+    write_parquet(
+        path,
+        &[batch],
+        &modal_metadata(r, settings_json, provenance),
+    )
 }
 
 /// Writes the pre/post comparison against the reference modes at

@@ -368,11 +368,10 @@ impl<W: std::io::Write + Send> ColumnParallelWriter<W> {
 /// writer properties: zstd, row groups of 2²⁰ rows, the key/value metadata —
 /// `quaketwin.version`, then the batch schema's own (the declaration's name
 /// and description), then `metadata`.
-fn writer_setup(
-    path: &Path,
-    first: &RecordBatch,
-    metadata: &[(String, String)],
-) -> Result<(SchemaRef, WriterProperties)> {
+/// The key/value metadata of a table: `quaketwin.version`, then the batch
+/// schema's own (the declaration's name and description), then `metadata`
+/// (one value per key: the first wins).
+fn table_metadata(first: &RecordBatch, metadata: &[(String, String)]) -> Vec<(String, String)> {
     let mut kv: Vec<(String, String)> = vec![(
         VERSION_KEY.to_string(),
         env!("CARGO_PKG_VERSION").to_string(),
@@ -380,11 +379,46 @@ fn writer_setup(
     let own = first.schema().metadata().clone();
     let given = metadata.iter().map(|(k, v)| (k, v));
     for (k, v) in own.iter().chain(given) {
-        // One value per key: the declaration's name wins over a repeated one.
         if !kv.iter().any(|(key, _)| key == k) {
             kv.push((k.clone(), v.clone()));
         }
     }
+    kv
+}
+
+/// `batches` (all of one schema) with the metadata a file written by
+/// [`write_parquet`] would carry in its Arrow schema: the in-memory form of
+/// a table (the Python bindings hand these to pyarrow without a file).
+pub fn with_table_metadata(
+    batches: Vec<RecordBatch>,
+    metadata: &[(String, String)],
+) -> Result<Vec<RecordBatch>> {
+    let Some(first) = batches.first() else {
+        return Ok(batches);
+    };
+    let kv = table_metadata(first, metadata);
+    let schema = Arc::new(
+        first
+            .schema()
+            .as_ref()
+            .clone()
+            .with_metadata(kv.into_iter().collect::<BTreeMap<_, _>>()),
+    );
+    batches
+        .into_iter()
+        .map(|b| {
+            b.with_schema(schema.clone())
+                .map_err(|e| Error::numerical(format!("building a table: {e}")))
+        })
+        .collect()
+}
+
+fn writer_setup(
+    path: &Path,
+    first: &RecordBatch,
+    metadata: &[(String, String)],
+) -> Result<(SchemaRef, WriterProperties)> {
+    let kv = table_metadata(first, metadata);
     let schema = Arc::new(
         first
             .schema()
@@ -471,6 +505,24 @@ impl ReadTable {
             },
             reader,
         ))
+    }
+
+    /// A table held in memory (an Arrow table handed over by a caller, not a
+    /// file): `label` names it in errors; `metadata` is its schema's.
+    pub fn in_memory(
+        label: &str,
+        metadata: Vec<(String, String)>,
+        batches: Vec<RecordBatch>,
+    ) -> ReadTable {
+        let mut metadata: Vec<(String, Option<String>)> =
+            metadata.into_iter().map(|(k, v)| (k, Some(v))).collect();
+        metadata.sort();
+        ReadTable {
+            path: PathBuf::from(label),
+            rows: batches.iter().map(|b| b.num_rows()).sum(),
+            batches,
+            metadata,
+        }
     }
 
     /// Value of a key/value metadata entry.

@@ -1,0 +1,177 @@
+//! `quaketwin._native`: the Python face of the quaketwin library, one thin
+//! layer.  Every function calls one library function; tables cross the
+//! boundary through the Arrow C data interface (`arrow-pyarrow`: pyarrow
+//! takes the Rust buffers without a copy, and hands its own over the same
+//! way); errors become Python exceptions with the library's message.  The
+//! GIL is released while the library works.  The Python package
+//! (python/quaketwin) wraps these with docstrings and the fleet runner.
+
+use std::path::PathBuf;
+
+use arrow_array::RecordBatch;
+use arrow_pyarrow::{FromPyArrow, IntoPyArrow, Table as PyArrowTable};
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use quaketwin::in_memory::{self, Table};
+
+create_exception!(
+    _native,
+    QuaketwinError,
+    PyException,
+    "A quaketwin error: bad input (names the file, channel, line or byte offset) or a failed stage."
+);
+create_exception!(
+    _native,
+    UsageError,
+    QuaketwinError,
+    "Bad settings, pipeline file or arguments (exit code 2 on the command line)."
+);
+
+/// The library's error as the Python exception of its kind.
+fn raise(e: quaketwin::error::Error) -> PyErr {
+    let text =
+        quaketwin::error::printable(&e.to_string(), quaketwin::error::MAX_PRINTED_ERROR_CHARS);
+    match e {
+        quaketwin::error::Error::Usage(_) => UsageError::new_err(text),
+        _ => QuaketwinError::new_err(text),
+    }
+}
+
+fn to_pyarrow<'py>(py: Python<'py>, t: Table) -> PyResult<Bound<'py, PyAny>> {
+    let table = PyArrowTable::try_new(t.batches, t.schema)
+        .map_err(|e| QuaketwinError::new_err(e.to_string()))?;
+    table.into_pyarrow(py)
+}
+
+fn from_pyarrow(table: &Bound<'_, PyAny>) -> PyResult<Table> {
+    let (batches, schema): (Vec<RecordBatch>, _) =
+        PyArrowTable::from_pyarrow_bound(table)?.into_inner();
+    Ok(Table::new(schema, batches))
+}
+
+/// The inventory of an event folder or zip (the `event.json` document), as JSON text.
+#[pyfunction]
+fn inspect_json(py: Python<'_>, event: PathBuf) -> PyResult<String> {
+    py.detach(|| quaketwin::commands::inspect_json(&event))
+        .map_err(raise)
+}
+
+/// Runs a pipeline file on one event into `out`; the run summary as JSON text.
+#[pyfunction]
+#[pyo3(signature = (pipeline, event, out, reference=None))]
+fn run_json(
+    py: Python<'_>,
+    pipeline: PathBuf,
+    event: PathBuf,
+    out: PathBuf,
+    reference: Option<PathBuf>,
+) -> PyResult<String> {
+    py.detach(|| {
+        let result = quaketwin::commands::run_pipeline_with(
+            &pipeline,
+            &event,
+            &out,
+            reference.as_deref(),
+            true,
+        );
+        let summary = quaketwin::summary::RunSummary::of_run(
+            &pipeline.display().to_string(),
+            &event,
+            &out,
+            &result,
+        );
+        result?;
+        quaketwin::summary::to_json(&summary)
+    })
+    .map_err(raise)
+}
+
+/// The built-in hysteresis command (Bouc-Wen + damage) into `out`; the run summary as JSON.
+#[pyfunction]
+fn hysteresis_json(py: Python<'_>, event: PathBuf, out: PathBuf) -> PyResult<String> {
+    py.detach(|| {
+        let result = quaketwin::commands::hysteresis(&event, &out, true);
+        let summary =
+            quaketwin::summary::RunSummary::of_run("hysteresis (built-in)", &event, &out, &result);
+        result?;
+        quaketwin::summary::to_json(&summary)
+    })
+    .map_err(raise)
+}
+
+/// Ensemble update of a twin against a modes.parquet (or a run directory
+/// holding one) into `out`; the update summary as JSON.
+#[pyfunction]
+#[pyo3(signature = (twin, modes, out, settings=None))]
+fn update_json(
+    py: Python<'_>,
+    twin: PathBuf,
+    modes: PathBuf,
+    out: PathBuf,
+    settings: Option<PathBuf>,
+) -> PyResult<String> {
+    py.detach(|| {
+        let s = quaketwin::commands::update(&twin, &modes, &out, settings.as_deref())?;
+        quaketwin::summary::to_json(&s)
+    })
+    .map_err(raise)
+}
+
+/// The records of an event as the `samples` table (pyarrow), without files.
+#[pyfunction]
+fn read_event<'py>(py: Python<'py>, event: PathBuf) -> PyResult<Bound<'py, PyAny>> {
+    let table = py.detach(|| in_memory::read_event(&event)).map_err(raise)?;
+    to_pyarrow(py, table)
+}
+
+/// Modal identification of a `samples` table in memory: (modes, stabilization, warnings).
+#[pyfunction]
+fn modal<'py>(
+    py: Python<'py>,
+    samples: &Bound<'py, PyAny>,
+    settings_json: &str,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Vec<String>)> {
+    let samples = from_pyarrow(samples)?;
+    let settings = settings_json.to_string();
+    let r = py
+        .detach(|| in_memory::modal(&samples, &settings))
+        .map_err(raise)?;
+    Ok((
+        to_pyarrow(py, r.modes)?,
+        to_pyarrow(py, r.stabilization)?,
+        r.warnings,
+    ))
+}
+
+/// The Hive partition `structure=…/event=…` of an event (the many-event layout).
+#[pyfunction]
+fn event_partition(py: Python<'_>, event: PathBuf) -> PyResult<String> {
+    py.detach(|| quaketwin::commands::event_partition(&event))
+        .map(|p| p.to_string_lossy().replace('\\', "/"))
+        .map_err(raise)
+}
+
+/// The table files of a finished run directory (`run.json`'s list), with
+/// the dataset table each belongs to: [(file, table)].
+#[pyfunction]
+fn run_tables(py: Python<'_>, run_dir: PathBuf) -> PyResult<Vec<(String, String)>> {
+    py.detach(|| quaketwin::sinks::dataset::run_tables(&run_dir))
+        .map_err(raise)
+}
+
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("QuaketwinError", m.py().get_type::<QuaketwinError>())?;
+    m.add("UsageError", m.py().get_type::<UsageError>())?;
+    m.add_function(wrap_pyfunction!(inspect_json, m)?)?;
+    m.add_function(wrap_pyfunction!(run_json, m)?)?;
+    m.add_function(wrap_pyfunction!(hysteresis_json, m)?)?;
+    m.add_function(wrap_pyfunction!(update_json, m)?)?;
+    m.add_function(wrap_pyfunction!(read_event, m)?)?;
+    m.add_function(wrap_pyfunction!(modal, m)?)?;
+    m.add_function(wrap_pyfunction!(event_partition, m)?)?;
+    m.add_function(wrap_pyfunction!(run_tables, m)?)?;
+    Ok(())
+}
