@@ -12,6 +12,7 @@ pub mod design;
 pub mod error;
 pub mod event_folder;
 pub mod geometry;
+pub mod hash;
 pub mod hysteresis;
 pub mod metrics;
 pub mod modal;

@@ -353,38 +353,11 @@ fn column_parallel_parquet_is_the_file_arrow_writer_writes() {
     let ours = dir.path().join("ours.parquet");
     let meta = vec![("quaketwin.test".to_string(), "x".to_string())];
     write_parquet(&ours, &batches, &meta).unwrap();
-    // The reference: ArrowWriter with the properties write_parquet documents.
+    // The reference: ArrowWriter with the schema and properties of write_parquet.
     let reference = {
         use parquet::arrow::ArrowWriter;
-        use parquet::basic::{Compression, ZstdLevel};
-        use parquet::file::metadata::KeyValue;
-        use parquet::file::properties::WriterProperties;
-        let mut kv: Vec<(String, String)> =
-            vec![("quaketwin.version".into(), env!("CARGO_PKG_VERSION").into())];
-        for (k, v) in batches[0]
-            .schema()
-            .metadata()
-            .iter()
-            .chain(meta.iter().map(|(k, v)| (k, v)))
-        {
-            if !kv.iter().any(|(key, _)| key == k) {
-                kv.push((k.clone(), v.clone()));
-            }
-        }
-        let schema = Arc::new(
-            batches[0].schema().as_ref().clone().with_metadata(
-                kv.iter()
-                    .cloned()
-                    .collect::<std::collections::BTreeMap<_, _>>(),
-            ),
-        );
-        let props = WriterProperties::builder()
-            .set_compression(Compression::ZSTD(ZstdLevel::try_new(3).unwrap()))
-            .set_max_row_group_row_count(Some(1 << 20))
-            .set_key_value_metadata(Some(
-                kv.into_iter().map(|(k, v)| KeyValue::new(k, v)).collect(),
-            ))
-            .build();
+        let (schema, props) =
+            quaketwin::sinks::parquet::writer_setup(&ours, &batches[0], &meta).unwrap();
         let mut bytes = Vec::new();
         let mut w = ArrowWriter::try_new(&mut bytes, schema.clone(), Some(props)).unwrap();
         for b in &batches {
@@ -401,6 +374,77 @@ fn column_parallel_parquet_is_the_file_arrow_writer_writes() {
         written.len(),
         reference.len()
     );
+}
+
+/// A table of time-series samples is written without dictionaries for its
+/// floats (byte-stream-split) and its sample index and time (delta), and
+/// reads back to the same values; a table of results keeps Parquet's
+/// default dictionary.
+#[test]
+fn series_tables_are_byte_stream_split_and_delta_encoded() {
+    use parquet::basic::Encoding;
+    use parquet::file::reader::{FileReader, SerializedFileReader};
+    use quaketwin::sinks::parquet::{write_parquet, ReadTable, TableBuilder};
+    use quaketwin::vocab::tables::{spectra, SPECTRA};
+    let dir = tempfile::tempdir().unwrap();
+    let series = dir.path().join("samples.parquet");
+    let batch = samples_rows(
+        "A",
+        0,
+        10_000,
+        |i| (i as f64 * 0.1).sin(),
+        |i| (i % 7 != 0).then_some(i as f64 * 1e-3),
+    );
+    write_parquet(&series, &[batch.clone()], &[]).unwrap();
+    let results = dir.path().join("spectra.parquet");
+    let n = 100;
+    let spectra_batch = TableBuilder::new(&SPECTRA)
+        .str(spectra::CHANNEL_ID, &vec!["A"; n])
+        .f64(spectra::DAMPING, vec![0.05; n])
+        .f64(spectra::PERIOD_S, (0..n).map(|i| i as f64 * 0.1).collect())
+        .f64(spectra::SD_M, vec![1.0; n])
+        .f64(spectra::PSV_M_S, vec![1.0; n])
+        .f64(spectra::PSA_M_S2, vec![1.0; n])
+        .f64(spectra::SA_ABS_M_S2, vec![1.0; n])
+        .build()
+        .unwrap();
+    write_parquet(&results, &[spectra_batch], &[]).unwrap();
+    // (column, encodings, whether it has a dictionary page)
+    let layout = |path: &Path| -> Vec<(String, Vec<Encoding>, bool)> {
+        let r = SerializedFileReader::new(std::fs::File::open(path).unwrap()).unwrap();
+        let rg = r.metadata().row_group(0);
+        rg.columns()
+            .iter()
+            .map(|c| {
+                (
+                    c.column_path().string(),
+                    c.encodings().collect(),
+                    c.dictionary_page_offset().is_some(),
+                )
+            })
+            .collect()
+    };
+    for (column, encodings, dictionary) in layout(&series) {
+        let expected = match column.as_str() {
+            "channel_id" => None,
+            "sample" | "time" => Some(Encoding::DELTA_BINARY_PACKED),
+            _ => Some(Encoding::BYTE_STREAM_SPLIT),
+        };
+        match expected {
+            Some(e) => {
+                assert!(!dictionary, "{column}: {encodings:?}");
+                assert!(encodings.contains(&e), "{column}: {encodings:?}");
+            }
+            None => assert!(dictionary, "{column}: {encodings:?}"),
+        }
+    }
+    for (column, encodings, dictionary) in layout(&results) {
+        assert!(dictionary, "{column}: {encodings:?}");
+    }
+    let (_, reader) = ReadTable::open_stream(&series, Some(batch.num_rows())).unwrap();
+    let back: Vec<RecordBatch> = reader.map(|b| b.unwrap()).collect();
+    assert_eq!(back.len(), 1);
+    assert_eq!(back[0].columns(), batch.columns());
 }
 
 /// A big file of a folder is listed by its head and read when its records
