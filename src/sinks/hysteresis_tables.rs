@@ -308,12 +308,20 @@ pub fn write_fit(path: &Path, outcomes: &[DirectionOutcome], decimate: usize) ->
     let (mut dir, mut dof, mut seg, mut t, mut drift, mut fr, mut fm) =
         (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     for o in outcomes {
-        // (direction, rate, segments, drifts, record forces, model forces)
-        let (direction, fs, segments, drifts, record, model): (_, _, _, Vec<&[f64]>, _, _) = match o
-        {
+        // (direction, rate, start, segments, drifts, record forces, model forces)
+        let (direction, fs, start_s, segments, drifts, record, model): (
+            _,
+            _,
+            _,
+            _,
+            Vec<&[f64]>,
+            _,
+            _,
+        ) = match o {
             DirectionOutcome::Identified(d) => (
                 &d.direction,
                 d.sampling_rate_hz,
+                d.start_s,
                 &d.segments,
                 d.dofs
                     .iter()
@@ -339,6 +347,7 @@ pub fn write_fit(path: &Path, outcomes: &[DirectionOutcome], decimate: usize) ->
             } => (
                 direction,
                 m.sampling_rate_hz,
+                m.start_s,
                 &m.segments,
                 m.storey_drift.iter().map(|v| v.as_slice()).collect(),
                 storey_shears(
@@ -366,7 +375,7 @@ pub fn write_fit(path: &Path, outcomes: &[DirectionOutcome], decimate: usize) ->
                         .cloned()
                         .unwrap_or_else(|| format!("L{d}–L{}", d + 1)),
                 );
-                t.push(i as f64 * dt);
+                t.push(start_s + i as f64 * dt);
                 drift.push(storey_drift[i]);
                 fr.push(record[d][i]);
                 fm.push(model.as_ref().map(|m| m[d][i]));

@@ -19,6 +19,7 @@ pub use crate::hysteresis::{
 };
 use crate::hysteresis::{
     identify_event, BasisForm, EventSettings, FrequencyBand, IdentifySettings, VelocityDrift,
+    WindowSettings,
 };
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::hysteresis_tables::{self as tables, DirectionOutcome};
@@ -79,6 +80,9 @@ pub struct HysteresisParams {
     /// Fail the stage when a direction cannot be identified (the CLI command
     /// does); in a pipeline the reason is written to bouc_wen.parquet instead.
     pub fail_on_error: bool,
+    /// The part of the record identified: `{ rule = "strong_motion" | "record",
+    /// threshold, margin_s, max_s }` (`crate::hysteresis::window`).
+    pub window: WindowSettings,
 }
 
 impl Default for HysteresisParams {
@@ -97,6 +101,7 @@ impl Default for HysteresisParams {
             directions: None,
             output_decimation: 1,
             fail_on_error: false,
+            window: WindowSettings::default(),
         }
     }
 }
@@ -124,6 +129,7 @@ impl HysteresisParams {
                 "exponent range must satisfy 1 ≤ exponent_min < exponent_max, resolution > 0",
             ));
         }
+        self.window.validate()?;
         if !(self.reduced_mass_step > 0.0 && self.reduced_mass_step <= 0.001) {
             return Err(Error::usage(
                 "reduced_mass_step must be in (0, 0.001] (Eq. 35–36 search resolution)",
@@ -146,6 +152,7 @@ pub fn identify_event_at(
         reduced_mass_step: p.reduced_mass_step,
         mass_lumping: p.mass_lumping,
         directions: p.directions.clone(),
+        window: p.window,
         fail_on_error: p.fail_on_error,
     };
     identify_event(event, event_dir, &settings)
@@ -162,7 +169,7 @@ pub fn write_identification(
         "form": p.form, "band_low_hz": p.band_low_hz, "exponent_min": p.exponent_min,
         "exponent_max": p.exponent_max, "exponent_resolution": p.exponent_resolution,
         "velocity_drift": p.velocity_drift, "reduced_mass_step": p.reduced_mass_step,
-        "mass_lumping": p.mass_lumping,
+        "mass_lumping": p.mass_lumping, "window": p.window,
     });
     let processing: serde_json::Map<String, serde_json::Value> = outcomes
         .iter()
