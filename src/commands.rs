@@ -7,6 +7,7 @@ use std::path::Path;
 use crate::error::Result;
 use crate::event_folder::{self, LoadedEvent};
 use crate::pipeline::{self, StageOutcome};
+use crate::sinks::dataset;
 use crate::stages::{load_pipeline, parse_pipeline};
 use crate::vocab::format_epoch_ns;
 
@@ -439,26 +440,6 @@ pub fn design(design: &Path, out: &Path) -> Result<crate::stages::design::Design
     crate::stages::design::design_from_file(design, out)
 }
 
-/// A value made safe for a Hive partition directory name (`key=value`).
-fn partition_value(s: &str) -> String {
-    let v: String = s
-        .trim()
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    if v.is_empty() {
-        "unnamed".into()
-    } else {
-        v
-    }
-}
-
 /// Expands the EVENT arguments: a folder with no manifest whose
 /// sub-folders each hold an `event.toml` is a folder of event folders.
 pub fn expand_events(events: &[std::path::PathBuf]) -> Vec<std::path::PathBuf> {
@@ -496,9 +477,10 @@ pub fn expand_events(events: &[std::path::PathBuf]) -> Vec<std::path::PathBuf> {
     out
 }
 
-/// The Hive partition directory of one event: `structure=<name>/event=<name>`
-/// (names from the manifest, else the folder name).
-pub fn partition_dir(out: &Path, event: &Path) -> Result<std::path::PathBuf> {
+/// The Hive partition of one event, `structure=<name>/event=<name>` (the
+/// structure's name from the manifest, else `unknown`; the event folder's
+/// name), relative to the dataset root.
+pub fn event_partition(event: &Path) -> Result<std::path::PathBuf> {
     let loaded = event_folder::load(event)?;
     let folder = event
         .file_stem()
@@ -510,15 +492,15 @@ pub fn partition_dir(out: &Path, event: &Path) -> Result<std::path::PathBuf> {
         .as_ref()
         .and_then(|s| s.name.clone())
         .unwrap_or_else(|| "unknown".into());
-    Ok(out
-        .join(format!("structure={}", partition_value(&structure)))
-        .join(format!("event={}", partition_value(&folder))))
+    Ok(dataset::partition(&structure, &folder))
 }
 
 /// `quaketwin run PIPELINE EVENT1 EVENT2 … --out DIR`: events in parallel on
-/// all cores, each into its Hive partition `DIR/structure=…/event=…/`, so the
-/// tables of a whole network read as one dataset (pyarrow, DuckDB).  Every
-/// event is attempted; the first failure is returned after all have run.
+/// all cores, each into its run directory `DIR/runs/structure=…/event=…/`,
+/// its tables then published table-first, `DIR/<table>/structure=…/event=…/
+/// part-0.parquet` ([`dataset`]), so that one table of a whole network reads
+/// as one dataset (pyarrow, DuckDB, polars).  Every event is attempted; the
+/// first failure is returned after all have run.
 pub fn run_many(
     pipeline_path: &Path,
     events: &[std::path::PathBuf],
@@ -541,8 +523,11 @@ pub fn run_many_with(
     let results: Vec<(std::path::PathBuf, Result<()>)> = events
         .par_iter()
         .map(|e| {
-            let r =
-                partition_dir(out, e).and_then(|dir| pipeline::run(&p, e, &dir, true).map(|_| ()));
+            let r = event_partition(e).and_then(|partition| {
+                let dir = dataset::run_dir(out, &partition);
+                pipeline::run(&p, e, &dir, true)?;
+                dataset::publish_tables(out, &partition, &dir).map(|_| ())
+            });
             if !quiet {
                 match &r {
                     Ok(()) => eprintln!("[{}] {} done", p.pipeline.name, e.display()),

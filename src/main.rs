@@ -115,7 +115,9 @@ enum Command {
         seed: u64,
     },
     /// Run a pipeline file on an event folder; several events (or a folder of
-    /// event folders) run in parallel into a Hive-partitioned dataset.
+    /// event folders) run in parallel into a table-first Hive dataset:
+    /// DIR/<table>/structure=…/event=…/part-0.parquet, each event's run
+    /// (run.json, event.json, report.html) in DIR/runs/structure=…/event=…/.
     Run {
         /// Pipeline file (pipelines/*.toml).
         pipeline: PathBuf,

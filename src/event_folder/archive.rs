@@ -199,6 +199,9 @@ fn walk(root: &Path, dir: &Path, out: &mut Vec<std::path::PathBuf>) -> Result<()
         }
         let ft = entry.file_type().map_err(|e| Error::io(&path, e))?;
         if ft.is_dir() {
+            if super::is_run_directory(&path) {
+                continue; // quaketwin's own outputs (`--out` inside the event folder)
+            }
             walk(root, &path, out)?;
         } else if ft.is_file() {
             out.push(path.strip_prefix(root).unwrap_or(&path).to_path_buf());

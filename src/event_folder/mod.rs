@@ -46,6 +46,23 @@ pub struct LoadedEvent {
     pub geometry: crate::geometry::GeometryReport,
 }
 
+/// The lock file of a run's output directory (`pipeline::lock` creates it).
+/// Named here, below the pipeline, because the event folder's reader must
+/// recognise an output directory (see [`is_run_directory`]).
+pub const RUN_LOCK_FILE: &str = ".quaketwin.lock";
+/// The run manifest of an output directory (`pipeline::manifest` writes it).
+pub const RUN_MANIFEST_FILE: &str = "run.json";
+
+/// Whether `dir` is a quaketwin output directory — it holds a run's lock
+/// file or its run manifest.  Such a folder inside an event folder (`--out`
+/// placed there) is not part of the event: neither read as records nor
+/// counted in the event's fingerprint, so a re-run finds the event unchanged.
+pub fn is_run_directory(dir: &Path) -> bool {
+    [RUN_LOCK_FILE, RUN_MANIFEST_FILE]
+        .iter()
+        .any(|marker| std::fs::symlink_metadata(dir.join(marker)).is_ok_and(|m| m.is_file()))
+}
+
 /// Loads the event at `path` (directory or zip).
 pub fn load(path: &Path) -> Result<LoadedEvent> {
     load_with_limits(path, &ArchiveLimits::default())

@@ -1,8 +1,12 @@
 //! Peak inter-storey drift ratios per storey and building direction, from
-//! the conditioned displacements (METHODS §1 metrics).
+//! the conditioned displacements (METHODS §1 metrics), and the residual
+//! drift of each storey from the unfiltered records (`residual`).
 
+use std::collections::BTreeMap;
+
+use super::residual::{residual_drift, ResidualDrift};
 use crate::conditioning::Motion;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::vocab::{Event, Record};
 
 /// One storey's peak drift in one direction.
@@ -15,11 +19,61 @@ pub struct DriftRow {
     pub upper_channel: String,
     pub storey_height_m: f64,
     pub peak_drift_ratio: f64,
+    /// Residual drift from the unfiltered records, when they were available
+    /// on a common time base ([`storey_residual_drifts`]).
+    pub residual: Option<ResidualDrift>,
+}
+
+/// Residual drift per (direction, storey) of an event's records as recorded
+/// (the run's source, before any conditioning step; converted to SI here).
+/// Storeys whose two levels are not on a common time base, or whose records
+/// cannot be converted to SI or hold non-finite samples, are left out.
+pub fn storey_residual_drifts(source: &Event) -> Result<BTreeMap<(String, i32), ResidualDrift>> {
+    let mut out = BTreeMap::new();
+    let selection = crate::geometry::one_record_per_level(&source.records);
+    let mut by_dir: BTreeMap<String, Vec<(i32, &Record)>> = BTreeMap::new();
+    for (&(axis, level), r) in &selection.records {
+        by_dir
+            .entry(format!("{axis:?}"))
+            .or_default()
+            .push((level, *r));
+    }
+    for (dir, mut list) in by_dir {
+        list.sort_by_key(|(l, _)| *l);
+        for w in list.windows(2) {
+            let ((l0, r0), (l1, r1)) = (w[0], w[1]);
+            let (c0, c1) = (&r0.channel, &r1.channel);
+            if l1 != l0 + 1 || r0.len() != r1.len() || (c0.dt() - c1.dt()).abs() > 1e-12 {
+                continue;
+            }
+            let (Some(f0), Some(f1)) = (c0.units.to_si_factor(), c1.units.to_si_factor()) else {
+                continue;
+            };
+            let si = |r: &Record, f: f64| -> Result<Vec<f64>> {
+                Ok(r.samples.get()?.iter().map(|x| x * f).collect())
+            };
+            match residual_drift(&si(r0, f0)?, &si(r1, f1)?, c0.dt()) {
+                Ok(residual) => {
+                    out.insert((dir.clone(), l1), residual);
+                }
+                // Too short, non-finite: no residual drift for this storey.
+                Err(Error::Usage(_) | Error::Numerical(_)) => {}
+                Err(e) => return Err(e),
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// Peak inter-storey drift ratios: channels grouped by direction, ordered by
 /// level; consecutive levels with known storey heights form a storey.
-pub fn storey_drift(event: &Event, motions: &[Motion]) -> Result<Vec<DriftRow>> {
+/// `residual`: the residual drifts of [`storey_residual_drifts`], joined by
+/// (direction, storey).
+pub fn storey_drift(
+    event: &Event,
+    motions: &[Motion],
+    residual: &BTreeMap<(String, i32), ResidualDrift>,
+) -> Result<Vec<DriftRow>> {
     let Some(structure) = &event.structure else {
         return Ok(Vec::new());
     };
@@ -30,8 +84,7 @@ pub fn storey_drift(event: &Event, motions: &[Motion]) -> Result<Vec<DriftRow>> 
     // One motion per level and direction: the rigid-floor combination where
     // a level has several channels (geometry::floor).
     let selection = crate::geometry::one_record_per_level(&event.records);
-    let mut by_dir: std::collections::BTreeMap<String, Vec<(i32, &Record, &Motion)>> =
-        Default::default();
+    let mut by_dir: BTreeMap<String, Vec<(i32, &Record, &Motion)>> = Default::default();
     for (&(axis, level), r) in &selection.records {
         if let Some(m) = motions.iter().find(|m| m.channel_id == r.channel.id) {
             by_dir
@@ -63,6 +116,7 @@ pub fn storey_drift(event: &Event, motions: &[Motion]) -> Result<Vec<DriftRow>> 
                 upper_channel: r1.channel.id.clone(),
                 storey_height_m: h,
                 peak_drift_ratio: ratio,
+                residual: residual.get(&(dir.clone(), *l1)).copied(),
             });
         }
     }

@@ -3,9 +3,11 @@
 //! inter-storey drift ratios. Inputs in SI (m/s², m/s, m); no I/O.
 
 pub mod drift;
+pub mod residual;
 pub mod spectra;
 
-pub use drift::{storey_drift, DriftRow};
+pub use drift::{storey_drift, storey_residual_drifts, DriftRow};
+pub use residual::{residual_drift, ResidualDrift};
 pub use spectra::{default_periods, response_spectrum, sdof_response, ResponseSpectrum};
 
 use serde::{Deserialize, Serialize};

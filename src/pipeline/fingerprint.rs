@@ -24,6 +24,11 @@ pub fn path_fingerprint(path: &Path) -> Result<String> {
 fn collect(root: &Path, p: &Path, out: &mut Vec<(String, u64, i128)>) -> Result<()> {
     let meta = std::fs::metadata(p).map_err(|e| Error::io(p, e))?;
     if meta.is_dir() {
+        // An output directory inside the event folder is not part of the
+        // event (the event folder's reader skips it too).
+        if p != root && crate::event_folder::is_run_directory(p) {
+            return Ok(());
+        }
         for entry in std::fs::read_dir(p).map_err(|e| Error::io(p, e))? {
             let entry = entry.map_err(|e| Error::io(p, e))?;
             collect(root, &entry.path(), out)?;

@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 
 /// Name of the lock file inside the output directory.
-pub const LOCK_FILE: &str = ".quaketwin.lock";
+pub const LOCK_FILE: &str = crate::event_folder::RUN_LOCK_FILE;
 
 /// Who holds (or held) a lock.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

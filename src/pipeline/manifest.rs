@@ -14,7 +14,7 @@ use crate::error::{Error, Result};
 use crate::hash::Hash64;
 
 /// File name of the manifest inside the output directory.
-pub const MANIFEST_FILE: &str = "run.json";
+pub const MANIFEST_FILE: &str = crate::event_folder::RUN_MANIFEST_FILE;
 /// Version of the manifest's layout (2: outputs hashed with XXH64, `xxh64`;
 /// 1 had FNV-1a, `fnv1a64`).
 pub const FORMAT: u32 = 2;

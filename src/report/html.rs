@@ -42,6 +42,45 @@ pub fn format_number(x: f64) -> String {
     }
 }
 
+/// A direction as every table and caption of the page writes it: the
+/// building axes `X`, `Y`, `Z` (and mode labels such as `torsion`) as they
+/// are, a compass azimuth `<deg>deg` — a channel whose relation to the
+/// building axes is unknown — as "azimuth <deg>°".
+pub fn direction_text(raw: &str) -> String {
+    match raw.strip_suffix("deg") {
+        Some(deg) if deg.parse::<f64>().is_ok() => format!("azimuth {deg}°"),
+        _ => raw.to_string(),
+    }
+}
+
+/// A stated setting (a threshold) as written: [`format_number`] without
+/// trailing zeros ("0.005", not "0.005000").
+pub fn short_number(x: f64) -> String {
+    let s = format_number(x);
+    if s.contains('.') && !s.contains('e') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+/// An ISO 8601 UTC time as people read it: "2026-02-01 08:00:00 UTC"
+/// (fractional seconds kept only when not zero); other text as it is.
+pub fn time_text(iso: &str) -> String {
+    let Some(body) = iso.strip_suffix('Z') else {
+        return iso.to_string();
+    };
+    let Some((date, time)) = body.split_once('T') else {
+        return iso.to_string();
+    };
+    let time = match time.split_once('.') {
+        Some((whole, frac)) if frac.chars().all(|c| c == '0') => whole.to_string(),
+        Some((whole, frac)) => format!("{whole}.{}", frac.trim_end_matches('0')),
+        None => time.to_string(),
+    };
+    format!("{date} {time} UTC")
+}
+
 /// One table cell.
 #[derive(Debug, Clone, Default)]
 pub struct Cell {
@@ -87,6 +126,13 @@ impl Cell {
                 class: Some("num"),
             },
             other => Cell::number(other),
+        }
+    }
+    /// A direction cell of a loaded table column ([`direction_text`]).
+    pub fn direction(table: &Table, column: &str, row: usize) -> Cell {
+        match table.key(column, row) {
+            Some(d) => Cell::text(&direction_text(&d)),
+            None => Cell::number(None),
         }
     }
     /// Any cell of a loaded table column.

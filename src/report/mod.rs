@@ -7,9 +7,12 @@
 //! In a pipeline output directory only the files its run manifest
 //! (`run.json`) lists are read: a stray file is treated as absent.
 //! The only derived quantities are display choices: ratings (threshold
-//! comparisons of tabled values), maxima/final values of tabled series, and
-//! min–max decimation of traces for drawing.  Each section is always shown;
-//! when its stage did not run the section says which file is absent.
+//! comparisons of tabled values), maxima/final values of tabled series,
+//! relative changes of tabled before/after values, and decimation of traces
+//! (min–max per time bin) and loops (in time order) for drawing.  Each
+//! section is always shown; when its stage did not run the section says
+//! which file is absent.  The page opens with the rating and a one-screen
+//! summary; the raw processing history is in the appendix.
 //! Rating thresholds and their rationale: docs/report.md.
 
 mod html;
@@ -83,8 +86,13 @@ pub struct ReportSettings {
     pub iota_statistic: IotaStatistic,
     /// Peak inter-storey drift ratio: green < 0.005 ≤ yellow < 0.015 ≤ red.
     pub drift: Thresholds,
+    /// Residual inter-storey drift ratio (rated where resolved, |D| ≥ 2σ):
+    /// green < 0.002 ≤ yellow < 0.005 ≤ red.
+    pub residual_drift: Thresholds,
     /// Most points drawn per trace (min–max decimation beyond).
     pub max_points_per_trace: usize,
+    /// Most points drawn per force–drift loop (`plot::decimate_curve`).
+    pub max_points_per_loop: usize,
     /// Most rows shown of a generic table.
     pub max_table_rows: usize,
 }
@@ -102,7 +110,12 @@ impl Default for ReportSettings {
                 yellow: 0.005,
                 red: 0.015,
             },
+            residual_drift: Thresholds {
+                yellow: 0.002,
+                red: 0.005,
+            },
             max_points_per_trace: 2000,
+            max_points_per_loop: 6000,
             max_table_rows: 200,
         }
     }
@@ -112,7 +125,11 @@ impl ReportSettings {
     /// Rejects thresholds that are not 0 ≤ yellow ≤ red (finite) and
     /// absurd plot sizes.
     pub fn validate(&self) -> Result<()> {
-        for (name, t) in [("iota", &self.iota), ("drift", &self.drift)] {
+        for (name, t) in [
+            ("iota", &self.iota),
+            ("drift", &self.drift),
+            ("residual_drift", &self.residual_drift),
+        ] {
             if !(t.yellow.is_finite() && t.red.is_finite() && 0.0 <= t.yellow && t.yellow <= t.red)
             {
                 return Err(Error::usage(format!(
@@ -121,9 +138,9 @@ impl ReportSettings {
                 )));
             }
         }
-        if self.max_points_per_trace < 10 {
+        if self.max_points_per_trace < 10 || self.max_points_per_loop < 10 {
             return Err(Error::usage(
-                "report settings: max_points_per_trace must be at least 10",
+                "report settings: max_points_per_trace and max_points_per_loop must be at least 10",
             ));
         }
         if self.max_table_rows == 0 {

@@ -6,8 +6,6 @@
 //! read at build or run time.  Legends are written in HTML beside the chart
 //! (see `legend`) so long channel lists wrap instead of overlapping the data.
 
-use std::ops::Range;
-
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 
@@ -86,6 +84,15 @@ pub struct RefLine {
     pub colour: usize,
 }
 
+/// A text label at a data point (channel names on a mode shape).
+#[derive(Debug, Clone)]
+pub struct Annotation {
+    pub x: f64,
+    pub y: f64,
+    pub text: String,
+    pub colour: usize,
+}
+
 #[derive(Debug, Clone)]
 pub struct Chart {
     pub width: u32,
@@ -93,10 +100,19 @@ pub struct Chart {
     pub x_label: String,
     pub y_label: String,
     pub log_x: bool,
+    pub log_y: bool,
     pub series: Vec<Series>,
     pub ref_lines: Vec<RefLine>,
+    pub annotations: Vec<Annotation>,
     pub x_range: Option<(f64, f64)>,
     pub y_range: Option<(f64, f64)>,
+    /// Share of the data range added on each side of an automatic linear
+    /// axis (x: none for lines, 3 % for scatter charts; y: 5 %).
+    pub x_pad: Option<f64>,
+    pub y_pad: f64,
+    /// Width of the y label area, px (default: from the tick labels); set
+    /// equal on charts stacked on one x axis so their plot areas line up.
+    pub y_label_area: Option<u32>,
 }
 
 impl Chart {
@@ -107,10 +123,15 @@ impl Chart {
             x_label: x_label.into(),
             y_label: y_label.into(),
             log_x: false,
+            log_y: false,
             series: Vec::new(),
             ref_lines: Vec::new(),
+            annotations: Vec::new(),
             x_range: None,
             y_range: None,
+            x_pad: None,
+            y_pad: 0.05,
+            y_label_area: None,
         }
     }
 }
@@ -137,8 +158,17 @@ fn data_range(values: impl Iterator<Item = f64>, positive: bool) -> Option<(f64,
 }
 
 /// Renders the chart as an inline `<svg>` element (no XML declaration, no
-/// namespace URL — inline SVG in HTML needs neither).
+/// namespace URL — inline SVG in HTML needs neither).  The `<svg>` carries
+/// the plotting area in pixels (`data-plot-area="x0 y0 x1 y1"`), so a reader
+/// (the browser test) can relate drawn coordinates to the axes.
 pub fn render(chart: &Chart) -> Result<String, String> {
+    if !chart
+        .series
+        .iter()
+        .any(|s| s.points.iter().any(|p| p.0.is_finite() && p.1.is_finite()))
+    {
+        return Err("no finite data to plot".into());
+    }
     let x_range = match chart.x_range {
         Some(r) => Some(r),
         None => data_range(
@@ -158,19 +188,13 @@ pub fn render(chart: &Chart) -> Result<String, String> {
             Mark::FilledCircle | Mark::HollowCircle | Mark::Cross | Mark::Triangle
         )
     });
-    let x_range = if scatter && !chart.log_x && chart.x_range.is_none() {
-        let pad = 0.03 * (x_range.1 - x_range.0);
+    let x_pad = chart.x_pad.unwrap_or(if scatter { 0.03 } else { 0.0 });
+    let x_range = if !chart.log_x && chart.x_range.is_none() {
+        let pad = x_pad * (x_range.1 - x_range.0);
         (x_range.0 - pad, x_range.1 + pad)
     } else {
         x_range
     };
-    if !chart
-        .series
-        .iter()
-        .any(|s| s.points.iter().any(|p| p.0.is_finite() && p.1.is_finite()))
-    {
-        return Err("no finite data to plot".into());
-    }
     let y_range = match chart.y_range {
         Some(r) => Some(r),
         None => data_range(
@@ -185,53 +209,136 @@ pub fn render(chart: &Chart) -> Result<String, String> {
                         .filter(|l| l.horizontal)
                         .map(|l| l.at),
                 ),
-            false,
+            chart.log_y,
         )
         .map(|(lo, hi)| {
-            let pad = 0.05 * (hi - lo);
-            (lo - pad, hi + pad)
+            if chart.log_y {
+                let pad = (hi / lo).powf(chart.y_pad);
+                (lo / pad, hi * pad)
+            } else {
+                let pad = chart.y_pad * (hi - lo);
+                (lo - pad, hi + pad)
+            }
         }),
     }
     .ok_or("no finite data to plot")?;
-    let y = y_range.0..y_range.1;
-    let svg = if chart.log_x {
-        draw(chart, (x_range.0..x_range.1).log_scale(), y)?
-    } else {
-        draw(chart, x_range.0..x_range.1, y)?
+    let (x, y) = (x_range.0..x_range.1, y_range.0..y_range.1);
+    let svg = match (chart.log_x, chart.log_y) {
+        (false, false) => draw(chart, x, y)?,
+        (true, false) => draw(chart, x.log_scale(), y)?,
+        (false, true) => draw(chart, x, y.log_scale())?,
+        (true, true) => draw(chart, x.log_scale(), y.log_scale())?,
     };
     Ok(clean_svg(&svg))
 }
 
-fn draw<XS>(chart: &Chart, x_spec: XS, y_spec: Range<f64>) -> Result<String, String>
+/// Width of the y label area: the widest tick label (estimated from the
+/// range ends and middle, 7 px a character at 12 px) plus the axis title,
+/// so neither is clipped.
+fn y_label_area(chart: &Chart, y: (f64, f64)) -> u32 {
+    let widest = if chart.log_y {
+        [y.0, y.1]
+            .iter()
+            .map(|v| log_tick(*v).len())
+            .max()
+            .unwrap_or(4)
+    } else {
+        let step = (y.1 - y.0) / 6.0;
+        [y.0, y.1, 0.5 * (y.0 + y.1), y.0 + step, y.1 - step]
+            .iter()
+            .map(|v| tick(nice(*v, step)).chars().count())
+            .max()
+            .unwrap_or(4)
+    };
+    (26 + 7 * widest as u32).max(48)
+}
+
+/// `v` rounded to the precision of a tick step (what plotters labels).
+fn nice(v: f64, step: f64) -> f64 {
+    if !(step.is_finite() && step > 0.0) {
+        return v;
+    }
+    let unit = 10f64.powf(step.log10().floor());
+    (v / unit).round() * unit
+}
+
+fn draw<XS, YS>(chart: &Chart, x_spec: XS, y_spec: YS) -> Result<String, String>
 where
     XS: AsRangedCoord<Value = f64>,
     XS::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    YS: AsRangedCoord<Value = f64>,
+    YS::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
 {
     let mut buf = String::new();
+    let own_series;
+    let area;
     {
         let root =
             SVGBackend::with_string(&mut buf, (chart.width, chart.height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let y_spec: YS::CoordDescType = y_spec.into();
+        let y_area = chart
+            .y_label_area
+            .unwrap_or_else(|| y_label_area(chart, (y_spec.range().start, y_spec.range().end)));
         let mut ctx = ChartBuilder::on(&root)
             .margin(8)
-            .x_label_area_size(34)
-            .y_label_area_size(62)
+            .x_label_area_size(40)
+            .y_label_area_size(y_area)
             .build_cartesian_2d(x_spec, y_spec)
             .map_err(|e| e.to_string())?;
-        ctx.configure_mesh()
-            .x_desc(chart.x_label.as_str())
+        let mut mesh = ctx.configure_mesh();
+        mesh.x_desc(chart.x_label.as_str())
             .y_desc(chart.y_label.as_str())
             .x_labels(8)
             .y_labels(6)
             .light_line_style(RGBColor(235, 235, 235))
             .bold_line_style(RGBColor(215, 215, 215))
             .axis_desc_style(("sans-serif", 13))
-            .label_style(("sans-serif", 12))
-            .y_label_formatter(&|v| tick(*v))
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .label_style(("sans-serif", 12));
+        // Tick labels: short decimals on linear axes, powers of ten on log
+        // axes (plotters' own float formatting writes 9.999999999e-6).
+        if chart.log_y {
+            mesh.y_label_formatter(&|v| log_tick(*v));
+        } else {
+            mesh.y_label_formatter(&|v| tick(*v));
+        }
+        if !chart.log_x {
+            mesh.x_label_formatter(&|v| tick(*v));
+        }
+        mesh.draw().map_err(|e| e.to_string())?;
         let x_lim = ctx.x_range();
         let y_lim = ctx.y_range();
+        let (px, py) = ctx.plotting_area().get_pixel_range();
+        area = (px.start, py.start, px.end, py.end);
+        // Data → pixel, in floating point (plotters rounds to whole pixels):
+        // the mapping of the axis ends, interpolated (in ln for a log axis).
+        let (a, b) = (
+            ctx.backend_coord(&(x_lim.start, y_lim.start)),
+            ctx.backend_coord(&(x_lim.end, y_lim.end)),
+        );
+        let axis = |v: f64, lo: f64, hi: f64, p0: i32, p1: i32, log: bool| -> f64 {
+            let f = if log {
+                (v.ln() - lo.ln()) / (hi.ln() - lo.ln())
+            } else {
+                (v - lo) / (hi - lo)
+            };
+            f64::from(p0) + f * f64::from(p1 - p0)
+        };
+        let to_pixel = |x: f64, y: f64| {
+            (
+                axis(x, x_lim.start, x_lim.end, a.0, b.0, chart.log_x),
+                axis(y, y_lim.start, y_lim.end, a.1, b.1, chart.log_y),
+            )
+        };
+        let inside = |x: f64, y: f64| {
+            x.is_finite()
+                && y.is_finite()
+                && x >= x_lim.start
+                && x <= x_lim.end
+                && y >= y_lim.start
+                && y <= y_lim.end
+        };
+        own_series = line_elements(chart, &to_pixel, &inside);
         for l in &chart.ref_lines {
             let style = ShapeStyle::from(&colour(l.colour)).stroke_width(1);
             let pts = if l.horizontal {
@@ -264,17 +371,8 @@ where
                 })
                 .collect();
             let drawn = match s.mark {
-                Mark::Line => ctx
-                    .draw_series(LineSeries::new(pts, ShapeStyle::from(&c).stroke_width(1)))
-                    .map(|_| ()),
-                Mark::Dashed => ctx
-                    .draw_series(DashedLineSeries::new(
-                        pts,
-                        5,
-                        3,
-                        ShapeStyle::from(&c).stroke_width(1),
-                    ))
-                    .map(|_| ()),
+                // Lines are written below as one polyline each (`line_elements`).
+                Mark::Line | Mark::Dashed => Ok(()),
                 Mark::LinePoints => {
                     match ctx.draw_series(LineSeries::new(
                         pts.clone(),
@@ -304,9 +402,74 @@ where
             };
             drawn.map_err(|e| e.to_string())?;
         }
+        for a in &chart.annotations {
+            if !inside(a.x, a.y) {
+                continue;
+            }
+            // Right of the point, or left of it in the right part of the
+            // plot (about 6 px a character), so the label stays inside.
+            let (px0, px1) = (f64::from(area.0), f64::from(area.2));
+            let right_part = to_pixel(a.x, a.y).0 > px0 + 0.6 * (px1 - px0);
+            let dx = if right_part {
+                -(6 * a.text.chars().count() as i32 + 4)
+            } else {
+                4
+            };
+            let style = ("sans-serif", 11).into_font().color(&colour(a.colour));
+            ctx.draw_series(std::iter::once(
+                EmptyElement::at((a.x, a.y)) + Text::new(a.text.clone(), (dx, -13), style),
+            ))
+            .map_err(|e| e.to_string())?;
+        }
         root.present().map_err(|e| e.to_string())?;
     }
-    Ok(buf)
+    let end = buf.rfind("</svg>").unwrap_or(buf.len());
+    buf.insert_str(end, &own_series);
+    let tag = format!(
+        "<svg data-plot-area=\"{} {} {} {}\" ",
+        area.0, area.1, area.2, area.3
+    );
+    Ok(buf.replacen("<svg ", &tag, 1))
+}
+
+/// The `Line` and `Dashed` series as SVG polylines in pixel coordinates
+/// with one decimal (plotters would round to whole pixels and write a
+/// dashed line as one element per dash).  A run of points is broken where a
+/// point is off the axes or not finite, so no segment joins across a gap.
+fn line_elements(
+    chart: &Chart,
+    to_pixel: &dyn Fn(f64, f64) -> (f64, f64),
+    inside: &dyn Fn(f64, f64) -> bool,
+) -> String {
+    let mut out = String::new();
+    for s in &chart.series {
+        let dash = match s.mark {
+            Mark::Line => "",
+            Mark::Dashed => " stroke-dasharray=\"5 3\"",
+            _ => continue,
+        };
+        let mut run: Vec<String> = Vec::new();
+        let mut flush = |run: &mut Vec<String>| {
+            if run.len() >= 2 {
+                out.push_str(&format!(
+                    "<polyline class=\"series\" fill=\"none\" stroke=\"{}\" stroke-width=\"1\"{dash} points=\"{}\"/>\n",
+                    css_colour(s.colour),
+                    run.join(" ")
+                ));
+            }
+            run.clear();
+        };
+        for &(x, y) in &s.points {
+            if inside(x, y) {
+                let (px, py) = to_pixel(x, y);
+                run.push(format!("{px:.1},{py:.1}"));
+            } else {
+                flush(&mut run);
+            }
+        }
+        flush(&mut run);
+    }
+    out
 }
 
 /// Tick label: short, scientific for very small or large magnitudes.
@@ -320,6 +483,28 @@ fn tick(v: f64) -> String {
         let s = format!("{v:.4}");
         let s = s.trim_end_matches('0').trim_end_matches('.');
         s.to_string()
+    }
+}
+
+/// Tick label of a log axis: "1e-5" at a power of ten, else one significant
+/// digit ("3e-5"), or the linear label between 1e-3 and 1e5.
+fn log_tick(v: f64) -> String {
+    if !(v > 0.0) {
+        return tick(v);
+    }
+    let e = v.log10();
+    if (e - e.round()).abs() < 1e-6 {
+        let e = e.round() as i32;
+        return if (-3..5).contains(&e) {
+            tick(10f64.powi(e))
+        } else {
+            format!("1e{e}")
+        };
+    }
+    if (1e-3..1e5).contains(&v) {
+        tick(v)
+    } else {
+        format!("{v:.0e}")
     }
 }
 
@@ -444,14 +629,26 @@ impl MinMaxDecimator {
     }
 }
 
-/// Decimation of a parametric x–y curve (a force–drift loop) for display:
-/// at most `max_points` points, kept by the Ramer–Douglas–Peucker rule
-/// (points far from the chord of their neighbours — the reversals, where the
-/// curvature is — are kept first) in axes normalised by the data ranges,
-/// with the tolerance bisected to the point budget. The first and last
-/// points and the points of extreme x and y are always kept, so the loop's
-/// peak drift and force are drawn exactly. Never min–max per bin: that
-/// assumes x increases with the sample index and turns a loop into chords.
+/// Longest drawn segment of a decimated curve, as a share of the data range
+/// in either axis (unless one sample step of the data is longer).
+pub const CURVE_MAX_STEP: f64 = 0.025;
+
+/// Decimation of a parametric x–y curve (a force–drift loop) for display,
+/// in time order: at most `max_points` points, in axes normalised by the
+/// data ranges.
+///
+/// - A step rule: no drawn segment spans more than [`CURVE_MAX_STEP`] of
+///   either axis, unless a single step of the data does (a point is kept
+///   before the path leaves the box of that half-width round the last kept
+///   point); the step grows only when the budget cannot hold it.
+/// - Ramer–Douglas–Peucker within the remaining budget (the tolerance
+///   bisected to it): points far from the chord of their neighbours — the
+///   reversals, where the curvature is — are kept first.
+/// - The first and last points and those of extreme x and y are always
+///   kept, so the loop's peak drift and force are drawn exactly.
+///
+/// Never min–max per bin: that assumes x increases with the sample index and
+/// turns a loop into chords.
 pub fn decimate_curve(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f64)> {
     let max_points = max_points.max(8);
     let finite: Vec<(f64, f64)> = points
@@ -490,11 +687,20 @@ pub fn decimate_curve(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f64
     ];
     forced.sort_unstable();
     forced.dedup();
+    let mut base = vec![false; norm.len()];
+    for &i in &forced {
+        base[i] = true;
+    }
+    let count = |k: &[bool]| k.iter().filter(|x| **x).count();
+    // The step rule, widened until it fits the budget.
+    let mut step = CURVE_MAX_STEP;
+    let mut stepped = step_points(&norm, &base, step);
+    while count(&stepped) > max_points && step < 1.0 {
+        step *= 1.25;
+        stepped = step_points(&norm, &base, step);
+    }
     let keep_with = |tol: f64| -> Vec<bool> {
-        let mut keep = vec![false; norm.len()];
-        for &i in &forced {
-            keep[i] = true;
-        }
+        let mut keep = stepped.clone();
         let mut stack: Vec<(usize, usize)> = forced.windows(2).map(|w| (w[0], w[1])).collect();
         while let Some((a, b)) = stack.pop() {
             if b <= a + 1 {
@@ -523,7 +729,6 @@ pub fn decimate_curve(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f64
         }
         keep
     };
-    let count = |k: &[bool]| k.iter().filter(|x| **x).count();
     // Bisect the tolerance (normalised units) to the largest count ≤ budget.
     let (mut lo, mut hi) = (0.0f64, 2.0f64);
     let mut best = keep_with(hi);
@@ -543,4 +748,25 @@ pub fn decimate_curve(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f64
         .filter(|(_, k)| **k)
         .map(|(p, _)| *p)
         .collect()
+}
+
+/// `kept` plus the points the step rule keeps: walking in order, the point
+/// before the one that leaves the box of half-width `step` (either axis)
+/// round the last kept point, and that point too when its own step from
+/// there is longer than `step`.
+fn step_points(norm: &[(f64, f64)], kept: &[bool], step: f64) -> Vec<bool> {
+    let mut keep = kept.to_vec();
+    let far = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).abs() > step || (a.1 - b.1).abs() > step;
+    let mut last = 0;
+    for i in 1..norm.len() {
+        if far(norm[i], norm[last]) && i - 1 > last {
+            keep[i - 1] = true;
+            last = i - 1;
+        }
+        if keep[i] || far(norm[i], norm[last]) {
+            keep[i] = true;
+            last = i;
+        }
+    }
+    keep
 }

@@ -18,10 +18,9 @@ use crate::vocab::tables::{channels, drift, samples, spectra, CHANNELS, DRIFT, S
 use crate::vocab::{Channel, Direction, Event, ProcessingHistory, Record, SampleStore, Samples};
 use std::sync::Arc;
 
+pub use super::provenance::{EVENT_KEY, HISTORY_KEY};
 pub use crate::vocab::schema::SCHEMA_KEY;
-pub const HISTORY_KEY: &str = "quaketwin.history";
 pub const CHANNELS_KEY: &str = "quaketwin.channels";
-pub const EVENT_KEY: &str = "quaketwin.event";
 
 fn direction_text(d: &Option<Direction>) -> Option<String> {
     d.map(|d| d.to_string())
@@ -36,17 +35,7 @@ fn azimuth(d: &Option<Direction>) -> Option<f64> {
 
 /// Event-level metadata stored in every table's key/value metadata.
 fn event_metadata(event: &Event) -> Vec<(String, String)> {
-    let doc = serde_json::json!({
-        "name": event.name,
-        "origin_time": event.origin_ns.map(crate::vocab::format_epoch_ns),
-        "magnitude": event.magnitude,
-        "structure": event.structure,
-        "notes": event.notes,
-    });
-    vec![
-        (EVENT_KEY.to_string(), doc.to_string()),
-        (HISTORY_KEY.to_string(), event.history.to_json()),
-    ]
+    super::provenance::Provenance::of_event(event).metadata()
 }
 
 /// `channels.parquet`: one row per channel, metadata + QA + metrics.
@@ -323,6 +312,26 @@ pub fn write_drift(path: &Path, event: &Event, rows: &[DriftRow]) -> Result<()> 
         .f64(
             drift::PEAK_DRIFT_RATIO,
             rows.iter().map(|r| r.peak_drift_ratio).collect(),
+        )
+        .opt_f64(
+            drift::RESIDUAL_DRIFT_M,
+            rows.iter().map(|r| r.residual.map(|x| x.drift_m)).collect(),
+        )
+        .opt_f64(
+            drift::RESIDUAL_DRIFT_STD_M,
+            rows.iter().map(|r| r.residual.map(|x| x.std_m)).collect(),
+        )
+        .opt_f64(
+            drift::RESIDUAL_DRIFT_RATIO,
+            rows.iter()
+                .map(|r| r.residual.map(|x| x.drift_m / r.storey_height_m))
+                .collect(),
+        )
+        .opt_f64(
+            drift::RESIDUAL_WINDOW_START_S,
+            rows.iter()
+                .map(|r| r.residual.map(|x| x.window_start_s))
+                .collect(),
         )
         .build()?;
     write_parquet(path, &[batch], &event_metadata(event))

@@ -6,12 +6,36 @@
 use std::path::Path;
 
 use super::parquet::{write_parquet, TableBuilder};
+use super::provenance::Provenance;
 use crate::error::Result;
 pub use crate::hysteresis::DirectionOutcome;
 use crate::vocab::tables::{
     bouc_wen, bouc_wen_instantaneous, damage, hysteresis_fit, BOUC_WEN, BOUC_WEN_INSTANTANEOUS,
     DAMAGE, HYSTERESIS_FIT,
 };
+
+/// The provenance of the identification tables: `event`'s history followed
+/// by one `bouc_wen_identification` step whose parameters are the processing
+/// of each identified direction (band, exponent search, segments).
+pub fn identification_provenance(
+    event: &crate::vocab::Event,
+    outcomes: &[DirectionOutcome],
+) -> Provenance {
+    let processing: serde_json::Map<String, serde_json::Value> = outcomes
+        .iter()
+        .filter_map(|o| match o {
+            DirectionOutcome::Identified(d) => Some((
+                d.direction.clone(),
+                serde_json::to_value(&d.processing).unwrap_or_default(),
+            )),
+            _ => None,
+        })
+        .collect();
+    Provenance::of_event(event).then_step(
+        "bouc_wen_identification",
+        serde_json::Value::Object(processing),
+    )
+}
 
 /// `bouc_wen.parquet`: one row per direction, DoF and parameter (a direction
 /// that could not be identified has one row with `status` saying why).
@@ -242,7 +266,11 @@ impl Cols {
 }
 
 /// `bouc_wen_instantaneous.parquet`: cumulative (t_e → t) estimates per frame.
-pub fn write_instantaneous(path: &Path, outcomes: &[DirectionOutcome]) -> Result<()> {
+pub fn write_instantaneous(
+    path: &Path,
+    outcomes: &[DirectionOutcome],
+    metadata: &[(String, String)],
+) -> Result<()> {
     let (mut dir, mut dof, mut t, mut inf, mut n, mut cost, mut k0, mut beta, mut gamma) = (
         vec![],
         vec![],
@@ -284,7 +312,7 @@ pub fn write_instantaneous(path: &Path, outcomes: &[DirectionOutcome]) -> Result
         .f64(bouc_wen_instantaneous::BETA, beta)
         .f64(bouc_wen_instantaneous::GAMMA, gamma)
         .build()?;
-    write_parquet(path, &[batch], &[])
+    write_parquet(path, &[batch], metadata)
 }
 
 /// Storey shears V_d = Σ_{r ≥ d} f_r of per-DoF forces f_r.
@@ -303,7 +331,12 @@ fn storey_shears(forces: &[&[f64]]) -> Vec<Vec<f64>> {
 /// and, for identified directions, from the model — the force–drift loops.
 /// A direction that is not identified contributes its measured loops when
 /// its kinematics could be formed (model column null).
-pub fn write_fit(path: &Path, outcomes: &[DirectionOutcome], decimate: usize) -> Result<()> {
+pub fn write_fit(
+    path: &Path,
+    outcomes: &[DirectionOutcome],
+    decimate: usize,
+    metadata: &[(String, String)],
+) -> Result<()> {
     let step = decimate.max(1);
     let (mut dir, mut dof, mut seg, mut t, mut drift, mut fr, mut fm) =
         (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
@@ -391,12 +424,17 @@ pub fn write_fit(path: &Path, outcomes: &[DirectionOutcome], decimate: usize) ->
         .f64(hysteresis_fit::FORCE_RECORD_N, fr)
         .opt_f64(hysteresis_fit::FORCE_MODEL_N, fm)
         .build()?;
-    write_parquet(path, &[batch], &[])
+    write_parquet(path, &[batch], metadata)
 }
 
 /// `damage.parquet`: ι(t) and, per mode, ω_s(t)/ω_s(0) and c_s(t) — one row
 /// per direction, time and mode (ι repeated on the mode rows of one time).
-pub fn write_damage(path: &Path, outcomes: &[DirectionOutcome], decimate: usize) -> Result<()> {
+pub fn write_damage(
+    path: &Path,
+    outcomes: &[DirectionOutcome],
+    decimate: usize,
+    metadata: &[(String, String)],
+) -> Result<()> {
     let step = decimate.max(1);
     let (mut dir, mut t, mut iota, mut mode, mut omega, mut ratio, mut part) =
         (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
@@ -429,12 +467,10 @@ pub fn write_damage(path: &Path, outcomes: &[DirectionOutcome], decimate: usize)
         .f64(damage::OMEGA_RATIO, ratio)
         .f64(damage::PARTICIPATION, part)
         .build()?;
-    write_parquet(
-        path,
-        &[batch],
-        &[(
-            "quaketwin.indefinite_steps".into(),
-            serde_json::Value::Object(indefinite).to_string(),
-        )],
-    )
+    let mut meta = metadata.to_vec();
+    meta.push((
+        "quaketwin.indefinite_steps".into(),
+        serde_json::Value::Object(indefinite).to_string(),
+    ));
+    write_parquet(path, &[batch], &meta)
 }

@@ -1,18 +1,27 @@
-//! Writes a conditioned `Event` to MCAP for replay (Foxglove and friends) and
-//! for reading back with `readers::mcap`.
+//! Writes a conditioned `Event` to MCAP for replay in Foxglove (and
+//! friends) and for reading back with `readers::mcap`.
 //!
 //! Layout: one MCAP channel per record on topic `/accel/<channel id>`, JSON
-//! encoding, schema `quaketwin.AccelBlock` (JSON Schema in
-//! `readers::mcap::ACCEL_BLOCK_JSON_SCHEMA`); each message holds one block of
-//! `block_s` seconds (default 1 s) with `t0_ns` of its first sample, and
-//! log_time = t0_ns (0 when negative).  Messages of all channels are
-//! interleaved by time.  The channel metadata holds the record's
-//! `vocab::Channel` as JSON (`quaketwin.channel`), its units, and
-//! `start_known = "false"` when the record has no absolute start time (t0 is
-//! then counted from 0).  A metadata record `quaketwin.processing_history`
-//! holds the processing history JSON, the event name and notes.  Chunks are
-//! zstd-compressed by default, compressed single-threaded so the same event
-//! gives the same bytes.
+//! encoding.  By default every sample is one message, schema
+//! `quaketwin.AccelSample` (`{"t_ns": …, "value": …}`, JSON Schema
+//! [`ACCEL_SAMPLE_JSON_SCHEMA`]), so that Foxglove's Plot panel draws a
+//! channel from the path `/accel/<id>.value` with no adapter.  With
+//! [`McapMessages::Blocks`] each message holds a block of samples instead
+//! (schema `quaketwin.AccelBlock`, `readers::mcap::ACCEL_BLOCK_JSON_SCHEMA`):
+//! a smaller file for replay by quaketwin, which Foxglove shows as arrays.
+//!
+//! Times: a message's log_time and publish_time are the time of its (first)
+//! sample — from the record's start time; when the record has none, from the
+//! event's origin time (so a record of known origin never plots in 1970);
+//! from 0 when neither is known.  The channel metadata states which
+//! (`time_base` = `record_start`, `origin_time` or `none`), holds the record's
+//! `vocab::Channel` as JSON (`quaketwin.channel`) and its units, and
+//! `start_known = "false"` when the record has no start time of its own.
+//! Messages of all channels are interleaved by time, ties by record order.
+//! A metadata record `quaketwin.processing_history` holds the processing
+//! history JSON, the event name, notes and origin time.  Chunks are
+//! zstd-compressed by default, single-threaded so the same event gives the
+//! same bytes.
 //!
 //! [`write_event`] writes atomically (`sinks::atomic`): a temporary file in
 //! the target's directory, then a rename.
@@ -27,11 +36,26 @@ use crate::readers::mcap::{
 };
 use crate::vocab::Event;
 
+/// What one message holds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum McapMessages {
+    /// One sample per message (`quaketwin.AccelSample`): plots in Foxglove.
+    PerSample,
+    /// `seconds` of samples per message (> 0; `quaketwin.AccelBlock`).
+    Blocks { seconds: f64 },
+}
+
+/// Schema name of the per-sample messages.
+pub const ACCEL_SAMPLE_SCHEMA: &str = "quaketwin.AccelSample";
+/// JSON Schema of the per-sample messages (what `readers::mcap` reads as
+/// per-sample messages).
+pub const ACCEL_SAMPLE_JSON_SCHEMA: &str = r#"{"$schema":"https://json-schema.org/draft/2020-12/schema","title":"quaketwin.AccelSample","type":"object","required":["t_ns","value"],"properties":{"t_ns":{"type":"integer","description":"ns since the Unix epoch of the sample (see the channel's time_base)"},"value":{"type":["number","null"],"description":"the sample, in the channel's units; null = missing"}}}"#;
+
 /// Settings of the MCAP writer.
 #[derive(Debug, Clone)]
 pub struct McapWriteOptions {
-    /// Seconds of samples per message (> 0).
-    pub block_s: f64,
+    /// One sample per message (default) or blocks.
+    pub messages: McapMessages,
     /// Chunk compression (`None` = uncompressed chunks).
     pub compression: Option<mcap::Compression>,
     /// Target uncompressed chunk size in bytes.
@@ -41,7 +65,7 @@ pub struct McapWriteOptions {
 impl Default for McapWriteOptions {
     fn default() -> Self {
         McapWriteOptions {
-            block_s: 1.0,
+            messages: McapMessages::PerSample,
             compression: Some(mcap::Compression::Zstd),
             chunk_size: 1 << 20,
         }
@@ -71,11 +95,19 @@ pub fn write_event_to<W: Write + Seek>(
     path: &Path,
 ) -> Result<W> {
     let fail = |m: String| Error::output(path, m);
-    if !(opts.block_s.is_finite() && opts.block_s > 0.0) {
-        return Err(Error::usage(format!(
-            "MCAP block length {} s must be positive",
-            opts.block_s
-        )));
+    // Samples per message.
+    let per_message = |rate: f64| -> usize {
+        match opts.messages {
+            McapMessages::PerSample => 1,
+            McapMessages::Blocks { seconds } => ((seconds * rate).round() as usize).max(1),
+        }
+    };
+    if let McapMessages::Blocks { seconds } = opts.messages {
+        if !(seconds.is_finite() && seconds > 0.0) {
+            return Err(Error::usage(format!(
+                "MCAP block length {seconds} s must be positive"
+            )));
+        }
     }
     let mut writer = mcap::WriteOptions::new()
         .compression(opts.compression)
@@ -84,17 +116,26 @@ pub fn write_event_to<W: Write + Seek>(
         .profile("")
         .create(w)
         .map_err(|e| fail(e.to_string()))?;
+    let (schema_name, schema) = match opts.messages {
+        McapMessages::PerSample => (ACCEL_SAMPLE_SCHEMA, ACCEL_SAMPLE_JSON_SCHEMA),
+        McapMessages::Blocks { .. } => (ACCEL_BLOCK_SCHEMA, ACCEL_BLOCK_JSON_SCHEMA),
+    };
     let schema_id = writer
-        .add_schema(
-            ACCEL_BLOCK_SCHEMA,
-            "jsonschema",
-            ACCEL_BLOCK_JSON_SCHEMA.as_bytes(),
-        )
+        .add_schema(schema_name, "jsonschema", schema.as_bytes())
         .map_err(|e| fail(e.to_string()))?;
 
-    // (log_time, record index, block index, channel id, payload)
-    let mut messages: Vec<(u64, usize, u32, u16, Vec<u8>)> = Vec::new();
-    for (ri, rec) in event.records.iter().enumerate() {
+    // One stream of messages per record, merged by time below.
+    struct Stream<'a> {
+        channel_id: u16,
+        id: &'a str,
+        units: &'a str,
+        rate: f64,
+        t0_ns: i64,
+        samples: std::borrow::Cow<'a, [f64]>,
+        block_len: usize,
+    }
+    let mut streams = Vec::with_capacity(event.records.len());
+    for rec in &event.records {
         let ch = &rec.channel;
         let rate = ch.sampling_rate_hz;
         if !(rate.is_finite() && rate > 0.0) {
@@ -103,43 +144,73 @@ pub fn write_event_to<W: Write + Seek>(
                 ch.id
             )));
         }
+        let (t0_ns, time_base) = match (ch.start_ns, event.origin_ns) {
+            (Some(s), _) => (s, "record_start"),
+            (None, Some(o)) => (o, "origin_time"),
+            (None, None) => (0, "none"),
+        };
         let mut meta = BTreeMap::new();
         let json =
             serde_json::to_string(ch).map_err(|e| fail(format!("channel {}: {e}", ch.id)))?;
         meta.insert(CHANNEL_METADATA_KEY.to_string(), json);
         meta.insert("units".to_string(), ch.units.name().to_string());
         meta.insert("start_known".to_string(), ch.start_ns.is_some().to_string());
+        meta.insert("time_base".to_string(), time_base.to_string());
         let channel_id = writer
             .add_channel(schema_id, &format!("/accel/{}", ch.id), "json", &meta)
             .map_err(|e| fail(e.to_string()))?;
-        let start = ch.start_ns.unwrap_or(0);
-        let block_len = ((opts.block_s * rate).round() as usize).max(1);
-        for (bi, chunk) in rec.samples.chunks(block_len).enumerate() {
-            let first = bi * block_len;
-            let t0 = start.saturating_add((first as f64 * 1e9 / rate).round() as i64);
-            let block = AccelBlock {
-                channel: ch.id.clone(),
-                t0_ns: t0,
-                rate_hz: rate,
-                units: Some(ch.units.name().to_string()),
-                samples: chunk.to_vec(),
-            };
-            let payload =
-                serde_json::to_vec(&block).map_err(|e| fail(format!("channel {}: {e}", ch.id)))?;
-            messages.push((t0.max(0) as u64, ri, bi as u32, channel_id, payload));
+        streams.push(Stream {
+            channel_id,
+            id: &ch.id,
+            units: ch.units.name(),
+            rate,
+            t0_ns,
+            samples: rec.samples.get()?,
+            block_len: per_message(rate),
+        });
+    }
+    let time_of = |s: &Stream, first: usize| -> i64 {
+        s.t0_ns
+            .saturating_add((first as f64 * 1e9 / s.rate).round() as i64)
+    };
+    // k-way merge by (time, record, message): the messages are made as they
+    // are written, so memory holds the samples, not a copy per message.
+    let mut heap = std::collections::BinaryHeap::new();
+    for (ri, s) in streams.iter().enumerate() {
+        if !s.samples.is_empty() {
+            heap.push(std::cmp::Reverse((time_of(s, 0), ri, 0usize)));
         }
     }
-    messages.sort_by_key(|m| (m.0, m.1, m.2));
-    for (log_time, _, seq, channel_id, payload) in &messages {
+    while let Some(std::cmp::Reverse((t_ns, ri, mi))) = heap.pop() {
+        let s = &streams[ri];
+        let first = mi * s.block_len;
+        let end = (first + s.block_len).min(s.samples.len());
+        let payload = match opts.messages {
+            McapMessages::PerSample => {
+                serde_json::to_vec(&serde_json::json!({ "t_ns": t_ns, "value": s.samples[first] }))
+            }
+            McapMessages::Blocks { .. } => serde_json::to_vec(&AccelBlock {
+                channel: s.id.to_string(),
+                t0_ns: t_ns,
+                rate_hz: s.rate,
+                units: Some(s.units.to_string()),
+                samples: s.samples[first..end].to_vec(),
+            }),
+        }
+        .map_err(|e| fail(format!("channel {}: {e}", s.id)))?;
+        let log_time = t_ns.max(0) as u64;
         let header = mcap::records::MessageHeader {
-            channel_id: *channel_id,
-            sequence: *seq,
-            log_time: *log_time,
-            publish_time: *log_time,
+            channel_id: s.channel_id,
+            sequence: mi as u32,
+            log_time,
+            publish_time: log_time,
         };
         writer
-            .write_to_known_channel(&header, payload)
+            .write_to_known_channel(&header, &payload)
             .map_err(|e| fail(e.to_string()))?;
+        if end < s.samples.len() {
+            heap.push(std::cmp::Reverse((time_of(s, end), ri, mi + 1)));
+        }
     }
     let mut meta = BTreeMap::new();
     meta.insert("history".to_string(), event.history.to_json());

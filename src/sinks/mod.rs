@@ -2,6 +2,7 @@
 //! I/O lives here, at the edge; stages hand over plain data.
 
 pub mod atomic;
+pub mod dataset;
 pub mod design_tables;
 pub mod event_tables;
 pub mod hysteresis_tables;
@@ -9,4 +10,5 @@ pub mod matrix_market;
 pub mod mcap_writer;
 pub mod modal_tables;
 pub mod parquet;
+pub mod provenance;
 pub mod twin_tables;

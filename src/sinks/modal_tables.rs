@@ -7,6 +7,7 @@
 use std::path::Path;
 
 use super::parquet::{write_parquet, TableBuilder};
+use super::provenance::Provenance;
 use crate::error::Result;
 use crate::modal::{Comparison, FrequencyShift, ModalResult, PairingSettings, SpectralOverlay};
 use crate::vocab::tables::{
@@ -20,8 +21,18 @@ pub const OUTPUT_CHANNELS_KEY: &str = "quaketwin.output_channels";
 pub const WARNINGS_KEY: &str = "quaketwin.warnings";
 
 /// Metadata of every modal table (the schema name comes from the declaration).
-fn meta(result: &ModalResult, settings_json: &str) -> Vec<(String, String)> {
-    vec![
+/// The provenance comes first: the event's history followed by the modal
+/// pre-processing (mean removal, decimation, band limits).
+fn meta(
+    result: &ModalResult,
+    settings_json: &str,
+    provenance: &Provenance,
+) -> Vec<(String, String)> {
+    let mut entries = provenance
+        .clone()
+        .then(result.preprocessing.iter().cloned())
+        .metadata();
+    entries.extend([
         (
             OUTPUT_CHANNELS_KEY.into(),
             serde_json::to_string(&result.output_ids).unwrap_or_default(),
@@ -33,10 +44,6 @@ fn meta(result: &ModalResult, settings_json: &str) -> Vec<(String, String)> {
         ("quaketwin.method".into(), result.method.name().into()),
         ("quaketwin.block_rows".into(), result.block_rows.to_string()),
         ("quaketwin.settings".into(), settings_json.into()),
-        (
-            "quaketwin.history".into(),
-            serde_json::to_string(&result.preprocessing).unwrap_or_default(),
-        ),
         (
             "quaketwin.notes".into(),
             serde_json::to_string(&result.notes).unwrap_or_default(),
@@ -74,10 +81,16 @@ fn meta(result: &ModalResult, settings_json: &str) -> Vec<(String, String)> {
             )
             .to_string(),
         ),
-    ]
+    ]);
+    entries
 }
 
-pub fn write_stabilization(path: &Path, r: &ModalResult, settings_json: &str) -> Result<()> {
+pub fn write_stabilization(
+    path: &Path,
+    r: &ModalResult,
+    settings_json: &str,
+    provenance: &Provenance,
+) -> Result<()> {
     let p = &r.poles;
     let batch = TableBuilder::new(&STABILIZATION)
         .u32(
@@ -120,10 +133,15 @@ pub fn write_stabilization(path: &Path, r: &ModalResult, settings_json: &str) ->
                 .collect(),
         )
         .build()?;
-    write_parquet(path, &[batch], &meta(r, settings_json))
+    write_parquet(path, &[batch], &meta(r, settings_json, provenance))
 }
 
-pub fn write_modes(path: &Path, r: &ModalResult, settings_json: &str) -> Result<()> {
+pub fn write_modes(
+    path: &Path,
+    r: &ModalResult,
+    settings_json: &str,
+    provenance: &Provenance,
+) -> Result<()> {
     let m = &r.modes;
     let batch = TableBuilder::new(&MODES)
         .u32(modes::MODE, (1..=m.len() as u32).collect())
@@ -180,7 +198,7 @@ pub fn write_modes(path: &Path, r: &ModalResult, settings_json: &str) -> Result<
             &m.iter().map(|x| x.shape_std.clone()).collect::<Vec<_>>(),
         )
         .build()?;
-    write_parquet(path, &[batch], &meta(r, settings_json))
+    write_parquet(path, &[batch], &meta(r, settings_json, provenance))
 }
 
 /// Singular values of the factorisation and of the PSD matrix, long format.
@@ -189,6 +207,7 @@ pub fn write_spectrum(
     r: &ModalResult,
     overlay: Option<&SpectralOverlay>,
     settings_json: &str,
+    provenance: &Provenance,
 ) -> Result<()> {
     let (mut kind, mut index, mut freq, mut value) = (vec![], vec![], vec![], vec![]);
     for (i, s) in r.singular_values.iter().enumerate() {
@@ -213,7 +232,7 @@ pub fn write_spectrum(
         .opt_f64(modal_spectrum::FREQUENCY_HZ, freq)
         .f64(modal_spectrum::VALUE, value)
         .build()?;
-    write_parquet(path, &[batch], &meta(r, settings_json))
+    write_parquet(path, &[batch], &meta(r, settings_json, provenance))
 }
 
 /// Writes the pre/post comparison against the reference modes at
@@ -225,7 +244,7 @@ pub fn write_shifts(
     c: &Comparison,
     pairing: &PairingSettings,
     reference: &Path,
-    this_event: &str,
+    provenance: &Provenance,
 ) -> Result<()> {
     use frequency_shifts as fs;
     let s = &c.shifts;
@@ -268,35 +287,32 @@ pub fn write_shifts(
         )
         .str(fs::PAIRING, &vec![c.basis.name(); s.len()])
         .build()?;
-    write_parquet(
-        path,
-        &[batch],
-        &[
-            (
-                "quaketwin.reference".into(),
-                reference.display().to_string(),
-            ),
-            ("quaketwin.event".into(), this_event.into()),
-            (
-                "quaketwin.shared_channels".into(),
-                serde_json::to_string(&c.shared_channels).unwrap_or_default(),
-            ),
-            (
-                "quaketwin.pairing".into(),
-                serde_json::json!({
-                    "basis": c.basis.name(),
-                    "min_mac": pairing.min_mac,
-                    "frequency_window": pairing.frequency_window,
-                    "frequency_std_floor": pairing.frequency_std_floor,
-                })
-                .to_string(),
-            ),
-            (
-                "quaketwin.notes".into(),
-                serde_json::to_string(&c.notes).unwrap_or_default(),
-            ),
-        ],
-    )
+    let mut meta = provenance.metadata();
+    meta.extend([
+        (
+            "quaketwin.reference".into(),
+            reference.display().to_string(),
+        ),
+        (
+            "quaketwin.shared_channels".into(),
+            serde_json::to_string(&c.shared_channels).unwrap_or_default(),
+        ),
+        (
+            "quaketwin.pairing".into(),
+            serde_json::json!({
+                "basis": c.basis.name(),
+                "min_mac": pairing.min_mac,
+                "frequency_window": pairing.frequency_window,
+                "frequency_std_floor": pairing.frequency_std_floor,
+            })
+            .to_string(),
+        ),
+        (
+            "quaketwin.notes".into(),
+            serde_json::to_string(&c.notes).unwrap_or_default(),
+        ),
+    ]);
+    write_parquet(path, &[batch], &meta)
 }
 
 /// The `modes.parquet` an earlier run left at `path`: the file itself, or

@@ -14,6 +14,7 @@ use arrow_schema::DataType;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 
 use super::parquet::{write_parquet, TableBuilder};
+use super::provenance::Provenance;
 use crate::error::{Error, Location, Result};
 use crate::twin::ensemble::EnsembleResult;
 use crate::twin::objective::{MeasuredMode, MeasuredModes, ModeComparison};
@@ -32,6 +33,9 @@ pub struct ModesFile {
     pub measured: MeasuredModes,
     /// `mode` column value of each measured mode (same order as `measured.modes`).
     pub mode_numbers: Vec<u32>,
+    /// The event and processing history the modes come from (`None` for a
+    /// table without quaketwin's provenance keys).
+    pub provenance: Option<Provenance>,
 }
 
 /// Read measured modes from `modes.parquet` (columns named by the declaration
@@ -151,7 +155,10 @@ pub fn read_measured_modes(path: &Path) -> Result<ModesFile> {
             format!("mode number {} appears twice", w[0].0),
         ));
     }
+    let provenance =
+        Provenance::from_metadata(kv.iter().map(|e| (e.key.as_str(), e.value.as_deref())));
     Ok(ModesFile {
+        provenance,
         mode_numbers: rows.iter().map(|(n, _)| *n).collect(),
         measured: MeasuredModes {
             source,

@@ -19,10 +19,10 @@ pub use crate::hysteresis::{
 };
 use crate::hysteresis::{
     identify_event, BasisForm, EventSettings, FrequencyBand, IdentifySettings, VelocityDrift,
-    WindowSettings,
 };
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::hysteresis_tables::{self as tables, DirectionOutcome};
+use crate::sinks::provenance::Provenance;
 use crate::vocab::Event;
 
 pub const KIND: StageKind = StageKind {
@@ -49,6 +49,9 @@ pub const DAMAGE_FILE: &str = crate::vocab::tables::DAMAGE.file;
 /// The product: the identification of every direction.
 pub struct Identification {
     pub outcomes: Vec<DirectionOutcome>,
+    /// The event's provenance followed by the identification step: what the
+    /// damage table, made from these outcomes, carries.
+    pub provenance: Provenance,
 }
 
 /// Parameters of the `hysteresis` stage (docs/pipelines.md).
@@ -80,9 +83,8 @@ pub struct HysteresisParams {
     /// Fail the stage when a direction cannot be identified (the CLI command
     /// does); in a pipeline the reason is written to bouc_wen.parquet instead.
     pub fail_on_error: bool,
-    /// The part of the record identified: `{ rule = "strong_motion" | "record",
-    /// threshold, margin_s, max_s }` (`crate::hysteresis::window`).
-    pub window: WindowSettings,
+    /// The part of each record identified (`crate::hysteresis::window`).
+    pub window: crate::hysteresis::WindowSettings,
 }
 
 impl Default for HysteresisParams {
@@ -101,7 +103,7 @@ impl Default for HysteresisParams {
             directions: None,
             output_decimation: 1,
             fail_on_error: false,
-            window: WindowSettings::default(),
+            window: Default::default(),
         }
     }
 }
@@ -129,13 +131,12 @@ impl HysteresisParams {
                 "exponent range must satisfy 1 ≤ exponent_min < exponent_max, resolution > 0",
             ));
         }
-        self.window.validate()?;
         if !(self.reduced_mass_step > 0.0 && self.reduced_mass_step <= 0.001) {
             return Err(Error::usage(
                 "reduced_mass_step must be in (0, 0.001] (Eq. 35–36 search resolution)",
             ));
         }
-        Ok(s)
+        self.window.validate().map(|()| s)
     }
 }
 
@@ -164,6 +165,7 @@ pub fn write_identification(
     outcomes: &[DirectionOutcome],
     masses: &[MassResolution],
     p: &HysteresisParams,
+    provenance: &Provenance,
 ) -> Result<()> {
     let settings_json = serde_json::json!({
         "form": p.form, "band_low_hz": p.band_low_hz, "exponent_min": p.exponent_min,
@@ -171,30 +173,17 @@ pub fn write_identification(
         "velocity_drift": p.velocity_drift, "reduced_mass_step": p.reduced_mass_step,
         "mass_lumping": p.mass_lumping, "window": p.window,
     });
-    let processing: serde_json::Map<String, serde_json::Value> = outcomes
-        .iter()
-        .filter_map(|o| match o {
-            DirectionOutcome::Identified(d) => Some((
-                d.direction.clone(),
-                serde_json::to_value(&d.processing).unwrap_or_default(),
-            )),
-            _ => None,
-        })
-        .collect();
-    let meta = vec![
+    let mut meta = provenance.metadata();
+    meta.extend([
         ("quaketwin.settings".to_string(), settings_json.to_string()),
-        (
-            "quaketwin.history".to_string(),
-            serde_json::Value::Object(processing).to_string(),
-        ),
         (
             "quaketwin.masses".to_string(),
             serde_json::to_string(masses).unwrap_or_default(),
         ),
-    ];
+    ]);
     tables::write_bouc_wen(&dir.join(BOUC_WEN_FILE), outcomes, &meta)?;
-    tables::write_instantaneous(&dir.join(INSTANTANEOUS_FILE), outcomes)?;
-    tables::write_fit(&dir.join(FIT_FILE), outcomes, p.output_decimation)
+    tables::write_instantaneous(&dir.join(INSTANTANEOUS_FILE), outcomes, &meta)?;
+    tables::write_fit(&dir.join(FIT_FILE), outcomes, p.output_decimation, &meta)
 }
 
 fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
@@ -211,20 +200,20 @@ impl Hysteresis {
     fn identify(
         &self,
         ctx: &mut RunContext,
-    ) -> Result<(Vec<DirectionOutcome>, Vec<MassResolution>)> {
+    ) -> Result<(Vec<DirectionOutcome>, Vec<MassResolution>, Provenance)> {
         let event_dir = ctx.event_path.clone();
         let Conditioned { event, .. } = ctx.input(ProductKind::ConditionedEvent)?;
-        identify_event_at(event, Some(&event_dir), &self.params)
+        let (outcomes, masses) = identify_event_at(event, Some(&event_dir), &self.params)?;
+        let provenance = tables::identification_provenance(event, &outcomes);
+        Ok((outcomes, masses, provenance))
     }
 }
 
 impl Stage for Hysteresis {
     fn outputs(&self) -> Vec<String> {
-        vec![
-            BOUC_WEN_FILE.into(),
-            INSTANTANEOUS_FILE.into(),
-            FIT_FILE.into(),
-        ]
+        [BOUC_WEN_FILE, INSTANTANEOUS_FILE, FIT_FILE]
+            .map(String::from)
+            .to_vec()
     }
     /// Automatic directions need levels and building axes; without any (e.g. a folder without
     /// event.toml whose headers state neither) there is nothing to identify, and saying so
@@ -239,7 +228,7 @@ impl Stage for Hysteresis {
         }))
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
-        let (outcomes, masses) = self.identify(ctx)?;
+        let (outcomes, masses, provenance) = self.identify(ctx)?;
         if !ctx.quiet {
             for m in &masses {
                 eprintln!("[hysteresis] {}", m.message());
@@ -253,15 +242,21 @@ impl Stage for Hysteresis {
                 }
             }
         }
-        write_identification(&ctx.out_dir, &outcomes, &masses, &self.params)?;
-        Ok(Some(Box::new(Identification { outcomes })))
+        write_identification(&ctx.out_dir, &outcomes, &masses, &self.params, &provenance)?;
+        Ok(Some(Box::new(Identification {
+            outcomes,
+            provenance,
+        })))
     }
     /// The identification is not stored in a form that can be loaded back
     /// whole: when the stage was skipped it is recomputed in memory (its
     /// outputs are not rewritten).
     fn restore(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
-        let (outcomes, _) = self.identify(ctx)?;
-        Ok(Some(Box::new(Identification { outcomes })))
+        let (outcomes, _, provenance) = self.identify(ctx)?;
+        Ok(Some(Box::new(Identification {
+            outcomes,
+            provenance,
+        })))
     }
 }
 
@@ -289,8 +284,16 @@ impl Stage for Damage {
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let out = ctx.out_dir.join(DAMAGE_FILE);
-        let Identification { outcomes } = ctx.input(ProductKind::Hysteresis)?;
-        tables::write_damage(&out, outcomes, self.params.output_decimation.max(1))?;
+        let Identification {
+            outcomes,
+            provenance,
+        } = ctx.input(ProductKind::Hysteresis)?;
+        let decimation = self.params.output_decimation.max(1);
+        let provenance = provenance.clone().then_step(
+            "damage_index",
+            serde_json::json!({ "output_decimation": decimation }),
+        );
+        tables::write_damage(&out, outcomes, decimation, &provenance.metadata())?;
         Ok(None)
     }
 }

@@ -1,12 +1,15 @@
 //! `metrics`: strong-motion metrics and response spectra per channel, drift
-//! ratios per storey → `channels.parquet`, `spectra.parquet`, `drift.parquet`.
+//! ratios per storey (peak from the conditioned records, residual from the
+//! records as recorded) → `channels.parquet`, `spectra.parquet`, `drift.parquet`.
 
 use rayon::prelude::*;
 
 use super::condition::Conditioned;
 use crate::conditioning::{Motion, LONG_CHANNEL};
 use crate::error::Result;
-use crate::metrics::{metrics_of_parts, peak_abs, storey_drift, MetricsSettings};
+use crate::metrics::{
+    metrics_of_parts, peak_abs, storey_drift, storey_residual_drifts, MetricsSettings,
+};
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::event_tables;
 use crate::vocab::Samples;
@@ -39,6 +42,8 @@ impl Stage for Metrics {
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let out = ctx.out_dir.clone();
+        // Residual drift needs the records before any filter: the run's source.
+        let residual = storey_residual_drifts(&ctx.loaded_event()?.event)?;
         let Conditioned { event, motions } = ctx.input(ProductKind::ConditionedEvent)?;
         // Parked motions are read back a channel — a series — at a time; long
         // channels one after the other (two in flight would double the memory).
@@ -54,7 +59,7 @@ impl Stage for Metrics {
         } else {
             motions.par_iter().map(one).collect::<Result<Vec<_>>>()?
         };
-        let drift = storey_drift(event, motions)?;
+        let drift = storey_drift(event, motions, &residual)?;
         event_tables::write_channels(&out.join(CHANNELS_FILE), event, &metrics)?;
         event_tables::write_spectra(&out.join(SPECTRA_FILE), event, &metrics)?;
         event_tables::write_drift(&out.join(DRIFT_FILE), event, &drift)?;

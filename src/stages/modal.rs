@@ -16,6 +16,7 @@ use crate::modal::{
 };
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::modal_tables as tables;
+use crate::sinks::provenance::Provenance;
 use crate::vocab::{Event, Role};
 
 pub const KIND: StageKind = StageKind {
@@ -207,8 +208,9 @@ pub fn identify_and_write(
     for w in &result.warnings {
         eprintln!("quaketwin: warning: modal ({}): {w}", event.name);
     }
-    tables::write_stabilization(&out.join(STABILIZATION_FILE), &result, &settings_json)?;
-    tables::write_modes(&out.join(MODES_FILE), &result, &settings_json)?;
+    let (json, provenance) = (settings_json.as_str(), Provenance::of_event(event));
+    tables::write_stabilization(&out.join(STABILIZATION_FILE), &result, json, &provenance)?;
+    tables::write_modes(&out.join(MODES_FILE), &result, json, &provenance)?;
     // Read after the identification freed its signals (parked samples are read back).
     let outputs: Vec<Vec<f64>> = result
         .output_ids
@@ -224,14 +226,11 @@ pub fn identify_and_write(
         .map(|r| r.channel.dt())
         .unwrap_or(result.dt);
     let overlay = spectral_overlay(&outputs, dt, p.psd_segment).ok();
-    tables::write_spectrum(
-        &out.join(SPECTRUM_FILE),
-        &result,
-        overlay.as_ref(),
-        &settings_json,
-    )?;
+    let spectrum = out.join(SPECTRUM_FILE);
+    tables::write_spectrum(&spectrum, &result, overlay.as_ref(), json, &provenance)?;
     if let Some(reference) = &reference {
-        prepost::compare_and_write(reference, &result, out, &event.name)?;
+        let provenance = provenance.then(result.preprocessing.iter().cloned());
+        prepost::compare_and_write(reference, &result, out, &event.name, &provenance)?;
     }
     Ok(result)
 }

@@ -10,6 +10,7 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 use crate::modal::{compare_events, Comparison, ModalResult, Mode, ModeSet, PairingSettings};
 use crate::sinks::modal_tables as tables;
+use crate::sinks::provenance::Provenance;
 
 pub const SHIFTS_FILE: &str = crate::vocab::tables::FREQUENCY_SHIFTS.file;
 
@@ -146,6 +147,7 @@ pub fn compare_and_write(
     result: &ModalResult,
     out: &Path,
     event_name: &str,
+    provenance: &Provenance,
 ) -> Result<Comparison> {
     let (file, pairing) = (&reference.run.file, &reference.run.pairing);
     let c = compare_events(
@@ -166,7 +168,7 @@ pub fn compare_and_write(
             c.notes.join("; ")
         );
     }
-    tables::write_shifts(&out.join(SHIFTS_FILE), &c, pairing, file, event_name)?;
+    tables::write_shifts(&out.join(SHIFTS_FILE), &c, pairing, file, provenance)?;
     Ok(c)
 }
 

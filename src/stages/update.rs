@@ -179,10 +179,52 @@ pub fn update_from_files(
         "modes": modes_path.display().to_string(),
     })
     .to_string();
-    let meta = vec![
+    // The parameters' start values (those the update started from) and bounds,
+    // so that a reader (the report's before/after table) needs no twin file.
+    let bounds: Vec<serde_json::Value> = twin
+        .system
+        .parameters
+        .iter()
+        .zip(&outcome.start_values)
+        .map(|(p, start)| {
+            use crate::twin::model::ParameterKind::*;
+            let kind = twin
+                .file
+                .parameters
+                .iter()
+                .find(|d| d.name == p.name)
+                .map(|d| match d.kind {
+                    YoungsModulus => ("youngs_modulus", "Pa"),
+                    Density => ("density", "kg/m^3"),
+                    SpringStiffness => ("spring_stiffness", "N/m (N·m/rad for a rotation)"),
+                });
+            serde_json::json!({
+                "name": p.name, "kind": kind.map(|k| k.0), "unit": kind.map(|k| k.1),
+                "start": start, "lower": p.lower, "upper": p.upper,
+            })
+        })
+        .collect();
+    // The measured modes' provenance (event, conditioning, modal
+    // pre-processing) followed by this update.
+    let mut meta = modes_file
+        .provenance
+        .clone()
+        .map(|p| {
+            p.then_step(
+                "twin_update",
+                serde_json::json!({ "twin": twin_path.display().to_string() }),
+            )
+            .metadata()
+        })
+        .unwrap_or_default();
+    meta.extend([
         ("quaketwin.settings".to_string(), settings),
         ("quaketwin.inputs".to_string(), inputs),
-    ];
+        (
+            "quaketwin.parameter_bounds".to_string(),
+            serde_json::Value::Array(bounds).to_string(),
+        ),
+    ]);
     let update_path = out_dir.join(TWIN_UPDATE_FILE);
     let modes_path_out = out_dir.join(TWIN_MODES_FILE);
     let twin_out = out_dir.join(UPDATED_TWIN_FILE);

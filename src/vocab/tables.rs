@@ -113,7 +113,11 @@ declare!(DRIFT, drift, "drift", "drift.parquet",
     LOWER_CHANNEL: "lower_channel", Utf8, required, "", "channel at level L−1";
     UPPER_CHANNEL: "upper_channel", Utf8, required, "", "channel at level L";
     STOREY_HEIGHT_M: "storey_height_m", F64, required, "m", "from `structure.storey_heights_m`";
-    PEAK_DRIFT_RATIO: "peak_drift_ratio", F64, required, "1", "max over time of |u_L − u_{L−1}| / h_L";
+    PEAK_DRIFT_RATIO: "peak_drift_ratio", F64, required, "1", "max over time of |u_L − u_{L−1}| / h_L (band-passed displacements of the condition stage: the oscillation only)";
+    RESIDUAL_DRIFT_M: "residual_drift_m", F64, nullable, "m", "permanent drift u_L − u_{L−1} after the event (signed), from the relative acceleration as recorded (no filter) integrated twice and baseline-corrected on the post-event window (docs/report.md); null when the two levels' records are not on a common time base";
+    RESIDUAL_DRIFT_STD_M: "residual_drift_std_m", F64, nullable, "m", "uncertainty of `residual_drift_m`: sensor-noise random walk (white-noise estimate from 0.6–0.9 × Nyquist) and post-event window instability; a lower bound for non-white noise";
+    RESIDUAL_DRIFT_RATIO: "residual_drift_ratio", F64, nullable, "1", "residual_drift_m / h_L";
+    RESIDUAL_WINDOW_START_S: "residual_window_start_s", F64, nullable, "s", "start of the post-event window (95 % of the relative acceleration's Arias intensity, at most 90 % of the record)";
 });
 
 declare!(STABILIZATION, stabilization, "stabilization", "stabilization.parquet",

@@ -22,6 +22,9 @@
 //! The long run (docs/robustness.md):
 //! `QUAKETWIN_FUZZ_CASES=1000000 cargo test --release --test it fuzz_long_run -- --ignored --nocapture`
 //! (`QUAKETWIN_FUZZ_SAVE=DIR` keeps every failing input).
+//!
+//! The same seeds start the cargo-fuzz targets of `fuzz/`
+//! ([`fuzz_cargo_fuzz_corpus_shared`], run by `scripts/fuzz-corpus.sh`).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -612,6 +615,125 @@ fn short_at2(text: &str, n: usize) -> String {
     out
 }
 
+/// `line` with every whitespace-separated field equal to one of `counts`
+/// replaced by `n`, right-aligned in the field's width (fixed-width formats).
+fn recount(line: &str, counts: &[usize], n: usize) -> String {
+    let mut out = String::new();
+    let mut rest = line;
+    while let Some(start) = rest.find(|c: char| !c.is_whitespace()) {
+        let end = rest[start..]
+            .find(char::is_whitespace)
+            .map_or(rest.len(), |e| start + e);
+        let field = &rest[start..end];
+        out += &rest[..start];
+        match field.parse::<usize>() {
+            Ok(v) if counts.contains(&v) => out += &format!("{n:>w$}", w = field.len()),
+            _ => out += field,
+        }
+        rest = &rest[end..];
+    }
+    out + rest
+}
+
+/// The first `n` samples of every data block of a text record whose blocks
+/// follow a head line (`is_head`) starting with their count, `per_line`
+/// values a line (COSMOS, CSMIP V2); the counts in the header rewritten.
+fn short_blocks(text: &str, n: usize, per_line: usize, is_head: impl Fn(&str) -> bool) -> String {
+    let lines: Vec<&str> = text.lines().collect();
+    let count = |l: &str| {
+        l.split_whitespace()
+            .next()
+            .unwrap()
+            .parse::<usize>()
+            .unwrap()
+    };
+    let counts: Vec<usize> = lines
+        .iter()
+        .filter(|l| is_head(l))
+        .map(|l| count(l))
+        .collect();
+    let mut out = String::new();
+    let mut i = 0;
+    while i < lines.len() {
+        out += &recount(lines[i], &counts, n);
+        out.push('\n');
+        if is_head(lines[i]) {
+            for l in &lines[i + 1..i + 1 + n.div_ceil(per_line)] {
+                out += l;
+                out.push('\n');
+            }
+            i += count(lines[i]).div_ceil(per_line);
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The first `n` samples of every block of every component of a GeoNet
+/// V2A file (16 text lines, 10 header lines, then acceleration, velocity
+/// and displacement, 10 values a line); the counts in the headers rewritten.
+fn short_geonet(text: &str, n: usize) -> String {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = String::new();
+    let mut i = 0;
+    while i + 26 <= lines.len() {
+        let npts: usize = lines[i + 9]
+            .split_whitespace()
+            .nth(3)
+            .unwrap()
+            .parse()
+            .unwrap();
+        let block = npts.div_ceil(10);
+        let kept = (0..3).flat_map(|b| &lines[i + 26 + b * block..][..n / 10]);
+        for l in lines[i..i + 26]
+            .iter()
+            .map(|l| recount(l, &[npts], n))
+            .chain(kept.map(|l| l.to_string()))
+        {
+            out += &l;
+            out.push('\n');
+        }
+        i += 26 + 3 * block;
+    }
+    out
+}
+
+/// Seeds cut to 400 samples a channel, for the cargo-fuzz targets: a case of
+/// the 300–430 kB COSMOS, CSMIP and GeoNet files takes 0.1–0.6 s under the
+/// fuzzer's instrumentation.  Each must still read, 400 samples a channel.
+fn short_seeds(seeds: &[Seed]) -> Vec<Seed> {
+    type Cut = fn(&str) -> String;
+    let cuts: [(&str, &'static str, Format, Cut); 3] = [
+        ("cosmos-v0", "cosmos-v0-400", Format::Cosmos, |t| {
+            short_blocks(t, 400, 1, |l| l.contains(" pts,"))
+        }),
+        ("csmip-v2", "csmip-v2-400", Format::Dmg, |t| {
+            short_blocks(t, 400, 8, |l| l.contains(" DATA EQUALLY SPACED"))
+        }),
+        ("geonet", "geonet-400", Format::GeoNet, |t| {
+            short_geonet(t, 400)
+        }),
+    ];
+    cuts.iter()
+        .map(|&(from, label, format, cut)| {
+            let seed = seeds.iter().find(|s| s.label == from).unwrap();
+            let short = cut(&String::from_utf8_lossy(&seed.bytes));
+            let read = readers::read(
+                format,
+                short.as_bytes(),
+                &source(&seed.name),
+                &ReadOptions::default(),
+            )
+            .unwrap_or_else(|e| panic!("{label}: {e}"));
+            assert!(
+                read.records.iter().all(|r| r.samples.len() == 400),
+                "{label}"
+            );
+            reader_seed(&seed.name, label, short.into_bytes(), format)
+        })
+        .collect()
+}
+
 /// The first `rows` rows of a CSV (header kept).
 fn head_lines(text: &str, rows: usize) -> String {
     text.lines()
@@ -892,6 +1014,58 @@ fn fuzz_long_run() {
     let t0 = Instant::now();
     let tally = fuzz(&seeds, |_| per_seed, save.as_deref());
     assert_clean("long run", &tally, t0);
+}
+
+/// The cargo-fuzz target (`fuzz/fuzz_targets/`) a seed belongs to.
+fn cargo_fuzz_target(seed: &Seed) -> &'static str {
+    match &seed.target {
+        Target::Reader(format, _) => format.name(),
+        Target::StationXml => "stationxml",
+        Target::EventFolder(p) if p.extension().is_some_and(|e| e == "zip") => "event_zip",
+        Target::EventFolder(p) if p.ends_with("synthetic-facade") => "manifest_facade",
+        Target::EventFolder(_) => "manifest",
+        Target::Twin => "twin",
+        Target::Design(_) => "design",
+    }
+}
+
+/// Writes the seed corpus of the cargo-fuzz targets (`scripts/fuzz-corpus.sh`):
+/// `$QUAKETWIN_FUZZ_CORPUS/seeds/<target>/<seed>` for every seed above (the
+/// real records' too, read in place from `../shared/records`) and the
+/// pipeline files, and the small quake folder the manifest target loads,
+/// `$QUAKETWIN_FUZZ_CORPUS/events/small-quake/`.
+#[test]
+#[ignore]
+fn fuzz_cargo_fuzz_corpus_shared() {
+    let Some(out) = std::env::var_os("QUAKETWIN_FUZZ_CORPUS").map(PathBuf::from) else {
+        panic!("set QUAKETWIN_FUZZ_CORPUS to the fuzz/ folder (scripts/fuzz-corpus.sh does)");
+    };
+    let events = out.join("events");
+    let _ = std::fs::remove_dir_all(&events);
+    let mut seeds = sample_seeds(&events);
+    seeds.extend(shared_seeds());
+    seeds.extend(short_seeds(&seeds));
+    let corpus = out.join("seeds");
+    let _ = std::fs::remove_dir_all(&corpus);
+    let mut written = 0;
+    for seed in &seeds {
+        let dir = corpus.join(cargo_fuzz_target(seed));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join(format!("{}-{}", seed.label, seed.name)),
+            &seed.bytes,
+        )
+        .unwrap();
+        written += 1;
+    }
+    let dir = corpus.join("pipeline");
+    std::fs::create_dir_all(&dir).unwrap();
+    for e in std::fs::read_dir(root().join("pipelines")).unwrap() {
+        let p = e.unwrap().path();
+        std::fs::copy(&p, dir.join(p.file_name().unwrap())).unwrap();
+        written += 1;
+    }
+    eprintln!("{written} seeds in {}", corpus.display());
 }
 
 /// Replays the cases of the first long run (10⁶ cases) that failed, by seed

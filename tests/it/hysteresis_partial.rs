@@ -14,6 +14,7 @@ use std::sync::OnceLock;
 
 use quaketwin::geometry::{combine_floors, FloorSettings};
 use quaketwin::hysteresis::*;
+use quaketwin::sinks::hysteresis_tables::identification_provenance;
 use quaketwin::sinks::hysteresis_tables::DirectionOutcome;
 use quaketwin::stages::hysteresis::{identify_event_at, write_identification, HysteresisParams};
 use quaketwin::synth::{synthetic_ground_motion, GroundMotionSpec};
@@ -469,9 +470,10 @@ fn report_draws_the_measured_loop_of_a_not_identified_direction() {
         panic!("a linear response was identified");
     };
     let measured = measured.as_ref().expect("measured loops");
-    write_identification(out.path(), &outcomes, &masses, &p).unwrap();
+    let provenance = identification_provenance(&ev, &outcomes);
+    write_identification(out.path(), &outcomes, &masses, &p, &provenance).unwrap();
     let settings = quaketwin::report::ReportSettings::default();
-    let budget = settings.max_points_per_trace;
+    let budget = settings.max_points_per_loop;
     let html = quaketwin::report::render_report(out.path(), &settings).unwrap();
     let loops = html
         .matches("Measured force–drift loop, direction X")

@@ -41,6 +41,7 @@ mod readers_binary;
 mod readers_csv;
 mod readers_text;
 mod report;
+mod report_browser;
 mod schemas;
 mod stage_params;
 mod synth;

@@ -207,3 +207,109 @@ fn channel_metrics_from_motion() {
     assert!((m.arias_m_per_s - arias_intensity(&motion.acceleration, dt)).abs() == 0.0);
     assert!(m.d5_95_s > 17.0 && m.d5_95_s < 19.0);
 }
+
+// Residual drift (metrics::residual): a storey that moves to a permanent
+// offset D while it rings down, recorded as relative acceleration.
+
+/// d(t) = D·S((t − 3)/5) + 0.03·E(t)·sin(2π 1.7 t): S a smoothstep (0 → 1),
+/// E a smooth onset times a 1 %-damped decay, so d(0) = ḋ(0) = 0 and the
+/// offset builds up while the storey still rings strongly (95 % of the
+/// Arias intensity at ≈ 14 s, as in an earthquake); the acceleration is d̈
+/// in closed form, sampled at `dt` for `duration` s.
+fn storey_acceleration(offset: f64, dt: f64, duration: f64) -> Vec<f64> {
+    let n = (duration / dt).round() as usize + 1;
+    let w = 2.0 * PI * 1.7;
+    let decay = 0.01 * w;
+    // smoothstep s(u) = 3u² − 2u³ on [0, 1]: s'' = (6 − 12u)/L² inside.
+    let step2 = |t: f64, start: f64, len: f64| {
+        let u = (t - start) / len;
+        if (0.0..=1.0).contains(&u) {
+            (6.0 - 12.0 * u) / (len * len)
+        } else {
+            0.0
+        }
+    };
+    let step = |t: f64, start: f64, len: f64| {
+        let u = ((t - start) / len).clamp(0.0, 1.0);
+        3.0 * u * u - 2.0 * u * u * u
+    };
+    let step1 = |t: f64, start: f64, len: f64| {
+        let u = (t - start) / len;
+        if (0.0..=1.0).contains(&u) {
+            (6.0 * u - 6.0 * u * u) / len
+        } else {
+            0.0
+        }
+    };
+    (0..n)
+        .map(|i| {
+            let t = i as f64 * dt;
+            // Ringing: g(t) = s(t/4) e^{−decay t} sin(w t), differentiated twice.
+            let (s0, s1, s2) = (step(t, 0.0, 4.0), step1(t, 0.0, 4.0), step2(t, 0.0, 4.0));
+            let e = (-decay * t).exp();
+            let (sn, cs) = ((w * t).sin(), (w * t).cos());
+            let h0 = e * sn;
+            let h1 = e * (w * cs - decay * sn);
+            let h2 = e * ((decay * decay - w * w) * sn - 2.0 * decay * w * cs);
+            let ring = 0.03 * (s2 * h0 + 2.0 * s1 * h1 + s0 * h2);
+            offset * step2(t, 3.0, 5.0) + ring
+        })
+        .collect()
+}
+
+#[test]
+fn residual_drift_recovers_a_permanent_offset_and_removes_an_acceleration_offset() {
+    use quaketwin::metrics::residual::residual_drift_of;
+    let dt = 0.005;
+    for offset in [0.0, -0.02, 0.035] {
+        let clean = storey_acceleration(offset, dt, 60.0);
+        let r = residual_drift_of(&clean, dt).unwrap();
+        assert!(
+            (r.drift_m - offset).abs() < 5e-4,
+            "clean record: D = {} vs {offset}",
+            r.drift_m
+        );
+        // A sensor offset of 2 mm/s² would integrate to 3.6 m at 60 s; the
+        // post-event fit takes it out.
+        let shifted: Vec<f64> = clean.iter().map(|a| a + 0.002).collect();
+        let naive = quaketwin::numeric::cumulative_trapezoid(
+            &quaketwin::numeric::cumulative_trapezoid(&shifted, dt),
+            dt,
+        );
+        assert!((naive.last().unwrap() - offset).abs() > 1.0);
+        let r = residual_drift_of(&shifted, dt).unwrap();
+        assert!(
+            (r.drift_m - offset).abs() < 2e-3,
+            "offset record: D = {} vs {offset}",
+            r.drift_m
+        );
+        assert!((r.offset_m_s2 - 0.002).abs() < 1e-4, "{}", r.offset_m_s2);
+        if offset != 0.0 {
+            assert!(r.resolved(), "{r:?}");
+        }
+    }
+}
+
+/// Broadband sensor noise integrated twice wanders like a permanent offset;
+/// the estimate's σ says so: pure noise is not resolved, and σ is of the
+/// size of the scatter of D over independent noise records.
+#[test]
+fn residual_drift_of_noise_is_not_resolved() {
+    use quaketwin::metrics::residual::residual_drift_of;
+    let (dt, n) = (0.005, 9000);
+    let mut estimates = Vec::new();
+    for seed in 0..12 {
+        let mut rng = quaketwin::rng::Rng::new(seed);
+        let noise: Vec<f64> = (0..n).map(|_| 0.01 * rng.normal()).collect();
+        let r = residual_drift_of(&noise, dt).unwrap();
+        assert!(!r.resolved(), "seed {seed}: {r:?}");
+        estimates.push(r);
+    }
+    let rms =
+        (estimates.iter().map(|r| r.drift_m.powi(2)).sum::<f64>() / estimates.len() as f64).sqrt();
+    let sigma = estimates.iter().map(|r| r.std_m).sum::<f64>() / estimates.len() as f64;
+    assert!(
+        rms < sigma && sigma < 20.0 * rms,
+        "scatter of D {rms} against the mean σ {sigma}"
+    );
+}

@@ -617,3 +617,52 @@ fn a_symlink_is_never_replaced() {
         .is_symlink());
     assert_eq!(std::fs::read(&target).unwrap(), b"keep");
 }
+
+/// Copies the regular files of `from` (one level) into a new folder `to`.
+fn copy_folder(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_file() {
+            std::fs::copy(&p, to.join(p.file_name().unwrap())).unwrap();
+        }
+    }
+}
+
+/// Issue 15 item 4: `--out` inside the event folder is not part of the
+/// event.  The second run finds the event unchanged (every stage up to
+/// date) and reads the same channels (the outputs are not taken for
+/// records).
+#[test]
+fn an_output_directory_inside_the_event_folder_is_not_part_of_the_event() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ev = tmp.path().join("quake");
+    copy_folder(&event("synthetic-4storey-quake"), &ev);
+    let out = ev.join("out");
+    let p = ingest_pipeline();
+    let first = pipeline::run(&p, &ev, &out, true).unwrap();
+    assert!(first
+        .iter()
+        .all(|(_, o)| matches!(o, StageOutcome::Ran { .. })));
+    let channels = || {
+        let inv: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("event.json")).unwrap()).unwrap();
+        (
+            inv["channels"].as_array().unwrap().len(),
+            inv["files"].as_array().unwrap().len(),
+        )
+    };
+    let before = channels();
+    let second = pipeline::run(&p, &ev, &out, true).unwrap();
+    assert!(
+        second.iter().all(|(_, o)| *o == StageOutcome::Skipped),
+        "{second:?}"
+    );
+    // And the event, loaded again with the outputs beside it, is the same.
+    let loaded = quaketwin::event_folder::load(&ev).unwrap();
+    assert_eq!(
+        (loaded.event.records.len(), loaded.files.len()),
+        before,
+        "the output folder was read as part of the event"
+    );
+}

@@ -12,7 +12,7 @@ use quaketwin::readers::mseed::{
 };
 use quaketwin::readers::{self, mcap as mcap_reader, stationxml, FileContents, ReadOptions};
 use quaketwin::rng::SplitMix64;
-use quaketwin::sinks::mcap_writer::{self, McapWriteOptions};
+use quaketwin::sinks::mcap_writer::{self, McapMessages, McapWriteOptions};
 use quaketwin::vocab::{
     epoch_ns_from_civil, parse_iso8601_ns, Channel, Direction, Event, QaFlag, Record, SourceRef,
     Units,
@@ -617,7 +617,8 @@ fn mcap_round_trip_zstd_chunked_atomic() {
     );
     assert!(back.records.iter().all(|r| r.channel.qa.is_empty()));
 
-    // Container facts: zstd chunks, 330 one-second messages per channel, history metadata.
+    // Container facts: zstd chunks, one message per sample (Foxglove plots
+    // `/accel/<id>.value`), log_time = the sample's time, history metadata.
     let mut zstd_chunks = 0;
     let mut history = None;
     for rec in mcap::read::LinearReader::new(&bytes).unwrap() {
@@ -634,10 +635,22 @@ fn mcap_round_trip_zstd_chunked_atomic() {
     }
     assert!(zstd_chunks >= 1);
     assert_eq!(history, Some(ev.history.to_json()));
-    let messages = mcap::MessageStream::new(&bytes).unwrap().count();
-    assert_eq!(messages, 3 * 330);
-    // Compressed JSON is smaller than the raw JSON text of the samples.
-    assert!(bytes.len() < 3 * 66000 * 7, "{} bytes", bytes.len());
+    let messages: Vec<_> = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(Result::unwrap)
+        .collect();
+    assert_eq!(messages.len(), 3 * 66000);
+    let first = &messages[0];
+    assert_eq!(
+        first.channel.schema.as_ref().unwrap().name,
+        "quaketwin.AccelSample"
+    );
+    assert_eq!(first.channel.metadata["time_base"], "record_start");
+    assert_eq!(Some(first.log_time as i64), ev.records[0].channel.start_ns);
+    assert!(messages.windows(2).all(|w| w[0].log_time <= w[1].log_time));
+    let v: serde_json::Value = serde_json::from_slice(&first.data).unwrap();
+    assert_eq!(v["t_ns"].as_i64(), Some(first.log_time as i64));
+    assert!(v["value"].is_number());
 }
 
 #[test]
@@ -654,9 +667,16 @@ fn mcap_round_trip_lz4_and_uncompressed_with_nan_and_unknown_start() {
         records: vec![rec],
         ..Default::default()
     };
-    for compression in [Some(mcap::Compression::Lz4), None] {
+    let layouts = [
+        McapMessages::Blocks { seconds: 0.25 },
+        McapMessages::PerSample,
+    ];
+    for (compression, messages) in [Some(mcap::Compression::Lz4), None]
+        .into_iter()
+        .flat_map(|c| layouts.map(|m| (c, m)))
+    {
         let opts = McapWriteOptions {
-            block_s: 0.25,
+            messages,
             compression,
             ..Default::default()
         };
@@ -1486,4 +1506,40 @@ fn stationxml_bad_number_names_the_line() {
     let (location, message) = input_error(e);
     assert_eq!(location.line, Some(6));
     assert!(message.contains("five"));
+}
+
+/// A record without a start time of its own is placed at the event's origin
+/// time (stated in the channel metadata), not at 1970; it still reads back
+/// with no start time.
+#[test]
+fn mcap_record_without_start_is_placed_at_the_origin_time() {
+    let mut rec = anchorage_event().records[0].clone();
+    rec.channel.start_ns = None;
+    rec.samples.as_mut_vec().truncate(500);
+    let origin = 1_700_000_000_000_000_000i64;
+    let ev = Event {
+        name: "o".into(),
+        origin_ns: Some(origin),
+        records: vec![rec],
+        ..Default::default()
+    };
+    let bytes = mcap_writer::write_event_to(
+        &ev,
+        Cursor::new(Vec::new()),
+        &McapWriteOptions::default(),
+        Path::new("o.mcap"),
+    )
+    .unwrap()
+    .into_inner();
+    let first = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap();
+    assert_eq!(first.log_time as i64, origin);
+    assert_eq!(first.channel.metadata["time_base"], "origin_time");
+    assert_eq!(first.channel.metadata["start_known"], "false");
+    let back = mcap_reader::read(&bytes, &src("o.mcap"), &ReadOptions::default()).unwrap();
+    assert_eq!(back.records[0].channel.start_ns, None);
+    assert_same_records(&ev.records, &back.records);
 }

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use quaketwin::error::Error;
 use quaketwin::sinks::parquet::{write_parquet, TableBuilder};
+use quaketwin::sinks::provenance::{EVENT_KEY, HISTORY_KEY};
 use quaketwin::vocab::schema::{DESCRIPTION_KEY, SCHEMA_KEY, UNIT_KEY, VERSION_KEY};
 use quaketwin::vocab::tables::{self, drift, ALL_TABLES, DRIFT};
 
@@ -96,6 +97,15 @@ fn formats_md_lists_every_declared_column_with_its_type_and_unit() {
     assert!(wrong.is_empty(), "docs/formats.md:\n{}", wrong.join("\n"));
 }
 
+/// Tables of the hybrid-test design, whose provenance is the design file.
+const DESIGN_TABLES: [&str; 5] = [
+    "actuator_layout",
+    "pod",
+    "reduction_validation",
+    "interface_refinement",
+    "hybrid_prototype",
+];
+
 fn run(pipeline: &Path, event: &str, out: &Path) {
     quaketwin::commands::run_pipeline(
         pipeline,
@@ -152,6 +162,30 @@ fn check_outputs(dir: &Path, seen: &mut BTreeSet<String>) {
         );
         for key in [VERSION_KEY, SCHEMA_KEY, DESCRIPTION_KEY] {
             assert!(footer.iter().any(|k| k == key), "{p}: footer lacks {key}");
+        }
+        // Issue 15 item 2: every table made from an event says which event
+        // and by which steps, in the Arrow schema (where pyarrow and polars
+        // look) and in the footer.  The hybrid-test design tables carry
+        // their own provenance (design file, twin, motion source) instead.
+        if !DESIGN_TABLES.contains(&name.as_str()) {
+            for key in [EVENT_KEY, HISTORY_KEY] {
+                assert!(footer.iter().any(|k| k == key), "{p}: footer lacks {key}");
+            }
+            let event: serde_json::Value =
+                serde_json::from_str(schema.metadata().get(EVENT_KEY).unwrap()).unwrap();
+            assert!(
+                event["name"].as_str().is_some_and(|n| !n.is_empty()),
+                "{p}: {event}"
+            );
+            let history: serde_json::Value =
+                serde_json::from_str(schema.metadata().get(HISTORY_KEY).unwrap()).unwrap();
+            let steps = history["steps"]
+                .as_array()
+                .unwrap_or_else(|| panic!("{p}: {history}"));
+            assert!(
+                steps.iter().any(|s| s["step"] == "units_to_si"),
+                "{p}: the history does not start from the records: {history}"
+            );
         }
         seen.insert(name.clone());
     }
@@ -210,6 +244,10 @@ fn drift_columns(b: TableBuilder) -> TableBuilder {
 fn the_writer_refuses_a_table_that_does_not_match_its_declaration() {
     let ok = drift_columns(TableBuilder::new(&DRIFT))
         .f64(drift::PEAK_DRIFT_RATIO, vec![0.01])
+        .opt_f64(drift::RESIDUAL_DRIFT_M, vec![Some(0.002)])
+        .opt_f64(drift::RESIDUAL_DRIFT_STD_M, vec![Some(0.001)])
+        .opt_f64(drift::RESIDUAL_DRIFT_RATIO, vec![Some(0.002 / 3.0)])
+        .opt_f64(drift::RESIDUAL_WINDOW_START_S, vec![None])
         .build()
         .unwrap();
     let unit = |name: &str| {

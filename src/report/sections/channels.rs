@@ -30,11 +30,22 @@ pub(super) fn channel_section(channels: &Loaded) -> String {
     };
     let present = present_columns(t, &CHANNEL_COLUMNS);
     let rows: Vec<Vec<Cell>> = (0..t.rows)
-        .map(|r| present.iter().map(|c| Cell::of(t, c, r)).collect())
+        .map(|r| {
+            present
+                .iter()
+                .map(|c| match *c {
+                    c if c == channels::DIRECTION.name => Cell::direction(t, c, r),
+                    c => Cell::of(t, c, r),
+                })
+                .collect()
+        })
         .collect();
     body.push_str(&note(
         "Units: m/s² (pga), m/s (pgv, arias, cav), m (pgd), s (d5_95), dB (snr). \
-         QA flags and missing metadata as tags; — = not available.",
+         QA flags and missing metadata as tags; — = not available. \
+         Directions: X, Y, Z are the building axes every stage works in (applied once at ingest); \
+         \"azimuth N°\" marks a channel whose relation to them is unknown (event.json notes say why; \
+         structure.x_axis_azimuth_deg in event.toml settles it) — stages working in X/Y leave it out.",
     ));
     body.push_str(&format!(
         "<div class=\"scroll\">{}</div>",

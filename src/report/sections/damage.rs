@@ -1,11 +1,10 @@
-//! Section 9, damage index ι(t) (damage.parquet): ratings per direction, ι(t)
-//! and natural-frequency ratio charts.
+//! Damage index ι(t) (damage.parquet): ratings per direction, ι(t) and
+//! natural-frequency ratio charts on the page's common time axis.
 
 use std::collections::BTreeMap;
 
-use super::{figure, rating_cell, require, rows_points, Loaded};
-use crate::report::format_number;
-use crate::report::html::{column_notes, note, table, Cell};
+use super::{figure, rating_cell, require, rows_points, time_series_figure, Outputs};
+use crate::report::html::{column_notes, note, short_number, table, Cell};
 use crate::report::plot::{self, Chart, Mark, RefLine, Series};
 use crate::report::table::Table;
 use crate::report::{Assessment, IotaStatistic, ReportSettings};
@@ -22,13 +21,53 @@ const KNOWN_COLUMNS: [&str; 7] = [
     damage::PARTICIPATION.name,
 ];
 
+/// Final and peak ι per direction (the summary's rows).
+pub(super) fn iota_by_direction(t: &Table) -> Vec<(String, Option<f64>, Option<f64>)> {
+    if t.number(damage::T_S.name).is_none() || t.number(damage::IOTA.name).is_none() {
+        return Vec::new();
+    }
+    let long = t.has(damage::MODE.name) && t.number(damage::MODE.name).is_some();
+    direction_groups(t)
+        .into_iter()
+        .map(|(key, rows)| {
+            let modes = if long {
+                mode_groups(t, &rows)
+            } else {
+                Vec::new()
+            };
+            let iota_rows: &[usize] = modes.first().map(|g| g.1.as_slice()).unwrap_or(&rows);
+            let pts = rows_points(t, iota_rows, damage::T_S.name, damage::IOTA.name);
+            let (final_v, peak_v) = final_and_peak(&pts);
+            (key.join(""), final_v, peak_v)
+        })
+        .collect()
+}
+
+/// ι at the latest time and max over time of ι(t).
+fn final_and_peak(pts: &[(f64, f64)]) -> (Option<f64>, Option<f64>) {
+    let final_v = pts.iter().max_by(|a, b| a.0.total_cmp(&b.0)).map(|p| p.1);
+    let peak_v = pts
+        .iter()
+        .map(|p| p.1)
+        .filter(|v| v.is_finite())
+        .reduce(f64::max);
+    (final_v, peak_v)
+}
+
+/// Why damage.parquet is empty (the damage stage writes no row when no
+/// direction was identified).
+pub(super) const NO_ROWS: &str = "damage.parquet holds no rows: ι needs a direction whose Bouc-Wen model is identified (see the Bouc-Wen section)";
+
 pub(super) fn damage_section(
-    damage: &Loaded,
+    o: &Outputs,
     settings: &ReportSettings,
     out: &mut Vec<Assessment>,
 ) -> String {
     let mut body = String::new();
-    let Some(t) = require(damage, &tables::DAMAGE, &mut body) else {
+    if matches!(&o.damage, super::Loaded::Ok(t) if t.rows == 0) {
+        return note(&format!("{NO_ROWS}."));
+    }
+    let Some(t) = require(&o.damage, &tables::DAMAGE, &mut body) else {
         return body;
     };
     // Two layouts: long (one row per direction, time and `mode`, with
@@ -45,8 +84,8 @@ pub(super) fn damage_section(
     body.push_str(&note(&format!(
         "Rating of the {} value of ι(t): GREEN < {} ≤ YELLOW < {} ≤ RED.",
         settings.iota_statistic.name(),
-        format_number(th.yellow),
-        format_number(th.red)
+        short_number(th.yellow),
+        short_number(th.red)
     )));
     let mut rows_html = Vec::new();
     let mut figures = String::new();
@@ -61,7 +100,7 @@ pub(super) fn damage_section(
         let iota_rows: &[usize] = modes.first().map(|g| g.1.as_slice()).unwrap_or(rows);
         let pts = rows_points(t, iota_rows, damage::T_S.name, damage::IOTA.name);
         rows_html.push(rate_direction(&dir, &pts, settings, out));
-        figures.push_str(&iota_figure(&dir, &pts, gi, settings));
+        figures.push_str(&iota_figure(&dir, &pts, gi, o.time_axis, settings));
         let ratios: Vec<(String, Vec<(f64, f64)>)> = if long && t.has(damage::OMEGA_RATIO.name) {
             modes
                 .iter()
@@ -78,7 +117,7 @@ pub(super) fn damage_section(
                 .map(|c| (c.clone(), rows_points(t, rows, damage::T_S.name, c)))
                 .collect()
         };
-        figures.push_str(&ratio_figure(&dir, ratios, settings));
+        figures.push_str(&ratio_figure(&dir, ratios, o.time_axis, settings));
     }
     if let Some(steps) = t.metadata.get("quaketwin.indefinite_steps") {
         body.push_str(&note(&format!(
@@ -146,13 +185,7 @@ fn rate_direction(
     out: &mut Vec<Assessment>,
 ) -> Vec<Cell> {
     let stat = settings.iota_statistic;
-    // Final = value at the latest time; peak = maximum over time.
-    let final_v = pts.iter().max_by(|a, b| a.0.total_cmp(&b.0)).map(|p| p.1);
-    let peak_v = pts
-        .iter()
-        .map(|p| p.1)
-        .filter(|v| v.is_finite())
-        .reduce(f64::max);
+    let (final_v, peak_v) = final_and_peak(pts);
     let rated = match stat {
         IotaStatistic::Final => final_v,
         IotaStatistic::Peak => peak_v,
@@ -177,7 +210,13 @@ fn rate_direction(
 
 /// Chart of ι(t) of one direction with the rating thresholds (preceded by a note
 /// when ι has no finite value).
-fn iota_figure(dir: &str, pts: &[(f64, f64)], colour: usize, settings: &ReportSettings) -> String {
+fn iota_figure(
+    dir: &str,
+    pts: &[(f64, f64)],
+    colour: usize,
+    time_axis: Option<(f64, f64)>,
+    settings: &ReportSettings,
+) -> String {
     let th = settings.iota;
     let mut html = String::new();
     if !pts.iter().any(|p| p.1.is_finite()) {
@@ -186,6 +225,7 @@ fn iota_figure(dir: &str, pts: &[(f64, f64)], colour: usize, settings: &ReportSe
         )));
     }
     let mut chart = Chart::new(560, 280, "t (s)", "ι");
+    chart.x_range = time_axis;
     chart.series.push(Series::new(
         format!("ι(t), direction {dir}"),
         plot::decimate_min_max(pts, settings.max_points_per_trace),
@@ -215,24 +255,17 @@ fn iota_figure(dir: &str, pts: &[(f64, f64)], colour: usize, settings: &ReportSe
 fn ratio_figure(
     dir: &str,
     ratios: Vec<(String, Vec<(f64, f64)>)>,
+    time_axis: Option<(f64, f64)>,
     settings: &ReportSettings,
 ) -> String {
     if ratios.is_empty() {
         return String::new();
     }
-    let mut chart = Chart::new(560, 280, "t (s)", "ω(t)/ω(0)");
-    for (i, (label, pts)) in ratios.into_iter().enumerate() {
-        chart.series.push(Series::new(
-            label,
-            plot::decimate_min_max(&pts, settings.max_points_per_trace),
-            i,
-            Mark::Line,
-        ));
-    }
-    let legend = plot::legend(&chart.series);
-    figure(
-        plot::render(&chart),
+    time_series_figure(
+        Chart::new(560, 280, "t (s)", "ω(t)/ω(0)"),
+        ratios,
+        time_axis,
+        settings,
         &format!("Natural-frequency ratios, direction {dir}"),
-        &legend,
     )
 }

@@ -11,14 +11,13 @@ use crate::report::plot::{self, Chart, Mark, Series};
 use crate::report::ReportSettings;
 use crate::vocab::tables::{self, actuator_layout, hybrid_prototype, interface_refinement, pod};
 
-pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
-    let mut body = String::new();
-    // Key facts from the tables and their metadata (docs/test-design.md).
+/// The design in facts, from the tables and their metadata
+/// (docs/test-design.md): empty without design outputs.
+pub(super) fn design_facts(dir: &Path) -> Vec<(String, String)> {
     let pod = load(dir, &tables::POD, None);
     let layout = load(dir, &tables::ACTUATOR_LAYOUT, None);
     let validation = load(dir, &tables::REDUCTION_VALIDATION, None);
     let hybrid = load(dir, &tables::HYBRID_PROTOTYPE, None);
-    let refinement = load(dir, &tables::INTERFACE_REFINEMENT, None);
     let meta = |l: &Loaded, key: &str| -> String {
         match l {
             Loaded::Ok(t) => t.metadata.get(key).cloned().unwrap_or_else(|| "—".into()),
@@ -96,14 +95,27 @@ pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
         };
         facts.push(("Hybrid recommendation".into(), text));
     }
-    if !facts.is_empty() {
-        let mut dl = String::from("<dl class=\"facts\">");
-        for (k, v) in &facts {
-            dl.push_str(&format!("<dt>{}</dt><dd>{}</dd>", escape(k), escape(v)));
-        }
-        dl.push_str("</dl>");
-        body.push_str(&dl);
+    facts
+}
+
+/// A definition list of facts.
+pub(super) fn facts_list(facts: &[(String, String)]) -> String {
+    let mut dl = String::from("<dl class=\"facts\">");
+    for (k, v) in facts {
+        dl.push_str(&format!("<dt>{}</dt><dd>{}</dd>", escape(k), escape(v)));
     }
+    dl.push_str("</dl>");
+    dl
+}
+
+pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
+    let mut body = String::new();
+    let facts = design_facts(dir);
+    if !facts.is_empty() {
+        body.push_str(&facts_list(&facts));
+    }
+    let pod = load(dir, &tables::POD, None);
+    let refinement = load(dir, &tables::INTERFACE_REFINEMENT, None);
     // The trade-off of the interface refinement: accuracy against actuators.
     if let Loaded::Ok(t) = &refinement {
         if let (Some(act), Some(def), Some(tot)) = (

@@ -1,60 +1,53 @@
-//! Section 8, force–drift loops (hysteresis_fit.parquet): the measured loop
-//! of every storey or segment — also where the model is not identified — with
-//! the model's on top where it is, and the peak and residual drift of the
-//! displacement the loops are drawn from.
+//! Force–drift loops (hysteresis_fit.parquet): the measured loop of every
+//! storey or segment — also where the model is not identified — with the
+//! model's on top where it is, drawn as curves (decimated in time order,
+//! `plot::decimate_curve`), and each loop's peak drift and end offset beside
+//! the baseline-corrected residual drift of the drift section.
 
-use super::{figure, rows_points};
+use std::collections::BTreeMap;
+
+use super::drift::{residual, residual_text, Residual};
+use super::{figure_with, rows_points, Loaded};
 use crate::report::html::{column_notes, note, table, Cell};
 use crate::report::plot::{self, Chart, Mark, Series};
 use crate::report::table::Table;
 use crate::report::ReportSettings;
-use crate::vocab::tables::hysteresis_fit;
+use crate::vocab::tables::{drift, hysteresis_fit};
 
-/// Share of the record (its end) over which the residual drift is averaged.
-pub const RESIDUAL_WINDOW: f64 = 0.05;
+/// Share of the record (its end) over which a loop's end offset is averaged.
+pub const END_WINDOW: f64 = 0.05;
 
-/// The storey drift of one loop's rows, in time order.
-fn drift_series(t: &Table, rows: &[usize]) -> Vec<f64> {
-    rows_points(
-        t,
-        rows,
-        hysteresis_fit::T_S.name,
-        hysteresis_fit::DRIFT_M.name,
-    )
-    .into_iter()
-    .map(|p| p.1)
-    .collect()
-}
+/// Share of the data range left free on each side of a loop's axes.
+const LOOP_PAD: f64 = 0.08;
 
-/// Peak |drift| and residual drift (mean over the last `RESIDUAL_WINDOW` of
-/// the rows, in time order) of one loop, m.
-pub fn peak_and_residual(drift: &[f64]) -> Option<(f64, f64)> {
+/// Peak |drift| and the mean drift over the last [`END_WINDOW`] of the
+/// samples (in time order) of one loop, m.
+pub fn peak_and_end(drift: &[f64]) -> Option<(f64, f64)> {
     if drift.is_empty() {
         return None;
     }
     let peak = drift.iter().fold(0.0f64, |m, d| m.max(d.abs()));
-    let tail = ((drift.len() as f64 * RESIDUAL_WINDOW).ceil() as usize).clamp(1, drift.len());
+    let tail = ((drift.len() as f64 * END_WINDOW).ceil() as usize).clamp(1, drift.len());
     let end = &drift[drift.len() - tail..];
     Some((peak, end.iter().sum::<f64>() / end.len() as f64))
 }
 
-/// Residual drift (m) per (direction, segment) of a hysteresis_fit table.
-pub(super) fn residual_drifts(t: &Table) -> std::collections::BTreeMap<(String, String), f64> {
-    let mut out = std::collections::BTreeMap::new();
-    let keys = [hysteresis_fit::DIRECTION.name, hysteresis_fit::DOF.name];
-    if !keys.iter().all(|k| t.has(k)) || !t.has(hysteresis_fit::SEGMENT.name) {
+/// Residual drift of drift.parquet per (direction, segment `L<s−1>–L<s>`).
+fn corrected_residuals(drift_table: &Loaded) -> BTreeMap<(String, String), Residual> {
+    let mut out = BTreeMap::new();
+    let Loaded::Ok(t) = drift_table else {
         return out;
-    }
-    for (key, rows) in t.groups(&keys) {
-        let Some(segment) = rows
-            .first()
-            .and_then(|&r| t.key(hysteresis_fit::SEGMENT.name, r))
-        else {
+    };
+    for r in 0..t.rows {
+        let (Some(dir), Some(storey)) = (
+            t.key(drift::DIRECTION.name, r),
+            t.key(drift::STOREY.name, r)
+                .and_then(|s| s.parse::<i32>().ok()),
+        ) else {
             continue;
         };
-        let drift = drift_series(t, &rows);
-        if let Some((_, residual)) = peak_and_residual(&drift) {
-            out.insert((key[0].clone(), segment), residual);
+        if let Some(res) = residual(t, r) {
+            out.insert((dir, format!("L{}–L{storey}", storey - 1)), res);
         }
     }
     out
@@ -63,6 +56,7 @@ pub(super) fn residual_drifts(t: &Table) -> std::collections::BTreeMap<(String, 
 pub(super) fn loops_section(
     t: &Table,
     velocity_drift: Option<&str>,
+    drift_table: &Loaded,
     settings: &ReportSettings,
 ) -> String {
     let mut body = String::new();
@@ -80,15 +74,18 @@ pub(super) fn loops_section(
         return body;
     }
     body.push_str(&note(&format!(
-        "Loops and the drift columns below use the displacement the hysteresis stage integrates from the as-recorded accelerations \
-         (no band-pass; velocity drift control: {}), so a permanent offset shows as residual drift: the mean drift over the last {:.0} % \
-         of the record. The peak drift ratios of the inter-storey drift section come from the band-passed displacements of the \
-         condition stage: a band-pass removes a permanent offset by construction, so they measure the oscillation only and stay below \
-         the loops' extremes when residual drift builds up. Force: storey (segment) shear V = Σ of −m (a + ü) over the instrumented \
-         levels above (Eq. 46, lumped masses).",
+        "Loops use the displacement the hysteresis stage integrates from the as-recorded accelerations (no band-pass; velocity \
+         drift control: {}), so a permanent offset shows — and so does integrated sensor noise: the end offset (mean drift over the \
+         last {:.0} % of the record) is not corrected for it. The residual drift of the inter-storey drift section is \
+         baseline-corrected and carries its uncertainty. Force: storey (segment) shear V = Σ of −m (a + ü) over the instrumented \
+         levels above (Eq. 46, lumped masses). Curves keep every reversal: decimated in time order to segments of at most {:.1} % \
+         of either axis' data range (unless one sample step is longer) and at most {} points.",
         velocity_drift.unwrap_or("see quaketwin.settings of bouc_wen.parquet"),
-        100.0 * RESIDUAL_WINDOW
+        100.0 * END_WINDOW,
+        100.0 * plot::CURVE_MAX_STEP,
+        settings.max_points_per_loop
     )));
+    let corrected = corrected_residuals(drift_table);
     let keys: Vec<&str> = [hysteresis_fit::DIRECTION.name, hysteresis_fit::DOF.name]
         .into_iter()
         .filter(|k| t.has(k))
@@ -106,18 +103,35 @@ pub(super) fn loops_section(
                 .into_iter()
                 .map(|(d, f)| (d, f / 1000.0))
                 .collect();
-            plot::decimate_curve(&pts, settings.max_points_per_trace)
+            plot::decimate_curve(&pts, settings.max_points_per_loop)
         };
         let record = kn(hysteresis_fit::FORCE_RECORD_N.name);
         let model = kn(hysteresis_fit::FORCE_MODEL_N.name);
         let identified = !model.is_empty();
-        let drift = drift_series(t, &rows);
-        if let Some((peak, residual)) = peak_and_residual(&drift) {
+        let drift_series: Vec<f64> = rows_points(
+            t,
+            &rows,
+            hysteresis_fit::T_S.name,
+            hysteresis_fit::DRIFT_M.name,
+        )
+        .into_iter()
+        .map(|p| p.1)
+        .collect();
+        if let Some((peak, end)) = peak_and_end(&drift_series) {
+            let res = corrected.get(&(direction.clone(), segment.clone()));
             rows_html.push(vec![
                 Cell::text(&direction),
                 Cell::text(&segment),
                 Cell::number(Some(peak)),
-                Cell::number(Some(residual)),
+                Cell::number(Some(end)),
+                match res {
+                    Some(r) => Cell {
+                        value: Some(r.drift_m),
+                        class: Some("num"),
+                        ..Cell::text(&residual_text(r))
+                    },
+                    None => Cell::number(None),
+                },
                 Cell::text(if identified {
                     "yes"
                 } else {
@@ -125,10 +139,12 @@ pub(super) fn loops_section(
                 }),
             ]);
         }
-        let mut chart = Chart::new(440, 300, "storey drift (m)", "storey shear (kN)");
+        let mut chart = Chart::new(440, 320, "storey drift (m)", "storey shear (kN)");
+        chart.x_pad = Some(LOOP_PAD);
+        chart.y_pad = LOOP_PAD;
         chart
             .series
-            .push(Series::new("record", record, 0, Mark::Line));
+            .push(Series::new("measured", record, 0, Mark::Line));
         if identified {
             chart
                 .series
@@ -136,20 +152,26 @@ pub(super) fn loops_section(
         }
         let legend = plot::legend(&chart.series);
         let caption = if identified {
-            format!("Force–drift loop, direction {direction}, storey {segment}")
+            format!("Force–drift loop, direction {direction}, storey {segment}: measured and model")
         } else {
             format!(
-                "Measured force–drift loop, direction {direction}, storey {segment} (model not identified: see the reason in the parameter table)"
+                "Measured force–drift loop, direction {direction}, storey {segment} (model not identified: see the reason above)"
             )
         };
-        figures.push_str(&figure(plot::render(&chart), &caption, &legend));
+        figures.push_str(&figure_with(
+            "class=\"loop\"",
+            plot::render(&chart),
+            &caption,
+            &legend,
+        ));
     }
     figures.push_str("</div>");
     let headers: Vec<String> = [
         "direction",
         "storey (segment)",
         "peak |drift| (m)",
-        "residual drift (m)",
+        "end offset (m, uncorrected)",
+        "residual drift (baseline-corrected)",
         "model identified",
     ]
     .iter()

@@ -2,13 +2,16 @@
 //! what its files hold and says plainly when a file is absent or unreadable.
 //! This file holds the page and the helpers the sections share.
 
+mod appendix;
 mod channels;
 mod damage;
 mod design;
 mod drift;
+mod event;
 mod hysteresis;
 mod loops;
 mod modal;
+mod mode_shapes;
 mod rating;
 mod spectra;
 mod summary;
@@ -26,8 +29,9 @@ use super::{Assessment, Rating, ReportSettings};
 use crate::vocab::schema::{ColumnSpec, TableSchema};
 use crate::vocab::tables;
 
-/// Output files the report reads, with the stage that writes each.
-const OUTPUTS: [(&str, &str); 17] = [
+/// Output files the report reads, with the stage that writes each (every
+/// table of `vocab::tables`, the run's JSON/TOML files and the page itself).
+const OUTPUTS: [(&str, &str); 22] = [
     ("event.json", "ingest"),
     (tables::SAMPLES.file, "condition"),
     (tables::CHANNELS.file, "metrics"),
@@ -35,6 +39,7 @@ const OUTPUTS: [(&str, &str); 17] = [
     (tables::DRIFT.file, "metrics"),
     (tables::STABILIZATION.file, "modal"),
     (tables::MODES.file, "modal"),
+    (tables::MODAL_SPECTRUM.file, "modal"),
     (
         tables::FREQUENCY_SHIFTS.file,
         "modal (with a reference event)",
@@ -45,17 +50,23 @@ const OUTPUTS: [(&str, &str); 17] = [
     (tables::DAMAGE.file, "damage"),
     (tables::TWIN_UPDATE.file, "update"),
     (tables::TWIN_MODES.file, "update"),
+    ("twin_updated.toml", "update"),
     (tables::POD.file, "design"),
     (tables::ACTUATOR_LAYOUT.file, "design"),
+    (tables::REDUCTION_VALIDATION.file, "design"),
+    (tables::INTERFACE_REFINEMENT.file, "design"),
+    (tables::HYBRID_PROTOTYPE.file, "design"),
     ("report.html", "report"),
 ];
 
+/// The stage that writes `file` (a table not listed above is named by its
+/// declaration's table name, never "?").
 fn stage_of(file: &str) -> &'static str {
     OUTPUTS
         .iter()
         .find(|(f, _)| *f == file)
         .map(|(_, s)| *s)
-        .unwrap_or("?")
+        .unwrap_or("the stage that writes it")
 }
 
 /// A file as the report found it.
@@ -140,13 +151,52 @@ fn section(id: &str, number: usize, title: &str, body: &str) -> String {
 }
 
 fn figure(svg: Result<String, String>, caption: &str, legend: &str) -> String {
+    figure_with("", svg, caption, legend)
+}
+
+/// A figure whose element carries `attributes` (a class or id the browser
+/// test and the print stylesheet find it by).
+fn figure_with(
+    attributes: &str,
+    svg: Result<String, String>,
+    caption: &str,
+    legend: &str,
+) -> String {
+    let open = if attributes.is_empty() {
+        "<figure>".to_string()
+    } else {
+        format!("<figure {attributes}>")
+    };
     match svg {
         Ok(svg) => format!(
-            "<figure>{svg}{legend}<figcaption>{}</figcaption></figure>",
+            "{open}{svg}{legend}<figcaption>{}</figcaption></figure>",
             escape(caption)
         ),
         Err(e) => note(&format!("Plot \"{caption}\" not drawn: {e}.")),
     }
+}
+
+/// Time series as lines on the page's common time axis (min–max decimated
+/// to `max_points_per_trace`), with their legend under the chart.
+fn time_series_figure(
+    mut chart: super::plot::Chart,
+    series: Vec<(String, Vec<(f64, f64)>)>,
+    time_axis: Option<(f64, f64)>,
+    settings: &ReportSettings,
+    caption: &str,
+) -> String {
+    use super::plot::{self, Mark, Series};
+    chart.x_range = time_axis;
+    for (i, (label, pts)) in series.into_iter().enumerate() {
+        chart.series.push(Series::new(
+            label,
+            plot::decimate_min_max(&pts, settings.max_points_per_trace),
+            i,
+            Mark::Line,
+        ));
+    }
+    let legend = plot::legend(&chart.series);
+    figure(plot::render(&chart), caption, &legend)
 }
 
 fn rows_points(t: &Table, rows: &[usize], x: &str, y: &str) -> Vec<(f64, f64)> {
@@ -179,29 +229,68 @@ fn known_columns_first(t: &Table, known: &[&str]) -> Vec<String> {
     cols
 }
 
+/// The section ids and titles, in page order: the rating first, then the
+/// one-screen summary, the evidence section by section, and the appendix.
+pub const SECTIONS: [(&str, &str); 13] = [
+    ("rating", "Overall rating"),
+    ("summary", "Summary"),
+    ("event", "Event and structure"),
+    ("channels", "Channels: QA and strong-motion metrics"),
+    ("spectra", "Response spectra"),
+    ("time-histories", "Acceleration time histories"),
+    ("drift", "Inter-storey drift"),
+    ("modal", "Modal identification"),
+    ("hysteresis", "Bouc-Wen fit and hysteresis loops"),
+    ("damage", "Damage index ι(t)"),
+    ("twin", "Digital-twin update"),
+    ("test-design", "Hybrid-test design"),
+    ("appendix", "Appendix: processing history and output files"),
+];
+
+/// The tables several sections read, loaded once.
+struct Outputs {
+    channels: Loaded,
+    drift: Loaded,
+    damage: Loaded,
+    modes: Loaded,
+    shifts: Loaded,
+    twin_update: Loaded,
+    twin_modes: Loaded,
+    /// Common time axis of the time-history charts: 0 (each record's first
+    /// sample) to the longest record's duration, s.
+    time_axis: Option<(f64, f64)>,
+}
+
 /// The whole page.
 pub fn page(dir: &Path, settings: &ReportSettings) -> String {
-    let event = summary::read_event(dir);
+    let event = event::read_event(dir);
     let channels = load(dir, &tables::CHANNELS, None);
-    let drift = load(dir, &tables::DRIFT, None);
-    let damage = load(dir, &tables::DAMAGE, None);
+    let time_axis = time_axis(&channels);
+    let o = Outputs {
+        drift: load(dir, &tables::DRIFT, None),
+        damage: load(dir, &tables::DAMAGE, None),
+        modes: load(dir, &tables::MODES, None),
+        shifts: load(dir, &tables::FREQUENCY_SHIFTS, None),
+        twin_update: load(dir, &tables::TWIN_UPDATE, None),
+        twin_modes: load(dir, &tables::TWIN_MODES, None),
+        channels,
+        time_axis,
+    };
 
     let mut assessments: Vec<Assessment> = Vec::new();
-    let summary = summary::summary_section(dir, &event, &channels);
-    let channel_table = channels::channel_section(&channels);
-    let spectra = spectra::spectra_section(dir, &channels);
-    let histories = time_histories::time_history_section(dir, &channels, settings);
-    let residual = match load(dir, &tables::HYSTERESIS_FIT, None) {
-        Loaded::Ok(t) => loops::residual_drifts(&t),
-        _ => Default::default(),
-    };
-    let drift_html = drift::drift_section(&drift, &residual, settings, &mut assessments);
-    let modal = modal::modal_section(dir, settings);
-    let hysteresis = hysteresis::hysteresis_section(dir, settings);
-    let damage_html = damage::damage_section(&damage, settings, &mut assessments);
-    let twin = twin::twin_section(dir, settings);
+    let event_html = event::event_section(&event);
+    let channel_table = channels::channel_section(&o.channels);
+    let spectra = spectra::spectra_section(dir, &o.channels);
+    let histories = time_histories::time_history_section(dir, &o, settings);
+    let drift_html = drift::drift_section(&o.drift, settings, &mut assessments);
+    let modal = modal::modal_section(dir, &o, settings);
+    let hysteresis = hysteresis::hysteresis_section(dir, &o, settings);
+    let damage_html = damage::damage_section(&o, settings, &mut assessments);
+    let twin = twin::twin_section(&o, settings);
     let design = design::design_section(dir, settings);
-    let rating = rating::rating_section(&assessments, &drift, &damage, settings);
+    let rating = rating::rating_section(&assessments, &o, settings);
+    let summary = summary::summary_section(dir, &event, &o, settings);
+    let appendix = appendix::appendix_section(dir, &event, &o, settings);
 
     let event_name = match &event {
         Ok(v) => v.get("name").and_then(Value::as_str).map(str::to_string),
@@ -211,24 +300,12 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
         Some(n) => format!("quaketwin report — {n}"),
         None => "quaketwin report".to_string(),
     });
-    let toc = [
-        ("summary", "Event and structure"),
-        ("rating", "Overall rating"),
-        ("channels", "Channels"),
-        ("spectra", "Response spectra"),
-        ("time-histories", "Acceleration"),
-        ("drift", "Inter-storey drift"),
-        ("modal", "Modal identification"),
-        ("hysteresis", "Bouc-Wen hysteresis"),
-        ("damage", "Damage index"),
-        ("twin", "Twin update"),
-        ("test-design", "Test design"),
-    ]
-    .iter()
-    .enumerate()
-    .map(|(i, (id, t))| format!("<a href=\"#{id}\">{}. {t}</a>", i + 1))
-    .collect::<Vec<_>>()
-    .join(" ");
+    let toc = SECTIONS
+        .iter()
+        .enumerate()
+        .map(|(i, (id, t))| format!("<a href=\"#{id}\">{}. {}</a>", i + 1, escape(t)))
+        .collect::<Vec<_>>()
+        .join(" ");
     let mut page = String::with_capacity(1 << 20);
     page.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n");
     // No network at all: the policy blocks every fetch; styles are inline.
@@ -242,34 +319,45 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
         escape(&dir.display().to_string()),
         env!("CARGO_PKG_VERSION")
     ));
-    for (i, (id, title, body)) in [
-        ("summary", "Event and structure", summary),
-        ("rating", "Overall rating", rating),
-        (
-            "channels",
-            "Channels: QA and strong-motion metrics",
-            channel_table,
-        ),
-        ("spectra", "Response spectra", spectra),
-        ("time-histories", "Acceleration time histories", histories),
-        ("drift", "Inter-storey drift ratios", drift_html),
-        ("modal", "Modal identification", modal),
-        (
-            "hysteresis",
-            "Bouc-Wen fit and hysteresis loops",
-            hysteresis,
-        ),
-        ("damage", "Damage index ι(t)", damage_html),
-        ("twin", "Digital-twin update", twin),
-        ("test-design", "Hybrid-test design", design),
-    ]
-    .into_iter()
-    .enumerate()
-    {
+    let bodies = [
+        rating,
+        summary,
+        event_html,
+        channel_table,
+        spectra,
+        histories,
+        drift_html,
+        modal,
+        hysteresis,
+        damage_html,
+        twin,
+        design,
+        appendix,
+    ];
+    for (i, ((id, title), body)) in SECTIONS.iter().zip(bodies).enumerate() {
         page.push_str(&section(id, i + 1, title, &body));
     }
     page.push_str("</main>\n<footer><p>Every number on this page is read from the Parquet/JSON outputs in the directory above. Ratings: see docs/report.md.</p></footer>\n</body>\n</html>\n");
     page
+}
+
+/// 0 to the longest record (npts / sampling rate of channels.parquet): every
+/// time axis of the page starts where the records start.
+fn time_axis(channels: &Loaded) -> Option<(f64, f64)> {
+    let Loaded::Ok(t) = channels else {
+        return None;
+    };
+    let (npts, rate) = (
+        t.number(tables::channels::NPTS.name)?,
+        t.number(tables::channels::SAMPLING_RATE_HZ.name)?,
+    );
+    let end = npts
+        .iter()
+        .zip(rate)
+        .filter_map(|(n, r)| Some((n.as_ref()? - 1.0) / r.as_ref()?))
+        .filter(|d| d.is_finite() && *d > 0.0)
+        .fold(0.0f64, f64::max);
+    (end > 0.0).then_some((0.0, end))
 }
 
 /// channel id → (direction, level) from channels.parquet.
@@ -345,5 +433,34 @@ ul.legend{list-style:none;padding:0;margin:2px 0;display:flex;flex-wrap:wrap;gap
 .rating-box .big{font-size:20px;margin:2px 0}
 .rating-box.r-none{border-color:#999;background:var(--bg2)}
 footer{margin-top:24px;border-top:1px solid var(--line);color:var(--muted);font-size:12px}
-@media print{body{max-width:none;font-size:11px}nav{display:none}section{break-before:auto}h2{break-after:avoid}.badge,.r-green,.r-yellow,.r-red{-webkit-print-color-adjust:exact;print-color-adjust:exact}}
+.lead{font-size:15px;margin:4px 0 8px}
+.glance{display:grid;grid-template-columns:repeat(auto-fill,minmax(300px,1fr));gap:6px 18px;align-items:start}
+.card.wide{grid-column:span 2}
+#summary-storeys td.num{white-space:nowrap}
+.card h3{margin:6px 0 2px}
+.card table{margin:2px 0}
+ul.not-identifiable li{margin:4px 0}
+details summary{cursor:pointer;color:#0b5394;font-size:13px}
+@page{size:A4;margin:12mm 11mm}
+@media print{
+body{max-width:none;font-size:10.5px;padding:0}
+nav,footer{display:none}
+header{border-bottom:1px solid var(--fg)}
+h1{font-size:17px;margin:0 0 2px}
+h2{font-size:14px;margin:12px 0 6px;break-after:avoid;page-break-after:avoid}
+h3{font-size:12px;break-after:avoid;page-break-after:avoid}
+#event{break-before:page;page-break-before:always}
+table{font-size:9px;break-inside:auto}
+thead{display:table-header-group}
+tr,figure,.card,.rating-box{break-inside:avoid;page-break-inside:avoid}
+th,td{padding:1px 4px}
+.scroll{overflow:visible}
+.multiples,.grid2{grid-template-columns:repeat(2,minmax(0,1fr))}
+.glance{grid-template-columns:repeat(2,minmax(0,1fr))}
+ol.history code{font-size:8.5px}
+.meta,.note,figcaption,ul.legend,dl.facts{font-size:9.5px}
+.lead{font-size:12px}
+.rating-box .big{font-size:16px}
+.badge,.r-green,.r-yellow,.r-red,.rating-box,th,.absent{-webkit-print-color-adjust:exact;print-color-adjust:exact}
+}
 "#;

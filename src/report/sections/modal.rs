@@ -1,22 +1,36 @@
-//! Section 7, modal identification: stabilisation diagram, identified modes and
-//! the frequency shift against a reference event.
+//! Modal identification: stabilisation diagram with the modal spectrum (PSD
+//! singular values) under it on the same frequency axis, the identified
+//! modes, their shapes (`mode_shapes`) and the frequency shift against a
+//! reference event.
 
 use std::path::Path;
 
-use super::{figure, known_columns_first, load, require, Loaded};
+use super::{figure, load, require, Loaded, Outputs};
 use crate::report::html::{
-    cells, column_notes, escape, format_number, missing_columns_note, table, Cell,
+    cells, column_notes, escape, format_number, missing_columns_note, note, table, Cell,
 };
 use crate::report::plot::{self, Chart, Mark, RefLine, Series};
+use crate::report::table::Table;
 use crate::report::ReportSettings;
-use crate::vocab::tables::{self, frequency_shifts, modes, stabilization};
+use crate::vocab::tables::{self, frequency_shifts, modal_spectrum, modes, stabilization};
 
-pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
+/// PSD singular values drawn (σ1 … σ4): the leading ones carry the modes.
+const SPECTRUM_LINES: usize = 4;
+
+/// Decades of the strongest PSD singular value the spectrum's axis spans.
+const SPECTRUM_DECADES: f64 = 8.0;
+
+/// Width and y-label area shared by the stabilisation diagram and the modal
+/// spectrum, so their frequency axes line up.
+const MODAL_WIDTH: u32 = 900;
+const MODAL_Y_AREA: u32 = 78;
+
+pub(super) fn modal_section(dir: &Path, o: &Outputs, settings: &ReportSettings) -> String {
     let mut body = String::new();
     let stab = load(dir, &tables::STABILIZATION, None);
-    let modes = load(dir, &tables::MODES, None);
-    let shifts = load(dir, &tables::FREQUENCY_SHIFTS, None);
-    let mode_freqs: Vec<f64> = match &modes {
+    let spectrum = load(dir, &tables::MODAL_SPECTRUM, None);
+    let (modes, shifts) = (&o.modes, &o.shifts);
+    let mode_freqs: Vec<f64> = match modes {
         Loaded::Ok(m) => m
             .number(modes::FREQUENCY_HZ.name)
             .map(|v| v.iter().flatten().copied().collect())
@@ -24,7 +38,16 @@ pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
         _ => Vec::new(),
     };
 
-    body.push_str("<h3>Stabilisation diagram</h3>");
+    // The frequency axis of both charts: 0 to the highest pole.
+    let f_axis = match &stab {
+        Loaded::Ok(t) => t
+            .number(stabilization::FREQUENCY_HZ.name)
+            .map(|f| f.iter().flatten().fold(0.0f64, |a, b| a.max(*b)))
+            .filter(|m| *m > 0.0)
+            .map(|m| (0.0, 1.03 * m)),
+        _ => None,
+    };
+    body.push_str("<h3>Stabilisation diagram and modal spectrum</h3>");
     if let Some(t) = require(&stab, &tables::STABILIZATION, &mut body) {
         let known = [
             stabilization::ORDER.name,
@@ -84,7 +107,9 @@ pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
                 ("new or unstable", Mark::Cross, 4),
                 ("non-physical (filtered out)", Mark::Triangle, 6),
             ];
-            let mut chart = Chart::new(900, 380, "frequency (Hz)", "model order");
+            let mut chart = Chart::new(MODAL_WIDTH, 380, "frequency (Hz)", "model order");
+            chart.x_range = f_axis;
+            chart.y_label_area = Some(MODAL_Y_AREA);
             for (i, pts) in cats.into_iter().enumerate() {
                 let (label, mark, colour) = labels[i];
                 chart.series.push(Series::new(
@@ -117,9 +142,12 @@ pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
             ));
         }
     }
+    if let Some(t) = require(&spectrum, &tables::MODAL_SPECTRUM, &mut body) {
+        body.push_str(&spectrum_figure(t, f_axis, &mode_freqs));
+    }
 
     body.push_str("<h3>Identified modes</h3>");
-    if let Loaded::Ok(t) = &modes {
+    if let Loaded::Ok(t) = modes {
         // Why no mode, or fewer than the stable columns suggest (issue 13).
         let warnings: Vec<String> = t
             .metadata
@@ -133,30 +161,130 @@ pub(super) fn modal_section(dir: &Path, settings: &ReportSettings) -> String {
             ));
         }
     }
-    if let Some(t) = require(&modes, &tables::MODES, &mut body) {
+    if let Some(t) = require(modes, &tables::MODES, &mut body) {
         let known = [
             modes::MODE.name,
             modes::FREQUENCY_HZ.name,
             modes::FREQUENCY_STD_HZ.name,
             modes::DAMPING_RATIO.name,
             modes::DAMPING_STD.name,
+            modes::DIRECTION.name,
             modes::MPC.name,
             modes::MPD_DEG.name,
+            modes::MEAN_MAC.name,
             modes::POLE_COUNT.name,
+            modes::ORDER_MIN.name,
+            modes::ORDER_MAX.name,
+            modes::MANUAL.name,
         ];
         body.push_str(&missing_columns_note(t, &known));
-        let known = [&known[..], &["direction"]].concat();
-        let cols = known_columns_first(t, &known);
-        let rows = cells(t, &cols, settings.max_table_rows);
+        // Shapes are drawn below, with their channel names, not listed here.
+        let shape_columns = [
+            modes::SHAPE_RE.name,
+            modes::SHAPE_IM.name,
+            modes::SHAPE_STD.name,
+        ];
+        let cols: Vec<String> = known
+            .iter()
+            .filter(|c| t.has(c))
+            .map(|c| c.to_string())
+            .chain(
+                t.unknown(&known)
+                    .into_iter()
+                    .filter(|c| !shape_columns.contains(&c.as_str())),
+            )
+            .collect();
+        let rows: Vec<Vec<Cell>> = cells(t, &cols, settings.max_table_rows)
+            .into_iter()
+            .enumerate()
+            .map(|(r, mut row)| {
+                if let Some(i) = cols.iter().position(|c| c == modes::DIRECTION.name) {
+                    row[i] = Cell::direction(t, modes::DIRECTION.name, r);
+                }
+                row
+            })
+            .collect();
         body.push_str(&format!(
             "<div class=\"scroll\">{}</div>",
             table(Some("modes-table"), &cols, &rows)
         ));
+        body.push_str("<h3>Mode shapes</h3>");
+        body.push_str(&super::mode_shapes::mode_shapes(t, &o.channels));
     }
 
     body.push_str("<h3>Frequency shift against a reference event</h3>");
-    body.push_str(&shifts_part(&shifts, settings));
+    body.push_str(&shifts_part(shifts, settings));
     body
+}
+
+/// The leading singular values of the PSD matrix against frequency (log
+/// scale), on the stabilisation diagram's frequency axis, with the
+/// identified frequencies; the subspace singular values in a note.
+fn spectrum_figure(t: &Table, f_axis: Option<(f64, f64)>, mode_freqs: &[f64]) -> String {
+    let known = [
+        modal_spectrum::KIND.name,
+        modal_spectrum::INDEX.name,
+        modal_spectrum::FREQUENCY_HZ.name,
+        modal_spectrum::VALUE.name,
+    ];
+    let mut html = column_notes(t, &known);
+    let (Some(index), Some(freq), Some(value)) = (
+        t.number(modal_spectrum::INDEX.name),
+        t.number(modal_spectrum::FREQUENCY_HZ.name),
+        t.number(modal_spectrum::VALUE.name),
+    ) else {
+        return html;
+    };
+    let kind = |r: usize| t.key(modal_spectrum::KIND.name, r);
+    let (lo, hi) = f_axis.unwrap_or((0.0, f64::INFINITY));
+    let mut lines: Vec<Vec<(f64, f64)>> = vec![Vec::new(); SPECTRUM_LINES];
+    for r in 0..t.rows {
+        if kind(r).as_deref() != Some("psd") {
+            continue;
+        }
+        let (Some(i), Some(f), Some(v)) = (index[r], freq[r], value[r]) else {
+            continue;
+        };
+        let i = i as usize;
+        if (1..=SPECTRUM_LINES).contains(&i) && f >= lo && f <= hi && v > 0.0 {
+            lines[i - 1].push((f, v));
+        }
+    }
+    let top = lines.iter().flatten().map(|p| p.1).fold(0.0f64, f64::max);
+    if top <= 0.0 {
+        html.push_str(&note(
+            "modal_spectrum.parquet holds no PSD singular values to plot.",
+        ));
+        return html;
+    }
+    let mut chart = Chart::new(MODAL_WIDTH, 260, "frequency (Hz)", "PSD singular value");
+    chart.log_y = true;
+    chart.x_range = f_axis;
+    chart.y_range = Some((top * 10f64.powf(-SPECTRUM_DECADES), 2.0 * top));
+    chart.y_label_area = Some(MODAL_Y_AREA);
+    for (i, pts) in lines.into_iter().enumerate() {
+        if !pts.is_empty() {
+            chart
+                .series
+                .push(Series::new(format!("σ{}", i + 1), pts, i, Mark::Line));
+        }
+    }
+    for f in mode_freqs {
+        chart.ref_lines.push(RefLine {
+            at: *f,
+            horizontal: false,
+            colour: 1,
+        });
+    }
+    let legend = plot::legend(&chart.series);
+    html.push_str(&figure(
+        plot::render(&chart),
+        "Modal spectrum: leading singular values of the Welch PSD matrix of the outputs (modal_spectrum.parquet, kind psd) on the \
+         frequency axis of the stabilisation diagram above; dashed: identified modes. Peaks of σ1 mark modes; σ2 rising \
+         to σ1 marks close modes.",
+        &legend,
+    ));
+    html
 }
 
 /// The pre/post table: reference vs this event, shift ± σ, MAC, significant;
@@ -259,7 +387,7 @@ fn shifts_part(shifts: &Loaded, settings: &ReportSettings) -> String {
                         num(fs::FREQUENCY_CURRENT_HZ.name, r),
                         num(fs::FREQUENCY_CURRENT_STD_HZ.name, r),
                     )),
-                    Cell::of(t, fs::DIRECTION_CURRENT.name, r),
+                    Cell::direction(t, fs::DIRECTION_CURRENT.name, r),
                     Cell {
                         value: shift,
                         class: Some("num"),

@@ -1,37 +1,69 @@
-//! Section 2, overall rating: the worst of the available criteria and what drives it.
+//! The overall rating (first section): the worst of the available criteria,
+//! the values that drive it, every criterion with its thresholds and what it
+//! rated, and the criteria that could not be used and why.
 
 use std::collections::BTreeMap;
 
-use super::{stage_of, Loaded};
+use super::drift::{residual, PEAK_CRITERION, RESIDUAL_CRITERION};
+use super::{stage_of, Loaded, Outputs};
 use crate::report::format_number;
-use crate::report::html::{escape, note};
-use crate::report::{Assessment, Rating, ReportSettings};
+use crate::report::html::{escape, note, short_number, table, Cell};
+use crate::report::{Assessment, Rating, ReportSettings, Thresholds};
 use crate::vocab::tables;
+
+/// Why a criterion's file gives no value (None when it does).
+fn file_gap(file: &str, loaded: &Loaded) -> Option<String> {
+    match loaded {
+        Loaded::Ok(t) if t.rows == 0 => Some(format!("{file} holds no rows")),
+        Loaded::Ok(_) => None,
+        Loaded::Absent(Some(why)) => Some(format!("not applicable: {why}")),
+        Loaded::Absent(None) => Some(format!("{file} absent (stage {} not run)", stage_of(file))),
+        Loaded::Unreadable(_) => Some(format!("{file} unreadable")),
+    }
+}
+
+/// Why the residual drift gives no rated value, when it gives none.
+fn residual_gap(drift: &Loaded) -> String {
+    if let Some(gap) = file_gap(tables::DRIFT.file, drift) {
+        return gap;
+    }
+    let Loaded::Ok(t) = drift else {
+        return String::new();
+    };
+    if !t.has(tables::drift::RESIDUAL_DRIFT_M.name) {
+        return "drift.parquet has no residual_drift_m column (written by an older quaketwin: run the metrics stage again)"
+            .into();
+    }
+    let values: Vec<_> = (0..t.rows).filter_map(|r| residual(t, r)).collect();
+    if values.is_empty() {
+        return "no storey has unfiltered records of both levels on a common time base".into();
+    }
+    let widest = values.iter().filter_map(|v| v.std_m).fold(0.0f64, f64::max);
+    format!(
+        "not resolved at any storey: |D| < 2σ (σ up to {} mm: sensor noise integrated twice)",
+        format_number(1000.0 * widest)
+    )
+}
+
+fn thresholds_text(t: &Thresholds) -> String {
+    format!(
+        "GREEN < {} ≤ YELLOW < {} ≤ RED",
+        short_number(t.yellow),
+        short_number(t.red)
+    )
+}
 
 pub(super) fn rating_section(
     assessments: &[Assessment],
-    drift: &Loaded,
-    damage: &Loaded,
+    o: &Outputs,
     settings: &ReportSettings,
 ) -> String {
     let mut body = String::new();
     let worst = assessments.iter().map(|a| a.rating).max();
-    let mut considered = Vec::new();
-    for (file, loaded) in [(tables::DRIFT.file, drift), (tables::DAMAGE.file, damage)] {
-        considered.push(match loaded {
-            Loaded::Ok(_) if assessments.iter().any(|a| a.source == file) => {
-                format!("{file}: rated")
-            }
-            Loaded::Ok(_) => format!("{file}: present but holds no ratable value"),
-            Loaded::Absent(Some(why)) => format!("{file}: not applicable ({why})"),
-            Loaded::Absent(None) => format!("{file}: absent (stage {} not run)", stage_of(file)),
-            Loaded::Unreadable(_) => format!("{file}: unreadable"),
-        });
-    }
     match worst {
         None => {
             body.push_str(
-                "<div class=\"rating-box r-none\" id=\"overall-rating\"><p class=\"big\">NOT RATED</p><p>No rating criterion is available.</p></div>",
+                "<div class=\"rating-box r-none\" id=\"overall-rating\"><p class=\"big\">NOT RATED</p><p>No rating criterion is available (see below).</p></div>",
             );
         }
         Some(w) => {
@@ -68,18 +100,89 @@ pub(super) fn rating_section(
             ));
         }
     }
-    body.push_str("<ul>");
-    for c in considered {
-        body.push_str(&format!("<li>{}</li>", escape(&c)));
+    // Every criterion: used (what it rated) or missing (why).
+    let damage_criterion = format!("damage index ι ({})", settings.iota_statistic.name());
+    let criteria = [
+        (
+            PEAK_CRITERION.to_string(),
+            settings.drift,
+            tables::DRIFT.file,
+            file_gap(tables::DRIFT.file, &o.drift)
+                .unwrap_or_else(|| "drift.parquet holds no ratable value".into()),
+        ),
+        (
+            RESIDUAL_CRITERION.to_string(),
+            settings.residual_drift,
+            tables::DRIFT.file,
+            residual_gap(&o.drift),
+        ),
+        (
+            damage_criterion,
+            settings.iota,
+            tables::DAMAGE.file,
+            match &o.damage {
+                Loaded::Ok(t) if t.rows == 0 => super::damage::NO_ROWS.to_string(),
+                other => file_gap(tables::DAMAGE.file, other)
+                    .unwrap_or_else(|| "damage.parquet: present but holds no ratable value".into()),
+            },
+        ),
+    ];
+    let mut rows = Vec::new();
+    let mut missing = Vec::new();
+    for (criterion, th, file, gap) in &criteria {
+        let rated: Vec<&Assessment> = assessments
+            .iter()
+            .filter(|a| &a.criterion == criterion)
+            .collect();
+        let worst = rated
+            .iter()
+            .max_by(|a, b| a.rating.cmp(&b.rating).then(a.value.total_cmp(&b.value)));
+        match worst {
+            Some(w) => rows.push(vec![
+                Cell::text(criterion),
+                Cell::text(&thresholds_text(th)),
+                Cell::raw(format!("<code>{}</code>", escape(file))),
+                Cell::text(&rated.len().to_string()),
+                Cell::text(&format!("{} at {}", format_number(w.value), w.subject)),
+                Cell::raw(w.rating.badge()),
+            ]),
+            None => missing.push(format!(
+                "<li><b>{}</b> ({}): {}</li>",
+                escape(criterion),
+                escape(&thresholds_text(th)),
+                escape(gap)
+            )),
+        }
     }
-    body.push_str("</ul>");
-    body.push_str(&note(&format!(
-        "Overall rating = worst of the available criteria. Thresholds: drift ratio GREEN < {} ≤ YELLOW < {} ≤ RED; damage index ι ({} value) GREEN < {} ≤ YELLOW < {} ≤ RED. Screening values, see docs/report.md.",
-        format_number(settings.drift.yellow),
-        format_number(settings.drift.red),
-        settings.iota_statistic.name(),
-        format_number(settings.iota.yellow),
-        format_number(settings.iota.red),
-    )));
+    body.push_str("<h3>Criteria used</h3>");
+    if rows.is_empty() {
+        body.push_str(&note("None."));
+    } else {
+        body.push_str(&table(
+            Some("criteria-table"),
+            &[
+                "criterion",
+                "thresholds",
+                "from",
+                "values rated",
+                "worst value",
+                "rating",
+            ]
+            .map(String::from),
+            &rows,
+        ));
+    }
+    body.push_str("<h3>Criteria missing</h3>");
+    if missing.is_empty() {
+        body.push_str(&note("None: every criterion was rated."));
+    } else {
+        body.push_str(&format!(
+            "<ul id=\"criteria-missing\">{}</ul>",
+            missing.join("")
+        ));
+    }
+    body.push_str(&note(
+        "Overall rating = worst of the available criteria. Screening values, to be set per structure type; sources and rationale in docs/report.md.",
+    ));
     body
 }

@@ -4,7 +4,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use super::{channel_info, figure, load, require, rows_points, Loaded};
-use crate::report::html::column_notes;
+use crate::report::html::{column_notes, direction_text};
 use crate::report::plot::{self, Chart, Mark, Series};
 use crate::vocab::tables::{self, spectra};
 
@@ -64,7 +64,8 @@ pub(super) fn spectra_section(dir: &Path, channels: &Loaded) -> String {
         body.push_str(&figure(
             plot::render(&chart),
             &format!(
-                "Pseudo-acceleration response spectra, direction {dir}, damping {}",
+                "Pseudo-acceleration response spectra, direction {}, damping {}",
+                direction_text(&dir),
                 dampings.join(", ")
             ),
             &legend,

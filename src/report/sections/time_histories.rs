@@ -15,7 +15,7 @@ use arrow_array::cast::AsArray;
 use arrow_array::{Array, ArrayRef, RecordBatch};
 use arrow_schema::DataType;
 
-use super::{channel_info, figure, listed, not_loaded, require, Loaded};
+use super::{channel_info, figure, listed, not_loaded, require, Loaded, Outputs};
 use crate::report::format_number;
 use crate::report::html::note;
 use crate::report::plot::{self, Chart, Mark, MinMaxDecimator, Series};
@@ -103,11 +103,8 @@ fn for_each_row(
     })
 }
 
-pub(super) fn time_history_section(
-    dir: &Path,
-    channels: &Loaded,
-    settings: &ReportSettings,
-) -> String {
+pub(super) fn time_history_section(dir: &Path, o: &Outputs, settings: &ReportSettings) -> String {
+    let channels = &o.channels;
     let mut body = String::new();
     let path = dir.join(tables::SAMPLES.file);
     let only = [
@@ -170,13 +167,14 @@ pub(super) fn time_history_section(
         .fold(0.0f64, f64::max);
     let y = if peak > 0.0 { 1.05 * peak } else { 1.0 };
     body.push_str(&note(&format!(
-        "Conditioned acceleration, common vertical scale. Traces drawn with at most {} points (min–max decimation keeps the peaks); PGA values from channels.parquet.",
+        "Conditioned acceleration, common vertical scale; time from each record's first sample (every time axis of this page starts there). Traces drawn with at most {} points (min–max decimation keeps the peaks); PGA values from channels.parquet.",
         settings.max_points_per_trace
     )));
     body.push_str("<div class=\"multiples\">");
     for (i, (id, pts)) in traces.into_iter().enumerate() {
         let mut chart = Chart::new(440, 170, "t (s)", "a (m/s²)");
         chart.y_range = Some((-y, y));
+        chart.x_range = o.time_axis;
         chart
             .series
             .push(Series::new(id.clone(), pts, i % 7, Mark::Line));
@@ -184,7 +182,8 @@ pub(super) fn time_history_section(
         let caption = format!(
             "{id} — level {}, direction {}{}",
             level.unwrap_or_else(|| "?".into()),
-            dir.unwrap_or_else(|| "?".into()),
+            dir.map(|d| crate::report::html::direction_text(&d))
+                .unwrap_or_else(|| "?".into()),
             pga.get(&id)
                 .map(|p| format!(", PGA {} m/s²", format_number(*p)))
                 .unwrap_or_default()

@@ -1,0 +1,98 @@
+//! Appendix: the processing history as recorded (raw JSON parameters of
+//! every step), the status of every output file and the raw rows of the
+//! twin update.  What a reviewer checks, after what a reader decides on.
+
+use std::path::Path;
+
+use serde_json::Value;
+
+use super::event::json_text;
+use super::{listed, Loaded, Outputs, OUTPUTS};
+use crate::report::html::{escape, note, table, whole_table, Cell};
+use crate::report::ReportSettings;
+
+pub(super) fn appendix_section(
+    dir: &Path,
+    event: &Result<Value, String>,
+    o: &Outputs,
+    settings: &ReportSettings,
+) -> String {
+    let mut body = String::new();
+    // Processing history: the most complete copy is in channels.parquet's metadata.
+    let history = match &o.channels {
+        Loaded::Ok(t) => t
+            .metadata
+            .get("quaketwin.history")
+            .and_then(|h| serde_json::from_str::<Value>(h).ok()),
+        _ => None,
+    }
+    .or_else(|| event.as_ref().ok().and_then(|e| e.get("history").cloned()));
+    body.push_str("<h3 id=\"processing-history\">Processing history</h3>");
+    let steps: Vec<String> = history
+        .as_ref()
+        .and_then(|h| h.get("steps"))
+        .and_then(Value::as_array)
+        .map(|a| {
+            a.iter()
+                .map(|s| {
+                    let name = json_text(s.get("step"));
+                    let params = s.get("params").map(|p| p.to_string()).unwrap_or_default();
+                    format!(
+                        "<li><b>{}</b> <code>{}</code></li>",
+                        escape(&name),
+                        escape(&params)
+                    )
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    if steps.is_empty() {
+        body.push_str(&note("No processing steps recorded."));
+    } else {
+        body.push_str(&note(
+            "The conditioning steps with their parameters as recorded (channels.parquet metadata quaketwin.history); \
+             each later table carries its own history in its metadata.",
+        ));
+        body.push_str(&format!("<ol class=\"history\">{}</ol>", steps.join("")));
+    }
+    body.push_str("<h3 id=\"output-files\">Output files</h3>");
+    let rows: Vec<Vec<Cell>> = OUTPUTS
+        .iter()
+        .map(|(f, stage)| {
+            // report.html is this page: its status must not depend on
+            // whether an older copy exists (the page is deterministic).
+            let fixed = (*f == "report.html").then_some("this page");
+            let size = if fixed.is_some() {
+                None
+            } else {
+                listed(dir, f)
+                    .then(|| std::fs::metadata(dir.join(f)).ok().map(|m| m.len()))
+                    .flatten()
+            };
+            vec![
+                Cell::raw(format!("<code>{}</code>", escape(f))),
+                Cell::text(stage),
+                match (fixed, size) {
+                    (Some(text), _) => Cell::text(text),
+                    (None, Some(n)) => Cell::text(&format!("present, {n} bytes")),
+                    (None, None) => Cell::raw("<span class=\"absent-inline\">absent</span>".into()),
+                },
+            ]
+        })
+        .collect();
+    body.push_str(&table(
+        Some("output-files"),
+        &["file", "stage", "status"].map(String::from),
+        &rows,
+    ));
+    // The twin update's candidates, round by round (list columns as written).
+    if let Loaded::Ok(t) = &o.twin_update {
+        body.push_str("<h3 id=\"twin-candidates\">Twin update: every candidate</h3>");
+        body.push_str(&note(
+            "twin_update.parquet as written: one row per ensemble round and candidate solver, with the model quantities z, \
+             the normalised scatter and the score per voter (list columns). The section Digital-twin update summarises it.",
+        ));
+        body.push_str(&whole_table(t, settings.max_table_rows));
+    }
+    body
+}

@@ -1,0 +1,156 @@
+//! The many-event dataset layout (docs/cli.md, "Many events"): one folder per
+//! table, Hive-partitioned by structure and event, so that one table across
+//! a network's events is one query for pyarrow, DuckDB and polars:
+//!
+//! ```text
+//! DIR/<table>/structure=<S>/event=<E>/part-0.parquet   one file per table and event
+//! DIR/runs/structure=<S>/event=<E>/                    the event's run: run.json, event.json,
+//!                                                      report.html, twin_updated.toml, tables
+//! ```
+//!
+//! Each event runs into its own run directory (locked, with its run manifest,
+//! re-run stage by stage like any single-event run); its tables are then
+//! *published* into the table folders as hard links to the run's files (no
+//! copy; a copy where the file system refuses links).  The writers replace
+//! a file by renaming a new one over it, never by writing into it, so a
+//! published link keeps the bytes of the run that published it until the
+//! next publication replaces it.  JSON, HTML and TOML never enter a table
+//! folder, so a glob over a table folder meets one schema only.
+
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+use crate::vocab::tables;
+
+/// Folder of the per-event run directories, beside the table folders.
+pub const RUNS_DIR: &str = "runs";
+/// The one file of a table in an event's partition.
+pub const PART_FILE: &str = "part-0.parquet";
+
+/// A Hive partition value: ASCII letters, digits, `-`, `_` and `.` kept,
+/// anything else (`/`, `=`, spaces) replaced by `_`, so that a name can
+/// neither leave its folder nor break the `key=value` form.
+pub fn partition_value(s: &str) -> String {
+    let v: String = s
+        .trim()
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    match v.as_str() {
+        "" => "unnamed".into(),
+        // `.` and `..` are path components, not names.
+        "." | ".." => v.replace('.', "_"),
+        _ => v,
+    }
+}
+
+/// The partition path `structure=<S>/event=<E>` (relative).
+pub fn partition(structure: &str, event: &str) -> PathBuf {
+    Path::new(&format!("structure={}", partition_value(structure)))
+        .join(format!("event={}", partition_value(event)))
+}
+
+/// The run directory of the event at `partition` under the dataset `root`.
+pub fn run_dir(root: &Path, partition: &Path) -> PathBuf {
+    root.join(RUNS_DIR).join(partition)
+}
+
+/// Publishes the tables of the run at `run_dir` into the table folders of
+/// `root` for `partition`, and withdraws this partition's files of tables the
+/// run no longer has (a stage that no longer applies): after it, the table
+/// folders hold exactly this run's tables for this event.  Only files named
+/// after a declared table are published.  Returns the published paths.
+pub fn publish_tables(root: &Path, partition: &Path, run_dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut produced: Vec<&'static str> = Vec::new();
+    for entry in std::fs::read_dir(run_dir).map_err(|e| Error::io(run_dir, e))? {
+        let path = entry.map_err(|e| Error::io(run_dir, e))?.path();
+        let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
+            continue;
+        };
+        let declared = name
+            .strip_suffix(".parquet")
+            .and_then(tables::by_name)
+            .filter(|t| t.file == name);
+        let is_file = std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file());
+        if let (Some(t), true) = (declared, is_file) {
+            produced.push(t.name);
+        }
+    }
+    produced.sort_unstable();
+    let mut published = Vec::with_capacity(produced.len());
+    for name in &produced {
+        let from = run_dir.join(format!("{name}.parquet"));
+        let dir = root.join(name).join(partition);
+        std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        let to = dir.join(PART_FILE);
+        link_or_copy_atomically(&from, &to)?;
+        published.push(to);
+    }
+    // Withdraw what an earlier run of this event published and this one
+    // did not produce.
+    for t in tables::ALL_TABLES {
+        if produced.contains(&t.name) {
+            continue;
+        }
+        let dir = root.join(t.name).join(partition);
+        let stale = dir.join(PART_FILE);
+        match std::fs::symlink_metadata(&stale) {
+            Ok(m) if m.is_file() => {
+                std::fs::remove_file(&stale).map_err(|e| Error::io(&stale, e))?;
+                // Empty folders go too (best effort: another event may share the structure folder).
+                let _ = std::fs::remove_dir(&dir);
+                if let Some(parent) = dir.parent() {
+                    let _ = std::fs::remove_dir(parent);
+                }
+            }
+            Ok(_) => {
+                return Err(Error::output(
+                    &stale,
+                    "not a regular file: refusing to remove it from the dataset",
+                ))
+            }
+            Err(_) => {}
+        }
+    }
+    Ok(published)
+}
+
+/// Puts a hard link to `from` (a copy where linking fails) at `to`: made
+/// under a temporary name beside `to`, then renamed over it, so a reader of
+/// the dataset sees the old file or the new one, never a missing or half
+/// file.  Anything but a regular file at `to` is an error, never replaced.
+fn link_or_copy_atomically(from: &Path, to: &Path) -> Result<()> {
+    if let Ok(m) = std::fs::symlink_metadata(to) {
+        if !m.is_file() {
+            return Err(Error::output(
+                to,
+                "not a regular file: refusing to replace it with a table",
+            ));
+        }
+    }
+    // Temporary files a killed publication left are swept first.
+    let prefix = format!(".{PART_FILE}.quaketwin-");
+    if let Some(Ok(entries)) = to.parent().map(std::fs::read_dir) {
+        for e in entries.flatten() {
+            let name = e.file_name();
+            let name = name.to_string_lossy();
+            if name.starts_with(&prefix) && name.ends_with(".tmp") {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+    let tmp = to.with_file_name(format!("{prefix}{}.tmp", std::process::id()));
+    if std::fs::hard_link(from, &tmp).is_err() {
+        std::fs::copy(from, &tmp).map_err(|e| Error::io(&tmp, e))?;
+    }
+    std::fs::rename(&tmp, to).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        Error::io(to, e)
+    })
+}
