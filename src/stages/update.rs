@@ -206,17 +206,9 @@ pub fn update_from_files(
         .collect();
     // The measured modes' provenance (event, conditioning, modal
     // pre-processing) followed by this update.
-    let mut meta = modes_file
-        .provenance
-        .clone()
-        .map(|p| {
-            p.then_step(
-                "twin_update",
-                serde_json::json!({ "twin": twin_path.display().to_string() }),
-            )
-            .metadata()
-        })
-        .unwrap_or_default();
+    let step = serde_json::json!({ "twin": twin_path.display().to_string() });
+    let provenance = (modes_file.provenance.clone()).map(|p| p.then_step("twin_update", step));
+    let mut meta = provenance.map(|p| p.metadata()).unwrap_or_default();
     meta.extend([
         ("quaketwin.settings".to_string(), settings),
         ("quaketwin.inputs".to_string(), inputs),

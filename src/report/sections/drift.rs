@@ -50,15 +50,18 @@ pub(super) fn subject(t: &Table, r: usize) -> String {
     )
 }
 
-/// "−12.3 ± 4.5 mm" (or without σ).
+/// "−12.3 ± 4.5 mm" (or without σ); in metres when either reaches 1 m (an
+/// unresolved estimate of a noisy record).
 pub(super) fn residual_text(res: &Residual) -> String {
+    let big = res.drift_m.abs().max(res.std_m.unwrap_or(0.0)) >= 1.0;
+    let (scale, unit) = if big { (1.0, "m") } else { (1000.0, "mm") };
     match res.std_m {
         Some(s) => format!(
-            "{} ± {} mm",
-            format_number(1000.0 * res.drift_m),
-            format_number(1000.0 * s)
+            "{} ± {} {unit}",
+            format_number(scale * res.drift_m),
+            format_number(scale * s)
         ),
-        None => format!("{} mm", format_number(1000.0 * res.drift_m)),
+        None => format!("{} {unit}", format_number(scale * res.drift_m)),
     }
 }
 

@@ -31,7 +31,7 @@ fn residual_gap(drift: &Loaded) -> String {
         return String::new();
     };
     if !t.has(tables::drift::RESIDUAL_DRIFT_M.name) {
-        return "drift.parquet has no residual_drift_m column (written by an older quaketwin: run the metrics stage again)"
+        return "drift.parquet has no residual_drift_m column (written by an earlier quaketwin: remove it and run the pipeline again)"
             .into();
     }
     let values: Vec<_> = (0..t.rows).filter_map(|r| residual(t, r)).collect();
@@ -40,8 +40,8 @@ fn residual_gap(drift: &Loaded) -> String {
     }
     let widest = values.iter().filter_map(|v| v.std_m).fold(0.0f64, f64::max);
     format!(
-        "not resolved at any storey: |D| < 2σ (σ up to {} mm: sensor noise integrated twice)",
-        format_number(1000.0 * widest)
+        "not resolved at any storey: |D| < 2σ (σ up to {} m: sensor noise integrated twice)",
+        format_number(widest)
     )
 }
 
