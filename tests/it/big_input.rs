@@ -333,6 +333,38 @@ fn spectra_in_lanes_match_one_oscillator_at_a_time() {
     }
 }
 
+/// The spectra's oscillator lanes compiled for wider vector registers
+/// (chosen at run time) give the peaks of the baseline build bit for bit,
+/// on a record with a tail of quiet samples and a NaN-free spike.
+#[test]
+fn spectra_lanes_are_the_same_in_every_instruction_set() {
+    let dt = 0.005;
+    let mut a: Vec<f64> = (0..6000)
+        .map(|i| (i as f64 * 0.017).sin() * (i as f64 * 0.0041).cos() * 3.7)
+        .collect();
+    a[2500] = 40.0;
+    a.extend(std::iter::repeat_n(1e-9, 500));
+    let periods = quaketwin::metrics::default_periods();
+    for omegas in periods
+        .iter()
+        .map(|t| 2.0 * std::f64::consts::PI / t)
+        .collect::<Vec<_>>()
+        .chunks(8)
+    {
+        let variants = quaketwin::metrics::spectra::sdof_peaks_variants(&a, dt, omegas, 0.05);
+        let bits = |v: &[(f64, f64, f64)]| {
+            v.iter()
+                .map(|p| (p.0.to_bits(), p.1.to_bits(), p.2.to_bits()))
+                .collect::<Vec<_>>()
+        };
+        let (_, portable) = &variants[0];
+        assert_eq!(portable.len(), omegas.len());
+        for (name, peaks) in &variants[1..] {
+            assert_eq!(bits(peaks), bits(portable), "{name}, ω = {omegas:?}");
+        }
+    }
+}
+
 /// A Parquet table of several row groups written by the column-parallel
 /// writer is the file `ArrowWriter` writes from the same batches.
 #[test]
@@ -395,7 +427,7 @@ fn series_tables_are_byte_stream_split_and_delta_encoded() {
         |i| (i as f64 * 0.1).sin(),
         |i| (i % 7 != 0).then_some(i as f64 * 1e-3),
     );
-    write_parquet(&series, &[batch.clone()], &[]).unwrap();
+    write_parquet(&series, std::slice::from_ref(&batch), &[]).unwrap();
     let results = dir.path().join("spectra.parquet");
     let n = 100;
     let spectra_batch = TableBuilder::new(&SPECTRA)
@@ -539,5 +571,74 @@ fn channel_at_a_time_conditioning_reports_the_earliest_step_that_failed() {
             .unwrap_err()
             .to_string();
         assert!(e.contains("A"), "align {align}: {e}");
+    }
+}
+
+/// The block-Hankel Gram matrix, its products formed four at a time, is
+/// bit for bit the one formed a product at a time with `dot` (the code it
+/// replaced, below), for rows of several signals and shifts of both signs
+/// of lag, record lengths with and without a tail.
+#[test]
+fn hankel_gram_products_in_fours_are_the_products_one_at_a_time() {
+    use quaketwin::modal::hankel::{dot, hankel_gram, HankelRow};
+    fn reference(signals: &[&[f64]], rows: &[HankelRow], columns: usize) -> Vec<f64> {
+        let max_shift = rows.iter().map(|r| r.shift).max().unwrap_or(0);
+        let span = 2 * max_shift + 1;
+        let base = |a: usize, b: usize, d: usize| {
+            // The canonical product of (a, b, d), as the old code chose it.
+            let (a, b, d) = if a < b || (a == b && d <= max_shift) {
+                (a, b, d)
+            } else {
+                (b, a, span - 1 - d)
+            };
+            let lag = d as isize - max_shift as isize;
+            let (sa, sb) = if lag >= 0 {
+                (0, lag as usize)
+            } else {
+                ((-lag) as usize, 0)
+            };
+            dot(&signals[a][sa..sa + columns], &signals[b][sb..sb + columns])
+        };
+        let nr = rows.len();
+        let mut g = vec![0.0; nr * nr];
+        for (i, ra) in rows.iter().enumerate() {
+            for (k, rb) in rows.iter().enumerate().skip(i) {
+                let lag = rb.shift as isize - ra.shift as isize;
+                let d = (lag + max_shift as isize) as usize;
+                let mut value = base(ra.signal, rb.signal, d);
+                let steps = ra.shift.min(rb.shift);
+                let (xa, xb) = (signals[ra.signal], signals[rb.signal]);
+                let (mut sa, mut sb) = (ra.shift - steps, rb.shift - steps);
+                for _ in 0..steps {
+                    value += xa[columns + sa] * xb[columns + sb] - xa[sa] * xb[sb];
+                    sa += 1;
+                    sb += 1;
+                }
+                let v = value / columns as f64;
+                g[i * nr + k] = v;
+                g[k * nr + i] = v;
+            }
+        }
+        g
+    }
+    let signal = |seed: u64, n: usize| -> Vec<f64> {
+        let mut rng = quaketwin::rng::Rng::new(seed);
+        (0..n).map(|_| rng.normal()).collect()
+    };
+    let owned: Vec<Vec<f64>> = (0..3).map(|s| signal(11 + s, 1_203)).collect();
+    let signals: Vec<&[f64]> = owned.iter().map(|s| s.as_slice()).collect();
+    for (shifts, columns) in [(7usize, 1_190usize), (3, 1_001), (1, 4), (10, 1_193)] {
+        let rows: Vec<HankelRow> = (0..signals.len())
+            .flat_map(|signal| (0..shifts).map(move |shift| HankelRow { signal, shift }))
+            .collect();
+        let want: Vec<u64> = reference(&signals, &rows, columns)
+            .iter()
+            .map(|v| v.to_bits())
+            .collect();
+        let got: Vec<u64> = hankel_gram(&signals, &rows, columns)
+            .iter()
+            .map(|v| v.to_bits())
+            .collect();
+        assert_eq!(got, want, "{shifts} shifts, {columns} columns");
     }
 }
