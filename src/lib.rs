@@ -13,6 +13,7 @@ pub mod design;
 pub mod error;
 pub mod event_folder;
 pub mod geometry;
+pub mod hash;
 pub mod hysteresis;
 pub mod in_memory;
 pub mod metrics;

@@ -123,6 +123,21 @@ impl DirectionRecords {
         floor_channels: &[&str],
         masses: Option<&[f64]>,
     ) -> Result<Self> {
+        Self::from_event_window(event, direction, base_channel, floor_channels, masses, None)
+    }
+
+    /// As [`DirectionRecords::from_event`], with samples `window` of every
+    /// channel only (`None`: all of them; the identification window,
+    /// `super::window`).  Parked samples are read a channel at a time and not
+    /// kept.
+    pub fn from_event_window(
+        event: &Event,
+        direction: &str,
+        base_channel: &str,
+        floor_channels: &[&str],
+        masses: Option<&[f64]>,
+        window: Option<std::ops::Range<usize>>,
+    ) -> Result<Self> {
         let find = |id: &str| -> Result<&Record> {
             event.record(id).ok_or_else(|| {
                 Error::input(
@@ -150,7 +165,9 @@ impl DirectionRecords {
                     "counts without a known sensitivity cannot be converted to m/s²",
                 )
             })?;
-            Ok(record.samples.iter().map(|x| x * factor).collect())
+            let range = window.clone().unwrap_or(0..record.samples.len());
+            let samples = record.samples.get_range(range.start, range.len())?;
+            Ok(samples.iter().map(|x| x * factor).collect())
         };
         let base = find(base_channel).ok();
         let fs = base.map(|b| b.channel.sampling_rate_hz).or_else(|| {
@@ -274,6 +291,9 @@ pub fn end_drift_rate(velocity: &[f64], dt: f64) -> f64 {
 #[derive(Debug, Clone, PartialEq)]
 pub struct DirectionKinematics {
     pub sampling_rate_hz: f64,
+    /// Time of the first sample from the record's start, s: the start of the
+    /// identification window (`super::window`); 0 for the whole record.
+    pub start_s: f64,
     pub masses: Vec<f64>,
     pub base_acceleration: Vec<f64>,
     pub absolute_acceleration: Vec<Vec<f64>>,
@@ -520,6 +540,7 @@ impl DirectionKinematics {
         }
         Ok(DirectionKinematics {
             sampling_rate_hz: fs,
+            start_s: 0.0,
             masses,
             base_acceleration: base.acceleration.clone(),
             absolute_acceleration: absolute,

@@ -119,6 +119,7 @@ pub(super) fn identify_dof(
             k0_dd: p[problem.coupled.len() - 1],
             hysteretic_share: fit.hysteretic_share,
             significance: &fit.significance,
+            unknowns: problem.fixed_count() + 3,
             exponent: n_star,
             cost_contrast,
         },
@@ -128,6 +129,7 @@ pub(super) fn identify_dof(
     )?;
 
     let (instantaneous, stability) = if settings.instantaneous {
+        engine.solve_every_frame()?;
         instantaneous_estimates(
             &mut engine,
             problem,
@@ -269,6 +271,8 @@ struct Diagnostics<'a> {
     k0_dd: f64,
     hysteretic_share: f64,
     significance: &'a Significance,
+    /// Unknowns of the full model (K0 and K0·δ per coupling, β, γ, N).
+    unknowns: usize,
     /// N*.
     exponent: f64,
     /// (max over the coarse grid of J − J*)/J*.
@@ -276,7 +280,8 @@ struct Diagnostics<'a> {
 }
 
 /// Bad input, not a numerical failure: a response that does not yield leaves β, γ, N
-/// undetermined.  Checked in this order: K0_dd at its bound, hysteretic share, F-test,
+/// undetermined.  Checked in this order: K0_dd at its bound, hysteretic share, F-test (and
+/// whether the record has the windows to compute it),
 /// N* at the edge of its range, flat J(N).
 fn check_identifiable(
     d: &Diagnostics,
@@ -296,6 +301,18 @@ fn check_identifiable(
                  the nonlinear Bouc-Wen parameters β, γ, N are not identifiable from this record",
                 100.0 * d.hysteretic_share,
                 100.0 * settings.min_hysteretic_share
+            ),
+        ));
+    }
+    if d.significance.denominator_dof == 0 {
+        return Err(not_identifiable(
+            direction,
+            dof,
+            format!(
+                "the record holds n_eff = {} independent windows, no more than the {} unknowns of this DoF \
+                 (K0 and K0·δ of each coupled storey, β, γ, N): the hysteretic terms cannot be tested against the \
+                 linear fit, and the nonlinear Bouc-Wen parameters are not identifiable from this record",
+                d.significance.effective_samples, d.unknowns
             ),
         ));
     }

@@ -8,6 +8,7 @@ use std::path::Path;
 use serde::Deserialize;
 
 use super::mass_resolution::{resolve_masses, MassLumping, MassResolution};
+use super::window::{identification_window, WindowSettings};
 use super::{
     identify_kinematics, DirectionIdentification, DirectionKinematics, DirectionRecords,
     IdentifySettings,
@@ -48,6 +49,9 @@ pub enum DirectionOutcome {
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeasuredResponse {
     pub sampling_rate_hz: f64,
+    /// Time of the first sample from the record's start, s (as
+    /// `DirectionIdentification::start_s`).
+    pub start_s: f64,
     /// Segment of each DoF (`L0–L4`…).
     pub segments: Vec<String>,
     /// Inter-storey (segment) drift u_d − u_{d−1}, m, per DoF.
@@ -61,6 +65,7 @@ impl MeasuredResponse {
         let storey_drift = (0..kin.dofs()).map(|d| kin.storey_drift(d)).collect();
         MeasuredResponse {
             sampling_rate_hz: kin.sampling_rate_hz,
+            start_s: kin.start_s,
             segments,
             storey_drift,
             restoring_force: kin.restoring_force.clone(),
@@ -87,6 +92,8 @@ pub struct EventSettings {
     pub mass_lumping: MassLumping,
     /// Explicit directions; None = `auto_directions`.
     pub directions: Option<Vec<DirectionSpec>>,
+    /// The part of the record identified (`super::window`).
+    pub window: WindowSettings,
     /// A direction that cannot be identified fails the whole identification.
     pub fail_on_error: bool,
 }
@@ -187,7 +194,7 @@ pub fn identify_event(
             .zip(masses.par_iter())
             .map(|(spec, mass)| {
                 let (r, measured) = match mass {
-                    Ok(mass) => identify_spec(event, spec, mass, settings),
+                    Ok(mass) => identify_spec(event, spec, mass, settings, &p.window),
                     Err(e) => (Err(e.duplicate()), None),
                 };
                 (spec.direction.clone(), r, measured)
@@ -234,22 +241,38 @@ pub fn identify_event(
     Ok((outcomes, resolved))
 }
 
-/// Identifies one direction with its resolved masses; when the kinematics
-/// could be formed, also returns the measured response (for the loops of a
-/// direction whose model is not identified).
+/// Identifies one direction with its resolved masses, on its identification
+/// window (`super::window`); when the kinematics could be formed, also
+/// returns the measured response (for the loops of a direction whose model
+/// is not identified).
 fn identify_spec(
     event: &Event,
     spec: &DirectionSpec,
     mass: &MassResolution,
     settings: &IdentifySettings,
+    window: &WindowSettings,
 ) -> (Result<DirectionIdentification>, Option<MeasuredResponse>) {
     let floors: Vec<&str> = spec.floors.iter().map(|s| s.as_str()).collect();
-    let records = DirectionRecords::from_event(
+    let channels: Vec<&Record> = std::iter::once(spec.base.as_str())
+        .chain(floors.iter().copied())
+        .filter_map(|id| event.record(id))
+        .collect();
+    // A missing channel is reported by `from_event_window`, naming it.
+    let span = if channels.len() == floors.len() + 1 {
+        match identification_window(&spec.direction, &channels, window) {
+            Ok(w) => Some(w),
+            Err(e) => return (Err(e), None),
+        }
+    } else {
+        None
+    };
+    let records = DirectionRecords::from_event_window(
         event,
         &spec.direction,
         &spec.base,
         &floors,
         Some(&mass.masses_kg),
+        span.as_ref().map(|w| w.samples.clone()),
     );
     let mut records = match records {
         Ok(r) => r,
@@ -261,7 +284,16 @@ fn identify_spec(
         spec.floors.clone(),
         serde_json::to_value(mass).unwrap_or_default(),
     );
-    let kin = match DirectionKinematics::from_records(
+    if let Some(w) = &span {
+        records.declared_processing.push_for(
+            "hysteresis_window",
+            std::iter::once(spec.base.clone())
+                .chain(spec.floors.iter().cloned())
+                .collect(),
+            w.history(window),
+        );
+    }
+    let mut kin = match DirectionKinematics::from_records(
         &records,
         settings.min_samples,
         settings.velocity_drift,
@@ -269,6 +301,8 @@ fn identify_spec(
         Ok(k) => k,
         Err(e) => return (Err(e), None),
     };
+    drop(records);
+    kin.start_s = span.as_ref().map_or(0.0, |w| w.start_s());
     let segments = if mass.levels.len() == kin.dofs() {
         mass.segments()
     } else {

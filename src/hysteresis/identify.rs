@@ -37,6 +37,11 @@ use crate::vocab::ProcessingHistory;
 pub struct DirectionIdentification {
     pub direction: String,
     pub sampling_rate_hz: f64,
+    /// Time of the first sample identified from the record's start, s (the
+    /// identification window's start, `super::window`); the times of
+    /// `damage`, of the instantaneous estimates and of `hysteresis_fit.parquet`
+    /// count from the record's start.
+    pub start_s: f64,
     pub form: BasisForm,
     pub window_len: usize,
     pub hop: usize,
@@ -112,6 +117,15 @@ pub fn identify_kinematics(
         identified.push(result);
     }
     identified.reverse();
+    // Frame times count from the window's start: from the record's start.
+    for dof in identified.iter_mut() {
+        for e in dof.instantaneous.iter_mut() {
+            e.time_s += kin.start_s;
+        }
+        if let Some(st) = dof.stability.as_mut() {
+            st.onset_s += kin.start_s;
+        }
+    }
     // Model adequacy: estimates unstable over time at every DoF. Seen on a
     // linear building with 40 dB noise (every DoF unstable, N at its bound).
     if !identified.is_empty()
@@ -130,7 +144,7 @@ pub fn identify_kinematics(
     }
     let (k0, k0_delta) = stiffness_matrices(&identified);
     fit_restoring_forces(kin, &mut identified, &k0, &k0_delta);
-    let damage = damage_index(
+    let mut damage = damage_index(
         &k0,
         &k0_delta,
         &kin.masses,
@@ -138,10 +152,12 @@ pub fn identify_kinematics(
         fs,
         settings.damage_stride,
     )?;
+    damage.time_s.iter_mut().for_each(|t| *t += kin.start_s);
     let processing = processing(kin, settings, &layout, fs);
     Ok(DirectionIdentification {
         direction: direction.to_string(),
         sampling_rate_hz: fs,
+        start_s: kin.start_s,
         form: settings.form,
         window_len: layout.window_len,
         hop: layout.hop,

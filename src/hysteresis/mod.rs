@@ -16,6 +16,8 @@
 //! - [`lumping`]: Eq. 35–36 generalised to any instrumented levels
 //!   (tributary lumping, segments `L<a>–L<b>`).
 //! - [`storey_masses`]: storey masses and Eq. 35–36 targets from the twin.
+//! - [`window`]: the part of a record identified (the strong motion of a
+//!   long record, with margins; a triggered record whole).
 //!
 //! Processing is explicit: the stage takes minimally processed absolute
 //! accelerations (by default it integrates them itself with no filtering) and
@@ -46,6 +48,7 @@ pub mod significance;
 pub mod solve;
 pub mod stft;
 pub mod storey_masses;
+pub mod window;
 
 pub use basis::{
     BaseRecord, BasisForm, DirectionKinematics, DirectionRecords, DofParameters, FloorRecord,
@@ -71,3 +74,4 @@ pub use settings::IdentifySettings;
 pub use significance::Significance;
 pub use solve::{bounded_lsq_columns, bounded_lsq_gram, BoundedSolution};
 pub use stft::{hamming_symmetric, FrequencyBand, StftLayout, Transform};
+pub use window::{identification_window, IdentificationWindow, WindowRule, WindowSettings};

@@ -96,13 +96,16 @@ pub fn residual_drift_of(relative: &[f64], dt: f64) -> Result<ResidualDrift> {
             "residual drift: the record holds non-finite samples",
         ));
     }
-    let velocity = cumulative_trapezoid(relative, dt);
-    let displacement = cumulative_trapezoid(&velocity, dt);
+    // The noise floor first, and the velocity dropped once the displacement
+    // and the offset are formed: at most three series of the record's length
+    // are held at once (the same operations as in any order).
+    let noise = white_noise_std(relative, dt)?;
     let (d5_95, t5) = super::significant_duration(relative, dt, 0.05, 0.95)?;
     let last = (n - 1) as f64 * dt;
     let start_s = (t5 + d5_95).min(last * (1.0 - MIN_WINDOW_FRACTION));
     let first = ((start_s / dt).ceil() as usize).min(n - 2);
     let t = |i: usize| i as f64 * dt;
+    let velocity = cumulative_trapezoid(relative, dt);
     // c = Σ v t / Σ t² over W (velocity error c t, through the origin).
     let (mut vt, mut tt) = (0.0, 0.0);
     for (i, v) in velocity.iter().enumerate().skip(first) {
@@ -110,12 +113,13 @@ pub fn residual_drift_of(relative: &[f64], dt: f64) -> Result<ResidualDrift> {
         tt += t(i) * t(i);
     }
     let offset = if tt > 0.0 { vt / tt } else { 0.0 };
+    let displacement = cumulative_trapezoid(&velocity, dt);
+    drop(velocity);
     let corrected = |i: usize| displacement[i] - 0.5 * offset * t(i) * t(i);
     let mean = |from: usize, to: usize| (from..to).map(corrected).sum::<f64>() / (to - from) as f64;
     let drift = mean(first, n);
     let middle = first + (n - first) / 2;
     let halves = (mean(first, middle) - mean(middle, n)).abs();
-    let noise = white_noise_std(relative, dt)?;
     let t_mid = 0.5 * (t(first) + last);
     let walk = noise * (dt * t_mid.powi(3) / 3.0).sqrt();
     Ok(ResidualDrift {

@@ -33,6 +33,53 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
+/// Dot products formed together by [`dots_sharing`].
+const DOTS: usize = 4;
+
+/// `dot(shared, others[k])` for each of up to [`DOTS`] slices as long as
+/// `shared`, in one pass: each sum has `dot`'s four accumulators, terms and
+/// order (a product `x·y` is `y·x` exactly), so each result is `dot`'s bit
+/// for bit; the passes over `shared` and the chains of additions of the
+/// different sums overlap.  (The Gram products were the modal stage's time
+/// on an hour of 64 channels.)  Unused entries of the result are 0.
+fn dots_sharing(shared: &[f64], others: &[&[f64]]) -> [f64; DOTS] {
+    let n = shared.len();
+    let mut out = [0.0; DOTS];
+    if others.len() != DOTS || others.iter().any(|o| o.len() != n) {
+        for (v, o) in out.iter_mut().zip(others) {
+            *v = dot(shared, o);
+        }
+        return out;
+    }
+    let (y0, y1, y2, y3) = (
+        &others[0][..n],
+        &others[1][..n],
+        &others[2][..n],
+        &others[3][..n],
+    );
+    let mut acc = [[0.0f64; 4]; DOTS];
+    let chunks = n / 4;
+    for c in 0..chunks {
+        let i = 4 * c;
+        for j in 0..4 {
+            let x = shared[i + j];
+            acc[0][j] += x * y0[i + j];
+            acc[1][j] += x * y1[i + j];
+            acc[2][j] += x * y2[i + j];
+            acc[3][j] += x * y3[i + j];
+        }
+    }
+    for (k, y) in [y0, y1, y2, y3].into_iter().enumerate() {
+        let mut tail = 0.0;
+        for i in 4 * chunks..n {
+            tail += shared[i] * y[i];
+        }
+        let a = &acc[k];
+        out[k] = (a[0] + a[1]) + (a[2] + a[3]) + tail;
+    }
+    out
+}
+
 /// One row of a block-Hankel matrix: `signal[k + shift]` for k = 0..columns.
 #[derive(Debug, Clone, Copy)]
 pub struct HankelRow {
@@ -67,22 +114,51 @@ pub fn hankel_gram(signals: &[&[f64]], rows: &[HankelRow], columns: usize) -> Ve
     let split = |idx: usize| (idx / span / n_sig, idx / span % n_sig, idx % span);
     let mirror = |(a, b, d): (usize, usize, usize)| (b * n_sig + a) * span + (span - 1 - d);
     let canonical = |(a, b, d): (usize, usize, usize)| a < b || (a == b && d <= max_shift);
-    base.par_iter_mut()
-        .enumerate()
-        .filter(|(idx, _)| {
-            let abd = split(*idx);
-            canonical(abd) && (needed[*idx] || needed[mirror(abd)])
+    // The products of one pair (a, b) at lags of one sign share a factor that
+    // starts at sample 0 (x_a for lags ≥ 0, x_b for lags < 0): they are
+    // computed [`DOTS`] at a time ([`dots_sharing`]), which reads the shared
+    // factor once for all of them and overlaps their sums.  Each is still the
+    // sum `dot` forms, bit for bit.
+    let todo: Vec<usize> = (0..base.len())
+        .filter(|&idx| {
+            let abd = split(idx);
+            canonical(abd) && (needed[idx] || needed[mirror(abd)])
         })
-        .for_each(|(idx, value)| {
-            let (a, b, d) = split(idx);
-            let lag = d as isize - max_shift as isize;
-            let (sa, sb) = if lag >= 0 {
-                (0, lag as usize)
+        .collect();
+    let mut groups: Vec<&[usize]> = Vec::new();
+    for same_pair in todo.chunk_by(|&i, &j| {
+        let ((a, b, d), (a2, b2, d2)) = (split(i), split(j));
+        (a, b) == (a2, b2) && (d >= max_shift) == (d2 >= max_shift)
+    }) {
+        groups.extend(same_pair.chunks(DOTS));
+    }
+    let values: Vec<[f64; DOTS]> = groups
+        .par_iter()
+        .map(|group| {
+            let (a, b, _) = split(group[0]);
+            let lags = group
+                .iter()
+                .map(|&idx| split(idx).2 as isize - max_shift as isize);
+            let mut others = [&signals[a][..0]; DOTS];
+            let shared = if split(group[0]).2 >= max_shift {
+                for (o, lag) in others.iter_mut().zip(lags) {
+                    *o = &signals[b][lag as usize..lag as usize + columns];
+                }
+                &signals[a][..columns]
             } else {
-                ((-lag) as usize, 0)
+                for (o, lag) in others.iter_mut().zip(lags) {
+                    *o = &signals[a][(-lag) as usize..(-lag) as usize + columns];
+                }
+                &signals[b][..columns]
             };
-            *value = dot(&signals[a][sa..sa + columns], &signals[b][sb..sb + columns]);
-        });
+            dots_sharing(shared, &others[..group.len()])
+        })
+        .collect();
+    for (group, values) in groups.iter().zip(&values) {
+        for (&idx, &v) in group.iter().zip(values) {
+            base[idx] = v;
+        }
+    }
     for idx in 0..base.len() {
         let abd = split(idx);
         if needed[idx] && !canonical(abd) {

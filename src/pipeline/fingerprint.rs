@@ -1,51 +1,15 @@
-//! Stable fingerprints for deciding whether a stage is up to date.  FNV-1a
-//! 64 is written here (ten lines) because std's hasher is not guaranteed
-//! stable across releases and the stamps outlive one binary.
+//! Stable fingerprints for deciding whether a stage is up to date, with the
+//! one hash of [`crate::hash`].
 
 use std::path::Path;
 
 use crate::error::{Error, Result};
-
-#[derive(Debug, Clone, Copy)]
-pub struct Fnv64(u64);
-
-impl Default for Fnv64 {
-    fn default() -> Self {
-        Fnv64(0xcbf2_9ce4_8422_2325)
-    }
-}
-
-impl Fnv64 {
-    pub fn write(&mut self, bytes: &[u8]) -> &mut Self {
-        for b in bytes {
-            self.0 ^= *b as u64;
-            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
-        }
-        // Separator so ("ab","c") and ("a","bc") differ.
-        self.0 ^= 0xff;
-        self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
-        self
-    }
-    /// Bytes without the separator (for hashing a file in chunks).
-    pub fn write_raw(&mut self, bytes: &[u8]) -> &mut Self {
-        for b in bytes {
-            self.0 ^= *b as u64;
-            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
-        }
-        self
-    }
-    pub fn write_str(&mut self, s: &str) -> &mut Self {
-        self.write(s.as_bytes())
-    }
-    pub fn finish_hex(&self) -> String {
-        format!("{:016x}", self.0)
-    }
-}
+use crate::hash::Hash64;
 
 /// Fingerprint of an input path (file or directory tree): names, sizes and
 /// modification times, in sorted order.
 pub fn path_fingerprint(path: &Path) -> Result<String> {
-    let mut h = Fnv64::default();
+    let mut h = Hash64::default();
     let mut entries = Vec::new();
     collect(path, path, &mut entries)?;
     entries.sort();

@@ -1,6 +1,6 @@
 //! The run manifest `DIR/run.json`: which event the output directory holds,
 //! and per stage the fingerprint of its inputs and settings and the size and
-//! FNV-1a 64 hash of every output file.  It is the directory's table of
+//! XXH64 hash ([`crate::hash`]) of every output file.  It is the directory's table of
 //! contents: a file not listed here is not a result (the report shows only
 //! listed files), a listed file that fails its size or hash is damaged and
 //! rebuilt.  Schema: docs/pipelines.md ("The run manifest").
@@ -10,13 +10,14 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::fingerprint::Fnv64;
 use crate::error::{Error, Result};
+use crate::hash::Hash64;
 
 /// File name of the manifest inside the output directory.
 pub const MANIFEST_FILE: &str = crate::event_folder::RUN_MANIFEST_FILE;
-/// Version of the manifest's layout.
-pub const FORMAT: u32 = 1;
+/// Version of the manifest's layout (2: outputs hashed with XXH64, `xxh64`;
+/// 1 had FNV-1a, `fnv1a64`).
+pub const FORMAT: u32 = 2;
 
 /// Contents of `run.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -81,9 +82,9 @@ pub struct OutputRecord {
     /// Size in bytes (absent while the stage is `started`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bytes: Option<u64>,
-    /// FNV-1a 64 of the file's bytes, 16 hex digits (absent while `started`).
+    /// XXH64 of the file's bytes, 16 hex digits (absent while `started`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub fnv1a64: Option<String>,
+    pub xxh64: Option<String>,
 }
 
 impl RunManifest {
@@ -119,13 +120,21 @@ pub fn read(dir: &Path) -> std::result::Result<Option<RunManifest>, String> {
         Ok(_) => {}
     }
     let bytes = std::fs::read(&path).map_err(|e| e.to_string())?;
-    let m: RunManifest = serde_json::from_slice(&bytes).map_err(|e| e.to_string())?;
-    if m.format != FORMAT {
+    // The layout version first: a manifest of another format is reported
+    // as such, not by the first field this build does not know.
+    #[derive(Deserialize)]
+    struct Format {
+        format: u32,
+    }
+    let format = serde_json::from_slice::<Format>(&bytes)
+        .map_err(|e| e.to_string())?
+        .format;
+    if format != FORMAT {
         return Err(format!(
-            "manifest format {} (this build reads {FORMAT})",
-            m.format
+            "manifest format {format} (this build reads {FORMAT})"
         ));
     }
+    let m: RunManifest = serde_json::from_slice(&bytes).map_err(|e| e.to_string())?;
     Ok(Some(m))
 }
 
@@ -137,7 +146,7 @@ pub fn write(dir: &Path, m: &RunManifest) -> Result<()> {
     crate::sinks::atomic::write_bytes_atomically(&path, &json)
 }
 
-/// Size and FNV-1a 64 hash of a regular file (never following a link);
+/// Size and hash of a regular file (never following a link), read whole;
 /// `None` when absent or not a regular file.
 pub fn hash_file(path: &Path) -> Result<Option<(u64, String)>> {
     match std::fs::symlink_metadata(path) {
@@ -147,8 +156,8 @@ pub fn hash_file(path: &Path) -> Result<Option<(u64, String)>> {
         Ok(_) => {}
     }
     let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut h = Fnv64::default();
-    let mut buf = vec![0u8; 1 << 16];
+    let mut h = Hash64::default();
+    let mut buf = vec![0u8; 1 << 20];
     let mut n_total = 0u64;
     loop {
         let n = f.read(&mut buf).map_err(|e| Error::io(path, e))?;
@@ -158,26 +167,31 @@ pub fn hash_file(path: &Path) -> Result<Option<(u64, String)>> {
         h.write_raw(&buf[..n]);
         n_total += n as u64;
     }
-    h.write(&n_total.to_le_bytes());
     Ok(Some((n_total, h.finish_hex())))
 }
 
-/// Record of output `file` in `dir` as it is now.
+/// Record of output `file` in `dir` as it is now: the size and hash taken
+/// as this process wrote it ([`crate::sinks::atomic::written_digest`]) when
+/// it is still that file, else read from the file.
 pub fn record_output(dir: &Path, file: &str) -> Result<OutputRecord> {
     let path = dir.join(file);
-    let (bytes, hash) = hash_file(&path)?
+    let digest = match crate::sinks::atomic::written_digest(&path) {
+        Some(d) => Some(d),
+        None => hash_file(&path)?,
+    };
+    let (bytes, hash) = digest
         .ok_or_else(|| Error::output(&path, "the stage did not write this declared output"))?;
     Ok(OutputRecord {
         file: file.to_string(),
         bytes: Some(bytes),
-        fnv1a64: Some(hash),
+        xxh64: Some(hash),
     })
 }
 
 /// Whether `dir/o.file` is still exactly as recorded; `Err` holds what is
 /// wrong, in words.
 pub fn verify_output(dir: &Path, o: &OutputRecord) -> Result<std::result::Result<(), String>> {
-    let (Some(bytes), Some(hash)) = (o.bytes, o.fnv1a64.as_deref()) else {
+    let (Some(bytes), Some(hash)) = (o.bytes, o.xxh64.as_deref()) else {
         return Ok(Err("no recorded size and hash".into()));
     };
     let path = dir.join(&o.file);

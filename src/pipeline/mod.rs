@@ -34,7 +34,7 @@ pub use context::RunContext;
 pub use stage::{Product, ProductKind, Stage, StageKind};
 
 use crate::error::{Error, Result};
-use fingerprint::Fnv64;
+use crate::hash::Hash64;
 use manifest::{EventIdentity, OutputRecord, RunManifest, StageRecord, StageState};
 
 /// What happened to one stage in a run.
@@ -187,7 +187,7 @@ fn set_record(m: &mut RunManifest, rec: StageRecord, pipeline: &Pipeline) {
     m.stages.sort_by_key(|r| pos(&r.name));
 }
 
-fn hash_record(h: &mut Fnv64, r: Option<&StageRecord>) {
+fn hash_record(h: &mut Hash64, r: Option<&StageRecord>) {
     match r {
         None => {
             h.write_str("absent");
@@ -198,7 +198,7 @@ fn hash_record(h: &mut Fnv64, r: Option<&StageRecord>) {
                 .write_str(&r.fingerprint);
             for o in &r.outputs {
                 h.write_str(&o.file)
-                    .write_str(o.fnv1a64.as_deref().unwrap_or(""));
+                    .write_str(o.xxh64.as_deref().unwrap_or(""));
             }
         }
     }
@@ -216,7 +216,7 @@ fn stage_fingerprint(
     pipeline: &Pipeline,
 ) -> Result<String> {
     let stage = &planned.decl;
-    let mut h = Fnv64::default();
+    let mut h = Hash64::default();
     h.write_str(env!("CARGO_PKG_VERSION"))
         .write_str(&stage.kind)
         .write_str(&stage.name);
@@ -560,7 +560,7 @@ fn run_stages(
                     .map(|f| OutputRecord {
                         file: f.clone(),
                         bytes: None,
-                        fnv1a64: None,
+                        xxh64: None,
                     })
                     .collect(),
             },

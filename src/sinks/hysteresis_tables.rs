@@ -344,12 +344,20 @@ pub fn write_fit(
     let (mut dir, mut dof, mut seg, mut t, mut drift, mut fr, mut fm) =
         (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     for o in outcomes {
-        // (direction, rate, segments, drifts, record forces, model forces)
-        let (direction, fs, segments, drifts, record, model): (_, _, _, Vec<&[f64]>, _, _) = match o
-        {
+        // (direction, rate, start, segments, drifts, record forces, model forces)
+        let (direction, fs, start_s, segments, drifts, record, model): (
+            _,
+            _,
+            _,
+            _,
+            Vec<&[f64]>,
+            _,
+            _,
+        ) = match o {
             DirectionOutcome::Identified(d) => (
                 &d.direction,
                 d.sampling_rate_hz,
+                d.start_s,
                 &d.segments,
                 d.dofs
                     .iter()
@@ -375,6 +383,7 @@ pub fn write_fit(
             } => (
                 direction,
                 m.sampling_rate_hz,
+                m.start_s,
                 &m.segments,
                 m.storey_drift.iter().map(|v| v.as_slice()).collect(),
                 storey_shears(
@@ -402,7 +411,7 @@ pub fn write_fit(
                         .cloned()
                         .unwrap_or_else(|| format!("L{d}–L{}", d + 1)),
                 );
-                t.push(i as f64 * dt);
+                t.push(start_s + i as f64 * dt);
                 drift.push(storey_drift[i]);
                 fr.push(record[d][i]);
                 fm.push(model.as_ref().map(|m| m[d][i]));

@@ -17,7 +17,8 @@ use crate::design::motion::design_inputs;
 use crate::design::plan::{design_hybrid_test_with, BaseMotion, TestDesign};
 use crate::design::recorded::RecordedResponse;
 use crate::error::Result;
-use crate::pipeline::fingerprint::{path_fingerprint, Fnv64};
+use crate::hash::Hash64;
+use crate::pipeline::fingerprint::path_fingerprint;
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::design_tables::{write_design, DesignProvenance, DESIGN_FILES};
 use crate::vocab::Role;
@@ -191,7 +192,7 @@ impl Stage for Design {
     fn extra_fingerprint(&self, ctx: &mut RunContext) -> Result<String> {
         let path = self.design_path(ctx)?;
         let design = load_design(&path)?;
-        let mut h = Fnv64::default();
+        let mut h = Hash64::default();
         h.write_str(&path_fingerprint(&path)?)
             .write_str(&path_fingerprint(&design.twin_path)?);
         if let MotionSource::File { path: f, .. } = &design.motion.source {

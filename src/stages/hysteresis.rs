@@ -83,6 +83,8 @@ pub struct HysteresisParams {
     /// Fail the stage when a direction cannot be identified (the CLI command
     /// does); in a pipeline the reason is written to bouc_wen.parquet instead.
     pub fail_on_error: bool,
+    /// The part of each record identified (`crate::hysteresis::window`).
+    pub window: crate::hysteresis::WindowSettings,
 }
 
 impl Default for HysteresisParams {
@@ -101,6 +103,7 @@ impl Default for HysteresisParams {
             directions: None,
             output_decimation: 1,
             fail_on_error: false,
+            window: Default::default(),
         }
     }
 }
@@ -133,7 +136,7 @@ impl HysteresisParams {
                 "reduced_mass_step must be in (0, 0.001] (Eq. 35–36 search resolution)",
             ));
         }
-        Ok(s)
+        self.window.validate().map(|()| s)
     }
 }
 
@@ -150,6 +153,7 @@ pub fn identify_event_at(
         reduced_mass_step: p.reduced_mass_step,
         mass_lumping: p.mass_lumping,
         directions: p.directions.clone(),
+        window: p.window,
         fail_on_error: p.fail_on_error,
     };
     identify_event(event, event_dir, &settings)
@@ -167,7 +171,7 @@ pub fn write_identification(
         "form": p.form, "band_low_hz": p.band_low_hz, "exponent_min": p.exponent_min,
         "exponent_max": p.exponent_max, "exponent_resolution": p.exponent_resolution,
         "velocity_drift": p.velocity_drift, "reduced_mass_step": p.reduced_mass_step,
-        "mass_lumping": p.mass_lumping,
+        "mass_lumping": p.mass_lumping, "window": p.window,
     });
     let mut meta = provenance.metadata();
     meta.extend([
@@ -207,11 +211,9 @@ impl Hysteresis {
 
 impl Stage for Hysteresis {
     fn outputs(&self) -> Vec<String> {
-        vec![
-            BOUC_WEN_FILE.into(),
-            INSTANTANEOUS_FILE.into(),
-            FIT_FILE.into(),
-        ]
+        [BOUC_WEN_FILE, INSTANTANEOUS_FILE, FIT_FILE]
+            .map(String::from)
+            .to_vec()
     }
     /// Automatic directions need levels and building axes; without any (e.g. a folder without
     /// event.toml whose headers state neither) there is nothing to identify, and saying so

@@ -168,6 +168,20 @@ fn nullability(nullable: bool) -> &'static str {
     }
 }
 
+/// What a table's rows are, which decides how its columns are encoded
+/// (`sinks::parquet`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Rows {
+    /// Rows of results (channels, modes, spectra…): Parquet's default
+    /// encodings, a dictionary first.
+    Results,
+    /// Samples of time series (one row per sample, millions of rows): nearly
+    /// every float and every sample index or time is distinct, so floats are
+    /// byte-stream-split and 64-bit integers and times delta-encoded, with
+    /// no dictionary attempt (docs/formats.md).
+    Series,
+}
+
 /// One declared table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TableSchema {
@@ -177,6 +191,7 @@ pub struct TableSchema {
     /// another name, e.g. `samples_as_recorded.parquet`).
     pub file: &'static str,
     pub doc: &'static str,
+    pub rows: Rows,
     pub columns: &'static [ColumnSpec],
 }
 

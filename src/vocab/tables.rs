@@ -11,11 +11,14 @@
 //! Each table has a constant (`MODES`) and a module of its columns
 //! (`modes::FREQUENCY_HZ`), so code names a column without a string literal.
 
-use super::schema::TableSchema;
+use super::schema::{Rows, TableSchema};
 
-/// `declare!(CONST, module, "name", "file", "doc", { COL: "col", Type, required|nullable, "unit", "doc"; … })`
+/// `declare!([series] CONST, module, "name", "file", "doc", { COL: "col", Type, required|nullable, "unit", "doc"; … })`
+/// (`series`: rows are samples of time series, [`Rows::Series`]).
 macro_rules! declare {
-    ($konst:ident, $module:ident, $name:literal, $file:literal, $doc:literal, {
+    (series $konst:ident, $($rest:tt)*) => { declare!(@table Series, $konst, $($rest)*); };
+    ($konst:ident, $($rest:tt)*) => { declare!(@table Results, $konst, $($rest)*); };
+    (@table $rows:ident, $konst:ident, $module:ident, $name:literal, $file:literal, $doc:literal, {
         $($col:ident: $cname:literal, $ty:ident, $null:ident, $unit:literal, $cdoc:literal;)*
     }) => {
         #[doc = concat!("Columns of `", $file, "`.")]
@@ -37,6 +40,7 @@ macro_rules! declare {
             name: $name,
             file: $file,
             doc: $doc,
+            rows: Rows::$rows,
             columns: &[$($module::$col),*],
         };
     };
@@ -80,7 +84,7 @@ declare!(CHANNELS, channels, "channels", "channels.parquet",
     CAV_M_S: "cav_m_s", F64, nullable, "m/s", "cumulative absolute velocity ∫|a| dt";
 });
 
-declare!(SAMPLES, samples, "samples", "samples.parquet",
+declare!(series SAMPLES, samples, "samples", "samples.parquet",
     "one row per channel and sample: the conditioned records (long format)", {
     CHANNEL_ID: "channel_id", Utf8, required, "", "channel id (`channel_id` of channels.parquet)";
     SAMPLE: "sample", I64, required, "", "index from 0";
@@ -212,7 +216,7 @@ declare!(BOUC_WEN_INSTANTANEOUS, bouc_wen_instantaneous, "bouc_wen_instantaneous
     GAMMA: "gamma", F64, required, "N^(1-N)/m", "γ";
 });
 
-declare!(HYSTERESIS_FIT, hysteresis_fit, "hysteresis_fit", "hysteresis_fit.parquet",
+declare!(series HYSTERESIS_FIT, hysteresis_fit, "hysteresis_fit", "hysteresis_fit.parquet",
     "recorded vs model storey shear and drift per storey (segment): the force–drift loops", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
     DOF: "dof", I32, required, "", "DoF (instrumented floor), 1-based";
@@ -223,7 +227,7 @@ declare!(HYSTERESIS_FIT, hysteresis_fit, "hysteresis_fit", "hysteresis_fit.parqu
     FORCE_MODEL_N: "force_model_n", F64, nullable, "N", "storey shear of the identified model along the recorded kinematics; null where the direction is not identified (measured loop only)";
 });
 
-declare!(DAMAGE, damage, "damage", "damage.parquet",
+declare!(series DAMAGE, damage, "damage", "damage.parquet",
     "one row per direction, time and mode: the damage index", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
     T_S: "t_s", F64, required, "s", "time";

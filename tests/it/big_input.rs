@@ -333,6 +333,38 @@ fn spectra_in_lanes_match_one_oscillator_at_a_time() {
     }
 }
 
+/// The spectra's oscillator lanes compiled for wider vector registers
+/// (chosen at run time) give the peaks of the baseline build bit for bit,
+/// on a record with a tail of quiet samples and a NaN-free spike.
+#[test]
+fn spectra_lanes_are_the_same_in_every_instruction_set() {
+    let dt = 0.005;
+    let mut a: Vec<f64> = (0..6000)
+        .map(|i| (i as f64 * 0.017).sin() * (i as f64 * 0.0041).cos() * 3.7)
+        .collect();
+    a[2500] = 40.0;
+    a.extend(std::iter::repeat_n(1e-9, 500));
+    let periods = quaketwin::metrics::default_periods();
+    for omegas in periods
+        .iter()
+        .map(|t| 2.0 * std::f64::consts::PI / t)
+        .collect::<Vec<_>>()
+        .chunks(8)
+    {
+        let variants = quaketwin::metrics::spectra::sdof_peaks_variants(&a, dt, omegas, 0.05);
+        let bits = |v: &[(f64, f64, f64)]| {
+            v.iter()
+                .map(|p| (p.0.to_bits(), p.1.to_bits(), p.2.to_bits()))
+                .collect::<Vec<_>>()
+        };
+        let (_, portable) = &variants[0];
+        assert_eq!(portable.len(), omegas.len());
+        for (name, peaks) in &variants[1..] {
+            assert_eq!(bits(peaks), bits(portable), "{name}, ω = {omegas:?}");
+        }
+    }
+}
+
 /// A Parquet table of several row groups written by the column-parallel
 /// writer is the file `ArrowWriter` writes from the same batches.
 #[test]
@@ -353,38 +385,11 @@ fn column_parallel_parquet_is_the_file_arrow_writer_writes() {
     let ours = dir.path().join("ours.parquet");
     let meta = vec![("quaketwin.test".to_string(), "x".to_string())];
     write_parquet(&ours, &batches, &meta).unwrap();
-    // The reference: ArrowWriter with the properties write_parquet documents.
+    // The reference: ArrowWriter with the schema and properties of write_parquet.
     let reference = {
         use parquet::arrow::ArrowWriter;
-        use parquet::basic::{Compression, ZstdLevel};
-        use parquet::file::metadata::KeyValue;
-        use parquet::file::properties::WriterProperties;
-        let mut kv: Vec<(String, String)> =
-            vec![("quaketwin.version".into(), env!("CARGO_PKG_VERSION").into())];
-        for (k, v) in batches[0]
-            .schema()
-            .metadata()
-            .iter()
-            .chain(meta.iter().map(|(k, v)| (k, v)))
-        {
-            if !kv.iter().any(|(key, _)| key == k) {
-                kv.push((k.clone(), v.clone()));
-            }
-        }
-        let schema = Arc::new(
-            batches[0].schema().as_ref().clone().with_metadata(
-                kv.iter()
-                    .cloned()
-                    .collect::<std::collections::BTreeMap<_, _>>(),
-            ),
-        );
-        let props = WriterProperties::builder()
-            .set_compression(Compression::ZSTD(ZstdLevel::try_new(3).unwrap()))
-            .set_max_row_group_row_count(Some(1 << 20))
-            .set_key_value_metadata(Some(
-                kv.into_iter().map(|(k, v)| KeyValue::new(k, v)).collect(),
-            ))
-            .build();
+        let (schema, props) =
+            quaketwin::sinks::parquet::writer_setup(&ours, &batches[0], &meta).unwrap();
         let mut bytes = Vec::new();
         let mut w = ArrowWriter::try_new(&mut bytes, schema.clone(), Some(props)).unwrap();
         for b in &batches {
@@ -401,6 +406,77 @@ fn column_parallel_parquet_is_the_file_arrow_writer_writes() {
         written.len(),
         reference.len()
     );
+}
+
+/// A table of time-series samples is written without dictionaries for its
+/// floats (byte-stream-split) and its sample index and time (delta), and
+/// reads back to the same values; a table of results keeps Parquet's
+/// default dictionary.
+#[test]
+fn series_tables_are_byte_stream_split_and_delta_encoded() {
+    use parquet::basic::Encoding;
+    use parquet::file::reader::{FileReader, SerializedFileReader};
+    use quaketwin::sinks::parquet::{write_parquet, ReadTable, TableBuilder};
+    use quaketwin::vocab::tables::{spectra, SPECTRA};
+    let dir = tempfile::tempdir().unwrap();
+    let series = dir.path().join("samples.parquet");
+    let batch = samples_rows(
+        "A",
+        0,
+        10_000,
+        |i| (i as f64 * 0.1).sin(),
+        |i| (i % 7 != 0).then_some(i as f64 * 1e-3),
+    );
+    write_parquet(&series, std::slice::from_ref(&batch), &[]).unwrap();
+    let results = dir.path().join("spectra.parquet");
+    let n = 100;
+    let spectra_batch = TableBuilder::new(&SPECTRA)
+        .str(spectra::CHANNEL_ID, &vec!["A"; n])
+        .f64(spectra::DAMPING, vec![0.05; n])
+        .f64(spectra::PERIOD_S, (0..n).map(|i| i as f64 * 0.1).collect())
+        .f64(spectra::SD_M, vec![1.0; n])
+        .f64(spectra::PSV_M_S, vec![1.0; n])
+        .f64(spectra::PSA_M_S2, vec![1.0; n])
+        .f64(spectra::SA_ABS_M_S2, vec![1.0; n])
+        .build()
+        .unwrap();
+    write_parquet(&results, &[spectra_batch], &[]).unwrap();
+    // (column, encodings, whether it has a dictionary page)
+    let layout = |path: &Path| -> Vec<(String, Vec<Encoding>, bool)> {
+        let r = SerializedFileReader::new(std::fs::File::open(path).unwrap()).unwrap();
+        let rg = r.metadata().row_group(0);
+        rg.columns()
+            .iter()
+            .map(|c| {
+                (
+                    c.column_path().string(),
+                    c.encodings().collect(),
+                    c.dictionary_page_offset().is_some(),
+                )
+            })
+            .collect()
+    };
+    for (column, encodings, dictionary) in layout(&series) {
+        let expected = match column.as_str() {
+            "channel_id" => None,
+            "sample" | "time" => Some(Encoding::DELTA_BINARY_PACKED),
+            _ => Some(Encoding::BYTE_STREAM_SPLIT),
+        };
+        match expected {
+            Some(e) => {
+                assert!(!dictionary, "{column}: {encodings:?}");
+                assert!(encodings.contains(&e), "{column}: {encodings:?}");
+            }
+            None => assert!(dictionary, "{column}: {encodings:?}"),
+        }
+    }
+    for (column, encodings, dictionary) in layout(&results) {
+        assert!(dictionary, "{column}: {encodings:?}");
+    }
+    let (_, reader) = ReadTable::open_stream(&series, Some(batch.num_rows())).unwrap();
+    let back: Vec<RecordBatch> = reader.map(|b| b.unwrap()).collect();
+    assert_eq!(back.len(), 1);
+    assert_eq!(back[0].columns(), batch.columns());
 }
 
 /// A big file of a folder is listed by its head and read when its records
@@ -495,5 +571,74 @@ fn channel_at_a_time_conditioning_reports_the_earliest_step_that_failed() {
             .unwrap_err()
             .to_string();
         assert!(e.contains("A"), "align {align}: {e}");
+    }
+}
+
+/// The block-Hankel Gram matrix, its products formed four at a time, is
+/// bit for bit the one formed a product at a time with `dot` (the code it
+/// replaced, below), for rows of several signals and shifts of both signs
+/// of lag, record lengths with and without a tail.
+#[test]
+fn hankel_gram_products_in_fours_are_the_products_one_at_a_time() {
+    use quaketwin::modal::hankel::{dot, hankel_gram, HankelRow};
+    fn reference(signals: &[&[f64]], rows: &[HankelRow], columns: usize) -> Vec<f64> {
+        let max_shift = rows.iter().map(|r| r.shift).max().unwrap_or(0);
+        let span = 2 * max_shift + 1;
+        let base = |a: usize, b: usize, d: usize| {
+            // The canonical product of (a, b, d), as the old code chose it.
+            let (a, b, d) = if a < b || (a == b && d <= max_shift) {
+                (a, b, d)
+            } else {
+                (b, a, span - 1 - d)
+            };
+            let lag = d as isize - max_shift as isize;
+            let (sa, sb) = if lag >= 0 {
+                (0, lag as usize)
+            } else {
+                ((-lag) as usize, 0)
+            };
+            dot(&signals[a][sa..sa + columns], &signals[b][sb..sb + columns])
+        };
+        let nr = rows.len();
+        let mut g = vec![0.0; nr * nr];
+        for (i, ra) in rows.iter().enumerate() {
+            for (k, rb) in rows.iter().enumerate().skip(i) {
+                let lag = rb.shift as isize - ra.shift as isize;
+                let d = (lag + max_shift as isize) as usize;
+                let mut value = base(ra.signal, rb.signal, d);
+                let steps = ra.shift.min(rb.shift);
+                let (xa, xb) = (signals[ra.signal], signals[rb.signal]);
+                let (mut sa, mut sb) = (ra.shift - steps, rb.shift - steps);
+                for _ in 0..steps {
+                    value += xa[columns + sa] * xb[columns + sb] - xa[sa] * xb[sb];
+                    sa += 1;
+                    sb += 1;
+                }
+                let v = value / columns as f64;
+                g[i * nr + k] = v;
+                g[k * nr + i] = v;
+            }
+        }
+        g
+    }
+    let signal = |seed: u64, n: usize| -> Vec<f64> {
+        let mut rng = quaketwin::rng::Rng::new(seed);
+        (0..n).map(|_| rng.normal()).collect()
+    };
+    let owned: Vec<Vec<f64>> = (0..3).map(|s| signal(11 + s, 1_203)).collect();
+    let signals: Vec<&[f64]> = owned.iter().map(|s| s.as_slice()).collect();
+    for (shifts, columns) in [(7usize, 1_190usize), (3, 1_001), (1, 4), (10, 1_193)] {
+        let rows: Vec<HankelRow> = (0..signals.len())
+            .flat_map(|signal| (0..shifts).map(move |shift| HankelRow { signal, shift }))
+            .collect();
+        let want: Vec<u64> = reference(&signals, &rows, columns)
+            .iter()
+            .map(|v| v.to_bits())
+            .collect();
+        let got: Vec<u64> = hankel_gram(&signals, &rows, columns)
+            .iter()
+            .map(|v| v.to_bits())
+            .collect();
+        assert_eq!(got, want, "{shifts} shifts, {columns} columns");
     }
 }

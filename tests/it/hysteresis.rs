@@ -45,7 +45,7 @@ fn one_dof_chain() -> BoucWenChain {
 /// (K0 = [[1e8, −4e7], [−4e7, 4e7]], modes 2.25 and 5.51 Hz),
 /// δ11 = 4e-7, δ21 = −1e-6 (δ12 = +1e-6), δ22 = 4e-7 1/J,
 /// β = [0.4, 2e-5], γ = [0.2, 1e-5], N = [1.4, 2.2].
-fn two_dof_chain() -> BoucWenChain {
+pub(crate) fn two_dof_chain() -> BoucWenChain {
     BoucWenChain::shear(
         vec![1e5, 1e5],
         &[6e7, 4e7],

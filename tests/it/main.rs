@@ -30,6 +30,7 @@ mod hysteresis;
 mod hysteresis_masses;
 mod hysteresis_partial;
 mod hysteresis_real;
+mod hysteresis_window;
 mod metrics;
 mod modal;
 mod modal_synthetic;

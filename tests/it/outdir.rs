@@ -328,7 +328,37 @@ fn the_run_manifest_is_deterministic_and_lists_sizes_and_hashes() {
                 .len()
         )
     );
-    assert_eq!(o.fnv1a64.as_deref().map(str::len), Some(16));
+    // Hashed as it was written: the hash of the file read back.
+    let (bytes, hash) = manifest::hash_file(&a.path().join("samples.parquet"))
+        .unwrap()
+        .unwrap();
+    assert_eq!(
+        (o.bytes, o.xxh64.as_deref()),
+        (Some(bytes), Some(hash.as_str()))
+    );
+}
+
+/// The hash of the run manifest is XXH64 (what `xxhsum -H1` prints), and a
+/// file changed after it was written is hashed from what it holds now.
+#[test]
+fn output_hashes_are_xxh64_of_the_file_as_it_is() {
+    use quaketwin::hash::Hash64;
+    // XXH64 test vectors (seed 0).
+    assert_eq!(Hash64::default().finish_hex(), "ef46db3751d8e999");
+    assert_eq!(
+        Hash64::default().write_raw(b"a").finish_hex(),
+        "d24ec4f1a98c6e5b"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("x.json");
+    write_bytes_atomically(&f, b"a").unwrap();
+    let rec = manifest::record_output(dir.path(), "x.json").unwrap();
+    assert_eq!(rec.xxh64.as_deref(), Some("d24ec4f1a98c6e5b"));
+    write_bytes_atomically(&f, b"ab").unwrap();
+    std::fs::write(&f, b"abc").unwrap();
+    let rec = manifest::record_output(dir.path(), "x.json").unwrap();
+    let expected = Hash64::default().write_raw(b"abc").finish_hex();
+    assert_eq!((rec.bytes, rec.xxh64), (Some(3), Some(expected)));
 }
 
 /// Item 9: temporary files of a killed run are swept; only quaketwin's.
