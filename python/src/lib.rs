@@ -160,6 +160,14 @@ fn run_tables(py: Python<'_>, run_dir: PathBuf) -> PyResult<Vec<(String, String)
         .map_err(raise)
 }
 
+/// The fingerprint of an event folder or zip (names, sizes, modification
+/// times): what a run manifest records to tell a changed event.
+#[pyfunction]
+fn event_fingerprint(py: Python<'_>, event: PathBuf) -> PyResult<String> {
+    py.detach(|| quaketwin::pipeline::fingerprint::path_fingerprint(&event))
+        .map_err(raise)
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
@@ -173,5 +181,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(modal, m)?)?;
     m.add_function(wrap_pyfunction!(event_partition, m)?)?;
     m.add_function(wrap_pyfunction!(run_tables, m)?)?;
+    m.add_function(wrap_pyfunction!(event_fingerprint, m)?)?;
     Ok(())
 }

@@ -1,0 +1,276 @@
+"""Fleet processing on Dask distributed: many events over a cluster's
+workers into one table-first Hive dataset on any fsspec file system
+(docs/python.md, "Fleet").
+
+Each event is one task.  A worker copies the event to its local disk when
+it is a URL, runs the pipeline into a local run directory (the Rust library,
+as ``quaketwin run``), then publishes: every table file is written under a
+temporary name and moved to ``OUT/<table>/structure=…/event=…/part-0.parquet``
+(a table the event's new run no longer has is withdrawn), the run's JSON and
+HTML go to ``OUT/runs/structure=…/event=…/``, and the event's commit record
+``OUT/_fleet/commits/structure=…/event=…/commit.json`` is written last.  A
+re-run skips an event whose commit record names the same pipeline text and
+event fingerprint; a task that runs twice (a worker lost mid-task is retried
+by Dask) writes the same files again, so every event is present exactly
+once.  Failures are recorded per event in ``OUT/fleet_runs/part-0.parquet``
+instead of stopping the fleet.
+
+Command line: ``python -m quaketwin.fleet PIPELINE EVENT… --out URL
+[--scheduler ADDRESS]`` (also ``quaketwin fleet …``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import socket
+import sys
+import tempfile
+import time
+import uuid
+from typing import Iterable, Optional
+
+import fsspec
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from . import _native
+
+PART_FILE = "part-0.parquet"
+RUN_FILES = ("run.json", "event.json", "report.html", "twin_updated.toml")
+FLEET_RUNS_SCHEMA = pa.schema(
+    [
+        ("event", pa.string()),
+        ("partition", pa.string()),
+        ("status", pa.string()),  # ok, skipped, failed
+        ("error", pa.string()),
+        ("seconds", pa.float64()),
+        ("worker", pa.string()),
+    ]
+)
+
+
+def _fs(url: str, storage_options: Optional[dict]):
+    return fsspec.core.url_to_fs(url, **(storage_options or {}))
+
+
+def _join(root: str, *parts: str) -> str:
+    return "/".join([root.rstrip("/")] + [p.strip("/") for p in parts])
+
+
+def _put_atomically(fs, local: str, remote: str) -> None:
+    """Writes ``local`` to ``remote`` under a temporary name beside it, then
+    moves it into place (a rename on local and POSIX-like file systems; on
+    object stores one PUT, itself atomic)."""
+    parent = remote.rsplit("/", 1)[0]
+    fs.makedirs(parent, exist_ok=True)
+    tmp = _join(parent, f".{os.path.basename(remote)}.{uuid.uuid4().hex}.tmp")
+    fs.put_file(local, tmp)
+    fs.mv(tmp, remote)
+
+
+def _local_event(event: str, workdir: str, storage_options: Optional[dict]) -> str:
+    """The event as a local path: itself, or a copy of the URL (folder or zip)."""
+    if "://" not in event or event.startswith("file://"):
+        return event[len("file://"):] if event.startswith("file://") else event
+    fs, path = _fs(event, storage_options)
+    name = os.path.basename(path.rstrip("/"))
+    target = os.path.join(workdir, name)
+    fs.get(path, target, recursive=fs.isdir(path))
+    return target
+
+
+def _commit_path(out: str, partition: str) -> str:
+    return _join(out, "_fleet", "commits", partition, "commit.json")
+
+
+def process_event(
+    pipeline_text: str,
+    pipeline_name: str,
+    event: str,
+    out: str,
+    storage_options: Optional[dict] = None,
+) -> dict:
+    """One event of a fleet (the task a worker runs).  Never raises: the
+    outcome is returned as a ``fleet_runs`` row."""
+    started = time.perf_counter()
+    row = {
+        "event": event,
+        "partition": None,
+        "status": "failed",
+        "error": None,
+        "seconds": 0.0,
+        "worker": socket.gethostname(),
+    }
+    try:
+        fs, root = _fs(out, storage_options)
+        with tempfile.TemporaryDirectory(prefix="quaketwin-fleet-") as work:
+            local = _local_event(event, work, storage_options)
+            partition = _native.event_partition(local)
+            row["partition"] = partition
+            identity = {
+                "pipeline_sha256": hashlib.sha256(pipeline_text.encode()).hexdigest(),
+                "event_fingerprint": _native.event_fingerprint(local),
+                "partition": partition,
+            }
+            commit = _commit_path(root, partition)
+            if fs.exists(commit):
+                with fs.open(commit, "r") as f:
+                    done = json.load(f)
+                if all(done.get(k) == v for k, v in identity.items()):
+                    row["status"] = "skipped"
+                    return row
+            pipeline_path = os.path.join(work, pipeline_name)
+            with open(pipeline_path, "w", encoding="utf-8") as f:
+                f.write(pipeline_text)
+            run_dir = os.path.join(work, "run")
+            summary = json.loads(_native.run_json(pipeline_path, local, run_dir, None))
+            tables = _native.run_tables(run_dir)
+            produced = sorted(t for _, t in tables)
+            for file, table in tables:
+                _put_atomically(
+                    fs, os.path.join(run_dir, file), _join(root, table, partition, PART_FILE)
+                )
+            # Withdraw the tables an earlier commit of this event published
+            # and this run did not produce.
+            if fs.exists(commit):
+                with fs.open(commit, "r") as f:
+                    earlier = json.load(f).get("tables", [])
+                for table in sorted(set(earlier) - set(produced)):
+                    stale = _join(root, table, partition, PART_FILE)
+                    if fs.exists(stale):
+                        fs.rm(stale)
+            for file in RUN_FILES:
+                path = os.path.join(run_dir, file)
+                if os.path.isfile(path):
+                    _put_atomically(fs, path, _join(root, "runs", partition, file))
+            record = dict(identity, tables=produced, ok=summary["ok"])
+            local_commit = os.path.join(work, "commit.json")
+            with open(local_commit, "w", encoding="utf-8") as f:
+                json.dump(record, f, indent=2, sort_keys=True)
+            _put_atomically(fs, local_commit, commit)
+            row["status"] = "ok"
+    except Exception as e:  # every failure is a row, never a stopped fleet
+        row["error"] = f"{type(e).__name__}: {e}"
+    finally:
+        row["seconds"] = time.perf_counter() - started
+    return row
+
+
+def _write_fleet_runs(rows: list, out: str, storage_options: Optional[dict]) -> pa.Table:
+    rows = sorted(rows, key=lambda r: r["event"])
+    table = pa.Table.from_pylist(rows, schema=FLEET_RUNS_SCHEMA)
+    fs, root = _fs(out, storage_options)
+    with tempfile.TemporaryDirectory(prefix="quaketwin-fleet-") as work:
+        local = os.path.join(work, PART_FILE)
+        pq.write_table(table, local)
+        _put_atomically(fs, local, _join(root, "fleet_runs", PART_FILE))
+    return table
+
+
+def run(
+    pipeline,
+    events: Iterable,
+    out,
+    client=None,
+    storage_options: Optional[dict] = None,
+    progress: bool = True,
+) -> pa.Table:
+    """Runs ``pipeline`` (a pipeline file) on every event (folders, zips or
+    fsspec URLs) over the Dask cluster of ``client`` (default: a
+    ``LocalCluster`` on this machine, closed at the end) into the dataset at
+    ``out`` (a path or fsspec URL).  Returns the ``fleet_runs`` table (one
+    row per event: ``ok``, ``skipped`` or ``failed`` with the error), also
+    written to ``OUT/fleet_runs/part-0.parquet``."""
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    pipeline = os.fspath(pipeline)
+    with open(pipeline, encoding="utf-8") as f:
+        pipeline_text = f.read()
+    events = [os.fspath(e) if not isinstance(e, str) else e for e in events]
+    out = os.fspath(out) if not isinstance(out, str) else out
+    own = client is None
+    cluster = None
+    if own:
+        cluster = LocalCluster(n_workers=min(2, os.cpu_count() or 1), threads_per_worker=1,
+                               processes=True, dashboard_address=None)
+        client = Client(cluster)
+    try:
+        futures = [
+            client.submit(
+                process_event,
+                pipeline_text,
+                os.path.basename(pipeline),
+                e,
+                out,
+                storage_options,
+                key=f"quaketwin-event-{i}-{uuid.uuid4().hex}",
+                retries=2,
+                pure=False,
+            )
+            for i, e in enumerate(events)
+        ]
+        rows = []
+        for done, future in enumerate(as_completed(futures), start=1):
+            try:
+                row = future.result()
+            except Exception as e:  # the task itself could not run (e.g. workers lost)
+                i = futures.index(future)
+                row = {
+                    "event": events[i],
+                    "partition": None,
+                    "status": "failed",
+                    "error": f"{type(e).__name__}: {e}",
+                    "seconds": 0.0,
+                    "worker": None,
+                }
+            rows.append(row)
+            if progress:
+                print(
+                    f"[fleet {done}/{len(futures)}] {row['event']}: {row['status']}"
+                    + (f" ({row['error']})" if row["error"] else ""),
+                    file=sys.stderr,
+                )
+        return _write_fleet_runs(rows, out, storage_options)
+    finally:
+        if own:
+            client.close()
+            cluster.close()
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="quaketwin fleet",
+        description="Run a pipeline on many events over a Dask cluster into a table-first dataset.",
+        epilog="Example: quaketwin fleet pipelines/post-earthquake.toml sample-records --out s3://bucket/dataset "
+        "--scheduler tcp://scheduler:8786",
+    )
+    parser.add_argument("pipeline", help="pipeline file (pipelines/*.toml)")
+    parser.add_argument("events", nargs="+", help="event folders, zips or URLs; a folder of event folders expands")
+    parser.add_argument("--out", required=True, help="dataset root: a path or an fsspec URL")
+    parser.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    args = parser.parse_args(argv)
+    events = []
+    for e in args.events:
+        subs = sorted(
+            os.path.join(e, d) for d in os.listdir(e)
+            if os.path.isdir(os.path.join(e, d)) and os.path.isfile(os.path.join(e, d, "event.toml"))
+        ) if os.path.isdir(e) and not os.path.isfile(os.path.join(e, "event.toml")) else []
+        events.extend(subs or [e])
+    client = None
+    if args.scheduler:
+        from dask.distributed import Client
+
+        client = Client(args.scheduler)
+    table = run(args.pipeline, events, args.out, client=client, progress=not args.quiet)
+    failed = [r for r in table.to_pylist() if r["status"] == "failed"]
+    for r in failed:
+        print(f"quaketwin fleet: {r['event']} failed: {r['error']}", file=sys.stderr)
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,166 @@
+"""Tests of the Python package (docs/python.md): the bindings against the
+command line's own outputs, and the Dask fleet (four sample events on a
+LocalCluster of two workers, once undisturbed and once with a worker killed
+mid-fleet) against the command line's many-event dataset, queried with
+DuckDB.
+
+Run: ``python3 -m unittest discover -s python/tests -v`` after installing
+the wheel (``.ci/run`` does both); ``QUAKETWIN_BIN`` names the command-line
+binary (default: ``$CARGO_TARGET_DIR/debug/quaketwin`` or ``target/debug``).
+"""
+
+import json
+import os
+import pathlib
+import subprocess
+import tempfile
+import threading
+import time
+import unittest
+
+import duckdb
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+import quaketwin
+import quaketwin.fleet
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+SAMPLES = ROOT / "sample-records"
+PIPELINE = ROOT / "pipelines" / "post-earthquake.toml"
+EVENTS = sorted(p for p in SAMPLES.iterdir() if (p / "event.toml").is_file())
+BIN = os.environ.get(
+    "QUAKETWIN_BIN",
+    str(pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")) / "debug" / "quaketwin"),
+)
+
+
+def cli(*args):
+    r = subprocess.run([BIN, "-q", *map(str, args)], capture_output=True, text=True)
+    if r.returncode != 0:
+        raise AssertionError(f"quaketwin {args}: {r.stderr}")
+    return r.stdout
+
+
+def modes_by_event(root):
+    """(event, mode, frequency_hz) of every row of the modes dataset at root."""
+    return duckdb.sql(
+        f"select event, mode, frequency_hz from read_parquet('{root}/modes/**/*.parquet', "
+        "hive_partitioning=true) order by event, mode"
+    ).fetchall()
+
+
+class Bindings(unittest.TestCase):
+    def test_inspect_and_read_event_describe_the_same_records(self):
+        event = SAMPLES / "synthetic-4storey-quake"
+        inventory = quaketwin.inspect(event)
+        table = quaketwin.read_event(event)
+        self.assertIsInstance(table, pa.Table)
+        npts = {c["id"]: c["npts"] for c in inventory["channels"]}
+        self.assertEqual(table.num_rows, sum(npts.values()))
+        counts = table.group_by("channel_id").aggregate([("sample", "count")]).to_pylist()
+        self.assertEqual({r["channel_id"]: r["sample_count"] for r in counts}, npts)
+        channels = json.loads(table.schema.metadata[b"quaketwin.channels"])
+        self.assertEqual(sorted(c["id"] for c in channels), sorted(npts))
+
+    def test_modal_in_memory_reproduces_the_command_line(self):
+        # The command line's modal stage identifies the conditioned samples;
+        # the same table handed over in memory with the same (default)
+        # settings gives the same modes, bit for bit.
+        with tempfile.TemporaryDirectory() as out:
+            cli("modal", SAMPLES / "synthetic-4storey-ambient", "--out", out)
+            samples = pq.read_table(pathlib.Path(out) / "samples.parquet")
+            modes, stabilization = quaketwin.modal(samples)
+            expected = pq.read_table(pathlib.Path(out) / "modes.parquet")
+            self.assertGreater(expected.num_rows, 0)
+            self.assertEqual(
+                modes.column("frequency_hz").to_pylist(),
+                expected.column("frequency_hz").to_pylist(),
+            )
+            self.assertEqual(modes.schema.metadata[b"quaketwin.schema"], b"modes")
+            self.assertGreater(stabilization.num_rows, modes.num_rows)
+
+    def test_errors_are_exceptions_with_the_library_message(self):
+        missing = SAMPLES / "no-such-event"
+        with self.assertRaises(quaketwin.QuaketwinError) as caught:
+            quaketwin.read_event(missing)
+        self.assertIn("no-such-event", str(caught.exception))
+        table = quaketwin.read_event(SAMPLES / "synthetic-4storey-quake")
+        with self.assertRaises(quaketwin.UsageError) as caught:
+            quaketwin.modal(table, {"band_hz": [5.0, 1.0]})
+        self.assertIn("band_hz", str(caught.exception))
+
+    def test_run_returns_the_command_line_summary(self):
+        with tempfile.TemporaryDirectory() as out:
+            summary = quaketwin.run(PIPELINE, SAMPLES / "synthetic-2storey-yielding", out)
+            self.assertTrue(summary["ok"])
+            self.assertEqual(summary["assessment"]["rating"], "red")
+            self.assertTrue((pathlib.Path(out) / "report.html").is_file())
+
+
+class Fleet(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.reference = tempfile.TemporaryDirectory()
+        cli("run", PIPELINE, SAMPLES, "--out", cls.reference.name)
+        cls.expected = modes_by_event(cls.reference.name)
+        assert {e for e, _, _ in cls.expected} >= {"synthetic-4storey-quake"}
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.reference.cleanup()
+
+    def cluster(self):
+        from dask.distributed import Client, LocalCluster
+
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+        return cluster, Client(cluster)
+
+    def test_fleet_on_two_workers_equals_the_command_line_and_reruns_skip(self):
+        cluster, client = self.cluster()
+        with cluster, client, tempfile.TemporaryDirectory() as out:
+            runs = quaketwin.fleet.run(PIPELINE, EVENTS, out, client=client, progress=False)
+            self.assertEqual(runs.column("status").to_pylist(), ["ok"] * len(EVENTS), runs.to_pylist())
+            self.assertEqual(modes_by_event(out), self.expected)
+            # The dataset holds one part file per table and event, nothing else.
+            for part in pathlib.Path(out).glob("*/structure=*/event=*/*"):
+                self.assertEqual(part.name, "part-0.parquet", part)
+            again = quaketwin.fleet.run(PIPELINE, EVENTS, out, client=client, progress=False)
+            self.assertEqual(again.column("status").to_pylist(), ["skipped"] * len(EVENTS))
+            self.assertEqual(
+                pq.read_table(pathlib.Path(out) / "fleet_runs" / "part-0.parquet").num_rows,
+                len(EVENTS),
+            )
+
+    def test_a_worker_killed_mid_fleet_leaves_every_event_exactly_once(self):
+        cluster, client = self.cluster()
+        with cluster, client, tempfile.TemporaryDirectory() as out:
+            result = {}
+            runner = threading.Thread(
+                target=lambda: result.update(
+                    runs=quaketwin.fleet.run(PIPELINE, EVENTS, out, client=client, progress=False)
+                )
+            )
+            runner.start()
+            killed = None
+            deadline = time.time() + 120
+            while killed is None and time.time() < deadline and runner.is_alive():
+                busy = [w for w, tasks in client.processing().items() if tasks]
+                if busy:
+                    killed = busy[0]
+                    try:
+                        client.run(os._exit, 1, workers=[killed])
+                    except Exception:
+                        pass  # the worker died before answering: that is the point
+                else:
+                    time.sleep(0.05)
+            runner.join(timeout=600)
+            self.assertIsNotNone(killed, "no worker was busy to kill")
+            self.assertFalse(runner.is_alive(), "the fleet did not finish")
+            runs = result["runs"]
+            self.assertEqual(runs.column("status").to_pylist(), ["ok"] * len(EVENTS), runs.to_pylist())
+            self.assertEqual(modes_by_event(out), self.expected)
+
+
+if __name__ == "__main__":
+    unittest.main()
