@@ -459,6 +459,61 @@ pub fn design(design: &Path, out: &Path) -> Result<crate::stages::design::Design
     crate::stages::design::design_from_file(design, out)
 }
 
+/// Environment variable naming the Python interpreter `quaketwin fleet` runs
+/// (default `python3`).
+pub const PYTHON_ENV: &str = "QUAKETWIN_PYTHON";
+
+/// `quaketwin fleet PIPELINE EVENT… --out URL [--scheduler ADDRESS]`: hands
+/// over to the Python package's fleet runner (`python3 -m quaketwin.fleet`),
+/// which maps the events over a Dask cluster (docs/python.md).  Its exit
+/// status is this command's: 1 when an event failed (listed in
+/// `OUT/fleet_runs`), 2 for usage errors.
+pub fn fleet(
+    pipeline: &Path,
+    events: &[String],
+    out: &str,
+    scheduler: Option<&str>,
+    quiet: bool,
+) -> Result<()> {
+    let python = std::env::var(PYTHON_ENV).unwrap_or_else(|_| "python3".into());
+    let missing = |why: String| {
+        crate::error::Error::usage(format!(
+            "quaketwin fleet runs the Python package with {python} ({PYTHON_ENV}): {why}; install it with `pip install '.[fleet]'` (docs/python.md)"
+        ))
+    };
+    let found = std::process::Command::new(&python)
+        .args([
+            "-c",
+            "import importlib.util as u, sys; sys.exit(0 if u.find_spec('quaketwin') and u.find_spec('distributed') else 3)",
+        ])
+        .status()
+        .map_err(|e| missing(e.to_string()))?;
+    if !found.success() {
+        return Err(missing(
+            "the quaketwin package or dask.distributed is not installed".into(),
+        ));
+    }
+    let mut cmd = std::process::Command::new(&python);
+    cmd.args(["-m", "quaketwin.fleet"])
+        .arg(pipeline)
+        .args(events)
+        .args(["--out", out]);
+    if let Some(s) = scheduler {
+        cmd.args(["--scheduler", s]);
+    }
+    if quiet {
+        cmd.arg("--quiet");
+    }
+    let status = cmd.status().map_err(|e| missing(e.to_string()))?;
+    match status.code() {
+        Some(0) => Ok(()),
+        Some(2) => Err(crate::error::Error::usage("quaketwin fleet: usage error (above)")),
+        _ => Err(crate::error::Error::numerical(format!(
+            "quaketwin fleet: some events failed ({status}); each failure is a row of {out}/fleet_runs/part-0.parquet"
+        ))),
+    }
+}
+
 /// Expands the EVENT arguments: a folder with no manifest whose
 /// sub-folders each hold an `event.toml` is a folder of event folders.
 pub fn expand_events(events: &[std::path::PathBuf]) -> Vec<std::path::PathBuf> {

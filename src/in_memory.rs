@@ -61,6 +61,8 @@ pub struct ModalTables {
 /// from [`read_event`] or a `samples.parquet`) with the `modal` stage's
 /// parameters given as JSON (`{}`: the defaults; docs/pipelines.md).
 pub fn modal(samples: &Table, params_json: &str) -> Result<ModalTables> {
+    // The same summation order as a pipeline run: same modes to the last bit.
+    crate::fixed_order_reductions();
     let params: ModalParams = serde_json::from_str(params_json)
         .map_err(|e| Error::usage(format!("modal settings: {e}")))?;
     params.validate()?;

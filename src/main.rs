@@ -161,6 +161,25 @@ enum Command {
         #[arg(long, default_value_t = 2026)]
         seed: u64,
     },
+    /// Run a pipeline on many events over a Dask cluster into a table-first
+    /// dataset on any fsspec file system (the Python package's
+    /// quaketwin.fleet; docs/python.md).
+    #[command(after_help = "Examples:
+  quaketwin fleet pipelines/post-earthquake.toml sample-records --out out/fleet
+  quaketwin fleet pipelines/post-earthquake.toml s3://bucket/events/ev1.zip --out s3://bucket/dataset --scheduler tcp://scheduler:8786")]
+    Fleet {
+        /// Pipeline file (pipelines/*.toml).
+        pipeline: PathBuf,
+        /// Event folders, zips or fsspec URLs; a folder of event folders expands.
+        #[arg(required = true)]
+        events: Vec<String>,
+        /// Dataset root: a path or an fsspec URL.
+        #[arg(long)]
+        out: String,
+        /// Address of a running Dask scheduler (default: a local cluster).
+        #[arg(long, value_name = "ADDRESS")]
+        scheduler: Option<String>,
+    },
     /// Run a pipeline file on an event folder; several events (or a folder of
     /// event folders) run in parallel into a table-first Hive dataset:
     /// DIR/<table>/structure=…/event=…/part-0.parquet, each event's run
@@ -304,6 +323,12 @@ fn run_command(cli: &Cli) -> Result<()> {
                 Ok(())
             }
         }
+        Command::Fleet {
+            pipeline,
+            events,
+            out,
+            scheduler,
+        } => commands::fleet(pipeline, events, out, scheduler.as_deref(), quiet),
         Command::Run {
             pipeline,
             event,

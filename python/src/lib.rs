@@ -170,6 +170,8 @@ fn event_fingerprint(py: Python<'_>, event: PathBuf) -> PyResult<String> {
 
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // Results independent of the thread count, as from the command line.
+    quaketwin::fixed_order_reductions();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("QuaketwinError", m.py().get_type::<QuaketwinError>())?;
     m.add("UsageError", m.py().get_type::<UsageError>())?;

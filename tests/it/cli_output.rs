@@ -236,6 +236,7 @@ fn help_has_an_example_per_command_and_a_description_per_flag() {
         "design",
         "synth",
         "run",
+        "fleet",
     ];
     let top = quaketwin(&[os("--help")]);
     let top_text = String::from_utf8_lossy(&top.stdout);
