@@ -105,6 +105,24 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Rehearse the hybrid test of a design run before the specimen is loaded: virtual test
+    /// with actuator lag, delay and noise, swept over time scales λ (docs/test-design.md).
+    Rehearse {
+        /// Output directory of a design run (holds rehearsal_model.json).
+        design_out: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Rehearsal settings (TOML, the `rehearse` stage's params).
+        #[arg(long)]
+        settings: Option<PathBuf>,
+        /// Integration scheme: alpha-os or central-difference (overrides the settings).
+        #[arg(long)]
+        scheme: Option<String>,
+        /// Time scales λ to sweep, comma-separated (overrides the settings).
+        #[arg(long, value_delimiter = ',')]
+        time_scales: Option<Vec<f64>>,
+    },
     /// Generate the synthetic sample events (known model, with truth files).
     Synth {
         /// Directory to write the event folders into.
@@ -185,6 +203,24 @@ fn main() -> ExitCode {
             quaketwin::commands::hysteresis(event, out, cli.quiet)
         }
         Command::Design { design, out } => quaketwin::commands::design(design, out).map(|s| {
+            if !cli.quiet {
+                eprintln!("{}", serde_json::to_string_pretty(&s).unwrap_or_default());
+            }
+        }),
+        Command::Rehearse {
+            design_out,
+            out,
+            settings,
+            scheme,
+            time_scales,
+        } => quaketwin::commands::rehearse(
+            design_out,
+            out,
+            settings.as_deref(),
+            scheme.as_deref(),
+            time_scales.clone(),
+        )
+        .map(|s| {
             if !cli.quiet {
                 eprintln!("{}", serde_json::to_string_pretty(&s).unwrap_or_default());
             }
