@@ -140,9 +140,6 @@ pub struct TestDesign {
     /// With recorded snapshots: MAC between each recorded POM and the twin's POM of the same
     /// rank (how far the twin predicts the recorded deformation patterns).
     pub pom_mac: Option<Vec<f64>>,
-    /// The reference: the full twin's PS displacements (relative to the base) per motion step,
-    /// `[step][PS position]` (Newmark, average acceleration).
-    pub reference: Vec<Vec<f64>>,
     /// Rayleigh coefficients (a0, a1) of the reference response: C = a0 M + a1 K.
     pub rayleigh: (f64, f64),
 }
@@ -485,7 +482,6 @@ pub fn design_hybrid_test_with(
         full_frequencies_hz,
         snapshot_source,
         pom_mac,
-        reference,
         rayleigh,
     })
 }

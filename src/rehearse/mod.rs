@@ -64,8 +64,10 @@ pub struct RehearseSettings {
     pub seed: u64,
     /// Divergence: a response beyond this many times the reference's peak (or non-finite).
     pub divergence_factor: f64,
-    /// A run is safe when stable with response WNRMSE ≤ this.
+    /// A run is safe when stable with response WNRMSE ≤ this …
     pub response_tolerance: f64,
+    /// … and energy error ≤ this.
+    pub energy_tolerance: f64,
 }
 
 impl Default for RehearseSettings {
@@ -85,6 +87,7 @@ impl Default for RehearseSettings {
             seed: 16,
             divergence_factor: 10.0,
             response_tolerance: 0.05,
+            energy_tolerance: 0.1,
         }
     }
 }
@@ -134,6 +137,12 @@ impl RehearseSettings {
             return bad(format!(
                 "response_tolerance {} must be positive",
                 self.response_tolerance
+            ));
+        }
+        if !positive(self.energy_tolerance) {
+            return bad(format!(
+                "energy_tolerance {} must be positive",
+                self.energy_tolerance
             ));
         }
         Ok(())

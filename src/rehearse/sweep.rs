@@ -6,8 +6,9 @@
 //! `divergence_factor` × the reference's peak, or non-finite, is divergence; its simulation
 //! time is reported), the energy error (`energy`), the response WNRMSE (Eq. 84,
 //! `design::pod::wnrmse`) of the total displacement at the actuated DoFs against the full
-//! twin's (the design's reference), tracking-error statistics per actuator. The smallest safe
-//! λ (stable, WNRMSE ≤ `response_tolerance`) at the design's NS mode count is recommended.
+//! twin's (`model::fine_reference`), tracking-error statistics per actuator. The smallest safe
+//! λ (stable, WNRMSE ≤ `response_tolerance`, energy error ≤ `energy_tolerance`) at the
+//! design's NS mode count is recommended.
 
 use faer::Mat;
 use rayon::prelude::*;
@@ -236,7 +237,8 @@ pub fn run(
         h.response = response;
     }
     let top = model.top_frequency_hz();
-    let safe = response_wnrmse.is_some_and(|w| w <= settings.response_tolerance);
+    let safe = response_wnrmse.is_some_and(|w| w <= settings.response_tolerance)
+        && energy.error() <= settings.energy_tolerance;
     Ok((
         RunSummary {
             ns_modes: model.ns_modes,

@@ -344,7 +344,7 @@ declare!(REHEARSAL_SUMMARY, rehearsal_summary, "rehearsal_summary", "rehearsal_s
     MAX_TRACKING_ERROR_M: "max_tracking_error_m", F64, required, "m", "largest |command − achieved| over actuators and steps";
     TRACKING_RMS_M: "tracking_rms_m", ListF64, required, "m", "RMS of command − achieved per actuator (actuator order)";
     TRACKING_MAX_M: "tracking_max_m", ListF64, required, "m", "max |command − achieved| per actuator (actuator order)";
-    SAFE: "safe", Bool, required, "", "stable and response WNRMSE ≤ `response_tolerance`";
+    SAFE: "safe", Bool, required, "", "stable, response WNRMSE ≤ `response_tolerance` and energy error ≤ `energy_tolerance`";
     RECOMMENDED: "recommended", Bool, required, "", "the smallest safe λ at the design's NS mode count";
 });
 

@@ -112,6 +112,7 @@ pub fn two_oscillator_model() -> RehearsalModel {
         accelerations: vec![acc],
         observation: vec![vec![0.0, 0.0, 1.0]],
         reference: reference.displacement.clone(),
+        reference_substeps: 1,
         frequencies_hz: Vec::new(),
         actuator_band_hz: 1.0,
         time_scale: 1000.0,
@@ -252,4 +253,123 @@ fn rehearse_refuses_bad_settings_and_models() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("reference"), "{e}");
+}
+
+/// The facade sample through pipelines/test-design.toml: the run ends with a rehearsal sweep
+/// over the design's candidate λ, a recommended λ, and the report shows it.
+#[test]
+fn facade_pipeline_ends_with_a_rehearsal_sweep_and_a_recommended_time_scale() {
+    use quaketwin::vocab::tables::{rehearsal, rehearsal_summary as rs};
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    crate::common::run_sample_pipeline("test-design.toml", "synthetic-facade", &out, &[]);
+    let summary = out.join("rehearsal_summary.parquet");
+    let lam = crate::common::column_f64(&summary, rs::TIME_SCALE.name);
+    assert_eq!(lam.len(), 10, "the design's 10 candidate λ");
+    let file = std::fs::File::open(&summary).unwrap();
+    let reader =
+        parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file).unwrap();
+    let meta = reader
+        .metadata()
+        .file_metadata()
+        .key_value_metadata()
+        .unwrap()
+        .iter()
+        .find(|kv| kv.key == "quaketwin.recommendation")
+        .and_then(|kv| kv.value.clone())
+        .unwrap();
+    let rec: serde_json::Value = serde_json::from_str(&meta).unwrap();
+    let best = rec["time_scale"].as_f64().expect("a recommended λ");
+    let batch = reader.build().unwrap().next().unwrap().unwrap();
+    let col = |name: &str| batch.column_by_name(name).unwrap().clone();
+    let stable = col(rs::STABLE.name);
+    let stable = stable
+        .as_any()
+        .downcast_ref::<arrow_array::BooleanArray>()
+        .unwrap();
+    let wn = col(rs::RESPONSE_WNRMSE.name);
+    let wn = wn
+        .as_any()
+        .downcast_ref::<arrow_array::Float64Array>()
+        .unwrap();
+    // Small λ diverge (the prototype's top mode far outside the actuator band), the
+    // recommended one is stable and accurate, and so is every larger λ.
+    assert!(!stable.value(0), "λ = {} should diverge", lam[0]);
+    let k = lam.iter().position(|&l| l == best).unwrap();
+    for i in k..lam.len() {
+        assert!(stable.value(i), "λ = {} should be stable", lam[i]);
+        assert!(
+            wn.value(i) <= 0.05,
+            "λ = {}: WNRMSE {}",
+            lam[i],
+            wn.value(i)
+        );
+    }
+    let t = crate::common::column_f64(&out.join("rehearsal.parquet"), rehearsal::TIME_S.name);
+    assert!(t.len() > 1000 && t.iter().all(|v| v.is_finite()));
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.contains("Rehearsal of the hybrid test"));
+    assert!(html.contains("Recommended time scale (smallest safe λ)"));
+    assert!(
+        html.contains(&format!("λ = {best} with")),
+        "report names λ = {best}"
+    );
+}
+
+/// `quaketwin rehearse DESIGN_OUT --out DIR` on a design run, and its errors.
+#[test]
+fn rehearse_command_reads_a_design_output() {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let design_out = dir.path().join("design");
+    let bin = env!("CARGO_BIN_EXE_quaketwin");
+    let o = std::process::Command::new(bin)
+        .args(["--quiet", "design"])
+        .arg(root.join("sample-records/synthetic-facade/design.toml"))
+        .arg("--out")
+        .arg(&design_out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.path().join("rehearsal");
+    let o = std::process::Command::new(bin)
+        .args(["--quiet", "rehearse"])
+        .arg(&design_out)
+        .arg("--out")
+        .arg(&out)
+        .args([
+            "--scheme",
+            "central-difference",
+            "--time-scales",
+            "500,1000",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let lam = crate::common::column_f64(
+        &out.join("rehearsal_summary.parquet"),
+        quaketwin::vocab::tables::rehearsal_summary::TIME_SCALE.name,
+    );
+    assert_eq!(lam, vec![500.0, 1000.0]);
+    // A directory without a design: exit 1 naming the file; a bad scheme: usage, exit 2.
+    let o = std::process::Command::new(bin)
+        .args(["rehearse"])
+        .arg(dir.path())
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("rehearsal_model.json"), "{err}");
+    let o = std::process::Command::new(bin)
+        .args(["rehearse"])
+        .arg(&design_out)
+        .arg("--out")
+        .arg(&out)
+        .args(["--scheme", "euler"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--scheme euler"));
 }
