@@ -326,7 +326,7 @@ declare!(REHEARSAL, rehearsal, "rehearsal", "rehearsal.parquet",
     ACHIEVED_M: "achieved_m", F64, required, "m", "measured achieved displacement (with measurement noise)";
     FORCE_N: "force_n", F64, required, "N", "measured restoring force of the specimen (with load-cell noise; N·m for rotations)";
     RESPONSE_M: "response_m", F64, required, "m", "total displacement of the actuated DoF relative to the base in the hybrid simulation";
-    REFERENCE_M: "reference_m", F64, required, "m", "the full twin's displacement there (the design's reference)";
+    REFERENCE_M: "reference_m", F64, required, "m", "the full twin's displacement there (the rehearsal's reference: sub-stepped Newmark, `reference` of `rehearsal_model.json`)";
     TIME_SCALE: "time_scale", F64, required, "1", "λ of this run (same on every row)";
     NS_MODES: "ns_modes", U32, required, "", "NS fixed-interface modes of this run (same on every row)";
 });

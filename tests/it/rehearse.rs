@@ -296,14 +296,9 @@ fn facade_pipeline_ends_with_a_rehearsal_sweep_and_a_recommended_time_scale() {
     // recommended one is stable and accurate, and so is every larger λ.
     assert!(!stable.value(0), "λ = {} should diverge", lam[0]);
     let k = lam.iter().position(|&l| l == best).unwrap();
-    for i in k..lam.len() {
-        assert!(stable.value(i), "λ = {} should be stable", lam[i]);
-        assert!(
-            wn.value(i) <= 0.05,
-            "λ = {}: WNRMSE {}",
-            lam[i],
-            wn.value(i)
-        );
+    for (i, l) in lam.iter().enumerate().skip(k) {
+        assert!(stable.value(i), "λ = {l} should be stable");
+        assert!(wn.value(i) <= 0.05, "λ = {l}: WNRMSE {}", wn.value(i));
     }
     let t = crate::common::column_f64(&out.join("rehearsal.parquet"), rehearsal::TIME_S.name);
     assert!(t.len() > 1000 && t.iter().all(|v| v.is_finite()));
