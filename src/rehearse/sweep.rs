@@ -259,9 +259,11 @@ pub fn run(
 }
 
 /// The sweep over the settings' NS mode counts × time scales (parallel over runs, collected in
-/// order: the result does not depend on the thread count), the recommendation and the
+/// order, faer's reductions sequential: the result does not depend on the thread count), the recommendation and the
 /// histories of the recommended run.
 pub fn rehearse(model: &RehearsalModel, settings: &RehearseSettings) -> Result<Rehearsal> {
+    // Dense products in a fixed summation order, whatever the thread count (as `pipeline::run`).
+    crate::fixed_order_reductions();
     model.validate("rehearsal model")?;
     settings.check("rehearsal settings")?;
     let actuator = settings.actuator(model.actuator_band_hz);

@@ -165,6 +165,7 @@ pub fn design_and_rehearsal_model(
 /// `quaketwin design DESIGN --out DIR`: load, build the motion (and the records, snapshot
 /// source (b)), design, write.
 pub fn design_from_file(design_path: &Path, out_dir: &Path) -> Result<DesignSummary> {
+    crate::fixed_order_reductions();
     let design = load_design(design_path)?;
     let (motion, recorded) = load_inputs(&design)?;
     run_design(&design, &motion, recorded.as_ref(), out_dir)

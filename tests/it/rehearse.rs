@@ -368,3 +368,54 @@ fn rehearse_command_reads_a_design_output() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--scheme euler"));
 }
+
+/// A rehearse stage whose params change re-runs alone: the design stage is skipped as up to
+/// date and its product, the rehearsal model, is read back from `rehearsal_model.json`. Bad
+/// params are usage errors when the pipeline file is read.
+#[test]
+fn rehearse_stage_reruns_from_the_restored_rehearsal_model() {
+    use quaketwin::pipeline::{self, StageOutcome};
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let event = root.join("sample-records/synthetic-facade");
+    let text = std::fs::read_to_string(root.join("pipelines/test-design.toml")).unwrap();
+    let few = text.replace(
+        "delay_s = 0.005\n",
+        "delay_s = 0.005\ntime_scales = [500.0, 1000.0]\n",
+    );
+    let p = quaketwin::stages::parse_pipeline(&few, "test-design.toml").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    pipeline::run(&p, &event, &out, true).unwrap();
+    let first = std::fs::read(out.join("rehearsal_summary.parquet")).unwrap();
+    let one = few.replace("[500.0, 1000.0]", "[1000.0]");
+    let p1 = quaketwin::stages::parse_pipeline(&one, "test-design.toml").unwrap();
+    let outcomes = pipeline::run(&p1, &event, &out, true).unwrap();
+    let of = |name: &str| outcomes.iter().find(|(n, _)| n == name).unwrap().1.clone();
+    assert_eq!(of("design"), StageOutcome::Skipped);
+    assert!(
+        matches!(of("rehearse"), StageOutcome::Ran { .. }),
+        "{outcomes:?}"
+    );
+    let lam = crate::common::column_f64(
+        &out.join("rehearsal_summary.parquet"),
+        quaketwin::vocab::tables::rehearsal_summary::TIME_SCALE.name,
+    );
+    assert_eq!(lam, vec![1000.0]);
+    // Back to the first settings: the same bytes as the run that had the model in memory.
+    let outcomes = pipeline::run(&p, &event, &out, true).unwrap();
+    assert!(outcomes
+        .iter()
+        .any(|(n, o)| n == "rehearse" && matches!(o, StageOutcome::Ran { .. })));
+    assert!(std::fs::read(out.join("rehearsal_summary.parquet")).unwrap() == first);
+    // Bad params: usage errors naming the key, when the file is read.
+    for (bad, key) in [
+        ("scheme = \"euler\"", "euler"),
+        ("alpha = -0.9", "alpha"),
+        ("lag = 1", "lag"),
+    ] {
+        let t = text.replace("scheme = \"alpha-os\"", bad);
+        let e = quaketwin::stages::parse_pipeline(&t, "test-design.toml").unwrap_err();
+        assert_eq!(e.exit_code(), 2, "{e}");
+        assert!(e.to_string().contains(key), "{e}");
+    }
+}
