@@ -85,11 +85,22 @@ impl Dense {
             v: (0..n * n).map(|k| m[(k / n, k % n)]).collect(),
         }
     }
-    /// y = A x
+    /// y = A x (four partial sums per row, in a fixed order: vectorisable and deterministic).
     fn mul(&self, x: &[f64], y: &mut [f64]) {
-        for (i, yi) in y.iter_mut().enumerate().take(self.n) {
-            let row = &self.v[i * self.n..(i + 1) * self.n];
-            *yi = row.iter().zip(x).map(|(a, b)| a * b).sum();
+        let n = self.n;
+        let x = &x[..n];
+        for (i, yi) in y.iter_mut().enumerate().take(n) {
+            let row = &self.v[i * n..(i + 1) * n];
+            let mut acc = [0.0; 4];
+            let (rc, rr) = row.split_at(n - n % 4);
+            let (xc, xr) = x.split_at(n - n % 4);
+            for (a, b) in rc.chunks_exact(4).zip(xc.chunks_exact(4)) {
+                for k in 0..4 {
+                    acc[k] += a[k] * b[k];
+                }
+            }
+            let tail: f64 = rr.iter().zip(xr).map(|(a, b)| a * b).sum();
+            *yi = (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail;
         }
     }
 }

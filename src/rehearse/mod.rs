@@ -10,6 +10,8 @@
 //! - `energy`: energy balance and spurious energy (Mosqueda et al. 2005, 2007);
 //! - `sweep`: one rehearsal, the sweep over λ and NS modes, the smallest safe λ.
 //!
+//! - `specimen`: the emulated specimen, linear or with Bouc–Wen springs (Bouc 1967; Wen 1976).
+//!
 //! Gravity is not rehearsed: the rehearsal is of the seismic increment about the static
 //! state, which for the linear specimen superposes; force-controlled actuators (which hold
 //! the gravity load) are rehearsed at their seismic displacement like the others.
@@ -18,6 +20,7 @@ pub mod actuator;
 pub mod energy;
 pub mod integrator;
 pub mod model;
+pub mod specimen;
 pub mod sweep;
 
 use serde::{Deserialize, Serialize};
@@ -25,6 +28,7 @@ use serde::{Deserialize, Serialize};
 pub use actuator::{ActuatorModel, ServoKind};
 pub use integrator::Scheme;
 pub use model::RehearsalModel;
+pub use specimen::BoucWenSpring;
 pub use sweep::{rehearse, Histories, Rehearsal, RunSummary};
 
 use crate::error::{Error, Result};
@@ -68,6 +72,8 @@ pub struct RehearseSettings {
     pub response_tolerance: f64,
     /// … and energy error ≤ this.
     pub energy_tolerance: f64,
+    /// A Bouc–Wen spring on every actuated DoF (nonlinear rehearsal); none: linear specimen.
+    pub bouc_wen: Option<BoucWenSpring>,
 }
 
 impl Default for RehearseSettings {
@@ -88,6 +94,7 @@ impl Default for RehearseSettings {
             divergence_factor: 10.0,
             response_tolerance: 0.05,
             energy_tolerance: 0.1,
+            bouc_wen: None,
         }
     }
 }
@@ -138,6 +145,10 @@ impl RehearseSettings {
                 "response_tolerance {} must be positive",
                 self.response_tolerance
             ));
+        }
+        if let Some(b) = &self.bouc_wen {
+            b.check()
+                .map_err(|e| Error::usage(format!("{source}: {e}")))?;
         }
         if !positive(self.energy_tolerance) {
             return bad(format!(

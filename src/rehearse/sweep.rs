@@ -17,6 +17,7 @@ use super::actuator::{ActuatorBank, ActuatorModel};
 use super::energy::EnergyBalance;
 use super::integrator::{HybridSystem, Integrator, Specimen};
 use super::model::{mat, RehearsalModel};
+use super::specimen::SpecimenModel;
 use super::RehearseSettings;
 use crate::design::pod::wnrmse;
 use crate::error::{Error, Result};
@@ -40,7 +41,6 @@ pub struct RunSummary {
     pub tracking_rms_m: Vec<f64>,
     pub tracking_max_m: Vec<f64>,
     pub safe: bool,
-    stream: u64,
 }
 
 /// Time histories of one run at the base-motion steps, `[actuator][sample]`.
@@ -70,24 +70,22 @@ pub struct Rehearsal {
     pub actuator: ActuatorModel,
 }
 
-/// The specimen behind its actuators: linear elastic K_P at the achieved displacement.
-struct Emulated<'a> {
+/// The specimen behind its actuators: its force at the achieved displacement.
+struct Emulated {
     bank: ActuatorBank,
-    kp: &'a Mat<f64>,
+    specimen: SpecimenModel,
     achieved: Vec<f64>,
     measured: Vec<f64>,
     noise: (f64, f64),
     rng: Rng,
 }
 
-impl Specimen for Emulated<'_> {
+impl Specimen for Emulated {
     fn impose(&mut self, targets: &[f64], force: &mut [f64]) {
         self.bank.advance(targets, &mut self.achieved);
         let m = targets.len();
-        for (i, f) in force.iter_mut().enumerate().take(m) {
-            *f = (0..m)
-                .map(|j| self.kp[(i, j)] * self.achieved[j])
-                .sum::<f64>();
+        self.specimen.force(&self.achieved, force);
+        for f in force.iter_mut().take(m) {
             if self.noise.1 > 0.0 {
                 *f += self.noise.1 * self.rng.normal();
             }
@@ -157,7 +155,11 @@ pub fn run(
     let mut integ = Integrator::new(&sys, settings.scheme, settings.alpha, dt, &load(0))?;
     let mut spec = Emulated {
         bank: ActuatorBank::new(actuator, m, time_scale * dt),
-        kp: &kp,
+        specimen: SpecimenModel::new(
+            (0..m * m).map(|k| kp[(k / m, k % m)]).collect(),
+            m,
+            settings.bouc_wen.clone(),
+        ),
         achieved: vec![0.0; m],
         measured: vec![0.0; m],
         noise: (settings.displacement_noise_m, settings.force_noise_n),
@@ -252,7 +254,6 @@ pub fn run(
             tracking_rms_m: sum_sq.iter().map(|s| (s / done).sqrt()).collect(),
             tracking_max_m: max_e,
             safe,
-            stream,
         },
         h,
     ))
@@ -290,16 +291,14 @@ pub fn rehearse(model: &RehearsalModel, settings: &RehearseSettings) -> Result<R
     let jobs: Vec<(usize, f64)> = (0..models.len())
         .flat_map(|i| scales.iter().map(move |&l| (i, l)))
         .collect();
-    let runs = jobs
+    // Histories are kept for every run (at the motion's steps: small) so that the chosen one
+    // needs no second integration.
+    let mut results = jobs
         .par_iter()
         .enumerate()
-        .map(|(k, &(i, l))| {
-            run(
-                &models[i], settings, &actuator, l, substeps, k as u64, false,
-            )
-            .map(|r| r.0)
-        })
+        .map(|(k, &(i, l))| run(&models[i], settings, &actuator, l, substeps, k as u64, true))
         .collect::<Result<Vec<_>>>()?;
+    let runs: Vec<RunSummary> = results.iter().map(|r| r.0.clone()).collect();
     let ns_modes = if ns_list.contains(&model.ns_modes) {
         model.ns_modes
     } else {
@@ -318,20 +317,7 @@ pub fn rehearse(model: &RehearsalModel, settings: &RehearseSettings) -> Result<R
                 .map(|(i, _)| i)
         })
         .ok_or_else(|| Error::usage("rehearsal: nothing to sweep"))?;
-    let chosen = &runs[history_run];
-    let which = ns_list
-        .iter()
-        .position(|&s| s == chosen.ns_modes)
-        .unwrap_or(0);
-    let (_, histories) = run(
-        &models[which],
-        settings,
-        &actuator,
-        chosen.time_scale,
-        substeps,
-        chosen.stream,
-        true,
-    )?;
+    let histories = std::mem::take(&mut results[history_run].1);
     Ok(Rehearsal {
         runs,
         ns_modes,
