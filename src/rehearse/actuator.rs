@@ -175,6 +175,8 @@ pub struct ActuatorBank {
     /// Index of the newest target.
     newest: usize,
     state: Vec<[f64; 2]>,
+    /// Per sub-step of the current step: the command's history rows and fraction.
+    schedule: Vec<(usize, usize, f64)>,
 }
 
 impl ActuatorBank {
@@ -202,48 +204,59 @@ impl ActuatorBank {
             first: 0,
             newest: 0,
             state: vec![[0.0; 2]; count],
+            schedule: Vec::with_capacity(substeps),
         }
     }
 
-    /// Command of actuator `a` at step-time `s` (in steps; linear ramp between targets;
-    /// before the first target: 0).
-    fn command(&self, a: usize, s: f64) -> f64 {
+    /// Where the command at step-time `s` lies (in steps; linear ramp between targets, 0 before
+    /// the first): rows (in `history`) of the two targets and the fraction between them.
+    fn locate(&self, s: f64) -> (usize, usize, f64) {
         if s <= self.first as f64 {
-            return self.history.front().map(|d| d[a]).unwrap_or(0.0);
+            return (0, 0, 0.0);
         }
         let i = s.floor() as usize;
         let f = s - i as f64;
-        let at = |k: usize| {
-            let k = k.clamp(self.first, self.newest);
-            self.history[k - self.first][a]
-        };
-        at(i) + f * (at(i + 1) - at(i))
+        let row = |k: usize| k.clamp(self.first, self.newest) - self.first;
+        (row(i), row(i + 1), f)
     }
 
     /// Sends the next step's targets and runs one step of laboratory time; returns the
     /// achieved displacements at its end into `achieved`.
     pub fn advance(&mut self, targets: &[f64], achieved: &mut [f64]) {
-        self.history.push_back(targets.to_vec());
-        self.newest += 1;
         let keep = self.delay_steps.ceil() as usize + 3;
-        while self.history.len() > keep {
-            self.history.pop_front();
+        // Reuse the oldest row's allocation for the new targets.
+        let mut row = if self.history.len() >= keep {
             self.first += 1;
-        }
+            self.history.pop_front().unwrap_or_default()
+        } else {
+            Vec::with_capacity(targets.len())
+        };
+        row.clear();
+        row.extend_from_slice(targets);
+        self.history.push_back(row);
+        self.newest += 1;
         let start = (self.newest - 1) as f64;
         let n = self.substeps;
         let d = self.discrete;
+        // The delayed command's position at each sub-step (the same for every actuator):
+        // the end of the sub-step for the ideal actuator, its midpoint for the servo (ZOH).
+        let at = if self.ideal { 1.0 } else { 0.5 };
+        self.schedule.clear();
+        for j in 0..n {
+            let s = start + (j as f64 + at) / n as f64 - self.delay_steps;
+            let p = self.locate(s);
+            self.schedule.push(p);
+        }
         for (a, out) in achieved.iter_mut().enumerate().take(self.state.len()) {
             let mut x = self.state[a];
-            for j in 0..n {
-                let s_mid = start + (j as f64 + 0.5) / n as f64 - self.delay_steps;
-                let s_end = start + (j as f64 + 1.0) / n as f64 - self.delay_steps;
-                let u = if self.ideal {
+            for &(i0, i1, f) in &self.schedule {
+                let (c0, c1) = (self.history[i0][a], self.history[i1][a]);
+                let u = c0 + f * (c1 - c0);
+                if self.ideal {
                     // Ideal: follows the delayed command exactly.
-                    self.command(a, s_end)
-                } else {
-                    self.command(a, s_mid)
-                };
+                    x = [u, 0.0];
+                    continue;
+                }
                 x = [
                     d.phi[0][0] * x[0] + d.phi[0][1] * x[1] + d.gamma[0] * u,
                     d.phi[1][0] * x[0] + d.phi[1][1] * x[1] + d.gamma[1] * u,

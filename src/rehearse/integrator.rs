@@ -142,6 +142,13 @@ pub struct Integrator {
     force: Vec<f64>,
     work: Vec<f64>,
     rhs: Vec<f64>,
+    /// Scratch of the α-OS step (predictors, gathered vectors, forces).
+    xt: Vec<f64>,
+    vt: Vec<f64>,
+    dx: Vec<f64>,
+    dv: Vec<f64>,
+    ki: Vec<f64>,
+    old_force: Vec<f64>,
 }
 
 impl Integrator {
@@ -206,6 +213,12 @@ impl Integrator {
             force: vec![0.0; sys.m()],
             work: vec![0.0; n],
             rhs: vec![0.0; n],
+            xt: vec![0.0; n],
+            vt: vec![0.0; n],
+            dx: vec![0.0; n],
+            dv: vec![0.0; n],
+            ki: vec![0.0; sys.m()],
+            old_force: vec![0.0; sys.m()],
         })
     }
 
@@ -255,32 +268,30 @@ impl Integrator {
             }
             Scheme::AlphaOs => {
                 let (al, be, ga) = (self.alpha, self.beta, self.gamma);
-                let xt: Vec<f64> = (0..n)
-                    .map(|i| self.x[i] + dt * self.v[i] + dt * dt * (0.5 - be) * self.a[i])
-                    .collect();
-                let vt: Vec<f64> = (0..n)
-                    .map(|i| self.v[i] + dt * (1.0 - ga) * self.a[i])
-                    .collect();
+                let (mut xt, mut vt) = (std::mem::take(&mut self.xt), std::mem::take(&mut self.vt));
+                for i in 0..n {
+                    xt[i] = self.x[i] + dt * self.v[i] + dt * dt * (0.5 - be) * self.a[i];
+                    vt[i] = self.v[i] + dt * (1.0 - ga) * self.a[i];
+                }
                 command.copy_from_slice(&xt[o..o + m]);
-                let old_force = self.force.clone();
+                self.old_force.copy_from_slice(&self.force);
                 specimen.impose(command, &mut self.force);
                 // rhs = (1+α) f_{n+1} − α f_n − (1+α)(C ṽ + K_N x̃ + L r̃_{n+1})
-                //       + α (C v_n + K_N x_n + L r̃_n + K_I (x_n − x̃_n))
+                //       + α (C v_n + K_N x_n + L r̃_n + K_I (x_n − x̃_n)),
+                // the C and K_N terms gathered: C (α v_n − (1+α) ṽ) + K_N (α x_n − (1+α) x̃).
                 for i in 0..n {
                     self.rhs[i] = (1.0 + al) * f_next[i] - al * f_n[i];
+                    self.dv[i] = al * self.v[i] - (1.0 + al) * vt[i];
+                    self.dx[i] = al * self.x[i] - (1.0 + al) * xt[i];
                 }
-                self.damping.mul(&vt, &mut self.work);
-                axpy(-(1.0 + al), &self.work, &mut self.rhs);
-                self.kn.mul(&xt, &mut self.work);
-                axpy(-(1.0 + al), &self.work, &mut self.rhs);
-                self.damping.mul(&self.v, &mut self.work);
-                axpy(al, &self.work, &mut self.rhs);
-                self.kn.mul(&self.x, &mut self.work);
-                axpy(al, &self.work, &mut self.rhs);
-                let mut ki = vec![0.0; m];
-                self.kp.mul(&self.correction[o..o + m], &mut ki);
+                self.damping.mul(&self.dv, &mut self.work);
+                axpy(1.0, &self.work, &mut self.rhs);
+                self.kn.mul(&self.dx, &mut self.work);
+                axpy(1.0, &self.work, &mut self.rhs);
+                self.kp.mul(&self.correction[o..o + m], &mut self.ki);
                 for i in 0..m {
-                    self.rhs[o + i] += -(1.0 + al) * self.force[i] + al * (old_force[i] + ki[i]);
+                    self.rhs[o + i] +=
+                        -(1.0 + al) * self.force[i] + al * (self.old_force[i] + self.ki[i]);
                 }
                 self.p.mul(&self.rhs, &mut self.a);
                 for i in 0..n {
@@ -288,6 +299,7 @@ impl Integrator {
                     self.x[i] = xt[i] + self.correction[i];
                     self.v[i] = vt[i] + ga * dt * self.a[i];
                 }
+                (self.xt, self.vt) = (xt, vt);
             }
         }
     }
