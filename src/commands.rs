@@ -514,6 +514,43 @@ pub fn fleet(
     }
 }
 
+/// `quaketwin rehearse DESIGN_OUT --out DIR`: the hybrid test of a design run rehearsed
+/// (docs/test-design.md); `settings` a TOML file of the `rehearse` stage's params, `scheme`
+/// and `time_scales` override it.
+pub fn rehearse(
+    design_out: &Path,
+    out: &Path,
+    settings: Option<&Path>,
+    scheme: Option<&str>,
+    time_scales: Option<Vec<f64>>,
+) -> Result<crate::stages::rehearse::RehearsalSummary> {
+    use crate::error::Error;
+    let mut s: crate::rehearse::RehearseSettings = match settings {
+        None => Default::default(),
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
+            toml::from_str(&text).map_err(|e| {
+                Error::usage(format!("{}: bad rehearsal settings: {e}", p.display()))
+            })?
+        }
+    };
+    if let Some(name) = scheme {
+        s.scheme = match name {
+            "alpha-os" => crate::rehearse::Scheme::AlphaOs,
+            "central-difference" => crate::rehearse::Scheme::CentralDifference,
+            other => {
+                return Err(Error::usage(format!(
+                    "--scheme {other}: expected alpha-os or central-difference"
+                )))
+            }
+        };
+    }
+    if let Some(l) = time_scales {
+        s.time_scales = l;
+    }
+    crate::stages::rehearse::rehearse_design_output(design_out, &s, out)
+}
+
 /// Expands the EVENT arguments: a folder with no manifest whose
 /// sub-folders each hold an `event.toml` is a folder of event folders.
 pub fn expand_events(events: &[std::path::PathBuf]) -> Vec<std::path::PathBuf> {

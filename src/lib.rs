@@ -21,6 +21,7 @@ pub mod modal;
 pub mod numeric;
 pub mod pipeline;
 pub mod readers;
+pub mod rehearse;
 pub mod report;
 pub mod rng;
 pub mod sinks;

@@ -149,6 +149,27 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Rehearse the hybrid test of a design run before the specimen is loaded: virtual test
+    /// with actuator lag, delay and noise, swept over time scales λ (docs/test-design.md).
+    #[command(after_help = "Examples:
+  quaketwin rehearse out/design --out out/rehearsal
+  quaketwin rehearse out/design --out out/r --scheme central-difference --time-scales 100,200,500 --json")]
+    Rehearse {
+        /// Output directory of a design run (holds rehearsal_model.json).
+        design_out: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Rehearsal settings (TOML, the `rehearse` stage's params).
+        #[arg(long, value_name = "FILE")]
+        settings: Option<PathBuf>,
+        /// Integration scheme: alpha-os or central-difference (overrides the settings).
+        #[arg(long)]
+        scheme: Option<String>,
+        /// Time scales λ to sweep, comma-separated (overrides the settings).
+        #[arg(long, value_delimiter = ',', value_name = "L1,L2,…")]
+        time_scales: Option<Vec<f64>>,
+    },
     /// Generate the synthetic sample events (known model, with truth files).
     #[command(after_help = "Examples:
   quaketwin synth
@@ -329,6 +350,33 @@ fn run_command(cli: &Cli) -> Result<()> {
             out,
             scheduler,
         } => commands::fleet(pipeline, events, out, scheduler.as_deref(), quiet),
+        Command::Rehearse {
+            design_out,
+            out,
+            settings,
+            scheme,
+            time_scales,
+        } => {
+            let s = commands::rehearse(
+                design_out,
+                out,
+                settings.as_deref(),
+                scheme.as_deref(),
+                time_scales.clone(),
+            )?;
+            console::info(format!(
+                "rehearse: {} runs ({} stable), {} NS modes; smallest safe λ {} (design λ = {}); wrote {}",
+                s.runs,
+                s.stable_runs,
+                s.ns_modes,
+                s.recommended_time_scale
+                    .map(|l| l.to_string())
+                    .unwrap_or_else(|| "none".into()),
+                s.design_time_scale,
+                out.display()
+            ));
+            print_json(json, &s)
+        }
         Command::Run {
             pipeline,
             event,

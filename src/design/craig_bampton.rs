@@ -32,6 +32,10 @@ pub struct Prototype {
     pub mass: Mat<f64>,
     /// All eigenfrequencies of the reduced prototype, ascending (Hz).
     pub frequencies_hz: Vec<f64>,
+    /// The Craig–Bampton basis ψ over the twin's free DoFs (n × (ns_modes + n_q)): columns
+    /// 0..ns_modes the NS fixed-interface modes, then the PS coordinates (Eq. 60–64). Loads
+    /// of the full model reduce as ψᵀ f (the rehearsal's base-excitation loads).
+    pub basis: Mat<f64>,
 }
 
 impl Prototype {
@@ -122,6 +126,7 @@ pub fn craig_bampton_prototype(
         stiffness,
         mass,
         frequencies_hz: modes.frequencies_hz(),
+        basis: psi,
     })
 }
 

@@ -140,6 +140,8 @@ pub struct TestDesign {
     /// With recorded snapshots: MAC between each recorded POM and the twin's POM of the same
     /// rank (how far the twin predicts the recorded deformation patterns).
     pub pom_mac: Option<Vec<f64>>,
+    /// Rayleigh coefficients (a0, a1) of the reference response: C = a0 M + a1 K.
+    pub rayleigh: (f64, f64),
 }
 
 /// Design a hybrid test of the PS `ps_node_ids` of `twin` under `motion` (see the module
@@ -480,6 +482,7 @@ pub fn design_hybrid_test_with(
         full_frequencies_hz,
         snapshot_source,
         pom_mac,
+        rayleigh,
     })
 }
 

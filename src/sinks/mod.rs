@@ -11,4 +11,5 @@ pub mod mcap_writer;
 pub mod modal_tables;
 pub mod parquet;
 pub mod provenance;
+pub mod rehearsal_tables;
 pub mod twin_tables;

@@ -2,7 +2,8 @@
 //! numerical work in `crate::design::plan`). Reads a design file (`crate::design::file`),
 //! builds the base motion (`crate::design::motion`) — the conditioned event of the stage's
 //! `condition` input, or a ground-motion file — and writes the design tables
-//! (`crate::sinks::design_tables`).
+//! (`crate::sinks::design_tables`) and the rehearsal model (`rehearsal_model.json`,
+//! `crate::rehearse::model`), which is also its product for a `rehearse` stage.
 //!
 //! Which channels drive which twin axis: `crate::design::motion`.
 
@@ -20,7 +21,11 @@ use crate::error::Result;
 use crate::hash::Hash64;
 use crate::pipeline::fingerprint::path_fingerprint;
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
+use crate::rehearse::RehearsalModel;
 use crate::sinks::design_tables::{write_design, DesignProvenance, DESIGN_FILES};
+use crate::sinks::rehearsal_tables::{
+    read_rehearsal_model, write_rehearsal_model, REHEARSAL_MODEL_FILE,
+};
 use crate::vocab::Role;
 
 pub const KIND: StageKind = StageKind {
@@ -94,6 +99,17 @@ pub fn run_design(
     recorded: Option<&RecordedResponse>,
     out_dir: &Path,
 ) -> Result<DesignSummary> {
+    Ok(design_and_rehearsal_model(design, motion, recorded, out_dir)?.0)
+}
+
+/// As [`run_design`], also writing and returning the rehearsal model
+/// (`rehearsal_model.json`: what the `rehearse` stage and `quaketwin rehearse` run).
+pub fn design_and_rehearsal_model(
+    design: &LoadedDesign,
+    motion: &BaseMotion,
+    recorded: Option<&RecordedResponse>,
+    out_dir: &Path,
+) -> Result<(DesignSummary, RehearsalModel)> {
     let model = design.model()?;
     let d: TestDesign = design_hybrid_test_with(
         &design.twin,
@@ -109,9 +125,13 @@ pub fn run_design(
         motion_source: motion.source.clone(),
         settings_json: settings_json(&design.settings),
     };
-    let outputs = write_design(out_dir, model, &d, &provenance)?;
+    let mut outputs = write_design(out_dir, model, &d, &provenance)?;
+    let rehearsal = RehearsalModel::from_design(&design.twin, &d, motion, &design.settings.hybrid)?;
+    let path = out_dir.join(REHEARSAL_MODEL_FILE);
+    write_rehearsal_model(&path, &rehearsal)?;
+    outputs.push(path);
     let retained = d.pod_curve.retained;
-    Ok(DesignSummary {
+    let summary = DesignSummary {
         design_file: design.source.clone(),
         twin: provenance.twin,
         motion: motion.source.clone(),
@@ -139,12 +159,14 @@ pub fn run_design(
         time_scale: d.hybrid.time_scale,
         bandwidth_hz: d.hybrid.bandwidth_hz,
         outputs,
-    })
+    };
+    Ok((summary, rehearsal))
 }
 
 /// `quaketwin design DESIGN --out DIR`: load, build the motion (and the records, snapshot
 /// source (b)), design, write.
 pub fn design_from_file(design_path: &Path, out_dir: &Path) -> Result<DesignSummary> {
+    crate::fixed_order_reductions();
     let design = load_design(design_path)?;
     let (motion, recorded) = load_inputs(&design)?;
     run_design(&design, &motion, recorded.as_ref(), out_dir)
@@ -185,7 +207,16 @@ impl Design {
 
 impl Stage for Design {
     fn outputs(&self) -> Vec<String> {
-        DESIGN_FILES.iter().map(|s| s.to_string()).collect()
+        DESIGN_FILES
+            .iter()
+            .chain([&REHEARSAL_MODEL_FILE])
+            .map(|s| s.to_string())
+            .collect()
+    }
+    /// The rehearsal model, read back from `rehearsal_model.json`.
+    fn restore(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
+        let model = read_rehearsal_model(&ctx.out_dir.join(REHEARSAL_MODEL_FILE))?;
+        Ok(Some(Box::new(model)))
     }
     /// The design file, its twin and (for a file source) the ground-motion file: inputs
     /// outside the event folder that the pipeline would not see.
@@ -233,7 +264,8 @@ impl Stage for Design {
             }
             MotionSource::File { .. } => design_inputs(&design, None)?,
         };
-        let summary = run_design(&design, &motion, recorded.as_ref(), &ctx.out_dir)?;
+        let (summary, model) =
+            design_and_rehearsal_model(&design, &motion, recorded.as_ref(), &ctx.out_dir)?;
         ctx.info(format!(
                 "design: {} actuators ({} force-controlled), {} POMs retained, WNRMSE {:.2e}, {} NS modes, λ = {}, bandwidth {:.3} Hz",
                 summary.actuators,
@@ -244,6 +276,6 @@ impl Stage for Design {
                 summary.time_scale,
                 summary.bandwidth_hz
         ));
-        Ok(None)
+        Ok(Some(Box::new(model)))
     }
 }

@@ -13,6 +13,7 @@ pub mod ingest;
 pub mod metrics;
 pub mod modal;
 pub mod prepost;
+pub mod rehearse;
 pub mod report;
 pub mod update;
 
@@ -31,6 +32,7 @@ pub const CATALOG: &[StageKind] = &[
     hysteresis::DAMAGE_KIND,
     update::KIND,
     design::KIND,
+    rehearse::KIND,
     report::KIND,
 ];
 

@@ -320,6 +320,38 @@ declare!(HYBRID_PROTOTYPE, hybrid_prototype, "hybrid_prototype", "hybrid_prototy
     BANDWIDTH_HZ: "bandwidth_hz", F64, required, "Hz", "highest prototype frequency / λ";
 });
 
+declare!(REHEARSAL, rehearsal, "rehearsal", "rehearsal.parquet",
+    "time histories of one rehearsed hybrid test (the recommended λ), one row per base-motion step and actuator, in simulation time", {
+    TIME_S: "time_s", F64, required, "s", "simulation time (laboratory time = λ × this)";
+    ACTUATOR: "actuator", U32, required, "", "1-based actuator number (as in `actuator_layout.parquet`)";
+    NODE_ID: "node_id", I64, required, "", "twin node id of the actuated DoF";
+    DIRECTION: "direction", Utf8, required, "", "DoF name";
+    COMMAND_M: "command_m", F64, required, "m", "commanded actuator displacement (actuated coordinate q_m: deformation relative to the constrained set)";
+    ACHIEVED_M: "achieved_m", F64, required, "m", "measured achieved displacement (with measurement noise)";
+    FORCE_N: "force_n", F64, required, "N", "measured restoring force of the specimen (with load-cell noise; N·m for rotations)";
+    RESPONSE_M: "response_m", F64, required, "m", "total displacement of the actuated DoF relative to the base in the hybrid simulation";
+    REFERENCE_M: "reference_m", F64, required, "m", "the full twin's displacement there (the rehearsal's reference: sub-stepped Newmark, `reference` of `rehearsal_model.json`)";
+    TIME_SCALE: "time_scale", F64, required, "1", "λ of this run (same on every row)";
+    NS_MODES: "ns_modes", U32, required, "", "NS fixed-interface modes of this run (same on every row)";
+});
+
+declare!(REHEARSAL_SUMMARY, rehearsal_summary, "rehearsal_summary", "rehearsal_summary.parquet",
+    "one row per rehearsal run of the sweep (NS modes × time scale λ)", {
+    NS_MODES: "ns_modes", U32, required, "", "NS fixed-interface modes of the prototype";
+    TIME_SCALE: "time_scale", F64, required, "1", "time scale λ (laboratory time / simulation time)";
+    TOP_FREQUENCY_HZ: "top_frequency_hz", F64, required, "Hz", "highest prototype frequency with these NS modes";
+    BANDWIDTH_HZ: "bandwidth_hz", F64, required, "Hz", "top frequency / λ: the highest frequency in laboratory time";
+    STABLE: "stable", Bool, required, "", "the run did not diverge";
+    DIVERGENCE_TIME_S: "divergence_time_s", F64, nullable, "s", "simulation time when the response left `divergence_factor` × the reference peak (null when stable)";
+    ENERGY_ERROR: "energy_error", F64, required, "1", "max |spurious energy| / max |input energy| (Mosqueda energy balance)";
+    RESPONSE_WNRMSE: "response_wnrmse", F64, nullable, "1", "WNRMSE (Eq. 84) of the actuated DoFs' total displacement against the full twin (null when diverged)";
+    MAX_TRACKING_ERROR_M: "max_tracking_error_m", F64, required, "m", "largest |command − achieved| over actuators and steps";
+    TRACKING_RMS_M: "tracking_rms_m", ListF64, required, "m", "RMS of command − achieved per actuator (actuator order)";
+    TRACKING_MAX_M: "tracking_max_m", ListF64, required, "m", "max |command − achieved| per actuator (actuator order)";
+    SAFE: "safe", Bool, required, "", "stable, response WNRMSE ≤ `response_tolerance` and energy error ≤ `energy_tolerance`";
+    RECOMMENDED: "recommended", Bool, required, "", "the smallest safe λ at the design's NS mode count";
+});
+
 /// Every table quaketwin writes, in pipeline order.
 pub const ALL_TABLES: &[&TableSchema] = &[
     &SAMPLES,
@@ -341,6 +373,8 @@ pub const ALL_TABLES: &[&TableSchema] = &[
     &REDUCTION_VALIDATION,
     &INTERFACE_REFINEMENT,
     &HYBRID_PROTOTYPE,
+    &REHEARSAL_SUMMARY,
+    &REHEARSAL,
 ];
 
 /// The declared table of a `quaketwin.schema` name.

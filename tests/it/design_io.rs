@@ -637,8 +637,8 @@ fn design_command_on_the_sample_writes_consistent_tables_deterministically() {
     }
 }
 
-/// `pipelines/test-design.toml` on the sample event: ingest → condition → design writes the
-/// tables; a second run skips the design stage; editing a design file outside the event
+/// `pipelines/test-design.toml` on the sample event: ingest → condition → design → rehearse
+/// writes the tables; a second run skips the design stage; editing a design file outside the event
 /// folder makes it run again (the stage fingerprints its own inputs).
 #[test]
 fn test_design_pipeline_runs_and_tracks_the_design_file() {
@@ -675,7 +675,9 @@ fn test_design_pipeline_runs_and_tracks_the_design_file() {
     );
     assert!(section.contains("Reduced vs full twin at the PS (WNRMSE)"));
     assert!(section.contains("MAC of recorded vs twin POMs 1–3"));
-    assert_eq!(section.matches("<svg").count(), 2);
+    // Interface refinement, POD energies and the rehearsal sweep.
+    assert_eq!(section.matches("<svg").count(), 3);
+    assert!(section.contains("Rehearsal of the hybrid test"));
     let again = pipeline::run(&p, &event, &out, true).unwrap();
     assert_eq!(stage(&again, "design"), &StageOutcome::Skipped);
 

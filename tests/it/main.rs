@@ -41,6 +41,7 @@ mod prepost;
 mod readers_binary;
 mod readers_csv;
 mod readers_text;
+mod rehearse;
 mod report;
 mod report_browser;
 mod schemas;

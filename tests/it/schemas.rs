@@ -98,12 +98,14 @@ fn formats_md_lists_every_declared_column_with_its_type_and_unit() {
 }
 
 /// Tables of the hybrid-test design, whose provenance is the design file.
-const DESIGN_TABLES: [&str; 5] = [
+const DESIGN_TABLES: [&str; 7] = [
     "actuator_layout",
     "pod",
     "reduction_validation",
     "interface_refinement",
     "hybrid_prototype",
+    "rehearsal_summary",
+    "rehearsal",
 ];
 
 fn run(pipeline: &Path, event: &str, out: &Path) {

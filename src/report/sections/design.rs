@@ -187,5 +187,6 @@ pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
     generic(dir, &tables::ACTUATOR_LAYOUT, settings, &mut body);
     generic(dir, &tables::HYBRID_PROTOTYPE, settings, &mut body);
     generic(dir, &tables::POD, settings, &mut body);
+    body.push_str(&super::rehearsal::rehearsal_section(dir, settings));
     body
 }

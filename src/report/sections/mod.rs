@@ -13,6 +13,7 @@ mod loops;
 mod modal;
 mod mode_shapes;
 mod rating;
+mod rehearsal;
 mod spectra;
 mod summary;
 mod time_histories;
@@ -31,7 +32,7 @@ use crate::vocab::tables;
 
 /// Output files the report reads, with the stage that writes each (every
 /// table of `vocab::tables`, the run's JSON/TOML files and the page itself).
-const OUTPUTS: [(&str, &str); 22] = [
+const OUTPUTS: [(&str, &str); 25] = [
     ("event.json", "ingest"),
     (tables::SAMPLES.file, "condition"),
     (tables::CHANNELS.file, "metrics"),
@@ -56,6 +57,9 @@ const OUTPUTS: [(&str, &str); 22] = [
     (tables::REDUCTION_VALIDATION.file, "design"),
     (tables::INTERFACE_REFINEMENT.file, "design"),
     (tables::HYBRID_PROTOTYPE.file, "design"),
+    ("rehearsal_model.json", "design"),
+    (tables::REHEARSAL_SUMMARY.file, "rehearse"),
+    (tables::REHEARSAL.file, "rehearse"),
     ("report.html", "report"),
 ];
 

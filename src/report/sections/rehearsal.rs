@@ -1,0 +1,129 @@
+//! Part of the hybrid-test design section: the rehearsal (rehearsal_summary.parquet,
+//! rehearsal.parquet) — the recommended λ, the sweep plot (response WNRMSE and energy error
+//! against λ, divergence marked) and the tables.
+
+use std::path::Path;
+
+use serde_json::Value;
+
+use super::design::facts_list;
+use super::{figure, generic, load, Loaded};
+use crate::report::plot::{self, Chart, Mark, RefLine, Series};
+use crate::report::table::{Column, Table};
+use crate::report::ReportSettings;
+use crate::vocab::tables::{self, rehearsal_summary as rs};
+
+fn bools(t: &Table, name: &str) -> Vec<bool> {
+    match t.columns.get(name) {
+        Some(Column::Bool(v)) => v.iter().map(|b| b.unwrap_or(false)).collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// The rehearsal part of the test-design section; empty without rehearsal outputs.
+pub(super) fn rehearsal_section(dir: &Path, settings: &ReportSettings) -> String {
+    let summary = load(dir, &tables::REHEARSAL_SUMMARY, None);
+    let Loaded::Ok(t) = &summary else {
+        return String::new();
+    };
+    let mut body = String::from("<h3>Rehearsal of the hybrid test</h3>");
+    let rec: Option<Value> = t
+        .metadata
+        .get("quaketwin.recommendation")
+        .and_then(|s| serde_json::from_str(s).ok());
+    let field = |k: &str| rec.as_ref().and_then(|r| r.get(k)).cloned();
+    let num = |k: &str| field(k).and_then(|v| v.as_f64());
+    let stable = bools(t, rs::STABLE.name);
+    let mut facts = vec![(
+        "Recommended time scale (smallest safe λ)".to_string(),
+        match (num("time_scale"), num("bandwidth_hz")) {
+            (Some(l), Some(b)) => format!(
+                "λ = {l} with {} NS modes: bandwidth {b:.3} Hz (design's bandwidth rule: λ = {})",
+                num("ns_modes").unwrap_or(0.0),
+                num("design_time_scale").unwrap_or(0.0)
+            ),
+            _ => "none of the swept λ is safe".into(),
+        },
+    )];
+    facts.push((
+        "Runs".into(),
+        format!(
+            "{} ({} stable); scheme {}, Δt = {:.3e} s",
+            t.rows,
+            stable.iter().filter(|s| **s).count(),
+            field("scheme")
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_default(),
+            num("dt_s").unwrap_or(0.0)
+        ),
+    ));
+    if let Some(a) = t.metadata.get("quaketwin.actuator") {
+        facts.push(("Actuator model".into(), a.clone()));
+    }
+    if let Some(g) = t.metadata.get("quaketwin.gravity") {
+        facts.push(("Gravity".into(), g.clone()));
+    }
+    body.push_str(&facts_list(&facts));
+
+    // The sweep: one series per NS mode count, response WNRMSE and energy error against λ;
+    // divergent runs drawn as crosses at their energy error.
+    if let (Some(ns), Some(lam), Some(w), Some(e)) = (
+        t.number(rs::NS_MODES.name),
+        t.number(rs::TIME_SCALE.name),
+        t.number(rs::RESPONSE_WNRMSE.name),
+        t.number(rs::ENERGY_ERROR.name),
+    ) {
+        let mut counts: Vec<i64> = ns.iter().flatten().map(|v| *v as i64).collect();
+        counts.sort_unstable();
+        counts.dedup();
+        let mut chart = Chart::new(560, 300, "time scale λ", "error");
+        chart.log_x = true;
+        chart.log_y = true;
+        for (c, &n) in counts.iter().enumerate() {
+            let rows: Vec<usize> = (0..t.rows)
+                .filter(|&i| ns[i].map(|v| v as i64) == Some(n))
+                .collect();
+            let pts = |y: &[Option<f64>], keep: &dyn Fn(usize) -> bool| -> Vec<(f64, f64)> {
+                rows.iter()
+                    .filter(|&&i| keep(i))
+                    .filter_map(|&i| Some((lam[i]?, y[i]?)))
+                    .filter(|p| p.1 > 0.0)
+                    .collect()
+            };
+            let ok = |i: usize| stable.get(i).copied().unwrap_or(false);
+            chart.series.push(Series::new(
+                format!("response WNRMSE, {n} NS modes"),
+                pts(w, &ok),
+                2 * c,
+                Mark::LinePoints,
+            ));
+            chart.series.push(Series::new(
+                format!("energy error, {n} NS modes"),
+                pts(e, &ok),
+                2 * c + 1,
+                Mark::LinePoints,
+            ));
+            chart.series.push(Series::new(
+                format!("diverged (energy error), {n} NS modes"),
+                pts(e, &|i| !ok(i)),
+                2 * c + 1,
+                Mark::Cross,
+            ));
+        }
+        if let Some(l) = num("time_scale") {
+            chart.ref_lines.push(RefLine {
+                at: l,
+                horizontal: false,
+                colour: 0,
+            });
+        }
+        let legend = plot::legend(&chart.series);
+        body.push_str(&figure(
+            plot::render(&chart),
+            "Rehearsal sweep: response WNRMSE against the full twin and energy error (spurious / input energy) per time scale λ; crosses: runs that diverged; vertical line: the recommended λ (rehearsal_summary.parquet)",
+            &legend,
+        ));
+    }
+    generic(dir, &tables::REHEARSAL_SUMMARY, settings, &mut body);
+    body
+}
