@@ -382,6 +382,17 @@ fn table_metadata(first: &RecordBatch, metadata: &[(String, String)]) -> Vec<(St
     kv
 }
 
+/// The schema of `first` with the key/value entries `kv` as its metadata.
+fn schema_with(first: &RecordBatch, kv: &[(String, String)]) -> SchemaRef {
+    Arc::new(
+        first
+            .schema()
+            .as_ref()
+            .clone()
+            .with_metadata(kv.iter().cloned().collect::<BTreeMap<_, _>>()),
+    )
+}
+
 /// `batches` (all of one schema) with the metadata a file written by
 /// [`write_parquet`] would carry in its Arrow schema: the in-memory form of
 /// a table (the Python bindings hand these to pyarrow without a file).
@@ -392,14 +403,7 @@ pub fn with_table_metadata(
     let Some(first) = batches.first() else {
         return Ok(batches);
     };
-    let kv = table_metadata(first, metadata);
-    let schema = Arc::new(
-        first
-            .schema()
-            .as_ref()
-            .clone()
-            .with_metadata(kv.into_iter().collect::<BTreeMap<_, _>>()),
-    );
+    let schema = schema_with(first, &table_metadata(first, metadata));
     batches
         .into_iter()
         .map(|b| {
@@ -420,13 +424,7 @@ pub fn writer_setup(
     metadata: &[(String, String)],
 ) -> Result<(SchemaRef, WriterProperties)> {
     let kv = table_metadata(first, metadata);
-    let schema = Arc::new(
-        first
-            .schema()
-            .as_ref()
-            .clone()
-            .with_metadata(kv.iter().cloned().collect::<BTreeMap<_, _>>()),
-    );
+    let schema = schema_with(first, &kv);
     let props = WriterProperties::builder()
         .set_compression(Compression::ZSTD(
             ZstdLevel::try_new(3).map_err(|e| Error::output(path, e.to_string()))?,
