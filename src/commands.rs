@@ -592,16 +592,15 @@ pub fn expand_events(events: &[std::path::PathBuf]) -> Vec<std::path::PathBuf> {
 /// structure's name from the manifest, else `unknown`; the event folder's
 /// name), relative to the dataset root.
 pub fn event_partition(event: &Path) -> Result<std::path::PathBuf> {
-    let loaded = event_folder::load(event)?;
+    // The manifest alone: the records are read by the run itself.
+    let manifest = event_folder::read_manifest(event)?;
     let folder = event
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let structure = loaded
-        .event
-        .structure
-        .as_ref()
-        .and_then(|s| s.name.clone())
+    let structure = manifest
+        .and_then(|m| m.structure)
+        .and_then(|s| s.name)
         .unwrap_or_else(|| "unknown".into());
     Ok(dataset::partition(&structure, &folder))
 }

@@ -82,15 +82,7 @@ pub fn load_parking(
 ) -> Result<LoadedEvent> {
     let files = collect(path, limits)?;
     let manifest_file = files.iter().find(|f| is_manifest(f));
-    let manifest = match manifest_file {
-        Some(f) => {
-            let bytes = f.content()?;
-            let text = std::str::from_utf8(&bytes)
-                .map_err(|e| Error::input(f.location(), format!("manifest is not UTF-8: {e}")))?;
-            Some(Manifest::parse(text, &f.display_name())?)
-        }
-        None => None,
-    };
+    let manifest = manifest_file.map(parse_manifest).transpose()?;
     let default_name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -334,6 +326,25 @@ pub fn load_parking(
         manifest,
         geometry,
     })
+}
+
+fn parse_manifest(f: &EventFile) -> Result<Manifest> {
+    let bytes = f.content()?;
+    let text = std::str::from_utf8(&bytes)
+        .map_err(|e| Error::input(f.location(), format!("manifest is not UTF-8: {e}")))?;
+    Manifest::parse(text, &f.display_name())
+}
+
+/// The manifest (`event.toml`) of the event at `path`, without reading its
+/// records (big files are only listed): what naming an event needs — the
+/// structure of the many-event layout's partition.
+pub fn read_manifest(path: &Path) -> Result<Option<Manifest>> {
+    let files = collect(path, &ArchiveLimits::default())?;
+    files
+        .iter()
+        .find(|f| is_manifest(f))
+        .map(parse_manifest)
+        .transpose()
 }
 
 fn is_manifest(f: &EventFile) -> bool {
