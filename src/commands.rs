@@ -459,6 +459,82 @@ pub fn design(design: &Path, out: &Path) -> Result<crate::stages::design::Design
     crate::stages::design::design_from_file(design, out)
 }
 
+/// What `quaketwin twin export` wrote.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TwinExport {
+    /// Free DoFs (the order of the matrices' rows).
+    pub dofs: usize,
+    pub stiffness: std::path::PathBuf,
+    pub mass: std::path::PathBuf,
+    /// The parameter values the matrices are assembled at (the twin's start values).
+    pub parameters: Vec<(String, f64)>,
+}
+
+/// `quaketwin twin export TWIN --out DIR`: the twin's stiffness and mass
+/// matrices over its free DoFs at its start parameters, as Matrix Market
+/// (`DIR/stiffness.mtx`, `DIR/mass.mtx`, lower triangles, `coordinate real
+/// symmetric`), so that any eigen-solver (scipy's `eigsh`…) can be run on
+/// exactly the model quaketwin solves (`scripts/eigsh_compare.py`).
+pub fn twin_export(twin: &Path, out: &Path) -> Result<TwinExport> {
+    let twin = crate::twin::file::load_twin(twin)?;
+    let sys = &twin.system;
+    let theta = sys.start_values();
+    std::fs::create_dir_all(out).map_err(|e| crate::error::Error::io(out, e))?;
+    let (stiffness, mass) = (out.join("stiffness.mtx"), out.join("mass.mtx"));
+    crate::sinks::matrix_market::write_matrix_market_symmetric(
+        &sys.stiffness_at(&theta),
+        &stiffness,
+    )?;
+    crate::sinks::matrix_market::write_matrix_market_symmetric(&sys.mass_at(&theta), &mass)?;
+    Ok(TwinExport {
+        dofs: sys.n,
+        stiffness,
+        mass,
+        parameters: sys
+            .parameters
+            .iter()
+            .map(|p| (p.name.clone(), p.start))
+            .collect(),
+    })
+}
+
+/// What `quaketwin twin modes` found.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TwinModes {
+    pub dofs: usize,
+    pub frequencies_hz: Vec<f64>,
+    /// Wall time of the eigen-solve (assembly at θ, factorisation, iterations).
+    pub solve_seconds: f64,
+}
+
+/// `quaketwin twin modes TWIN [--count N]`: the N lowest modes of the twin
+/// at its start parameters, and the time the solve took.
+pub fn twin_modes(twin: &Path, count: usize) -> Result<TwinModes> {
+    crate::fixed_order_reductions();
+    let twin = crate::twin::file::load_twin(twin)?;
+    let sys = &twin.system;
+    let t0 = std::time::Instant::now();
+    let modes = sys.modes(&sys.start_values(), count)?;
+    Ok(TwinModes {
+        dofs: sys.n,
+        frequencies_hz: modes.frequencies_hz(),
+        solve_seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// `quaketwin twin plate --nx NX --ny NY --out FILE`: writes the benchmark
+/// twin of a clamped concrete shell plate (NX × NY elements; 162 × 102 gives
+/// 100 116 free DoFs, the model of the twin benchmark).
+pub fn twin_plate(nx: usize, ny: usize, out: &Path) -> Result<()> {
+    if nx == 0 || ny == 0 || nx.saturating_mul(ny) > 1_000_000 {
+        return Err(crate::error::Error::usage(format!(
+            "--nx {nx} --ny {ny}: between 1 and 10⁶ elements"
+        )));
+    }
+    let text = crate::twin::benchmark::shell_plate_toml(nx, ny, nx as f64 * 0.1, ny as f64 * 0.1);
+    crate::sinks::atomic::write_bytes_atomically(out, text.as_bytes())
+}
+
 /// Environment variable naming the Python interpreter `quaketwin fleet` runs
 /// (default `python3`).
 pub const PYTHON_ENV: &str = "QUAKETWIN_PYTHON";

@@ -81,6 +81,9 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         settings: Option<PathBuf>,
     },
+    /// The digital twin on its own: its matrices for other solvers, its modes, a benchmark model.
+    #[command(subcommand)]
+    Twin(TwinCommand),
     /// Write DIR/report.html from the outputs of a pipeline run in DIR.
     #[command(after_help = "Examples:
   quaketwin report out/quake
@@ -226,6 +229,45 @@ enum Command {
     },
 }
 
+#[derive(Subcommand)]
+enum TwinCommand {
+    /// Write the stiffness and mass matrices (free DoFs, start parameters) as Matrix Market.
+    #[command(after_help = "Examples:
+  quaketwin twin export sample-records/synthetic-4storey-quake/twin.toml --out out/twin
+  python3 scripts/eigsh_compare.py   # scipy eigsh on the exported benchmark plate")]
+    Export {
+        /// Twin file (TOML, docs/twin.md).
+        twin: PathBuf,
+        /// Output directory (stiffness.mtx, mass.mtx).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// The lowest modes of the twin at its start parameters, and the solve time.
+    #[command(after_help = "Examples:
+  quaketwin twin modes sample-records/synthetic-4storey-quake/twin.toml --count 4 --json")]
+    Modes {
+        /// Twin file (TOML, docs/twin.md).
+        twin: PathBuf,
+        /// Number of modes.
+        #[arg(long, default_value_t = 10)]
+        count: usize,
+    },
+    /// Write the benchmark twin: a clamped concrete shell plate of NX × NY elements.
+    #[command(after_help = "Examples:
+  quaketwin twin plate --nx 162 --ny 102 --out plate.toml   # 100 116 free DoFs")]
+    Plate {
+        /// Elements along x.
+        #[arg(long)]
+        nx: usize,
+        /// Elements along y.
+        #[arg(long)]
+        ny: usize,
+        /// Twin file to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
 /// Prints `value` as JSON on stdout when `--json` was given.
 fn print_json<T: serde::Serialize>(json: bool, value: &T) -> Result<()> {
     if json {
@@ -285,6 +327,32 @@ fn run_command(cli: &Cli) -> Result<()> {
                 out.display()
             ));
             print_json(json, &s)
+        }
+        Command::Twin(TwinCommand::Export { twin, out }) => {
+            let e = commands::twin_export(twin, out)?;
+            console::info(format!(
+                "twin export: {} free DoFs; wrote {} and {}",
+                e.dofs,
+                e.stiffness.display(),
+                e.mass.display()
+            ));
+            print_json(json, &e)
+        }
+        Command::Twin(TwinCommand::Modes { twin, count }) => {
+            let m = commands::twin_modes(twin, *count)?;
+            if json {
+                return print_json(true, &m);
+            }
+            println!("{} free DoFs, solved in {:.3} s", m.dofs, m.solve_seconds);
+            for (i, f) in m.frequencies_hz.iter().enumerate() {
+                println!("mode {:>3}  {f:.6} Hz", i + 1);
+            }
+            Ok(())
+        }
+        Command::Twin(TwinCommand::Plate { nx, ny, out }) => {
+            commands::twin_plate(*nx, *ny, out)?;
+            console::info(format!("wrote {}", out.display()));
+            print_json(json, &serde_json::json!({ "twin": out }))
         }
         Command::Report { dir, settings } => {
             let path = commands::report(dir, settings.as_deref())?;
