@@ -282,10 +282,11 @@ fn twin_export_writes_the_matrices_twin_modes_solves() {
                 .unwrap();
             a.swap(c, p);
             x.swap(c, p);
+            let pivot = a[c].clone();
             for r in c + 1..n {
-                let f = a[r][c] / a[c][c];
-                for q in c..n {
-                    a[r][q] -= f * a[c][q];
+                let f = a[r][c] / pivot[c];
+                for (v, p) in a[r].iter_mut().zip(&pivot).skip(c) {
+                    *v -= f * p;
                 }
                 x[r] -= f * x[c];
             }
