@@ -118,13 +118,15 @@ pub fn two_oscillator_model() -> RehearsalModel {
         time_scale: 1000.0,
         time_scales: vec![25.0, 1000.0],
         gravity: false,
+        gravity_load: Vec::new(),
+        gravity_direction: String::new(),
         motion_source: "sine sweep".into(),
     };
     model.frequencies_hz = model.eigenfrequencies_hz().unwrap();
     model
 }
 
-fn settings(scheme: Scheme) -> RehearseSettings {
+pub fn settings(scheme: Scheme) -> RehearseSettings {
     RehearseSettings {
         scheme,
         servo: ServoKind::FirstOrder,
@@ -346,6 +348,30 @@ fn rehearse_command_reads_a_design_output() {
         quaketwin::vocab::tables::rehearsal_summary::TIME_SCALE.name,
     );
     assert_eq!(lam, vec![500.0, 1000.0]);
+    // The facade's design has gravity and force-controlled actuators: pre-load on by default,
+    // its vertical force (along the twin's gravity, −y: `uy`) recorded.
+    let file = std::fs::File::open(out.join("rehearsal_summary.parquet")).unwrap();
+    let reader =
+        parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file).unwrap();
+    let meta = reader
+        .metadata()
+        .file_metadata()
+        .key_value_metadata()
+        .unwrap()
+        .iter()
+        .find(|kv| kv.key == "quaketwin.gravity")
+        .and_then(|kv| kv.value.clone())
+        .unwrap();
+    eprintln!("facade gravity: {meta}");
+    let g: serde_json::Value = serde_json::from_str(&meta).unwrap();
+    assert_eq!(g["preload"], true, "{meta}");
+    assert_eq!(g["direction"], "uy", "{meta}");
+    let fc = g["force_controlled_n"].as_f64().unwrap();
+    let v = g["vertical_force_n"].as_f64().unwrap();
+    assert!(
+        fc.is_finite() && fc != 0.0 && v.is_finite() && v != 0.0,
+        "{meta}"
+    );
     // A directory without a design: exit 1 naming the file; a bad scheme: usage, exit 2.
     let o = std::process::Command::new(bin)
         .args(["rehearse"])
