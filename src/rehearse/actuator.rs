@@ -208,6 +208,17 @@ impl ActuatorBank {
         }
     }
 
+    /// Actuators holding `d` at rest (the gravity pre-load's static displacement): the
+    /// command history and the servo states start there.
+    pub fn hold(&mut self, d: &[f64]) {
+        for row in self.history.iter_mut() {
+            row.copy_from_slice(d);
+        }
+        for (s, v) in self.state.iter_mut().zip(d) {
+            *s = [*v, 0.0];
+        }
+    }
+
     /// Where the command at step-time `s` lies (in steps; linear ramp between targets, 0 before
     /// the first): rows (in `history`) of the two targets and the fraction between them.
     fn locate(&self, s: f64) -> (usize, usize, f64) {

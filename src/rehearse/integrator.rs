@@ -222,6 +222,15 @@ impl Integrator {
         })
     }
 
+    /// Starts from the static state x_0 with the specimen's measured force r_0 (gravity
+    /// pre-load, `gravity` Eq. G1–G2): x and (CD) x_{−1} shift by x_0; the initial
+    /// acceleration, from the seismic load at t = 0, is unchanged since K̂ x_0 = f̂_g.
+    pub fn preload(&mut self, x0: &[f64], r0: &[f64]) {
+        axpy(1.0, x0, &mut self.x);
+        axpy(1.0, x0, &mut self.x_prev);
+        self.force.copy_from_slice(r0);
+    }
+
     /// The force measured at the last command.
     pub fn measured_force(&self) -> &[f64] {
         &self.force

@@ -12,12 +12,12 @@
 //!
 //! - `specimen`: the emulated specimen, linear or with Bouc–Wen springs (Bouc 1967; Wen 1976).
 //!
-//! Gravity is not rehearsed: the rehearsal is of the seismic increment about the static
-//! state, which for the linear specimen superposes; force-controlled actuators (which hold
-//! the gravity load) are rehearsed at their seismic displacement like the others.
+//! - `gravity`: the static gravity state the dynamic test starts from (pre-load through the
+//!   force-controlled actuators).
 
 pub mod actuator;
 pub mod energy;
+pub mod gravity;
 pub mod integrator;
 pub mod model;
 pub mod specimen;
@@ -74,6 +74,10 @@ pub struct RehearseSettings {
     pub energy_tolerance: f64,
     /// A Bouc–Wen spring on every actuated DoF (nonlinear rehearsal); none: linear specimen.
     pub bouc_wen: Option<BoucWenSpring>,
+    /// Gravity pre-load (`gravity`): start from the static gravity state, the force-controlled
+    /// actuators applying the PS's share of the weight. Default: on when the design has the
+    /// gravity state and force-controlled actuators.
+    pub gravity: Option<bool>,
 }
 
 impl Default for RehearseSettings {
@@ -95,6 +99,7 @@ impl Default for RehearseSettings {
             response_tolerance: 0.05,
             energy_tolerance: 0.1,
             bouc_wen: None,
+            gravity: None,
         }
     }
 }
@@ -157,6 +162,15 @@ impl RehearseSettings {
             ));
         }
         Ok(())
+    }
+
+    /// Whether the rehearsal of `model` applies the gravity pre-load.
+    pub fn preload(&self, model: &RehearsalModel) -> bool {
+        self.gravity.unwrap_or_else(|| {
+            model.gravity
+                && !model.gravity_load.is_empty()
+                && model.actuators.iter().any(|a| a.control_mode == "force")
+        })
     }
 
     /// The actuator model, the design's band as the default bandwidth.

@@ -77,6 +77,14 @@ pub struct RehearsalModel {
     pub time_scales: Vec<f64>,
     /// Whether the design includes the gravity state (nominal forces).
     pub gravity: bool,
+    /// The prototype's gravity load f̂_g = ψᵀ f_g (n_c; f_g the twin's gravity load, its
+    /// gravity vector the vertical; `gravity::static_state`); empty without gravity.
+    #[serde(default)]
+    pub gravity_load: Vec<f64>,
+    /// The actuator direction (`ux`, `uy`, `uz`) along the twin's gravity vector (its
+    /// largest component): the vertical; empty without gravity.
+    #[serde(default)]
+    pub gravity_direction: String,
     /// Where the base motion came from.
     pub motion_source: String,
 }
@@ -144,6 +152,21 @@ impl RehearsalModel {
             })
             .collect();
         let (reference, reference_substeps) = fine_reference(twin, design, motion, hybrid)?;
+        let gravity = design.actuators.iter().any(|a| a.nominal_force != 0.0);
+        let g = twin.system.gravity;
+        let vertical = (0..3).fold(0, |b, i| if g[i].abs() > g[b].abs() { i } else { b });
+        let gravity_direction = if gravity && g[vertical] != 0.0 {
+            ["ux", "uy", "uz"][vertical].to_string()
+        } else {
+            String::new()
+        };
+        let gravity_load = if gravity {
+            let fg = twin.system.gravity_load(&[]);
+            let reduced = psi.transpose() * Mat::from_fn(fg.len(), 1, |i, _| fg[i]);
+            (0..nc).map(|i| reduced[(i, 0)]).collect()
+        } else {
+            Vec::new()
+        };
         let h = &design.hybrid;
         Ok(RehearsalModel {
             schema: MODEL_SCHEMA.into(),
@@ -178,7 +201,9 @@ impl RehearsalModel {
             actuator_band_hz: hybrid.actuator_band_hz,
             time_scale: h.time_scale,
             time_scales: hybrid.time_scales.clone(),
-            gravity: design.actuators.iter().any(|a| a.nominal_force != 0.0),
+            gravity,
+            gravity_load,
+            gravity_direction,
             motion_source: motion.source.clone(),
         })
     }
@@ -236,6 +261,9 @@ impl RehearsalModel {
         {
             return bad("`dt`, `actuator_band_hz` and `time_scale` must be positive".into());
         }
+        if !self.gravity_load.is_empty() && self.gravity_load.len() != n {
+            return bad("`gravity_load` must be empty or of the prototype's size".into());
+        }
         let finite = |a: &[Vec<f64>]| a.iter().flatten().all(|v| v.is_finite());
         if !(finite(&self.stiffness)
             && finite(&self.mass)
@@ -244,7 +272,8 @@ impl RehearsalModel {
             && finite(&self.accelerations)
             && finite(&self.observation)
             && finite(&self.reference)
-            && self.rayleigh.iter().all(|v| v.is_finite()))
+            && self.rayleigh.iter().all(|v| v.is_finite())
+            && self.gravity_load.iter().all(|v| v.is_finite()))
         {
             return bad("non-finite values".into());
         }
@@ -276,6 +305,11 @@ impl RehearsalModel {
             mass: sub(&self.mass),
             loads: cols(&self.loads),
             observation: cols(&self.observation),
+            gravity_load: if self.gravity_load.is_empty() {
+                Vec::new()
+            } else {
+                keep.iter().map(|&j| self.gravity_load[j]).collect()
+            },
             ..self.clone()
         };
         out.frequencies_hz = out.eigenfrequencies_hz()?;

@@ -15,6 +15,7 @@ use rayon::prelude::*;
 
 use super::actuator::{ActuatorBank, ActuatorModel};
 use super::energy::EnergyBalance;
+use super::gravity::{static_state, Preload};
 use super::integrator::{HybridSystem, Integrator, Specimen};
 use super::model::{mat, RehearsalModel};
 use super::specimen::SpecimenModel;
@@ -68,6 +69,8 @@ pub struct Rehearsal {
     pub substeps: usize,
     pub dt_s: f64,
     pub actuator: ActuatorModel,
+    /// The gravity pre-load's static state at the design's NS modes (None: not applied).
+    pub preload: Option<Preload>,
 }
 
 /// The specimen behind its actuators: its force at the achieved displacement.
@@ -153,6 +156,22 @@ pub fn run(
         f
     };
     let mut integ = Integrator::new(&sys, settings.scheme, settings.alpha, dt, &load(0))?;
+    // Gravity pre-load (`gravity`, Eq. G1–G2): the static state, the specimen driven to d_g,
+    // the actuators holding it; f̂_g is added to every step's load.
+    let preload = if settings.preload(model) {
+        Some(static_state(model)?)
+    } else {
+        None
+    };
+    let f_g = preload
+        .as_ref()
+        .map(|_| model.gravity_load.clone())
+        .unwrap_or_else(|| vec![0.0; n]);
+    let total_load = |j: usize| -> Vec<f64> {
+        let mut f = load(j);
+        axpy_(&f_g, &mut f);
+        f
+    };
     let mut spec = Emulated {
         bank: ActuatorBank::new(actuator, m, time_scale * dt),
         specimen: SpecimenModel::new(
@@ -165,6 +184,22 @@ pub fn run(
         noise: (settings.displacement_noise_m, settings.force_noise_n),
         rng: Rng::derived(settings.seed, stream),
     };
+    let (mut r_g, mut d_g, mut y_g) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+    if let Some(p) = &preload {
+        d_g.copy_from_slice(&p.displacement);
+        spec.specimen.force(&d_g, &mut r_g);
+        spec.bank.hold(&d_g);
+        spec.achieved.copy_from_slice(&d_g);
+        spec.measured.copy_from_slice(&d_g);
+        integ.preload(&p.x, &r_g);
+        for (a, ya) in y_g.iter_mut().enumerate() {
+            *ya = model.observation[a]
+                .iter()
+                .zip(&p.x)
+                .map(|(o, x)| o * x)
+                .sum();
+        }
+    }
     let ref_peak = model
         .reference
         .iter()
@@ -172,44 +207,52 @@ pub fn run(
         .fold(0.0_f64, |a, v| a.max(v.abs()));
     let limit = settings.divergence_factor * ref_peak;
     let mut energy = EnergyBalance::default();
-    let mut command = vec![0.0; m];
-    let (mut dc0, mut dm0, mut r0) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+    let mut command = d_g.clone();
+    // The energy balance is of the seismic increment about the static state: forces r − r_g,
+    // loads without f̂_g.
+    let (mut dc0, mut dm0, mut r0) = (d_g.clone(), d_g.clone(), vec![0.0; m]);
+    let mut r_inc = vec![0.0; m];
     let (mut sum_sq, mut max_e) = (vec![0.0; m], vec![0.0_f64; m]);
     let mut response: Vec<Vec<f64>> = vec![vec![0.0]; m];
     let mut h = Histories::default();
     if record {
         h.time_s.push(0.0);
-        h.command = vec![vec![0.0]; m];
-        h.achieved = vec![vec![0.0]; m];
-        h.force = vec![vec![0.0]; m];
+        h.command = d_g.iter().map(|d| vec![*d]).collect();
+        h.achieved = h.command.clone();
+        h.force = r_g.iter().map(|r| vec![*r]).collect();
     }
     let mut diverged = None;
     let total = (steps - 1) * substeps;
-    let mut f_n = load(0);
+    let (mut f_n, mut fd_n) = (total_load(0), load(0));
     let mut y = vec![0.0; m];
     for j in 0..total {
-        let f_next = load(j + 1);
+        let (f_next, fd_next) = (total_load(j + 1), load(j + 1));
         let x0 = integ.x.clone();
         integ.step(&f_n, &f_next, &mut spec, &mut command);
         let r1 = integ.measured_force();
-        energy.add_actuators(&r0, r1, &dm0, &spec.measured, &dc0, &command);
-        energy.add_input(&f_n, &f_next, &x0, &integ.x);
+        for a in 0..m {
+            r_inc[a] = r1[a] - r_g[a];
+        }
+        energy.add_actuators(&r0, &r_inc, &dm0, &spec.measured, &dc0, &command);
+        energy.add_input(&fd_n, &fd_next, &x0, &integ.x);
         for a in 0..m {
             let e = command[a] - spec.achieved[a];
             sum_sq[a] += e * e;
             max_e[a] = max_e[a].max(e.abs());
         }
-        r0.copy_from_slice(r1);
+        r0.copy_from_slice(&r_inc);
         dc0.copy_from_slice(&command);
         dm0.copy_from_slice(&spec.measured);
-        f_n = f_next;
+        (f_n, fd_n) = (f_next, fd_next);
         if (j + 1) % substeps == 0 {
+            // The seismic response: total displacement less the static one (the reference's).
             for (a, ya) in y.iter_mut().enumerate() {
                 *ya = model.observation[a]
                     .iter()
                     .zip(&integ.x)
                     .map(|(p, x)| p * x)
-                    .sum();
+                    .sum::<f64>()
+                    - y_g[a];
             }
             let t = (j + 1) as f64 * dt;
             if y.iter().any(|v| !v.is_finite() || v.abs() > limit) {
@@ -318,6 +361,11 @@ pub fn rehearse(model: &RehearsalModel, settings: &RehearseSettings) -> Result<R
         })
         .ok_or_else(|| Error::usage("rehearsal: nothing to sweep"))?;
     let histories = std::mem::take(&mut results[history_run].1);
+    let preload = if settings.preload(model) {
+        Some(static_state(model)?)
+    } else {
+        None
+    };
     Ok(Rehearsal {
         runs,
         ns_modes,
@@ -327,5 +375,12 @@ pub fn rehearse(model: &RehearsalModel, settings: &RehearseSettings) -> Result<R
         substeps,
         dt_s: model.dt / substeps as f64,
         actuator,
+        preload,
     })
+}
+
+fn axpy_(x: &[f64], y: &mut [f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi += xi;
+    }
 }

@@ -79,10 +79,20 @@ pub fn write_rehearsal(
         ),
         (
             "quaketwin.gravity".into(),
-            if model.gravity {
-                "not modelled: the rehearsal is of the seismic increment; force-controlled actuators are rehearsed at their seismic displacement".into()
-            } else {
-                "the design has no gravity state".into()
+            match &r.preload {
+                Some(p) => serde_json::json!({
+                    "preload": true,
+                    "force_controlled_n": p.force_controlled_n,
+                    "vertical_force_n": p.vertical_n,
+                    "direction": model.gravity_direction,
+                    "method": "static state K x_g = f_g (prototype, specimen's initial stiffness); force-controlled actuators apply r_g = K_P d_g, displacement-controlled hold d_g; the dynamic run starts there, responses are increments about it",
+                })
+                .to_string(),
+                None => serde_json::json!({
+                    "preload": false,
+                    "reason": if model.gravity { "switched off (settings gravity = false, or no force-controlled actuator)" } else { "the design has no gravity state" },
+                })
+                .to_string(),
             },
         ),
     ];

@@ -42,6 +42,7 @@ mod readers_binary;
 mod readers_csv;
 mod readers_text;
 mod rehearse;
+mod rehearse_gravity;
 mod report;
 mod report_browser;
 mod schemas;

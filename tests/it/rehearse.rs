@@ -46,7 +46,17 @@ fn rows(m: &Mat<f64>) -> Vec<Vec<f64>> {
 
 /// The hand-made prototype and its full-model reference at x_q.
 pub fn two_oscillator_model() -> RehearsalModel {
-    let (k1, k2, kp) = (K, K, K);
+    oscillator_model(M2, K, MP)
+}
+
+/// The same with light-oscillator mass `m2` and stiffness `k2`, interface mass `mp`.
+pub fn oscillator_model(m2: f64, k2: f64, mp: f64) -> RehearsalModel {
+    oscillator_model_damped(m2, k2, mp, false)
+}
+
+/// … and with mass-proportional damping only (a₁ = 0) when `mass_damping`.
+pub fn oscillator_model_damped(m2: f64, k2: f64, mp: f64, mass_damping: bool) -> RehearsalModel {
+    let (k1, kp) = (K, K);
     let k = Mat::from_fn(3, 3, |i, j| match (i, j) {
         (0, 0) => k1,
         (1, 1) => k2,
@@ -55,19 +65,20 @@ pub fn two_oscillator_model() -> RehearsalModel {
         (1, 2) | (2, 1) => -k2,
         _ => 0.0,
     });
-    let m = Mat::from_fn(3, 3, |i, j| if i == j { [M1, M2, MP][i] } else { 0.0 });
+    let m = Mat::from_fn(3, 3, |i, j| if i == j { [M1, m2, mp][i] } else { 0.0 });
     // Rayleigh: 5 % at the first full-model frequency, 1 % at the spurious one.
     let f = |w2: f64| w2.sqrt() / (2.0 * std::f64::consts::PI);
     let f_low = f(k1 * kp / (k1 + kp) / M1);
-    let f_high = f(2.62 * K / M2);
+    let f_high = f(2.62 * k2 / m2);
     let (a0, a1) = rayleigh_coefficients(f_low, f_high, 0.05, 0.01).unwrap();
+    let a1 = if mass_damping { 0.0 } else { a1 };
     let (dt, acc) = ground();
     let reference = newmark_base_excitation(
         &CscMatrix::from_dense(k.as_ref()),
         &CscMatrix::from_dense(m.as_ref()),
         &[BaseExcitation {
             influence: vec![1.0; 3],
-            load: vec![M1, M2, MP],
+            load: vec![M1, m2, mp],
             acceleration: acc.clone(),
         }],
         &NewmarkSettings {
@@ -77,19 +88,19 @@ pub fn two_oscillator_model() -> RehearsalModel {
         },
     )
     .unwrap();
-    let (s1, s2) = (M1.sqrt(), M2.sqrt());
+    let (s1, s2) = (M1.sqrt(), m2.sqrt());
     let k_hat = Mat::from_fn(3, 3, |i, j| {
         if i != j {
             0.0
         } else {
-            [k1 / M1, k2 / M2, kp][i]
+            [k1 / M1, k2 / m2, kp][i]
         }
     });
     let m_hat = Mat::from_fn(3, 3, |i, j| match (i, j) {
         (0, 0) | (1, 1) => 1.0,
         (0, 2) | (2, 0) => s1,
         (1, 2) | (2, 1) => s2,
-        (2, 2) => M1 + M2 + MP,
+        (2, 2) => M1 + m2 + mp,
         _ => 0.0,
     });
     let mut model = RehearsalModel {
@@ -108,7 +119,7 @@ pub fn two_oscillator_model() -> RehearsalModel {
         rayleigh: [a0, a1],
         dt,
         axes: vec![0],
-        loads: vec![vec![s1, s2, M1 + M2 + MP]],
+        loads: vec![vec![s1, s2, M1 + m2 + mp]],
         accelerations: vec![acc],
         observation: vec![vec![0.0, 0.0, 1.0]],
         reference: reference.displacement.clone(),
@@ -118,13 +129,15 @@ pub fn two_oscillator_model() -> RehearsalModel {
         time_scale: 1000.0,
         time_scales: vec![25.0, 1000.0],
         gravity: false,
+        gravity_load: Vec::new(),
+        gravity_direction: String::new(),
         motion_source: "sine sweep".into(),
     };
     model.frequencies_hz = model.eigenfrequencies_hz().unwrap();
     model
 }
 
-fn settings(scheme: Scheme) -> RehearseSettings {
+pub fn settings(scheme: Scheme) -> RehearseSettings {
     RehearseSettings {
         scheme,
         servo: ServoKind::FirstOrder,
@@ -183,6 +196,44 @@ fn rehearse_stable_inside_the_band_divergent_outside_stable_with_fewer_modes() {
         assert_eq!(r.recommended.map(|i| r.runs[i].time_scale), Some(1000.0));
         // Spurious energy: positive and small when safe.
         assert!(safe.energy_error < 0.05, "{scheme:?}: {safe:?}");
+    }
+}
+
+/// With fewer NS modes the same λ is stable again at an intermediate count, k = design − 1.
+/// In the light-oscillator prototype above that cannot show: with its NS mode dropped, the
+/// 1 kg oscillator rides on the 1 kg interface and the 1-mode prototype keeps a high interface
+/// mode (≈ 32 Hz) that diverges as well. Here the dropped NS oscillator is the heavier part of the
+/// interface assembly (m₂ = 3 kg on k₂ = 4 k, interface m_P = 0.1 kg): with it the interface
+/// can vibrate between k_P + k₁ and k₂ (the top mode, ≈ 247 Hz), without it the interface mode
+/// carries m₂ + m_P (≈ 25 Hz). Damping is mass-proportional only (a₁ = 0: the top mode is not
+/// damped out by Rayleigh's stiffness term). At λ = 1000 the 2-mode prototype diverges and the
+/// 1-mode one is stable and accurate (WNRMSE against the full model ≤ 1 %: the dropped mode
+/// barely participates in the response).
+#[test]
+fn rehearse_dropping_the_spurious_ns_mode_alone_restores_stability() {
+    let model = oscillator_model_damped(3.0, 4.0 * K, 0.1, true);
+    let f2 = model.top_frequency_hz();
+    let f1 = model.with_ns_modes(1).unwrap().top_frequency_hz();
+    assert!(f2 > 200.0 && f1 < 30.0, "top frequencies {f2} {f1} Hz");
+    for scheme in [Scheme::AlphaOs, Scheme::CentralDifference] {
+        let s = RehearseSettings {
+            time_scales: vec![1000.0],
+            ns_modes: vec![1, 2],
+            ..settings(scheme)
+        };
+        let r = rehearse(&model, &s).unwrap();
+        for run in &r.runs {
+            eprintln!("{scheme:?} {run:?}");
+        }
+        let (one, two) = (&r.runs[0], &r.runs[1]);
+        assert_eq!((one.ns_modes, two.ns_modes), (1, 2));
+        assert!(
+            !two.stable && two.response_wnrmse.is_none(),
+            "{scheme:?}: {two:?}"
+        );
+        assert!(one.stable, "{scheme:?}: {one:?}");
+        let w = one.response_wnrmse.unwrap();
+        assert!(w <= 0.01, "{scheme:?}: WNRMSE {w}");
     }
 }
 
@@ -346,6 +397,30 @@ fn rehearse_command_reads_a_design_output() {
         quaketwin::vocab::tables::rehearsal_summary::TIME_SCALE.name,
     );
     assert_eq!(lam, vec![500.0, 1000.0]);
+    // The facade's design has gravity and force-controlled actuators: pre-load on by default,
+    // its vertical force (along the twin's gravity, −y: `uy`) recorded.
+    let file = std::fs::File::open(out.join("rehearsal_summary.parquet")).unwrap();
+    let reader =
+        parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file).unwrap();
+    let meta = reader
+        .metadata()
+        .file_metadata()
+        .key_value_metadata()
+        .unwrap()
+        .iter()
+        .find(|kv| kv.key == "quaketwin.gravity")
+        .and_then(|kv| kv.value.clone())
+        .unwrap();
+    eprintln!("facade gravity: {meta}");
+    let g: serde_json::Value = serde_json::from_str(&meta).unwrap();
+    assert_eq!(g["preload"], true, "{meta}");
+    assert_eq!(g["direction"], "uy", "{meta}");
+    let fc = g["force_controlled_n"].as_f64().unwrap();
+    let v = g["vertical_force_n"].as_f64().unwrap();
+    assert!(
+        fc.is_finite() && fc != 0.0 && v.is_finite() && v != 0.0,
+        "{meta}"
+    );
     // A directory without a design: exit 1 naming the file; a bad scheme: usage, exit 2.
     let o = std::process::Command::new(bin)
         .args(["rehearse"])
