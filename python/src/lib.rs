@@ -57,6 +57,18 @@ fn inspect_json(py: Python<'_>, event: PathBuf) -> PyResult<String> {
         .map_err(raise)
 }
 
+/// A run's summary as JSON text, or its error.
+fn summary_json(
+    pipeline: &str,
+    event: &std::path::Path,
+    out: &std::path::Path,
+    result: quaketwin::error::Result<Vec<(String, quaketwin::pipeline::StageOutcome)>>,
+) -> quaketwin::error::Result<String> {
+    let summary = quaketwin::summary::RunSummary::of_run(pipeline, event, out, &result);
+    result?;
+    quaketwin::summary::to_json(&summary)
+}
+
 /// Runs a pipeline file on one event into `out`; the run summary as JSON text.
 #[pyfunction]
 #[pyo3(signature = (pipeline, event, out, reference=None))]
@@ -75,14 +87,7 @@ fn run_json(
             reference.as_deref(),
             true,
         );
-        let summary = quaketwin::summary::RunSummary::of_run(
-            &pipeline.display().to_string(),
-            &event,
-            &out,
-            &result,
-        );
-        result?;
-        quaketwin::summary::to_json(&summary)
+        summary_json(&pipeline.display().to_string(), &event, &out, result)
     })
     .map_err(raise)
 }
@@ -92,10 +97,7 @@ fn run_json(
 fn hysteresis_json(py: Python<'_>, event: PathBuf, out: PathBuf) -> PyResult<String> {
     py.detach(|| {
         let result = quaketwin::commands::hysteresis(&event, &out, true);
-        let summary =
-            quaketwin::summary::RunSummary::of_run("hysteresis (built-in)", &event, &out, &result);
-        result?;
-        quaketwin::summary::to_json(&summary)
+        summary_json("hysteresis (built-in)", &event, &out, result)
     })
     .map_err(raise)
 }
