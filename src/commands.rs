@@ -412,7 +412,10 @@ pub fn modal(
     let text = format!(
         "{INGEST_PIPELINE}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\n{params}"
     );
-    let p = parse_pipeline(&text, "built-in modal pipeline")?;
+    let mut p = parse_pipeline(&text, "built-in modal pipeline")?;
+    // The ingest pipeline's stages plus modal: named as the command, so that
+    // its lines read `[modal] modal done …`, not `[ingest] …`.
+    p.pipeline.name = "modal".into();
     pipeline::run(&p, event, out, quiet)
 }
 
