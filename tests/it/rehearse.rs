@@ -317,21 +317,11 @@ fn facade_pipeline_ends_with_a_rehearsal_sweep_and_a_recommended_time_scale() {
     let summary = out.join("rehearsal_summary.parquet");
     let lam = crate::common::column_f64(&summary, rs::TIME_SCALE.name);
     assert_eq!(lam.len(), 10, "the design's 10 candidate λ");
-    let file = std::fs::File::open(&summary).unwrap();
-    let reader =
-        parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file).unwrap();
-    let meta = reader
-        .metadata()
-        .file_metadata()
-        .key_value_metadata()
-        .unwrap()
-        .iter()
-        .find(|kv| kv.key == "quaketwin.recommendation")
-        .and_then(|kv| kv.value.clone())
-        .unwrap();
-    let rec: serde_json::Value = serde_json::from_str(&meta).unwrap();
+    let table = quaketwin::sinks::parquet::ReadTable::open(&summary).unwrap();
+    let meta = table.metadata("quaketwin.recommendation").unwrap();
+    let rec: serde_json::Value = serde_json::from_str(meta).unwrap();
     let best = rec["time_scale"].as_f64().expect("a recommended λ");
-    let batch = reader.build().unwrap().next().unwrap().unwrap();
+    let batch = &table.batches[0];
     let col = |name: &str| batch.column_by_name(name).unwrap().clone();
     let stable = col(rs::STABLE.name);
     let stable = stable
@@ -399,20 +389,11 @@ fn rehearse_command_reads_a_design_output() {
     assert_eq!(lam, vec![500.0, 1000.0]);
     // The facade's design has gravity and force-controlled actuators: pre-load on by default,
     // its vertical force (along the twin's gravity, −y: `uy`) recorded.
-    let file = std::fs::File::open(out.join("rehearsal_summary.parquet")).unwrap();
-    let reader =
-        parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file).unwrap();
-    let meta = reader
-        .metadata()
-        .file_metadata()
-        .key_value_metadata()
-        .unwrap()
-        .iter()
-        .find(|kv| kv.key == "quaketwin.gravity")
-        .and_then(|kv| kv.value.clone())
-        .unwrap();
+    let table =
+        quaketwin::sinks::parquet::ReadTable::open(&out.join("rehearsal_summary.parquet")).unwrap();
+    let meta = table.metadata("quaketwin.gravity").unwrap();
     eprintln!("facade gravity: {meta}");
-    let g: serde_json::Value = serde_json::from_str(&meta).unwrap();
+    let g: serde_json::Value = serde_json::from_str(meta).unwrap();
     assert_eq!(g["preload"], true, "{meta}");
     assert_eq!(g["direction"], "uy", "{meta}");
     let fc = g["force_controlled_n"].as_f64().unwrap();
