@@ -35,6 +35,24 @@ BRIDGES = {
     "crowley-ce54730": "Lake Crowley, US-395 (CE54730)",
     "capistrano-ce13795": "Capistrano Beach, I-5 / Via Calif. (CE13795)",
 }
+# Why no longitudinal mode is reported (issue 13): measured once, by hand,
+# in session 11 (not re-run by this script).
+LONGITUDINAL_NOTE = """
+## Longitudinal modes: why none is reported
+
+Each of these bridges has **one** longitudinal deck channel (Painter St. 89324.11 near the east abutment,
+Lake Crowley 54730.08 at the centre bent, Ridgecrest and Capistrano likewise). With the deck's transverse
+channels beside it, no longitudinal pole column is stable in any event. Identified on the longitudinal
+channels alone (deck X as output, ground X as inputs, an experiment not shipped), the selection promotes
+a different scatter in every event: the Painter St. small events gave 3.19–6.49, 3.45–7.44, 4.22–7.95
+and 3.58–8.34 Hz, with no frequency common to them within 10 %. A one-component shape cannot be tested for
+coherence (MAC and MPC are 1 by construction), so stability cannot tell a mode from a noise pole there.
+The deck-over-ground transfer function (Welch, 8-s segments) of the Painter St. longitudinal channel has
+its largest coherent peak at 5.0–5.5 Hz in the six modern events (5.50, 5.00, 5.38, 5.50, 5.00 Hz and
+6.25 Hz in nc73351710): a longitudinal resonance near 5.2 Hz is likely, but one channel does not
+identify it as a mode. Two longitudinal deck channels (or a stated twin to pair with) would.
+"""
+
 COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"]
 
 
@@ -150,13 +168,18 @@ def main():
         f.write("CESMD bridge records in `../shared/records`). Peak: largest PGA of the horizontal deck (output)\n")
         f.write("channels after conditioning. Direction: the label of the mode shape (X/Y of the record's axes).\n")
         f.write("Records of the 1980s give only azimuths (at Painter St. 360° transverse, 270° longitudinal) while\n")
-        f.write("later ones say `Tran`/`Long` (Long = X, Tran = Y): without an `event.toml` stating\n")
-        f.write("`x_axis_azimuth_deg = 270`, the transverse mode of the old records is labelled X. It is the same mode.\n\n")
+        f.write("later ones say `Tran`/`Long` (Long = X, Tran = Y). The old records' location texts name the east and\n")
+        f.write("west abutments, so ingest takes the deck's east–west line as X (docs/event-folder.md): the transverse\n")
+        f.write("mode is labelled Y in every event. Lake Crowley's modes come from the output-only fallback of\n")
+        f.write("`method = auto` (docs/pipelines.md): input–output with the centre bent's ground channels finds none.\n")
+        f.write("Longitudinal modes: each bridge has a single longitudinal deck channel; no consistent longitudinal\n")
+        f.write("mode is found (see the note at the end).\n\n")
         f.write("![frequency against peak acceleration](bridge-amplitude.svg)\n\n")
         f.write("| bridge | event | peak (g) | modes found | why none / warning |\n|---|---|---|---|---|\n")
         for bridge, name, peak_g, found, why in rows:
             p = f"{peak_g:.3f}" if peak_g is not None else "—"
             f.write(f"| {bridge} | {name} | {p} | {found} | {why.replace('|', '/')} |\n")
+        f.write(LONGITUDINAL_NOTE)
     if points:
         svg_plot(points, os.path.join(a.out, "bridge-amplitude.svg"))
 

@@ -76,12 +76,7 @@ pub fn modal(samples: &Table, params_json: &str) -> Result<ModalTables> {
             .collect(),
         samples.batches.clone(),
     )?;
-    let settings = params.settings_for(&event)?;
-    let choice = crate::modal::ChannelChoice {
-        inputs: params.inputs.clone(),
-        vertical_outputs: params.vertical_outputs,
-    };
-    let result = crate::modal::identify_event(&event, &settings, &choice)?;
+    let (result, settings) = params.identify(&event)?;
     let settings_json = serde_json::to_string(&settings).unwrap_or_default();
     let meta = modal_tables::modal_metadata(&result, &settings_json, &Provenance::of_event(&event));
     let table = |batch: RecordBatch| -> Result<Table> {

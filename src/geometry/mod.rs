@@ -83,6 +83,63 @@ pub fn infer_x_axis(azimuths: &[f64], tolerance_deg: f64) -> Option<f64> {
     lines.first().map(|(l, _)| *l)
 }
 
+/// The line of a bridge's deck, from where its abutments are: location texts
+/// that name an east or west abutment (CSMIP: "Deck: Near East Abutment",
+/// "On Ground Near West Abutment") place the abutments at the two ends of an
+/// east–west deck (line 90°), north or south ones a north–south deck (0°).
+/// `None` when no text names an abutment, or when both pairs are named.
+pub fn bridge_line_from_abutments<'a>(
+    location_texts: impl Iterator<Item = &'a str>,
+) -> Option<f64> {
+    let (mut east_west, mut north_south) = (false, false);
+    for text in location_texts {
+        let text = text.to_ascii_uppercase();
+        if !text.contains("ABUTMENT") {
+            continue;
+        }
+        let words: Vec<&str> = text
+            .split(|c: char| !c.is_ascii_alphabetic())
+            .filter(|w| !w.is_empty())
+            .collect();
+        east_west |= words.iter().any(|w| matches!(*w, "EAST" | "WEST"));
+        north_south |= words.iter().any(|w| matches!(*w, "NORTH" | "SOUTH"));
+    }
+    match (east_west, north_south) {
+        (true, false) => Some(90.0),
+        (false, true) => Some(0.0),
+        _ => None,
+    }
+}
+
+/// The X axis of a bridge recorded at azimuths only: its longitudinal axis
+/// (CSMIP's convention for bridges, Long = X and Tran = Y, so the modes of
+/// records that give only azimuths carry the labels of those that say
+/// Long/Tran), taken as the sensor line nearest the deck's line
+/// ([`bridge_line_from_abutments`]) when it is within 45° of it; the line's
+/// azimuth in [0°, 180°), as [`infer_x_axis`].
+pub fn bridge_x_axis(azimuths: &[f64], deck_line_deg: f64, tolerance_deg: f64) -> Option<f64> {
+    let separation = |a: f64| {
+        let d = (a - deck_line_deg).rem_euclid(180.0);
+        d.min(180.0 - d)
+    };
+    let nearest = azimuths
+        .iter()
+        .map(|a| a.rem_euclid(180.0))
+        .min_by(|a, b| separation(*a).total_cmp(&separation(*b)))?;
+    if separation(nearest) >= 45.0 {
+        return None;
+    }
+    // The line's azimuth as the first sensor within tolerance of it gives it.
+    azimuths
+        .iter()
+        .map(|a| a.rem_euclid(180.0))
+        .filter(|a| {
+            let d = (a - nearest).rem_euclid(180.0);
+            d.min(180.0 - d) <= tolerance_deg
+        })
+        .min_by(f64::total_cmp)
+}
+
 /// Applies the building geometry to `event` in place (see module doc) and
 /// records it in `event.history` (steps `building_axes` and, when floors were
 /// combined, `rigid_floor`) and `event.notes`.
@@ -97,6 +154,7 @@ pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
             _ => None,
         })
         .collect();
+    let mut bridge_axes_basis: Option<(f64, f64)> = None;
     let axes = match stated {
         Some(x) => Some(BuildingAxes {
             x_azimuth_deg: x.rem_euclid(360.0),
@@ -107,11 +165,24 @@ pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
         // manifest's X/Y) beside azimuth-labelled ones: how the two relate is
         // unknown, so no axes are inferred from the azimuths alone.
         None if mixes_axes_and_azimuths(event) => None,
-        None => infer_x_axis(&azimuths, AXIS_TOLERANCE_DEG).map(|x| BuildingAxes {
-            x_azimuth_deg: x,
-            y_azimuth_deg: (x - 90.0).rem_euclid(360.0),
-            source: AxesSource::Inferred,
-        }),
+        None => {
+            let deck_line = bridge_line_from_abutments(
+                event
+                    .records
+                    .iter()
+                    .filter_map(|r| r.channel.location_text.as_deref()),
+            );
+            let bridge =
+                deck_line.and_then(|line| bridge_x_axis(&azimuths, line, AXIS_TOLERANCE_DEG));
+            bridge_axes_basis = bridge.zip(deck_line);
+            bridge
+                .or_else(|| infer_x_axis(&azimuths, AXIS_TOLERANCE_DEG))
+                .map(|x| BuildingAxes {
+                    x_azimuth_deg: x,
+                    y_azimuth_deg: (x - 90.0).rem_euclid(360.0),
+                    source: AxesSource::Inferred,
+                })
+        }
     };
     if axes.is_none() {
         for r in &event.records {
@@ -135,7 +206,14 @@ pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
                 tolerance_deg: AXIS_TOLERANCE_DEG,
             },
         )?;
-        if axes.source == AxesSource::Inferred {
+        if let Some((_, deck_line)) = bridge_axes_basis {
+            event.notes.push(format!(
+                "building axes inferred from the abutments named in the location texts: a deck along the {} line, so X = longitudinal = {}°, Y = transverse = {}° (CSMIP's Long = X, Tran = Y; state structure.x_axis_azimuth_deg in event.toml to fix them)",
+                if deck_line == 90.0 { "east–west" } else { "north–south" },
+                axes.x_azimuth_deg,
+                axes.y_azimuth_deg
+            ));
+        } else if axes.source == AxesSource::Inferred {
             event.notes.push(format!(
                 "building axes inferred from the sensor azimuths: X = {}°, Y = {}° (state structure.x_axis_azimuth_deg in event.toml to fix them)",
                 axes.x_azimuth_deg, axes.y_azimuth_deg

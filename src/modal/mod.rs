@@ -30,6 +30,7 @@
 
 pub mod compare;
 pub mod direction;
+pub mod fallback;
 pub mod hankel;
 pub mod poles;
 pub mod preprocess;
@@ -41,10 +42,11 @@ pub use compare::{
     compare_events, mac_matrix, pair_modes, Comparison, FrequencyShift, ModePair, ModeSet,
     PairingBasis, PairingSettings,
 };
+pub use fallback::{identify_event_or_output_only, MIN_AMPLIFICATION};
 pub use poles::{mac, mpc_mpd, Pole, StabilityTolerances};
 pub use preprocess::Preprocessing;
 pub use selection::{Mode, PhysicalFilters, RejectedColumn, Selection, SelectionSettings};
-pub use spectrum::{spectral_overlay, SpectralOverlay};
+pub use spectrum::{spectral_overlay, structural_amplification, SpectralOverlay};
 
 use crate::error::{Error, Location, Result};
 use crate::vocab::{Event, ProcessingStep, Record, Role};
@@ -223,6 +225,41 @@ pub struct ModalResult {
     /// Why no mode, or fewer modes than the stable columns suggest, were
     /// selected (empty when nothing is wrong).
     pub warnings: Vec<String>,
+}
+
+impl ModalResult {
+    /// Withdraws the modes with a reason in `reasons` (one entry per mode):
+    /// each is reported as a rejected column with that reason, and the
+    /// poles behind the modes kept are re-numbered.
+    pub fn withdraw_modes(&mut self, reasons: &[Option<String>]) {
+        let mut renumber = Vec::with_capacity(self.modes.len());
+        let mut kept = Vec::new();
+        for (mode, reason) in std::mem::take(&mut self.modes).into_iter().zip(reasons) {
+            match reason {
+                None => {
+                    renumber.push(Some(kept.len()));
+                    kept.push(mode);
+                }
+                Some(reason) => {
+                    renumber.push(None);
+                    self.rejected.push(selection::RejectedColumn {
+                        frequency_hz: mode.frequency_hz,
+                        damping_ratio: mode.damping_ratio,
+                        poles: mode.pole_count,
+                        order_min: mode.order_min,
+                        order_max: mode.order_max,
+                        reason: reason.clone(),
+                    });
+                }
+            }
+        }
+        self.modes = kept;
+        for pole in self.poles.iter_mut() {
+            pole.mode = pole.mode.and_then(|m| renumber.get(m).copied().flatten());
+        }
+        self.rejected
+            .sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    }
 }
 
 fn channel_location(input: &ModalInput, index: usize, id: &str) -> Location {
@@ -755,7 +792,7 @@ pub struct ChannelChoice {
 /// Direction label of a channel for [`direction::label`]: building axis,
 /// vertical, or an azimuth folded onto [0, 180) (a reversed sensor measures
 /// the same axis), empty when unknown.
-fn direction_label(channel: &crate::vocab::Channel) -> String {
+pub fn direction_label(channel: &crate::vocab::Channel) -> String {
     use crate::vocab::{Axis, Direction};
     match channel.direction {
         Some(Direction::Axis(Axis::X)) => "X".into(),
@@ -1053,6 +1090,31 @@ pub fn input_from_event(
         },
         notes,
     ))
+}
+
+/// The PSD overlay ([`spectral_overlay`]) of `result`'s output channels in
+/// `event`, at their recorded rate; `None` when the records are shorter than
+/// a segment.  Read after the identification freed its signals (parked
+/// samples are read back).
+pub fn output_spectral_overlay(
+    event: &Event,
+    result: &ModalResult,
+    segment_length: usize,
+) -> Result<Option<SpectralOverlay>> {
+    let outputs: Vec<Vec<f64>> = result
+        .output_ids
+        .iter()
+        .filter_map(|id| {
+            event
+                .record(id)
+                .map(|r| r.samples.get().map(|s| s.into_owned()))
+        })
+        .collect::<Result<_>>()?;
+    let dt = event
+        .record(&result.output_ids[0])
+        .map(|r| r.channel.dt())
+        .unwrap_or(result.dt);
+    Ok(spectral_overlay(&outputs, dt, segment_length).ok())
 }
 
 /// Identifies an event: input–output when `settings.method` is `Io`,

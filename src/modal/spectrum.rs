@@ -158,3 +158,49 @@ pub fn lowest_spectral_peak_hz(
         .find(|&k| trace[k] >= PEAK_FRACTION * top && (k - 2..=k + 2).all(|j| trace[j] <= trace[k]))
         .map(|k| k as f64 * df)
 }
+
+/// Structural amplification of `output` over `inputs` around
+/// `frequency_hz`: √(Σ S_yy / mean_i Σ S_uiui), the auto-spectra (Welch,
+/// segments of `seg` samples, [`spectral_overlay`] of one channel) summed
+/// over the bins within ±`relative_band` of the frequency (at least the
+/// nearest bin).  A resonance of the structure makes the response larger
+/// than the ground motion that drives it (a lightly damped mode by ≈ 1/2ζ);
+/// a peak the ground motion brings (site, source, digitisation noise) shows
+/// in both and gives ≈ 1.  `None` when a record is shorter than a segment.
+pub fn structural_amplification(
+    output: &[f64],
+    inputs: &[&[f64]],
+    dt: f64,
+    seg: usize,
+    frequency_hz: f64,
+    relative_band: f64,
+) -> Option<f64> {
+    if inputs.is_empty() {
+        return None;
+    }
+    let band_power = |signal: &[f64]| -> Option<f64> {
+        let overlay = spectral_overlay(&[signal], dt, seg).ok()?;
+        let f = &overlay.frequencies_hz;
+        let (lo, hi) = (
+            frequency_hz * (1.0 - relative_band),
+            frequency_hz * (1.0 + relative_band),
+        );
+        let nearest = (0..f.len()).min_by(|&a, &b| {
+            (f[a] - frequency_hz)
+                .abs()
+                .total_cmp(&(f[b] - frequency_hz).abs())
+        })?;
+        let sum: f64 = (0..f.len())
+            .filter(|&k| (lo..=hi).contains(&f[k]) || k == nearest)
+            .map(|k| overlay.singular_values[k][0])
+            .sum();
+        Some(sum)
+    };
+    let response = band_power(output)?;
+    let ground: Vec<f64> = inputs
+        .iter()
+        .map(|u| band_power(u))
+        .collect::<Option<_>>()?;
+    let ground = ground.iter().sum::<f64>() / ground.len() as f64;
+    (ground > 0.0).then(|| (response / ground).sqrt())
+}

@@ -11,8 +11,8 @@ use super::condition::Conditioned;
 use super::prepost::{self, ReferenceParams, ReferenceRun};
 use crate::error::{Error, Result};
 use crate::modal::{
-    band_for_structure, identify_event, spectral_overlay, ChannelChoice, Method, ModalResult,
-    ModalSettings,
+    band_for_structure, identify_event, identify_event_or_output_only, output_spectral_overlay,
+    ChannelChoice, Method, ModalResult, ModalSettings,
 };
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::modal_tables as tables;
@@ -32,7 +32,7 @@ pub const MODES_FILE: &str = crate::vocab::tables::MODES.file;
 pub const SPECTRUM_FILE: &str = crate::vocab::tables::MODAL_SPECTRUM.file;
 
 /// Identification method of the stage: `auto` picks input–output when the
-/// event has base channels, else SSI-COV.
+/// event has base channels (output-only if that finds no mode), else SSI-COV.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum MethodChoice {
@@ -56,8 +56,7 @@ pub struct ModesFile {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ModalParams {
-    /// `auto` (input–output when the event has base channels, else SSI-COV),
-    /// `ssi-cov`, `ssi-data` or `io`.
+    /// `auto`, `ssi-cov`, `ssi-data` or `io` ([`MethodChoice`]).
     pub method: MethodChoice,
     /// Band of interest [low, high] Hz; unset = from the structure's height
     /// when the manifest gives storey heights, else 0.2–20 Hz.
@@ -147,22 +146,16 @@ impl ModalParams {
 
     /// The modal settings for `event` (method `auto` resolved from its channels).
     pub fn settings_for(&self, event: &Event) -> Result<ModalSettings> {
+        let has_input = match &self.inputs {
+            Some(ids) => !ids.is_empty(),
+            None => event.records.iter().any(|r| {
+                r.channel.role == Role::Input
+                    && !r.channel.direction.is_some_and(|d| d.is_vertical())
+            }),
+        };
         let method = match self.method {
-            MethodChoice::Auto => {
-                let has_input = match &self.inputs {
-                    Some(ids) => !ids.is_empty(),
-                    None => event.records.iter().any(|r| {
-                        r.channel.role == Role::Input
-                            && !r.channel.direction.is_some_and(|d| d.is_vertical())
-                    }),
-                };
-                if has_input {
-                    Method::Io
-                } else {
-                    Method::SsiCov
-                }
-            }
-            MethodChoice::SsiCov => Method::SsiCov,
+            MethodChoice::Auto if has_input => Method::Io,
+            MethodChoice::Auto | MethodChoice::SsiCov => Method::SsiCov,
             MethodChoice::SsiData => Method::SsiData,
             MethodChoice::Io => Method::Io,
         };
@@ -186,6 +179,23 @@ impl ModalParams {
         s.manual_frequencies_hz = self.manual_frequencies_hz.clone();
         Ok(s)
     }
+
+    /// Identifies `event` with these parameters; returns the result and the
+    /// settings it was made with.  `auto` may fall back to output-only
+    /// identification ([`identify_event_or_output_only`]); an explicit
+    /// `method` never does.
+    pub fn identify(&self, event: &Event) -> Result<(ModalResult, ModalSettings)> {
+        let settings = self.settings_for(event)?;
+        let choice = ChannelChoice {
+            inputs: self.inputs.clone(),
+            vertical_outputs: self.vertical_outputs,
+        };
+        if self.method == MethodChoice::Auto {
+            identify_event_or_output_only(event, &settings, &choice)
+        } else {
+            Ok((identify_event(event, &settings, &choice)?, settings))
+        }
+    }
 }
 
 /// Identifies `event` and writes the modal tables into `out`; with a
@@ -197,35 +207,17 @@ pub fn identify_and_write(
     reference: Option<&ReferenceRun>,
     out: &Path,
 ) -> Result<ModalResult> {
-    let settings = p.settings_for(event)?;
-    let settings_json = serde_json::to_string(&settings).unwrap_or_default();
+    p.validate()?;
     let reference = reference.map(|r| r.read(out)).transpose()?;
-    let choice = ChannelChoice {
-        inputs: p.inputs.clone(),
-        vertical_outputs: p.vertical_outputs,
-    };
-    let result = identify_event(event, &settings, &choice)?;
+    let (result, settings) = p.identify(event)?;
+    let settings_json = serde_json::to_string(&settings).unwrap_or_default();
     for w in &result.warnings {
         crate::console::warn(format!("modal ({}): {w}", event.name));
     }
     let (json, provenance) = (settings_json.as_str(), Provenance::of_event(event));
     tables::write_stabilization(&out.join(STABILIZATION_FILE), &result, json, &provenance)?;
     tables::write_modes(&out.join(MODES_FILE), &result, json, &provenance)?;
-    // Read after the identification freed its signals (parked samples are read back).
-    let outputs: Vec<Vec<f64>> = result
-        .output_ids
-        .iter()
-        .filter_map(|id| {
-            event
-                .record(id)
-                .map(|r| r.samples.get().map(|s| s.into_owned()))
-        })
-        .collect::<Result<_>>()?;
-    let dt = event
-        .record(&result.output_ids[0])
-        .map(|r| r.channel.dt())
-        .unwrap_or(result.dt);
-    let overlay = spectral_overlay(&outputs, dt, p.psd_segment).ok();
+    let overlay = output_spectral_overlay(event, &result, p.psd_segment)?;
     let spectrum = out.join(SPECTRUM_FILE);
     tables::write_spectrum(&spectrum, &result, overlay.as_ref(), json, &provenance)?;
     if let Some(reference) = &reference {

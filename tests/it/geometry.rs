@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 
 use quaketwin::event_folder;
 use quaketwin::geometry::{
-    apply_building_geometry, infer_x_axis, one_record_per_level, AxesSource,
+    apply_building_geometry, bridge_line_from_abutments, bridge_x_axis, infer_x_axis,
+    one_record_per_level, AxesSource,
 };
 use quaketwin::pipeline::{self, StageOutcome};
 use quaketwin::stages::hysteresis::auto_directions;
@@ -393,4 +394,41 @@ fn x_axis_is_the_line_with_most_sensors() {
     // A tie goes to the smaller line azimuth.
     assert_eq!(infer_x_axis(&[351.0, 261.0], 5.0), Some(81.0));
     assert_eq!(infer_x_axis(&[], 5.0), None);
+}
+
+#[test]
+fn a_bridge_deck_line_comes_from_its_abutments() {
+    let ew = [
+        "DECK, NEAR EAST ABUTMENT",
+        "ON GROUND NEAR WEST ABUTMENT",
+        "BASE OF CENTER BENT",
+    ];
+    assert_eq!(bridge_line_from_abutments(ew.into_iter()), Some(90.0));
+    let ns = ["Deck near South Abutment", "Center Bent: Deck Level"];
+    assert_eq!(bridge_line_from_abutments(ns.into_iter()), Some(0.0));
+    // No abutment named, or both pairs named: no line.
+    assert_eq!(
+        bridge_line_from_abutments(["Roof", "East wall"].into_iter()),
+        None
+    );
+    let both = ["North abutment", "West abutment"];
+    assert_eq!(bridge_line_from_abutments(both.into_iter()), None);
+    // "Eastbound" is not "east".
+    assert_eq!(
+        bridge_line_from_abutments(["Eastbound abutment"].into_iter()),
+        None
+    );
+}
+
+#[test]
+fn a_bridge_x_axis_is_the_sensor_line_along_its_deck() {
+    // Painter St. 1980s: transverse 360°, longitudinal 270°; deck east–west.
+    // The tie that `infer_x_axis` breaks towards 0° goes to the deck's line.
+    let azimuths = [360.0, 270.0, 360.0, 270.0];
+    assert_eq!(infer_x_axis(&azimuths, 5.0), Some(0.0));
+    assert_eq!(bridge_x_axis(&azimuths, 90.0, 5.0), Some(90.0));
+    assert_eq!(bridge_x_axis(&azimuths, 0.0, 5.0), Some(0.0));
+    // A skewed deck still picks the nearer line; none within 45°: no axis.
+    assert_eq!(bridge_x_axis(&[20.0, 110.0], 90.0, 5.0), Some(110.0));
+    assert_eq!(bridge_x_axis(&[45.0], 90.0, 5.0), None);
 }
