@@ -734,6 +734,7 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
     for m in modes.iter_mut() {
         m.direction = direction::label(&m.shape, &input.output_directions, &input.output_groups);
     }
+    notes.extend(lone_channel_directions(input, &modes));
     let mut preprocessing = steps;
     preprocessing.push(ProcessingStep {
         step: "band_limits".into(),
@@ -766,6 +767,35 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
         notes,
         warnings,
     })
+}
+
+/// A note per horizontal direction (X, Y) watched by one output channel
+/// only, with no mode labelled in it.  A mode seen by one channel has a
+/// one-component shape, whose coherence (MAC, MPC) is 1 by construction,
+/// so stability cannot tell it from a noise pole: a bridge's single
+/// longitudinal deck channel (CESMD corpus, docs/real-records) gives no
+/// longitudinal mode, and the user should know why.
+fn lone_channel_directions(input: &ModalInput, modes: &[Mode]) -> Vec<String> {
+    ["X", "Y"]
+        .into_iter()
+        .filter_map(|axis| {
+            let channels: Vec<&str> = input
+                .output_directions
+                .iter()
+                .zip(&input.output_ids)
+                .filter(|(d, _)| d.as_str() == axis)
+                .map(|(_, id)| id.as_str())
+                .collect();
+            let found = modes.iter().any(|m| m.direction == axis);
+            (channels.len() == 1 && input.output_ids.len() > 1 && !found).then(|| {
+                format!(
+                    "no mode labelled {axis}: one output channel ({}) watches {axis}, and a mode seen mainly by one channel \
+                     cannot be told from a noise pole by the coherence of its shape; a second {axis} channel would",
+                    channels[0]
+                )
+            })
+        })
+        .collect()
 }
 
 fn location_of(record: &Record) -> Location {
