@@ -187,126 +187,172 @@ pub fn sosfiltfilt(sos: &[Section], data: &[f64]) -> Result<Vec<f64>> {
     Ok(ext)
 }
 
-/// Channels filtered together by one thread in `sosfiltfilt_channels`.
-const LANES: usize = 4;
+/// Channels filtered together, one per SIMD lane, in `sosfiltfilt_channels`:
+/// 8 f64 lanes fill an AVX-512 register (two AVX2 ones).
+const LANES: usize = 8;
 
-/// `LANES` equal-length signals cascaded through `S` sections in lock-step,
-/// visiting samples in the order of `indices`. Independent channels hide
-/// the latency of each section's recursion (the per-lane arithmetic is the
-/// same, operation for operation, as `cascade_fixed`, so results are
-/// bit-identical to filtering each channel alone).
+/// Most sections the lane kernels are compiled for (more: channel by channel).
+const MAX_LANE_SECTIONS: usize = 12;
+
+/// One sample of `LANES` channels, interleaved: the kernel loads and stores
+/// whole vectors.
+type Frame = [f64; LANES];
+
+/// One frame through the `S` sections, each lane one channel: the
+/// arithmetic of `cascade_fixed`, operation for operation and without fused
+/// multiply–adds, so every lane is bit-identical to filtering its channel
+/// alone.  The lanes hide each section's recursion latency, and the
+/// fixed-size loops compile to vector instructions.
 #[inline(always)]
-fn cascade_lanes_fixed<const S: usize>(
-    sos: &[Section],
-    state: &mut [[[f64; LANES]; 2]],
-    bufs: &mut [Vec<f64>; LANES],
-    indices: impl Iterator<Item = usize>,
-) {
-    let mut coef = [[0.0f64; 5]; S];
-    let mut z = [[[0.0f64; LANES]; 2]; S];
+fn step_frame<const S: usize>(
+    coef: &[[f64; 5]; S],
+    state: &mut [[Frame; 2]; S],
+    frame: Frame,
+) -> Frame {
+    let mut x = frame;
     for s in 0..S {
-        coef[s] = [sos[s][0], sos[s][1], sos[s][2], sos[s][4], sos[s][5]];
-        z[s] = state[s];
-    }
-    let n = bufs[0].len();
-    let [b0s, b1s, b2s, b3s] = bufs;
-    let (b0s, b1s, b2s, b3s) = (&mut b0s[..n], &mut b1s[..n], &mut b2s[..n], &mut b3s[..n]);
-    for i in indices {
-        let mut x = [b0s[i], b1s[i], b2s[i], b3s[i]];
-        for s in 0..S {
-            let [b0, b1, b2, a1, a2] = coef[s];
-            let mut y = [0.0; LANES];
-            for l in 0..LANES {
-                y[l] = b0 * x[l] + z[s][0][l];
-                z[s][0][l] = b1 * x[l] - a1 * y[l] + z[s][1][l];
-                z[s][1][l] = b2 * x[l] - a2 * y[l];
-            }
-            x = y;
+        let [b0, b1, b2, a1, a2] = coef[s];
+        let mut y = [0.0; LANES];
+        for l in 0..LANES {
+            y[l] = b0 * x[l] + state[s][0][l];
+            state[s][0][l] = b1 * x[l] - a1 * y[l] + state[s][1][l];
+            state[s][1][l] = b2 * x[l] - a2 * y[l];
         }
-        b0s[i] = x[0];
-        b1s[i] = x[1];
-        b2s[i] = x[2];
-        b3s[i] = x[3];
+        x = y;
     }
-    state[..S].copy_from_slice(&z);
+    x
 }
 
-fn cascade_lanes(
+/// `sosfiltfilt` of `LANES` channels of `n` samples (`n > pad`) through `S`
+/// sections, in two passes: the forward one reads the channels (and their
+/// odd extension) and writes interleaved frames, the backward one reads the
+/// frames and writes the channels' outputs; the backward pass stops where
+/// the left extension starts (its outputs are dropped anyway).
+#[inline(always)]
+fn filtfilt_group<const S: usize>(
     sos: &[Section],
-    state: &mut [[[f64; LANES]; 2]],
-    bufs: &mut [Vec<f64>; LANES],
-    indices: impl Iterator<Item = usize>,
+    zi: &[[f64; 2]],
+    pad: usize,
+    inputs: &[&[f64]; LANES],
+    outputs: &mut [Vec<f64>; LANES],
+) {
+    let n = inputs[0].len();
+    let inputs: [&[f64]; LANES] = std::array::from_fn(|l| &inputs[l][..n]);
+    let at = |i: usize| -> Frame { std::array::from_fn(|l| inputs[l][i]) };
+    let coef: [[f64; 5]; S] =
+        std::array::from_fn(|s| [sos[s][0], sos[s][1], sos[s][2], sos[s][4], sos[s][5]]);
+    let scaled = |x: &Frame| -> [[Frame; 2]; S] {
+        std::array::from_fn(|s| [x.map(|v| zi[s][0] * v), x.map(|v| zi[s][1] * v)])
+    };
+    let (first, last) = (at(0), at(n - 1));
+    let odd = |edge: &Frame, x: Frame| -> Frame { std::array::from_fn(|l| 2.0 * edge[l] - x[l]) };
+    let mut frames: Vec<Frame> = Vec::with_capacity(n + 2 * pad);
+    let mut state = scaled(&odd(&first, at(pad)));
+    for i in (1..=pad).rev() {
+        frames.push(step_frame(&coef, &mut state, odd(&first, at(i))));
+    }
+    for i in 0..n {
+        frames.push(step_frame(&coef, &mut state, at(i)));
+    }
+    for i in 0..pad {
+        frames.push(step_frame(&coef, &mut state, odd(&last, at(n - 2 - i))));
+    }
+    let mut state = scaled(&frames[frames.len() - 1]);
+    for &frame in frames[pad + n..].iter().rev() {
+        step_frame(&coef, &mut state, frame);
+    }
+    for out in outputs.iter_mut() {
+        out.clear();
+        out.resize(n, 0.0);
+    }
+    let outs: [&mut [f64]; LANES] = outputs.each_mut().map(|o| &mut o[..n]);
+    for i in (0..n).rev() {
+        let y = step_frame(&coef, &mut state, frames[pad + i]);
+        for l in 0..LANES {
+            outs[l][i] = y[l];
+        }
+    }
+}
+
+/// [`filtfilt_group`] for the section count of `sos` (at most
+/// [`MAX_LANE_SECTIONS`]).
+#[inline(always)]
+fn filtfilt_group_any(
+    sos: &[Section],
+    zi: &[[f64; 2]],
+    pad: usize,
+    inputs: &[&[f64]; LANES],
+    outputs: &mut [Vec<f64>; LANES],
 ) {
     macro_rules! dispatch {
         ($($n:literal),*) => {
             match sos.len() {
-                $($n => cascade_lanes_fixed::<$n>(sos, state, bufs, indices),)*
-                _ => {
-                    // Many sections: lane by lane with the generic kernel.
-                    let order: Vec<usize> = indices.collect();
-                    for (l, buf) in bufs.iter_mut().enumerate() {
-                        let mut zi: Vec<[f64; 2]> = state.iter().map(|s| [s[0][l], s[1][l]]).collect();
-                        let mut values: Vec<f64> = order.iter().map(|&i| buf[i]).collect();
-                        cascade_any(sos, &mut zi, values.iter_mut());
-                        for (&i, v) in order.iter().zip(values) {
-                            buf[i] = v;
-                        }
-                        for (s, z) in state.iter_mut().zip(zi) {
-                            s[0][l] = z[0];
-                            s[1][l] = z[1];
-                        }
-                    }
-                }
+                $($n => filtfilt_group::<$n>(sos, zi, pad, inputs, outputs),)*
+                _ => unreachable!("at most MAX_LANE_SECTIONS sections reach the lane kernel"),
             }
         };
     }
     dispatch!(1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12)
 }
 
-/// Odd extension by `pad` samples at both ends (scipy `odd_ext`).
-fn odd_extension(data: &[f64], pad: usize) -> Vec<f64> {
-    let n = data.len();
-    let (first, last) = (data[0], data[n - 1]);
-    let mut ext = Vec::with_capacity(n + 2 * pad);
-    ext.extend((1..=pad).rev().map(|i| 2.0 * first - data[i]));
-    ext.extend_from_slice(data);
-    ext.extend((0..pad).map(|i| 2.0 * last - data[n - 2 - i]));
-    ext
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn filtfilt_group_avx512(
+    sos: &[Section],
+    zi: &[[f64; 2]],
+    pad: usize,
+    inputs: &[&[f64]; LANES],
+    outputs: &mut [Vec<f64>; LANES],
+) {
+    filtfilt_group_any(sos, zi, pad, inputs, outputs)
 }
 
-/// `sosfiltfilt` of `LANES` equal-length channels in lock-step.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn filtfilt_group_avx2(
+    sos: &[Section],
+    zi: &[[f64; 2]],
+    pad: usize,
+    inputs: &[&[f64]; LANES],
+    outputs: &mut [Vec<f64>; LANES],
+) {
+    filtfilt_group_any(sos, zi, pad, inputs, outputs)
+}
+
+/// `sosfiltfilt` of up to `LANES` equal-length channels in lock-step
+/// (unused lanes filter zeros and are dropped), compiled for the widest
+/// vector unit this processor has (checked at run time; the same
+/// arithmetic, so the same bits).
 fn sosfiltfilt_lanes(
     sos: &[Section],
     zi: &[[f64; 2]],
     pad: usize,
-    inputs: [&[f64]; LANES],
-) -> [Vec<f64>; LANES] {
-    let n = inputs[0].len();
-    let mut bufs = inputs.map(|x| odd_extension(x, pad));
-    let len = n + 2 * pad;
-    let scaled = |bufs: &[Vec<f64>; LANES], at: usize| -> Vec<[[f64; LANES]; 2]> {
-        zi.iter()
-            .map(|z| {
-                [
-                    std::array::from_fn(|l| z[0] * bufs[l][at]),
-                    std::array::from_fn(|l| z[1] * bufs[l][at]),
-                ]
-            })
-            .collect()
-    };
-    let mut state = scaled(&bufs, 0);
-    cascade_lanes(sos, &mut state, &mut bufs, 0..len);
-    let mut state = scaled(&bufs, len - 1);
-    cascade_lanes(sos, &mut state, &mut bufs, (0..len).rev());
-    bufs.map(|mut b| {
-        b.copy_within(pad..pad + n, 0);
-        b.truncate(n);
-        b
-    })
+    channels: &[&[f64]],
+) -> Vec<Vec<f64>> {
+    let n = channels[0].len();
+    let zeros = vec![0.0; if channels.len() < LANES { n } else { 0 }];
+    let inputs: [&[f64]; LANES] =
+        std::array::from_fn(|l| channels.get(l).copied().unwrap_or(zeros.as_slice()));
+    let mut outputs: [Vec<f64>; LANES] = std::array::from_fn(|_| Vec::new());
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the processor supports AVX-512F (checked above).
+            unsafe { filtfilt_group_avx512(sos, zi, pad, &inputs, &mut outputs) };
+        } else if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor supports AVX2 (checked above).
+            unsafe { filtfilt_group_avx2(sos, zi, pad, &inputs, &mut outputs) };
+        } else {
+            filtfilt_group_any(sos, zi, pad, &inputs, &mut outputs);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    filtfilt_group_any(sos, zi, pad, &inputs, &mut outputs);
+    outputs.into_iter().take(channels.len()).collect()
 }
 
 /// `sosfiltfilt` on many channels, in parallel (rayon): channels of equal
-/// length are filtered four at a time in lock-step (results bit-identical
+/// length are filtered eight at a time in SIMD lanes (results bit-identical
 /// to `sosfiltfilt` on each channel). Results in input order; fails on the
 /// first failing channel (lowest index).
 pub fn sosfiltfilt_channels<T: AsRef<[f64]> + Sync>(
@@ -319,14 +365,14 @@ pub fn sosfiltfilt_channels<T: AsRef<[f64]> + Sync>(
     let mut eligible: Vec<usize> = (0..channels.len())
         .filter(|&i| {
             let c = channels[i].as_ref();
-            c.len() > pad && c.iter().all(|v| v.is_finite())
+            sos.len() <= MAX_LANE_SECTIONS && c.len() > pad && c.iter().all(|v| v.is_finite())
         })
         .collect();
     eligible.sort_by_key(|&i| channels[i].as_ref().len());
-    let mut groups: Vec<[usize; LANES]> = Vec::new();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
     let mut is_eligible = vec![false; channels.len()];
     eligible.iter().for_each(|&i| is_eligible[i] = true);
-    let mut rest: Vec<usize> = (0..channels.len()).filter(|&i| !is_eligible[i]).collect();
+    let rest: Vec<usize> = (0..channels.len()).filter(|&i| !is_eligible[i]).collect();
     let mut k = 0;
     while k < eligible.len() {
         let len = channels[eligible[k]].as_ref().len();
@@ -334,18 +380,14 @@ pub fn sosfiltfilt_channels<T: AsRef<[f64]> + Sync>(
         while end < eligible.len() && channels[eligible[end]].as_ref().len() == len {
             end += 1;
         }
-        let mut j = k;
-        while j + LANES <= end {
-            groups.push(std::array::from_fn(|l| eligible[j + l]));
-            j += LANES;
-        }
-        rest.extend_from_slice(&eligible[j..end]);
+        groups.extend(eligible[k..end].chunks(LANES).map(<[usize]>::to_vec));
         k = end;
     }
     let grouped: Vec<Vec<(usize, Vec<f64>)>> = groups
         .par_iter()
         .map(|g| {
-            let outs = sosfiltfilt_lanes(sos, &zi, pad, g.map(|i| channels[i].as_ref()));
+            let inputs: Vec<&[f64]> = g.iter().map(|&i| channels[i].as_ref()).collect();
+            let outs = sosfiltfilt_lanes(sos, &zi, pad, &inputs);
             g.iter().copied().zip(outs).collect()
         })
         .collect();

@@ -115,16 +115,39 @@ fn butterworth_and_sosfiltfilt_match_scipy() {
 fn order4_bandpass_is_four_sections_and_parallel_equals_serial() {
     let sos = butter_sos(4, BandType::Bandpass, &[0.5, 20.0], 200.0).unwrap();
     assert_eq!(sos.len(), 4);
-    let channels: Vec<Vec<f64>> = (0..5)
+    // 19 channels: one full group of 8 lanes and a partial one at 2000
+    // samples, three at 1500, one non-finite and one too short (the
+    // per-channel path and its errors), so every grouping case is met.
+    let mut channels: Vec<Vec<f64>> = (0..19)
         .map(|c| {
-            (0..2000)
-                .map(|i| ((i * (c + 3)) as f64 * 0.013).sin())
+            let n = if c % 6 == 5 { 1500 } else { 2000 };
+            (0..n)
+                .map(|i| ((i * (c + 3)) as f64 * 0.013).sin() + 0.1 * c as f64)
                 .collect()
         })
         .collect();
-    let parallel = sosfiltfilt_channels(&sos, &channels).unwrap();
-    for (c, p) in channels.iter().zip(&parallel) {
-        assert_eq!(&sosfiltfilt(&sos, c).unwrap(), p);
+    channels[7][100] = f64::NAN;
+    channels[12].truncate(20);
+    // 2 and 4 sections (fixed kernels) and 13 (the generic one).
+    for order in [2, 4, 13] {
+        let sos = butter_sos(order, BandType::Bandpass, &[0.5, 20.0], 200.0).unwrap();
+        let parallel = sosfiltfilt_channels(&sos, &channels);
+        let serial: Vec<_> = channels.iter().map(|c| sosfiltfilt(&sos, c)).collect();
+        match parallel {
+            Ok(_) => panic!("order {order}: a non-finite channel must fail"),
+            Err(e) => assert_eq!(e.to_string(), serial[7].as_ref().unwrap_err().to_string()),
+        }
+        let good: Vec<Vec<f64>> = channels
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i != 7 && *i != 12)
+            .map(|(_, c)| c.clone())
+            .collect();
+        let parallel = sosfiltfilt_channels(&sos, &good).unwrap();
+        for (c, p) in good.iter().zip(&parallel) {
+            // Bit for bit: same operations in the same order per lane.
+            assert_eq!(&sosfiltfilt(&sos, c).unwrap(), p, "order {order}");
+        }
     }
 }
 
