@@ -425,9 +425,12 @@ pub fn writer_setup(
 ) -> Result<(SchemaRef, WriterProperties)> {
     let kv = table_metadata(first, metadata);
     let schema = schema_with(first, &kv);
+    // zstd level 1: on the 64-channel hour of samples the file is the same
+    // size as at level 3 (844 vs 842 MB, the byte-stream split does the
+    // work) and the write about 20 % faster (benches/parquet.rs).
     let props = WriterProperties::builder()
         .set_compression(Compression::ZSTD(
-            ZstdLevel::try_new(3).map_err(|e| Error::output(path, e.to_string()))?,
+            ZstdLevel::try_new(1).map_err(|e| Error::output(path, e.to_string()))?,
         ))
         .set_max_row_group_row_count(Some(1 << 20))
         .set_key_value_metadata(Some(
