@@ -754,3 +754,31 @@ pub fn run_many_with(
         .collect();
     Ok(runs)
 }
+
+/// `quaketwin track ARCHIVE --out DIR …`: continuous monitoring from an SDS
+/// archive ([`crate::track`]).
+pub fn track(opts: &crate::track::TrackOptions) -> Result<crate::track::TrackSummary> {
+    crate::track::run(opts).map(|(summary, _)| summary)
+}
+
+/// `quaketwin synth-archive --out DIR …`: the synthetic monitoring archive
+/// ([`crate::synth::archive`]).
+pub fn synth_archive(
+    out: &Path,
+    days: usize,
+    channels: usize,
+    rate_hz: f64,
+    seed: u64,
+    day_length: &str,
+) -> Result<crate::synth::archive::ArchiveWritten> {
+    let day_ns = crate::monitor::window::parse_duration("--day-length", day_length)?;
+    let settings = crate::synth::archive::ArchiveSettings {
+        days,
+        channels,
+        rate_hz,
+        seed,
+        day_length_s: day_ns as f64 / 1e9,
+        ..Default::default()
+    };
+    crate::synth::archive::write_archive(out, &settings)
+}

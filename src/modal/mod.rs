@@ -755,7 +755,7 @@ pub struct ChannelChoice {
 /// Direction label of a channel for [`direction::label`]: building axis,
 /// vertical, or an azimuth folded onto [0, 180) (a reversed sensor measures
 /// the same axis), empty when unknown.
-fn direction_label(channel: &crate::vocab::Channel) -> String {
+pub fn direction_label(channel: &crate::vocab::Channel) -> String {
     use crate::vocab::{Axis, Direction};
     match channel.direction {
         Some(Direction::Axis(Axis::X)) => "X".into(),

@@ -659,6 +659,82 @@ pub fn write_extra_output<T>(
     Ok(value)
 }
 
+/// A command that writes its files into an output directory without a
+/// pipeline (`quaketwin track`): the directory then holds the results of
+/// this run only, as after `run`.  Under the directory's lock: temporary
+/// files of an interrupted run are swept, every file the previous run
+/// manifest lists is removed (said once), a manifest naming `input` and a
+/// record `name` in state `started` is written, then `write` runs and the
+/// record lists `outputs` (file names in `out`) as done.  A failed `write`
+/// leaves the record `started`: nothing in the directory counts as a result.
+pub fn run_one_shot<T>(
+    out: &Path,
+    name: &str,
+    input: &Path,
+    outputs: &[&str],
+    write: impl FnOnce() -> Result<T>,
+) -> Result<T> {
+    prepare_out_dir(out)?;
+    let event = EventIdentity {
+        path: event_path_string(input),
+        fingerprint: fingerprint::path_fingerprint(input)?,
+    };
+    let _lock = lock::DirLock::acquire(out, &format!("{name} on {}", event.path))?;
+    let swept = crate::sinks::atomic::sweep_temp_files(out)?;
+    if !swept.is_empty() {
+        note(&format!(
+            "{}: removed temporary files of an interrupted run: {}",
+            out.display(),
+            swept.join(", ")
+        ));
+    }
+    let mut stale = take_legacy_stamps(out)?;
+    match manifest::read(out) {
+        Ok(Some(old)) => stale.extend(old.all_files()),
+        Ok(None) => {}
+        Err(_) => stale.extend(outputs.iter().map(|f| f.to_string())),
+    }
+    let removed = remove_files(out, stale)?;
+    if !removed.is_empty() {
+        note(&format!(
+            "{}: removing the results of the previous run: {}",
+            out.display(),
+            removed.join(", ")
+        ));
+    }
+    let mut m = RunManifest {
+        format: manifest::FORMAT,
+        quaketwin_version: env!("CARGO_PKG_VERSION").into(),
+        pipeline: name.into(),
+        event,
+        stages: vec![StageRecord {
+            name: name.into(),
+            kind: name.into(),
+            state: StageState::Started,
+            reason: None,
+            fingerprint: String::new(),
+            outputs: outputs
+                .iter()
+                .map(|f| manifest::OutputRecord {
+                    file: f.to_string(),
+                    bytes: None,
+                    xxh64: None,
+                })
+                .collect(),
+        }],
+    };
+    manifest::write(out, &m)?;
+    let value = write()?;
+    let records = outputs
+        .iter()
+        .map(|f| manifest::record_output(out, f))
+        .collect::<Result<Vec<_>>>()?;
+    m.stages[0].outputs = records;
+    m.stages[0].state = StageState::Done;
+    manifest::write(out, &m)?;
+    Ok(value)
+}
+
 /// Why the stage of kind `kind` did not apply in the run recorded in `dir`
 /// (run.json), when it did not.
 pub fn not_applicable_reason(dir: &Path, kind: &str) -> Option<String> {
