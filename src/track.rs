@@ -505,6 +505,14 @@ pub fn run(opts: &TrackOptions) -> Result<(TrackSummary, Tracking)> {
         "end": format_epoch_ns(plan.grid.end_ns),
     }))
     .then_step(
+        "units_to_si",
+        serde_json::json!({
+            "applied": cal.units != "counts",
+            "source": opts.stationxml,
+            "si_per_count": streams.iter().zip(&cal.scale).map(|(id, k)| (id.clone(), *k)).collect::<std::collections::BTreeMap<_, _>>(),
+        }),
+    )
+    .then_step(
         "track",
         serde_json::json!({
             "window_s": length as f64 / 1e9,
