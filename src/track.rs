@@ -12,10 +12,10 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::modal::{ModalSettings, Mode};
-use crate::monitor::anomaly::{self, BandModel, BandSettings, Observation};
-use crate::monitor::tracking::{self, Reference, TrackSettings, TrackedMode};
+use crate::monitor::anomaly::{self, BandModel, BandSettings};
+use crate::monitor::tracking::{Reference, TrackSettings, TrackedMode};
 use crate::monitor::window::{parse_duration, WindowGrid, NS_PER_S};
-use crate::monitor::{identify_window, WindowModes, WindowSignals};
+use crate::monitor::{analyse, identify_window, Tracking, WindowModes, WindowSignals};
 use crate::readers::mseed::StreamCodes;
 use crate::readers::sds::{SdsArchive, StreamPattern};
 use crate::readers::stationxml;
@@ -109,21 +109,6 @@ pub struct TrackSummary {
     pub anomalous_windows: usize,
     pub seconds: f64,
     pub files: Vec<PathBuf>,
-}
-
-/// Everything [`run`] computed: the windows, the tracked rows and their bands.
-#[derive(Debug, Clone)]
-pub struct Tracking {
-    pub windows: Vec<WindowModes>,
-    pub reference: Reference,
-    pub rows: Vec<TrackedMode>,
-    /// Per row: band (None = no model for that mode).
-    pub bands: Vec<Option<anomaly::Band>>,
-    /// Per window: Eq. M5's anomalous flag.
-    pub anomalous: Vec<bool>,
-    pub models: Vec<Option<BandModel>>,
-    pub band_settings: BandSettings,
-    pub anomaly_from: Option<usize>,
 }
 
 /// Checked plan of a run: everything parsed before any record is read.
@@ -337,92 +322,6 @@ fn window_modes(
     );
     w.notes.extend(read.notes);
     w
-}
-
-/// Tracking, bands and anomalies of identified windows (pure; module doc of
-/// [`crate::monitor`]).
-pub fn analyse(
-    windows: Vec<WindowModes>,
-    reference: Option<Reference>,
-    track_settings: &TrackSettings,
-    band_settings: BandSettings,
-) -> Result<Tracking> {
-    let reference = match reference {
-        Some(r) => r,
-        None => {
-            let (i, confirmed) = tracking::default_reference(&windows, track_settings)
-                .ok_or_else(|| {
-                    Error::numerical(
-                        "track: no mode was found in half of the first identified windows, so there is no reference to track (see the skipped windows, or give --reference)",
-                    )
-                })?;
-            Reference {
-                modes: confirmed
-                    .iter()
-                    .map(|&k| windows[i].modes[k].clone())
-                    .collect(),
-                channels: windows[i].channels.clone(),
-                source: format!(
-                    "window {} ({} of its {} modes confirmed in the first windows)",
-                    format_epoch_ns(windows[i].start_ns),
-                    confirmed.len(),
-                    windows[i].modes.len()
-                ),
-            }
-        }
-    };
-    let rows = tracking::track(&reference, &windows, track_settings);
-    let observation = |r: &TrackedMode| Observation {
-        start_ns: windows[r.window].start_ns,
-        end_ns: windows[r.window].end_ns,
-        rms: windows[r.window].rms,
-        frequency_hz: r.frequency_hz,
-    };
-    let models: Vec<Option<BandModel>> = (1..=reference.modes.len())
-        .map(|id| {
-            let obs: Vec<Observation> = rows
-                .iter()
-                .filter(|r| r.mode_id == id)
-                .map(observation)
-                .collect();
-            anomaly::fit(&obs, &band_settings)
-        })
-        .collect();
-    let bands: Vec<Option<anomaly::Band>> = rows
-        .iter()
-        .map(|r| {
-            models[r.mode_id - 1]
-                .as_ref()
-                .map(|m| m.band(&observation(r)))
-        })
-        .collect();
-    // Eq. M5: per window, at least half of the banded modes flagged.
-    let mut counts = vec![(0usize, 0usize); windows.len()];
-    for (r, b) in rows.iter().zip(&bands) {
-        if let Some(b) = b {
-            counts[r.window].0 += 1;
-            counts[r.window].1 += usize::from(b.flagged);
-        }
-    }
-    let per_window: Vec<Option<bool>> = counts
-        .iter()
-        .map(|&(n, f)| (n > 0).then_some(2 * f >= n))
-        .collect();
-    let eligible: Vec<bool> = windows
-        .iter()
-        .map(|w| w.start_ns >= band_settings.training_end_ns)
-        .collect();
-    let anomaly_from = anomaly::anomaly_onset(&per_window, &eligible, band_settings.min_run);
-    Ok(Tracking {
-        anomalous: per_window.iter().map(|a| a.unwrap_or(false)).collect(),
-        windows,
-        reference,
-        rows,
-        bands,
-        models,
-        band_settings,
-        anomaly_from,
-    })
 }
 
 /// Runs `quaketwin track` (module doc).

@@ -7,7 +7,7 @@
 
 use super::html::{escape, format_number};
 use super::plot::{css_colour, render, Chart, Mark, RefLine, Series};
-use crate::track::Tracking;
+use crate::monitor::Tracking;
 use crate::vocab::format_epoch_ns;
 
 const NS_PER_H: f64 = 3.6e12;

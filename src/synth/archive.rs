@@ -5,8 +5,7 @@
 //! per floor into an SDS MiniSEED archive with its StationXML.
 //!
 //! Environment and damage act on every storey stiffness through one factor
-//! (docs/formats.md, "synth-archive"; the equation numbers are those of
-//! docs/cli.md's `synth-archive`):
+//! (docs/monitoring.md, "The synthetic archive", Eqs. A1–A2):
 //!
 //! (A1) s(t) = [1 + a_T sin(2π (τ/D − 0.375))] · [1 − a_L (L(t) − L̄)] · d(t)
 //!

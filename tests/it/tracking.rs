@@ -10,11 +10,12 @@
 use std::path::Path;
 use std::process::Command;
 
+use quaketwin::monitor::Tracking;
 use quaketwin::readers::mseed::StreamCodes;
 use quaketwin::readers::sds::{day_file, SdsArchive, StreamPattern};
 use quaketwin::sinks::mseed_writer::{RecordEncoder, SampleEncoding};
 use quaketwin::synth::archive::{true_modes, write_archive, ArchiveSettings};
-use quaketwin::track::{run, TrackOptions, Tracking};
+use quaketwin::track::{run, TrackOptions};
 
 const HOUR_NS: i64 = 3_600_000_000_000;
 
