@@ -28,7 +28,8 @@ pub const TABLE_FILE: &str = MODAL_TRACKING.file;
 pub const REPORT_FILE: &str = "tracking.html";
 
 /// The command's flags, as typed (checked by [`TrackOptions::plan`] before any work).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct TrackOptions {
     pub archive: PathBuf,
     pub out: PathBuf,
@@ -46,6 +47,12 @@ pub struct TrackOptions {
     pub min_present: f64,
     /// Period of the environmental cycle of the band (default 24 h).
     pub cycle: String,
+}
+
+impl Default for TrackOptions {
+    fn default() -> Self {
+        TrackOptions::new(Path::new(""), Path::new(""))
+    }
 }
 
 impl TrackOptions {
@@ -324,12 +331,22 @@ fn window_modes(
     w
 }
 
-/// Runs `quaketwin track` (module doc).
-pub fn run(opts: &TrackOptions) -> Result<(TrackSummary, Tracking)> {
+/// A checked run, ready to identify windows: flags parsed, archive opened
+/// and selected, StationXML applied.  Workers of a cluster each prepare
+/// their own and identify their share of [`Prepared::starts`]; one process
+/// then [`Prepared::finish`]es with every window.
+pub struct Prepared {
+    opts: TrackOptions,
+    plan: Plan,
+    archive: SdsArchive,
+    cal: StreamCalibration,
+    settings: ModalSettings,
+}
+
+/// Checks the flags (before the archive is walked, except --start/--end
+/// defaults, which need it), opens the archive and applies the StationXML.
+pub fn prepare(opts: &TrackOptions) -> Result<Prepared> {
     crate::fixed_order_reductions();
-    let clock = std::time::Instant::now();
-    // Flags first: a bad value fails before the archive is walked (except
-    // --start/--end defaults, which need it).
     let mut opened: Option<SdsArchive> = None;
     let plan = opts.plan(|| {
         let a = SdsArchive::open(&opts.archive)?;
@@ -356,98 +373,152 @@ pub fn run(opts: &TrackOptions) -> Result<(TrackSummary, Tracking)> {
         opts.stationxml.as_deref(),
         plan.grid.start_ns,
     )?;
-    let starts = plan.grid.starts();
-    let settings = ModalSettings::default();
-    let length = plan.grid.length_ns;
-    let bar = crate::console::bar(starts.len() as u64, "track", "windows", false);
-    // Batches of windows in time order: the day-file indexes of days
-    // behind the batch are dropped, so memory stays at a few windows.
-    let batch = (2 * rayon::current_num_threads()).max(4);
-    let mut windows: Vec<WindowModes> = Vec::with_capacity(starts.len());
-    for chunk in starts.chunks(batch) {
-        let done: Vec<WindowModes> = chunk
-            .par_iter()
-            .map(|&t0| window_modes(&archive, &cal, t0, length, opts.min_present, &settings))
-            .collect();
-        bar.inc(done.len() as u64);
-        windows.extend(done);
-        if let Some(&next) = chunk.last() {
-            archive.forget_before(next + plan.grid.step_ns);
+    Ok(Prepared {
+        opts: opts.clone(),
+        plan,
+        archive,
+        cal,
+        settings: ModalSettings::default(),
+    })
+}
+
+impl Prepared {
+    /// Start times of every window of the run, ns.
+    pub fn starts(&self) -> Vec<i64> {
+        self.plan.grid.starts()
+    }
+
+    /// Identifies the windows starting at `starts` (in time order), in
+    /// parallel batches; the day-file indexes of days behind a batch are
+    /// dropped, so memory stays at a few windows.
+    pub fn identify(&self, starts: &[i64], progress: bool) -> Vec<WindowModes> {
+        let bar = crate::console::bar(starts.len() as u64, "track", "windows", !progress);
+        let batch = (2 * rayon::current_num_threads()).max(4);
+        let mut windows: Vec<WindowModes> = Vec::with_capacity(starts.len());
+        for chunk in starts.chunks(batch) {
+            let done: Vec<WindowModes> = chunk
+                .par_iter()
+                .map(|&t0| {
+                    window_modes(
+                        &self.archive,
+                        &self.cal,
+                        t0,
+                        self.plan.grid.length_ns,
+                        self.opts.min_present,
+                        &self.settings,
+                    )
+                })
+                .collect();
+            bar.inc(done.len() as u64);
+            windows.extend(done);
+            if let Some(&next) = chunk.last() {
+                self.archive.forget_before(next + self.plan.grid.step_ns);
+            }
         }
+        bar.finish_and_clear();
+        windows
     }
-    bar.finish_and_clear();
-    for w in windows.iter().filter(|w| w.skipped.is_some()) {
-        crate::console::warn(format!(
-            "track: window {} skipped: {}",
-            format_epoch_ns(w.start_ns),
-            w.skipped.as_deref().unwrap_or("")
-        ));
+
+    /// Tracks, fits the bands and writes the outputs from every window of
+    /// the run (in time order), whoever identified them.
+    pub fn finish(
+        self,
+        windows: Vec<WindowModes>,
+        clock: std::time::Instant,
+    ) -> Result<(TrackSummary, Tracking)> {
+        let Prepared {
+            opts,
+            plan,
+            archive,
+            cal,
+            settings,
+        } = self;
+        let opts = &opts;
+        let length = plan.grid.length_ns;
+        for w in windows.iter().filter(|w| w.skipped.is_some()) {
+            crate::console::warn(format!(
+                "track: window {} skipped: {}",
+                format_epoch_ns(w.start_ns),
+                w.skipped.as_deref().unwrap_or("")
+            ));
+        }
+        let reference = plan.reference.map(|(modes, channels, source)| Reference {
+            modes,
+            channels,
+            source,
+        });
+        let band_settings = BandSettings {
+            training_end_ns: plan.grid.start_ns + plan.training_ns,
+            cycle_period_s: plan.cycle_s,
+            confidence: 0.99,
+            min_run: 3,
+        };
+        let tracking = analyse(windows, reference, &TrackSettings::default(), band_settings)?;
+        let streams: Vec<String> = archive.streams().iter().map(StreamCodes::id).collect();
+        let provenance = Provenance::of_source(serde_json::json!({
+            "name": format!("continuous record {}", opts.archive.display()),
+            "archive": opts.archive,
+            "streams": streams,
+            "start": format_epoch_ns(plan.grid.start_ns),
+            "end": format_epoch_ns(plan.grid.end_ns),
+        }))
+        .then_step(
+            "units_to_si",
+            serde_json::json!({
+                "applied": cal.units != "counts",
+                "source": opts.stationxml,
+                "si_per_count": streams.iter().zip(&cal.scale).map(|(id, k)| (id.clone(), *k)).collect::<std::collections::BTreeMap<_, _>>(),
+            }),
+        )
+        .then_step(
+            "track",
+            serde_json::json!({
+                "window_s": length as f64 / 1e9,
+                "step_s": plan.grid.step_ns as f64 / 1e9,
+                "min_present": opts.min_present,
+                "stationxml": opts.stationxml,
+                "units": cal.units,
+                "modal_settings": settings,
+                "tracking": TrackSettings::default(),
+                "band": band_settings,
+                "reference": tracking.reference.source,
+            }),
+        );
+        let summary_files = vec![opts.out.join(TABLE_FILE), opts.out.join(REPORT_FILE)];
+        let out = opts.out.clone();
+        crate::pipeline::run_one_shot(
+            &out,
+            "track",
+            &opts.archive,
+            &[TABLE_FILE, REPORT_FILE],
+            || {
+                write_table(&out.join(TABLE_FILE), &tracking, &cal.units, &provenance)?;
+                let html = crate::report::tracking::page(&tracking, &cal.units, &streams);
+                crate::sinks::atomic::write_bytes_atomically(
+                    &out.join(REPORT_FILE),
+                    html.as_bytes(),
+                )
+            },
+        )?;
+        let summary = summarise(
+            opts,
+            &plan.grid,
+            &tracking,
+            streams,
+            cal.units,
+            summary_files,
+            clock,
+        );
+        Ok((summary, tracking))
     }
-    let reference = plan.reference.map(|(modes, channels, source)| Reference {
-        modes,
-        channels,
-        source,
-    });
-    let band_settings = BandSettings {
-        training_end_ns: plan.grid.start_ns + plan.training_ns,
-        cycle_period_s: plan.cycle_s,
-        confidence: 0.99,
-        min_run: 3,
-    };
-    let tracking = analyse(windows, reference, &TrackSettings::default(), band_settings)?;
-    let streams: Vec<String> = archive.streams().iter().map(StreamCodes::id).collect();
-    let provenance = Provenance::of_source(serde_json::json!({
-        "name": format!("continuous record {}", opts.archive.display()),
-        "archive": opts.archive,
-        "streams": streams,
-        "start": format_epoch_ns(plan.grid.start_ns),
-        "end": format_epoch_ns(plan.grid.end_ns),
-    }))
-    .then_step(
-        "units_to_si",
-        serde_json::json!({
-            "applied": cal.units != "counts",
-            "source": opts.stationxml,
-            "si_per_count": streams.iter().zip(&cal.scale).map(|(id, k)| (id.clone(), *k)).collect::<std::collections::BTreeMap<_, _>>(),
-        }),
-    )
-    .then_step(
-        "track",
-        serde_json::json!({
-            "window_s": length as f64 / 1e9,
-            "step_s": plan.grid.step_ns as f64 / 1e9,
-            "min_present": opts.min_present,
-            "stationxml": opts.stationxml,
-            "units": cal.units,
-            "modal_settings": settings,
-            "tracking": TrackSettings::default(),
-            "band": band_settings,
-            "reference": tracking.reference.source,
-        }),
-    );
-    let summary_files = vec![opts.out.join(TABLE_FILE), opts.out.join(REPORT_FILE)];
-    let out = opts.out.clone();
-    crate::pipeline::run_one_shot(
-        &out,
-        "track",
-        &opts.archive,
-        &[TABLE_FILE, REPORT_FILE],
-        || {
-            write_table(&out.join(TABLE_FILE), &tracking, &cal.units, &provenance)?;
-            let html = crate::report::tracking::page(&tracking, &cal.units, &streams);
-            crate::sinks::atomic::write_bytes_atomically(&out.join(REPORT_FILE), html.as_bytes())
-        },
-    )?;
-    let summary = summarise(
-        opts,
-        &plan.grid,
-        &tracking,
-        streams,
-        cal.units,
-        summary_files,
-        clock,
-    );
-    Ok((summary, tracking))
+}
+
+/// Runs `quaketwin track` (module doc) in this process.
+pub fn run(opts: &TrackOptions) -> Result<(TrackSummary, Tracking)> {
+    let clock = std::time::Instant::now();
+    let prepared = prepare(opts)?;
+    let windows = prepared.identify(&prepared.starts(), true);
+    prepared.finish(windows, clock)
 }
 
 fn summarise(
@@ -670,4 +741,44 @@ fn write_table(path: &Path, t: &Tracking, units: &str, provenance: &Provenance) 
         &[tracking_batch(t)?],
         &tracking_metadata(t, units, provenance),
     )
+}
+
+/// The options as JSON (the field names of [`TrackOptions`]; unset fields
+/// take the command's defaults): how the Python package hands them over.
+pub fn options_from_json(text: &str) -> Result<TrackOptions> {
+    serde_json::from_str(text).map_err(|e| Error::usage(format!("track options: {e}")))
+}
+
+/// Identifies the windows starting at `starts` (ns, a share of
+/// [`Prepared::starts`]) and returns them as JSON
+/// ([`crate::monitor::windows_to_json`]): one task of a cluster.
+pub fn identify_windows_json(opts: &TrackOptions, starts: &[i64]) -> Result<String> {
+    let prepared = prepare(opts)?;
+    crate::monitor::windows_to_json(&prepared.identify(starts, false))
+}
+
+/// Finishes a run from windows identified elsewhere (the JSON parts of
+/// [`identify_windows_json`], in any order; sorted by start here): tracks,
+/// fits the bands, writes the outputs.
+pub fn finish_from_json(opts: &TrackOptions, parts: &[String]) -> Result<TrackSummary> {
+    let clock = std::time::Instant::now();
+    let prepared = prepare(opts)?;
+    let mut windows = Vec::new();
+    for p in parts {
+        windows.extend(crate::monitor::windows_from_json(p)?);
+    }
+    windows.sort_by_key(|w| w.start_ns);
+    let expected = prepared.starts();
+    if windows
+        .iter()
+        .map(|w| w.start_ns)
+        .ne(expected.iter().copied())
+    {
+        return Err(Error::usage(format!(
+            "track: {} windows handed over, the run has {}: every window exactly once",
+            windows.len(),
+            expected.len()
+        )));
+    }
+    prepared.finish(windows, clock).map(|(s, _)| s)
 }

@@ -240,6 +240,53 @@ def run(
             cluster.close()
 
 
+def _identify_windows(options_json: str, starts: list) -> str:
+    """One task of ``track``: identifies the windows starting at ``starts``
+    (one UTC day of windows: the day files are indexed once per task)."""
+    return _native.track_windows_json(options_json, starts)
+
+
+def track(archive, out, client=None, **options) -> dict:
+    """``quaketwin track`` with the windows identified over the Dask cluster
+    of ``client`` (default: a ``LocalCluster`` of two single-threaded
+    workers, closed at the end): one task per UTC day of windows, each
+    reading the archive itself (the archive must be readable at the same
+    path on every worker: a shared file system), the identified windows
+    returned as JSON; this process then tracks, fits the bands and writes
+    ``modal_tracking.parquet`` and ``tracking.html`` into ``out`` (a local
+    directory, the command line's output directory rules).  ``options``: as
+    ``quaketwin.track``.  Each window is identified by the same code with
+    the same settings as on the command line, so the table is the same."""
+    from dask.distributed import Client, LocalCluster
+
+    from . import _track_options
+
+    options_json = _track_options(archive, out, options)
+    starts = _native.track_starts(options_json)
+    day_ns = 86_400 * 10**9
+    days: dict = {}
+    for t in starts:
+        days.setdefault(t // day_ns, []).append(t)
+    own = client is None
+    cluster = None
+    if own:
+        cluster = LocalCluster(n_workers=min(2, os.cpu_count() or 1), threads_per_worker=1,
+                               processes=True, dashboard_address=None)
+        client = Client(cluster)
+    try:
+        futures = [
+            client.submit(_identify_windows, options_json, group,
+                          key=f"quaketwin-track-{day}-{uuid.uuid4().hex}", retries=2, pure=False)
+            for day, group in sorted(days.items())
+        ]
+        parts = client.gather(futures)
+    finally:
+        if own:
+            client.close()
+            cluster.close()
+    return json.loads(_native.track_finish_json(options_json, parts))
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(
         prog="quaketwin fleet",
