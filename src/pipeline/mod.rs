@@ -274,9 +274,8 @@ pub fn run_showing(
     result
 }
 
-/// Brings the directory to a state holding only trusted results of this
-/// event (see the module doc) and returns the manifest to continue from.
-fn clean_out_dir(out: &Path, pipeline: &Pipeline, event: &EventIdentity) -> Result<RunManifest> {
+/// Removes the temporary files an interrupted run left in `out`, saying so.
+fn sweep_interrupted(out: &Path) -> Result<()> {
     let swept = crate::sinks::atomic::sweep_temp_files(out)?;
     if !swept.is_empty() {
         note(&format!(
@@ -285,13 +284,25 @@ fn clean_out_dir(out: &Path, pipeline: &Pipeline, event: &EventIdentity) -> Resu
             swept.join(", ")
         ));
     }
-    let mut current = RunManifest {
+    Ok(())
+}
+
+/// A run manifest of this quaketwin for `pipeline` on `event`, no stage yet.
+fn empty_manifest(pipeline: &str, event: EventIdentity) -> RunManifest {
+    RunManifest {
         format: manifest::FORMAT,
         quaketwin_version: env!("CARGO_PKG_VERSION").into(),
-        pipeline: pipeline.pipeline.name.clone(),
-        event: event.clone(),
+        pipeline: pipeline.into(),
+        event,
         stages: Vec::new(),
-    };
+    }
+}
+
+/// Brings the directory to a state holding only trusted results of this
+/// event (see the module doc) and returns the manifest to continue from.
+fn clean_out_dir(out: &Path, pipeline: &Pipeline, event: &EventIdentity) -> Result<RunManifest> {
+    sweep_interrupted(out)?;
+    let mut current = empty_manifest(&pipeline.pipeline.name, event.clone());
     // (reason, files) groups to remove, said per group.
     let mut groups: Vec<(String, Vec<String>)> = Vec::new();
     let legacy = take_legacy_stamps(out)?;
@@ -680,14 +691,7 @@ pub fn run_one_shot<T>(
         fingerprint: fingerprint::path_fingerprint(input)?,
     };
     let _lock = lock::DirLock::acquire(out, &format!("{name} on {}", event.path))?;
-    let swept = crate::sinks::atomic::sweep_temp_files(out)?;
-    if !swept.is_empty() {
-        note(&format!(
-            "{}: removed temporary files of an interrupted run: {}",
-            out.display(),
-            swept.join(", ")
-        ));
-    }
+    sweep_interrupted(out)?;
     let mut stale = take_legacy_stamps(out)?;
     match manifest::read(out) {
         Ok(Some(old)) => stale.extend(old.all_files()),
@@ -702,27 +706,22 @@ pub fn run_one_shot<T>(
             removed.join(", ")
         ));
     }
-    let mut m = RunManifest {
-        format: manifest::FORMAT,
-        quaketwin_version: env!("CARGO_PKG_VERSION").into(),
-        pipeline: name.into(),
-        event,
-        stages: vec![StageRecord {
-            name: name.into(),
-            kind: name.into(),
-            state: StageState::Started,
-            reason: None,
-            fingerprint: String::new(),
-            outputs: outputs
-                .iter()
-                .map(|f| manifest::OutputRecord {
-                    file: f.to_string(),
-                    bytes: None,
-                    xxh64: None,
-                })
-                .collect(),
-        }],
-    };
+    let mut m = empty_manifest(name, event);
+    m.stages.push(StageRecord {
+        name: name.into(),
+        kind: name.into(),
+        state: StageState::Started,
+        reason: None,
+        fingerprint: String::new(),
+        outputs: outputs
+            .iter()
+            .map(|f| manifest::OutputRecord {
+                file: f.to_string(),
+                bytes: None,
+                xxh64: None,
+            })
+            .collect(),
+    });
     manifest::write(out, &m)?;
     let value = write()?;
     let records = outputs
