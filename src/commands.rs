@@ -770,15 +770,24 @@ pub fn synth_archive(
     rate_hz: f64,
     seed: u64,
     day_length: &str,
+    damage_day: usize,
 ) -> Result<crate::synth::archive::ArchiveWritten> {
     let day_ns = crate::monitor::window::parse_duration("--day-length", day_length)?;
+    let defaults = crate::synth::archive::ArchiveSettings::default();
     let settings = crate::synth::archive::ArchiveSettings {
         days,
         channels,
         rate_hz,
         seed,
         day_length_s: day_ns as f64 / 1e9,
-        ..Default::default()
+        // Day N (1-based) starts after N − 1 days; 0: no damage at all.
+        damage_day: damage_day.saturating_sub(1),
+        damage_factor: if damage_day == 0 {
+            1.0
+        } else {
+            defaults.damage_factor
+        },
+        ..defaults
     };
     crate::synth::archive::write_archive(out, &settings)
 }

@@ -254,6 +254,9 @@ enum Command {
         /// Length of a simulated day (shortened archives for tests; damage at the start of day 2).
         #[arg(long, default_value = "24h", value_name = "DURATION")]
         day_length: String,
+        /// Day (1-based) from whose start the 2 % stiffness drop acts; 0 = no damage.
+        #[arg(long, default_value_t = 2, value_name = "DAY")]
+        damage_day: usize,
     },
     /// Run a pipeline on many events over a Dask cluster into a table-first
     /// dataset on any fsspec file system (the Python package's
@@ -532,8 +535,17 @@ fn run_command(cli: &Cli) -> Result<()> {
             rate,
             seed,
             day_length,
+            damage_day,
         } => {
-            let w = commands::synth_archive(out, *days, *channels, *rate, *seed, day_length)?;
+            let w = commands::synth_archive(
+                out,
+                *days,
+                *channels,
+                *rate,
+                *seed,
+                day_length,
+                *damage_day,
+            )?;
             console::info(format!(
                 "synth-archive: {} streams, {} to {}, {} day files ({:.0} MB); wrote {}",
                 w.streams.len(),
