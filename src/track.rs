@@ -630,6 +630,10 @@ pub fn tracking_batch(t: &Tracking) -> Result<arrow_array::RecordBatch> {
             rows.iter().map(|r| r.frequency_hz).collect(),
         )
         .f64(
+            col::FREQUENCY_STD_HZ.name,
+            rows.iter().map(|r| r.frequency_std_hz).collect(),
+        )
+        .f64(
             col::DAMPING_RATIO.name,
             rows.iter().map(|r| r.damping_ratio).collect(),
         )

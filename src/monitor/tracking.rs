@@ -99,6 +99,8 @@ pub struct TrackedMode {
     /// Id of the mode: 1-based rank of its reference mode.
     pub mode_id: usize,
     pub frequency_hz: f64,
+    /// Scatter of the frequency over the model orders, Hz.
+    pub frequency_std_hz: f64,
     pub damping_ratio: f64,
     /// MAC to the reference shape on the shared channels.
     pub mac: f64,
@@ -139,6 +141,7 @@ pub fn track(
                     window: w,
                     mode_id: s.reference_mode + 1,
                     frequency_hz: m.frequency_hz,
+                    frequency_std_hz: m.frequency_std_hz,
                     damping_ratio: m.damping_ratio,
                     mac: s.mac.unwrap_or(f64::NAN),
                     mpc: m.mpc,

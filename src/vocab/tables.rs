@@ -359,6 +359,7 @@ declare!(MODAL_TRACKING, modal_tracking, "modal_tracking", "modal_tracking.parqu
     MODE: "mode", U32, required, "", "id of the tracked mode: 1-based rank of its reference mode, the same in every window";
     DIRECTION: "direction", Utf8, required, "", "direction label of this window's shape (`X`, `Y`, `torsion`, an azimuth such as `90deg`, `mixed`; empty when the channels' orientations are unknown)";
     FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "identified natural frequency in this window";
+    FREQUENCY_STD_HZ: "frequency_std_hz", F64, required, "Hz", "scatter of the frequency over the model orders of the mode's pole column (`frequency_std_hz` of modes.parquet): a quality figure, large when the column is split";
     DAMPING_RATIO: "damping_ratio", F64, required, "1", "identified modal damping ratio";
     MAC_TO_REFERENCE: "mac_to_reference", F64, nullable, "1", "MAC between this window's shape and the reference shape on the shared channels (null when paired by frequency and direction: fewer than two shared channels)";
     REFERENCE_FREQUENCY_HZ: "reference_frequency_hz", F64, required, "Hz", "frequency of the reference mode";
