@@ -306,7 +306,9 @@ pub struct RecordSpan {
 impl RecordSpan {
     /// Time just after the last sample: start + samples / rate.
     pub fn end_ns(&self) -> i64 {
-        self.start_ns + (self.samples as f64 * NS_PER_S / self.rate_hz).round() as i64
+        // Saturating: a corrupt rate must not overflow the time (the cast saturates too).
+        self.start_ns
+            .saturating_add((self.samples as f64 * NS_PER_S / self.rate_hz).round() as i64)
     }
 }
 
