@@ -60,6 +60,13 @@ fn write_stream(
     }
 }
 
+/// Writes `n` samples of stream `XX.STA..{cha}` at `rate`; its id.
+fn write_stream_at(root: &Path, cha: &str, start: i64, rate: f64, n: usize) -> String {
+    let x: Vec<f64> = (0..n).map(|i| (i % 13) as f64).collect();
+    write_stream(root, &codes(cha), start, rate, &x, n..n);
+    codes(cha).id()
+}
+
 /// A window across midnight reads the records of both day files (one record
 /// spans midnight) with the samples as written; a gap lowers the present
 /// fraction by exactly the samples missing; a selection keeps its streams.
@@ -104,6 +111,14 @@ fn sds_window_spans_midnight_and_counts_gaps() {
         .unwrap();
     assert_eq!(only.streams(), &[codes("HNE")]);
     assert!(StreamPattern::parse("XX.STA.HNE").is_err());
+    // A stream at another rate: an input error naming both streams.
+    let c = write_stream_at(dir.path(), "HNZ", start, 2.0 * rate, n);
+    let e = SdsArchive::open(dir.path())
+        .unwrap()
+        .read_window(t0, t1)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains(&c) && e.contains("share a sampling rate"), "{e}");
     assert!(SdsArchive::open(dir.path())
         .unwrap()
         .select(&[StreamPattern::parse("YY.*.*.*").unwrap()])
