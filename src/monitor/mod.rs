@@ -220,33 +220,13 @@ pub fn analyse(
     })
 }
 
-/// A mode as JSON: the fields of [`Mode`], the complex shape split.
-#[derive(serde::Serialize, serde::Deserialize)]
-struct ModeRecord {
-    frequency_hz: f64,
-    frequency_std_hz: f64,
-    damping_ratio: f64,
-    damping_std: f64,
-    shape_re: Vec<f64>,
-    shape_im: Vec<f64>,
-    shape_std: Vec<f64>,
-    mpc: f64,
-    mpd_deg: f64,
-    mean_mac: f64,
-    pole_count: usize,
-    order_min: usize,
-    order_max: usize,
-    manual: bool,
-    direction: String,
-}
-
 /// A window as JSON (NaN RMS as null).
 #[derive(serde::Serialize, serde::Deserialize)]
 struct WindowRecord {
     start_ns: i64,
     end_ns: i64,
     channels: Vec<String>,
-    modes: Vec<ModeRecord>,
+    modes: Vec<Mode>,
     rms: Option<f64>,
     present_fraction: f64,
     skipped: Option<String>,
@@ -262,27 +242,7 @@ pub fn windows_to_json(windows: &[WindowModes]) -> Result<String> {
             start_ns: w.start_ns,
             end_ns: w.end_ns,
             channels: w.channels.clone(),
-            modes: w
-                .modes
-                .iter()
-                .map(|m| ModeRecord {
-                    frequency_hz: m.frequency_hz,
-                    frequency_std_hz: m.frequency_std_hz,
-                    damping_ratio: m.damping_ratio,
-                    damping_std: m.damping_std,
-                    shape_re: m.shape.iter().map(|z| z.re).collect(),
-                    shape_im: m.shape.iter().map(|z| z.im).collect(),
-                    shape_std: m.shape_std.clone(),
-                    mpc: m.mpc,
-                    mpd_deg: m.mpd_deg,
-                    mean_mac: m.mean_mac,
-                    pole_count: m.pole_count,
-                    order_min: m.order_min,
-                    order_max: m.order_max,
-                    manual: m.manual,
-                    direction: m.direction.clone(),
-                })
-                .collect(),
+            modes: w.modes.clone(),
             rms: w.rms.is_finite().then_some(w.rms),
             present_fraction: w.present_fraction,
             skipped: w.skipped.clone(),
@@ -302,31 +262,7 @@ pub fn windows_from_json(text: &str) -> Result<Vec<WindowModes>> {
             start_ns: w.start_ns,
             end_ns: w.end_ns,
             channels: w.channels,
-            modes: w
-                .modes
-                .into_iter()
-                .map(|m| Mode {
-                    frequency_hz: m.frequency_hz,
-                    frequency_std_hz: m.frequency_std_hz,
-                    damping_ratio: m.damping_ratio,
-                    damping_std: m.damping_std,
-                    shape: m
-                        .shape_re
-                        .iter()
-                        .zip(&m.shape_im)
-                        .map(|(&re, &im)| faer::c64::new(re, im))
-                        .collect(),
-                    shape_std: m.shape_std,
-                    mpc: m.mpc,
-                    mpd_deg: m.mpd_deg,
-                    mean_mac: m.mean_mac,
-                    pole_count: m.pole_count,
-                    order_min: m.order_min,
-                    order_max: m.order_max,
-                    manual: m.manual,
-                    direction: m.direction,
-                })
-                .collect(),
+            modes: w.modes,
             rms: w.rms.unwrap_or(f64::NAN),
             present_fraction: w.present_fraction,
             skipped: w.skipped,
