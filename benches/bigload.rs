@@ -35,6 +35,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use quaketwin::rng::Rng;
+use quaketwin::sinks::mseed_writer::{RecordEncoder, SampleEncoding, StreamCodes};
 use quaketwin::synth::{
     synthetic_ground_motion, Envelope, GroundMotionSpec, Sampling, Shaping, ShearBuilding,
     WhiteNoise,
@@ -228,82 +229,43 @@ fn write_csv_hour(w: &mut impl std::io::Write, chans: &[Vec<f64>], hour: usize) 
     }
 }
 
-/// MiniSEED 2 writer: 4096-byte records, float32 (encoding 4), big-endian,
-/// blockette 1000; 1008 samples per record.
+/// One MiniSEED file per channel, float32 records from the library's one
+/// encoder (`quaketwin::sinks::mseed_writer`).
 struct MseedChannel {
     file: std::io::BufWriter<std::fs::File>,
-    channel_code: String,
-    sequence: u32,
-    /// Samples written so far (the next record's start).
-    written: u64,
-    pending: Vec<f64>,
+    encoder: RecordEncoder,
 }
-
-const MSEED_RECORD: usize = 4096;
-const MSEED_PER_RECORD: usize = (MSEED_RECORD - 64) / 4;
 
 impl MseedChannel {
     fn new(path: &Path, channel_code: &str) -> Self {
         let f = std::fs::File::create(path).expect("create MiniSEED file");
+        let codes = StreamCodes {
+            network: "QT".into(),
+            station: "BIG".into(),
+            location: "00".into(),
+            channel: channel_code.into(),
+        };
+        // 2026-02-01T00:00:00Z
+        let start_ns = 1_769_904_000_000_000_000;
         MseedChannel {
             file: std::io::BufWriter::new(f),
-            channel_code: channel_code.into(),
-            sequence: 0,
-            written: 0,
-            pending: Vec::new(),
+            encoder: RecordEncoder::new(codes, RATE_HZ, start_ns, SampleEncoding::Float32),
         }
     }
     fn push(&mut self, samples: &[f64]) {
-        self.pending.extend_from_slice(samples);
-        while self.pending.len() >= MSEED_PER_RECORD {
-            self.record(MSEED_PER_RECORD);
-        }
+        let file = &mut self.file;
+        self.encoder
+            .push(samples, &mut |_, r| {
+                Ok(file.write_all(r).expect("write MiniSEED"))
+            })
+            .expect("write MiniSEED");
     }
     fn finish(mut self) {
-        if !self.pending.is_empty() {
-            self.record(self.pending.len());
-        }
+        let file = &mut self.file;
+        self.encoder
+            .finish(&mut |_, r| Ok(file.write_all(r).expect("write MiniSEED")))
+            .expect("write MiniSEED");
         self.file.flush().expect("flush MiniSEED");
-    }
-    fn record(&mut self, count: usize) {
-        let mut r = vec![0u8; MSEED_RECORD];
-        self.sequence += 1;
-        r[0..6].copy_from_slice(format!("{:06}", self.sequence).as_bytes());
-        r[6] = b'D';
-        r[7] = b' ';
-        let pad = |s: &str, n: usize| format!("{s:<n$}").into_bytes();
-        r[8..13].copy_from_slice(&pad("BIG", 5));
-        r[13..15].copy_from_slice(&pad("00", 2));
-        r[15..18].copy_from_slice(&pad(&self.channel_code, 3));
-        r[18..20].copy_from_slice(&pad("QT", 2));
-        // Start time: 2026-02-01 00:00:00 + written / rate (BTIME).
-        let t_tenth_ms = self.written * 10_000 / RATE_HZ as u64;
-        let secs = t_tenth_ms / 10_000;
-        let frac = (t_tenth_ms % 10_000) as u16;
-        let day = 32 + (secs / 86_400) as u16; // 1 February = day 32
-        let rem = secs % 86_400;
-        r[20..22].copy_from_slice(&2026u16.to_be_bytes());
-        r[22..24].copy_from_slice(&day.to_be_bytes());
-        r[24] = (rem / 3600) as u8;
-        r[25] = (rem % 3600 / 60) as u8;
-        r[26] = (rem % 60) as u8;
-        r[28..30].copy_from_slice(&frac.to_be_bytes());
-        r[30..32].copy_from_slice(&(count as u16).to_be_bytes());
-        r[32..34].copy_from_slice(&(RATE_HZ as i16).to_be_bytes());
-        r[34..36].copy_from_slice(&1i16.to_be_bytes());
-        r[39] = 1; // one blockette
-        r[44..46].copy_from_slice(&64u16.to_be_bytes()); // data offset
-        r[46..48].copy_from_slice(&48u16.to_be_bytes()); // first blockette
-                                                         // Blockette 1000 at 48.
-        r[48..50].copy_from_slice(&1000u16.to_be_bytes());
-        r[52] = 4; // float32
-        r[53] = 1; // big-endian
-        r[54] = 12; // 2^12 = 4096
-        for (k, v) in self.pending.drain(..count).enumerate() {
-            r[64 + 4 * k..68 + 4 * k].copy_from_slice(&(v as f32).to_be_bytes());
-        }
-        self.written += count as u64;
-        self.file.write_all(&r).expect("write MiniSEED");
     }
 }
 

@@ -754,3 +754,40 @@ pub fn run_many_with(
         .collect();
     Ok(runs)
 }
+
+/// `quaketwin track ARCHIVE --out DIR …`: continuous monitoring from an SDS
+/// archive ([`crate::track`]).
+pub fn track(opts: &crate::track::TrackOptions) -> Result<crate::track::TrackSummary> {
+    crate::track::run(opts).map(|(summary, _)| summary)
+}
+
+/// `quaketwin synth-archive --out DIR …`: the synthetic monitoring archive
+/// ([`crate::synth::archive`]).
+pub fn synth_archive(
+    out: &Path,
+    days: usize,
+    channels: usize,
+    rate_hz: f64,
+    seed: u64,
+    day_length: &str,
+    damage_day: usize,
+) -> Result<crate::synth::archive::ArchiveWritten> {
+    let day_ns = crate::monitor::window::parse_duration("--day-length", day_length)?;
+    let defaults = crate::synth::archive::ArchiveSettings::default();
+    let settings = crate::synth::archive::ArchiveSettings {
+        days,
+        channels,
+        rate_hz,
+        seed,
+        day_length_s: day_ns as f64 / 1e9,
+        // Day N (1-based) starts after N − 1 days; 0: no damage at all.
+        damage_day: damage_day.saturating_sub(1),
+        damage_factor: if damage_day == 0 {
+            1.0
+        } else {
+            defaults.damage_factor
+        },
+        ..defaults
+    };
+    crate::synth::archive::write_archive(out, &settings)
+}

@@ -18,6 +18,7 @@ pub mod hysteresis;
 pub mod in_memory;
 pub mod metrics;
 pub mod modal;
+pub mod monitor;
 pub mod numeric;
 pub mod pipeline;
 pub mod readers;
@@ -29,6 +30,7 @@ pub mod stages;
 pub mod stats;
 pub mod summary;
 pub mod synth;
+pub mod track;
 pub mod twin;
 pub mod vocab;
 

@@ -185,6 +185,79 @@ enum Command {
         #[arg(long, default_value_t = 2026)]
         seed: u64,
     },
+    /// Continuous monitoring from an SDS MiniSEED archive: ambient modal
+    /// identification per window, mode tracking, anomaly band
+    /// (modal_tracking.parquet, tracking.html; docs/monitoring.md).
+    #[command(after_help = "Examples:
+  quaketwin synth-archive --out /tmp/arch --days 3
+  quaketwin track /tmp/arch/sds --stationxml /tmp/arch/station.xml --out out/track
+  quaketwin track ARCHIVE --start 2026-01-01T00:00:00Z --end 2026-01-04T00:00:00Z --channels 'QT.BLD.*.HN?' --window 1h --training 24h --out out/track --json")]
+    Track {
+        /// Root of the SDS archive (YEAR/NET/STA/CHAN.D/NET.STA.LOC.CHAN.D.YEAR.DAY).
+        archive: PathBuf,
+        /// Output directory (created; holds the results of this run only).
+        #[arg(long)]
+        out: PathBuf,
+        /// First window start, UTC (default: the start of the archive's first day).
+        #[arg(long, value_name = "TIME")]
+        start: Option<String>,
+        /// End of the span, UTC (default: the end of the archive's last day).
+        #[arg(long, value_name = "TIME")]
+        end: Option<String>,
+        /// Streams NET.STA.LOC.CHAN (wildcards * and ?), comma-separated (default: all).
+        #[arg(long, value_delimiter = ',', value_name = "PATTERN,…")]
+        channels: Vec<String>,
+        /// StationXML with the streams' gains and orientations (without it: counts, no directions).
+        #[arg(long, value_name = "FILE")]
+        stationxml: Option<PathBuf>,
+        /// Window length (s, m, h, d).
+        #[arg(long, default_value = "1h")]
+        window: String,
+        /// Step between window starts (default: the window length).
+        #[arg(long)]
+        step: Option<String>,
+        /// Training period of the anomaly band, from the first window.
+        #[arg(long, default_value = "24h")]
+        training: String,
+        /// Reference modes (a modes.parquet or the directory holding it;
+        /// default: the modes confirmed in the first six identified windows).
+        #[arg(long, value_name = "FILE_OR_DIR")]
+        reference: Option<PathBuf>,
+        /// Skip windows with a smaller share of recorded samples.
+        #[arg(long, default_value_t = 0.9, value_name = "FRACTION")]
+        min_present: f64,
+        /// Period of the environmental cycle in the band's regression.
+        #[arg(long, default_value = "24h")]
+        cycle: String,
+    },
+    /// Generate a synthetic SDS archive of the 4-storey building under ambient
+    /// excitation (daily temperature cycle, a 2 % stiffness drop on day 2),
+    /// with StationXML and the true frequencies (truth.csv).
+    #[command(after_help = "Examples:
+  quaketwin synth-archive --out /tmp/arch --days 3 --channels 8 --rate 100 --seed 1")]
+    SynthArchive {
+        /// Directory to write sds/, station.xml and truth.csv into.
+        #[arg(long)]
+        out: PathBuf,
+        /// Days of record.
+        #[arg(long, default_value_t = 3)]
+        days: usize,
+        /// Channels: 2, 4, 6 or 8 (two per floor, top floors first).
+        #[arg(long, default_value_t = 8)]
+        channels: usize,
+        /// Sampling rate, Hz.
+        #[arg(long, default_value_t = 100.0)]
+        rate: f64,
+        /// Random seed (same seed, same files).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Length of a simulated day (shortened archives for tests; damage at the start of day 2).
+        #[arg(long, default_value = "24h", value_name = "DURATION")]
+        day_length: String,
+        /// Day (1-based) from whose start the 2 % stiffness drop acts; 0 = no damage.
+        #[arg(long, default_value_t = 2, value_name = "DAY")]
+        damage_day: usize,
+    },
     /// Run a pipeline on many events over a Dask cluster into a table-first
     /// dataset on any fsspec file system (the Python package's
     /// quaketwin.fleet; docs/python.md).
@@ -411,6 +484,78 @@ fn run_command(cli: &Cli) -> Result<()> {
                 }
                 Ok(())
             }
+        }
+        Command::Track {
+            archive,
+            out,
+            start,
+            end,
+            channels,
+            stationxml,
+            window,
+            step,
+            training,
+            reference,
+            min_present,
+            cycle,
+        } => {
+            let opts = quaketwin::track::TrackOptions {
+                archive: archive.clone(),
+                out: out.clone(),
+                start: start.clone(),
+                end: end.clone(),
+                channels: channels.clone(),
+                stationxml: stationxml.clone(),
+                window: window.clone(),
+                step: step.clone(),
+                training: training.clone(),
+                reference: reference.clone(),
+                min_present: *min_present,
+                cycle: cycle.clone(),
+            };
+            let s = commands::track(&opts)?;
+            console::info(format!(
+                "track: {} windows ({} identified), {} modes tracked; {}; {:.1} s; wrote {}",
+                s.windows,
+                s.identified_windows,
+                s.modes.len(),
+                match &s.anomaly_from {
+                    Some(t) => format!("anomaly from {t}"),
+                    None => "no sustained anomaly".into(),
+                },
+                s.seconds,
+                out.display()
+            ));
+            print_json(json, &s)
+        }
+        Command::SynthArchive {
+            out,
+            days,
+            channels,
+            rate,
+            seed,
+            day_length,
+            damage_day,
+        } => {
+            let w = commands::synth_archive(
+                out,
+                *days,
+                *channels,
+                *rate,
+                *seed,
+                day_length,
+                *damage_day,
+            )?;
+            console::info(format!(
+                "synth-archive: {} streams, {} to {}, {} day files ({:.0} MB); wrote {}",
+                w.streams.len(),
+                w.start,
+                w.end,
+                w.day_files,
+                w.bytes as f64 / 1e6,
+                out.display()
+            ));
+            print_json(json, &w)
         }
         Command::Fleet {
             pipeline,

@@ -87,3 +87,29 @@ pub fn regularized_incomplete_beta(x: f64, a: f64, b: f64) -> f64 {
     }
     (ln_front.exp() * h / a).clamp(0.0, 1.0)
 }
+
+/// Upper quantile of Student's t distribution with `nu` degrees of freedom:
+/// the t with P(T > t) = `tail` (0 < tail < ½), from P(T > t) =
+/// ½ I_{ν/(ν+t²)}(ν/2, ½) by bisection (the tail is monotone in t).
+pub fn student_t_upper_quantile(tail: f64, nu: f64) -> f64 {
+    if !(tail > 0.0 && tail < 0.5 && nu > 0.0) {
+        return f64::NAN;
+    }
+    let upper = |t: f64| 0.5 * regularized_incomplete_beta(nu / (nu + t * t), 0.5 * nu, 0.5);
+    let (mut lo, mut hi) = (0.0, 1.0);
+    while upper(hi) > tail && hi < 1e12 {
+        hi *= 2.0;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if upper(mid) > tail {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        if hi - lo < 1e-12 * hi {
+            break;
+        }
+    }
+    0.5 * (lo + hi)
+}

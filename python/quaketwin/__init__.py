@@ -32,6 +32,7 @@ __all__ = [
     "hysteresis",
     "update",
     "event_partition",
+    "track",
 ]
 
 
@@ -52,6 +53,29 @@ def run(pipeline, event, out, reference=None) -> dict:
     summary (stages, files, modes, Bouc-Wen status, rating; docs/cli.md)."""
     ref = None if reference is None else _path(reference)
     return json.loads(_native.run_json(_path(pipeline), _path(event), _path(out), ref))
+
+
+def _track_options(archive, out, options: dict) -> str:
+    opts = {"archive": _path(archive), "out": _path(out)}
+    for key, value in options.items():
+        if value is None:
+            continue
+        if key in ("stationxml", "reference"):
+            value = _path(value)
+        opts[key] = value
+    return json.dumps(opts)
+
+
+def track(archive, out, **options) -> dict:
+    """Continuous monitoring from an SDS archive (``quaketwin track``,
+    docs/monitoring.md) in this process: ``modal_tracking.parquet`` and
+    ``tracking.html`` in ``out``.  ``options`` are the command's flags with
+    underscores: ``start``, ``end`` (UTC text), ``channels`` (list of
+    ``NET.STA.LOC.CHAN`` patterns), ``stationxml``, ``window``, ``step``,
+    ``training``, ``cycle`` (durations such as ``"1h"``), ``reference``,
+    ``min_present``.  Returns the summary (the command's ``--json``).
+    ``quaketwin.fleet.track`` maps the windows over a Dask cluster."""
+    return json.loads(_native.track_json(_track_options(archive, out, options)))
 
 
 def read_event(event) -> pa.Table:

@@ -22,6 +22,7 @@ Command line: ``python -m quaketwin.fleet PIPELINE EVENT… --out URL
 from __future__ import annotations
 
 import argparse
+import contextlib
 import hashlib
 import json
 import os
@@ -170,6 +171,25 @@ def _write_fleet_runs(rows: list, out: str, storage_options: Optional[dict]) -> 
     return table
 
 
+@contextlib.contextmanager
+def _cluster(client):
+    """``client``, or (when None) a client of a ``LocalCluster`` of two
+    single-threaded worker processes on this machine, closed on exit."""
+    if client is not None:
+        yield client
+        return
+    from dask.distributed import Client, LocalCluster
+
+    cluster = LocalCluster(n_workers=min(2, os.cpu_count() or 1), threads_per_worker=1,
+                           processes=True, dashboard_address=None)
+    own = Client(cluster)
+    try:
+        yield own
+    finally:
+        own.close()
+        cluster.close()
+
+
 def run(
     pipeline,
     events: Iterable,
@@ -184,20 +204,14 @@ def run(
     ``out`` (a path or fsspec URL).  Returns the ``fleet_runs`` table (one
     row per event: ``ok``, ``skipped`` or ``failed`` with the error), also
     written to ``OUT/fleet_runs/part-0.parquet``."""
-    from dask.distributed import Client, LocalCluster, as_completed
+    from dask.distributed import as_completed
 
     pipeline = os.fspath(pipeline)
     with open(pipeline, encoding="utf-8") as f:
         pipeline_text = f.read()
     events = [os.fspath(e) if not isinstance(e, str) else e for e in events]
     out = os.fspath(out) if not isinstance(out, str) else out
-    own = client is None
-    cluster = None
-    if own:
-        cluster = LocalCluster(n_workers=min(2, os.cpu_count() or 1), threads_per_worker=1,
-                               processes=True, dashboard_address=None)
-        client = Client(cluster)
-    try:
+    with _cluster(client) as client:
         futures = [
             client.submit(
                 process_event,
@@ -234,10 +248,41 @@ def run(
                     file=sys.stderr,
                 )
         return _write_fleet_runs(rows, out, storage_options)
-    finally:
-        if own:
-            client.close()
-            cluster.close()
+
+
+def _identify_windows(options_json: str, starts: list) -> str:
+    """One task of ``track``: identifies the windows starting at ``starts``
+    (one UTC day of windows: the day files are indexed once per task)."""
+    return _native.track_windows_json(options_json, starts)
+
+
+def track(archive, out, client=None, **options) -> dict:
+    """``quaketwin track`` with the windows identified over the Dask cluster
+    of ``client`` (default: a ``LocalCluster`` of two single-threaded
+    workers, closed at the end): one task per UTC day of windows, each
+    reading the archive itself (the archive must be readable at the same
+    path on every worker: a shared file system), the identified windows
+    returned as JSON; this process then tracks, fits the bands and writes
+    ``modal_tracking.parquet`` and ``tracking.html`` into ``out`` (a local
+    directory, the command line's output directory rules).  ``options``: as
+    ``quaketwin.track``.  Each window is identified by the same code with
+    the same settings as on the command line, so the table is the same."""
+    from . import _track_options
+
+    options_json = _track_options(archive, out, options)
+    starts = _native.track_starts(options_json)
+    day_ns = 86_400 * 10**9
+    days: dict = {}
+    for t in starts:
+        days.setdefault(t // day_ns, []).append(t)
+    with _cluster(client) as client:
+        futures = [
+            client.submit(_identify_windows, options_json, group,
+                          key=f"quaketwin-track-{day}-{uuid.uuid4().hex}", retries=2, pure=False)
+            for day, group in sorted(days.items())
+        ]
+        parts = client.gather(futures)
+    return json.loads(_native.track_finish_json(options_json, parts))
 
 
 def main(argv=None) -> int:

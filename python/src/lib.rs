@@ -170,6 +170,49 @@ fn event_fingerprint(py: Python<'_>, event: PathBuf) -> PyResult<String> {
         .map_err(raise)
 }
 
+/// `quaketwin track` in this process (options as JSON, the fields of the
+/// library's `TrackOptions`); the summary as JSON.
+#[pyfunction]
+fn track_json(py: Python<'_>, options_json: &str) -> PyResult<String> {
+    py.detach(|| {
+        let opts = quaketwin::track::options_from_json(options_json)?;
+        let (summary, _) = quaketwin::track::run(&opts)?;
+        quaketwin::summary::to_json(&summary)
+    })
+    .map_err(raise)
+}
+
+/// The start times (ns since the epoch) of every window of a track run.
+#[pyfunction]
+fn track_starts(py: Python<'_>, options_json: &str) -> PyResult<Vec<i64>> {
+    py.detach(|| {
+        let opts = quaketwin::track::options_from_json(options_json)?;
+        Ok(quaketwin::track::prepare(&opts)?.starts())
+    })
+    .map_err(raise)
+}
+
+/// Identifies the windows starting at `starts` (ns); JSON to hand to `track_finish_json`.
+#[pyfunction]
+fn track_windows_json(py: Python<'_>, options_json: &str, starts: Vec<i64>) -> PyResult<String> {
+    py.detach(|| {
+        let opts = quaketwin::track::options_from_json(options_json)?;
+        quaketwin::track::identify_windows_json(&opts, &starts)
+    })
+    .map_err(raise)
+}
+
+/// Tracks, fits the bands and writes the outputs from every window's JSON; the summary as JSON.
+#[pyfunction]
+fn track_finish_json(py: Python<'_>, options_json: &str, parts: Vec<String>) -> PyResult<String> {
+    py.detach(|| {
+        let opts = quaketwin::track::options_from_json(options_json)?;
+        let summary = quaketwin::track::finish_from_json(&opts, &parts)?;
+        quaketwin::summary::to_json(&summary)
+    })
+    .map_err(raise)
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // Results independent of the thread count, as from the command line.
@@ -186,5 +229,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(event_partition, m)?)?;
     m.add_function(wrap_pyfunction!(run_tables, m)?)?;
     m.add_function(wrap_pyfunction!(event_fingerprint, m)?)?;
+    m.add_function(wrap_pyfunction!(track_json, m)?)?;
+    m.add_function(wrap_pyfunction!(track_starts, m)?)?;
+    m.add_function(wrap_pyfunction!(track_windows_json, m)?)?;
+    m.add_function(wrap_pyfunction!(track_finish_json, m)?)?;
     Ok(())
 }

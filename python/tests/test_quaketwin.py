@@ -179,5 +179,52 @@ class Fleet(unittest.TestCase):
             self.assertEqual(modes_by_event(out), self.expected)
 
 
+class TrackTest(unittest.TestCase):
+    """``quaketwin.track`` and ``quaketwin.fleet.track`` on a small synthetic
+    archive (two hours, 4 channels at 20 Hz, 20-minute windows) against the
+    command line's ``track`` on the same archive."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.work = tempfile.TemporaryDirectory(prefix="quaketwin-track-")
+        cls.arch = pathlib.Path(cls.work.name) / "arch"
+        cli("synth-archive", "--out", cls.arch, "--days", "2", "--day-length", "1h",
+            "--channels", "4", "--rate", "20")
+        cls.flags = dict(stationxml=cls.arch / "station.xml", window="20m", training="1h",
+                         cycle="1h", end="2026-01-01T02:00:00Z")
+        cls.cli_out = pathlib.Path(cls.work.name) / "cli"
+        cli("track", cls.arch / "sds", "--out", cls.cli_out, "--stationxml", cls.arch / "station.xml",
+            "--window", "20m", "--training", "1h", "--cycle", "1h", "--end", "2026-01-01T02:00:00Z")
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.work.cleanup()
+
+    def _same_table(self, out):
+        mine = pq.read_table(out / "modal_tracking.parquet")
+        theirs = pq.read_table(self.cli_out / "modal_tracking.parquet")
+        self.assertEqual(mine.num_rows, theirs.num_rows)
+        self.assertGreater(mine.num_rows, 0)
+        for name in ("window_start", "mode", "frequency_hz", "damping_ratio", "flagged"):
+            self.assertEqual(mine.column(name).to_pylist(), theirs.column(name).to_pylist(), name)
+
+    def test_track_in_process_equals_the_command_line(self):
+        out = pathlib.Path(self.work.name) / "py"
+        s = quaketwin.track(self.arch / "sds", out, **self.flags)
+        self.assertEqual(s["windows"], 6)
+        self._same_table(out)
+
+    def test_fleet_track_maps_windows_over_dask(self):
+        out = pathlib.Path(self.work.name) / "fleet"
+        s = quaketwin.fleet.track(self.arch / "sds", out, **self.flags)
+        self.assertEqual(s["identified_windows"], 6)
+        self._same_table(out)
+        self.assertTrue((out / "tracking.html").is_file())
+
+    def test_bad_options_raise_usage_errors(self):
+        with self.assertRaises(quaketwin.UsageError):
+            quaketwin.track(self.arch / "sds", pathlib.Path(self.work.name) / "bad", window="0h")
+
+
 if __name__ == "__main__":
     unittest.main()

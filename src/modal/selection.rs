@@ -176,7 +176,9 @@ impl Default for SelectionSettings {
 }
 
 /// One identified mode: statistics over the poles of its column.
-#[derive(Debug, Clone, PartialEq)]
+/// Serialisable (the shape as `[re, im]` pairs) so that identified windows
+/// can cross between processes (`monitor::windows_to_json`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Mode {
     pub frequency_hz: f64,
     pub frequency_std_hz: f64,
@@ -184,6 +186,7 @@ pub struct Mode {
     pub damping_std: f64,
     /// Mean complex shape (poles phase-aligned to the column's central pole),
     /// largest-modulus component 1 + 0i.
+    #[serde(with = "complex_pairs")]
     pub shape: Vec<c64>,
     /// Standard deviation of each aligned shape component's modulus.
     pub shape_std: Vec<f64>,
@@ -745,4 +748,22 @@ pub fn select_manual(
         }
     }
     Ok(modes)
+}
+
+/// A complex vector as `[[re, im], …]` (serde), for [`Mode::shape`].
+mod complex_pairs {
+    use faer::c64;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &[c64], s: S) -> Result<S::Ok, S::Error> {
+        v.iter()
+            .map(|z| [z.re, z.im])
+            .collect::<Vec<_>>()
+            .serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<c64>, D::Error> {
+        let pairs = Vec::<[f64; 2]>::deserialize(d)?;
+        Ok(pairs.into_iter().map(|[re, im]| c64::new(re, im)).collect())
+    }
 }

@@ -274,9 +274,8 @@ pub fn run_showing(
     result
 }
 
-/// Brings the directory to a state holding only trusted results of this
-/// event (see the module doc) and returns the manifest to continue from.
-fn clean_out_dir(out: &Path, pipeline: &Pipeline, event: &EventIdentity) -> Result<RunManifest> {
+/// Removes the temporary files an interrupted run left in `out`, saying so.
+fn sweep_interrupted(out: &Path) -> Result<()> {
     let swept = crate::sinks::atomic::sweep_temp_files(out)?;
     if !swept.is_empty() {
         note(&format!(
@@ -285,13 +284,25 @@ fn clean_out_dir(out: &Path, pipeline: &Pipeline, event: &EventIdentity) -> Resu
             swept.join(", ")
         ));
     }
-    let mut current = RunManifest {
+    Ok(())
+}
+
+/// A run manifest of this quaketwin for `pipeline` on `event`, no stage yet.
+fn empty_manifest(pipeline: &str, event: EventIdentity) -> RunManifest {
+    RunManifest {
         format: manifest::FORMAT,
         quaketwin_version: env!("CARGO_PKG_VERSION").into(),
-        pipeline: pipeline.pipeline.name.clone(),
-        event: event.clone(),
+        pipeline: pipeline.into(),
+        event,
         stages: Vec::new(),
-    };
+    }
+}
+
+/// Brings the directory to a state holding only trusted results of this
+/// event (see the module doc) and returns the manifest to continue from.
+fn clean_out_dir(out: &Path, pipeline: &Pipeline, event: &EventIdentity) -> Result<RunManifest> {
+    sweep_interrupted(out)?;
+    let mut current = empty_manifest(&pipeline.pipeline.name, event.clone());
     // (reason, files) groups to remove, said per group.
     let mut groups: Vec<(String, Vec<String>)> = Vec::new();
     let legacy = take_legacy_stamps(out)?;
@@ -656,6 +667,70 @@ pub fn write_extra_output<T>(
         });
     }
     manifest::write(dir, &m)?;
+    Ok(value)
+}
+
+/// A command that writes its files into an output directory without a
+/// pipeline (`quaketwin track`): the directory then holds the results of
+/// this run only, as after `run`.  Under the directory's lock: temporary
+/// files of an interrupted run are swept, every file the previous run
+/// manifest lists is removed (said once), a manifest naming `input` and a
+/// record `name` in state `started` is written, then `write` runs and the
+/// record lists `outputs` (file names in `out`) as done.  A failed `write`
+/// leaves the record `started`: nothing in the directory counts as a result.
+pub fn run_one_shot<T>(
+    out: &Path,
+    name: &str,
+    input: &Path,
+    outputs: &[&str],
+    write: impl FnOnce() -> Result<T>,
+) -> Result<T> {
+    prepare_out_dir(out)?;
+    let event = EventIdentity {
+        path: event_path_string(input),
+        fingerprint: fingerprint::path_fingerprint(input)?,
+    };
+    let _lock = lock::DirLock::acquire(out, &format!("{name} on {}", event.path))?;
+    sweep_interrupted(out)?;
+    let mut stale = take_legacy_stamps(out)?;
+    match manifest::read(out) {
+        Ok(Some(old)) => stale.extend(old.all_files()),
+        Ok(None) => {}
+        Err(_) => stale.extend(outputs.iter().map(|f| f.to_string())),
+    }
+    let removed = remove_files(out, stale)?;
+    if !removed.is_empty() {
+        note(&format!(
+            "{}: removing the results of the previous run: {}",
+            out.display(),
+            removed.join(", ")
+        ));
+    }
+    let mut m = empty_manifest(name, event);
+    m.stages.push(StageRecord {
+        name: name.into(),
+        kind: name.into(),
+        state: StageState::Started,
+        reason: None,
+        fingerprint: String::new(),
+        outputs: outputs
+            .iter()
+            .map(|f| manifest::OutputRecord {
+                file: f.to_string(),
+                bytes: None,
+                xxh64: None,
+            })
+            .collect(),
+    });
+    manifest::write(out, &m)?;
+    let value = write()?;
+    let records = outputs
+        .iter()
+        .map(|f| manifest::record_output(out, f))
+        .collect::<Result<Vec<_>>>()?;
+    m.stages[0].outputs = records;
+    m.stages[0].state = StageState::Done;
+    manifest::write(out, &m)?;
     Ok(value)
 }
 

@@ -17,6 +17,7 @@ pub mod mcap;
 pub mod mseed;
 pub mod resample;
 pub mod sac;
+pub mod sds;
 pub mod smc;
 pub mod stationxml;
 pub mod textfmt;

@@ -53,8 +53,12 @@ struct DataRecord {
     start_ns: i64,
     rate_hz: f64,
     samples: Vec<f64>,
+    /// Samples the header announces (`samples` is empty when not decoded).
+    nsamples: usize,
     /// Byte offset of the record in the file (for error messages).
     offset: usize,
+    /// Record length, bytes.
+    len: usize,
 }
 
 /// A run of samples on a uniform grid, to be joined with others of the same channel.
@@ -263,6 +267,102 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     })
 }
 
+/// `NET.STA.LOC.CHA` codes of a stream (at most 2, 5, 2 and 3 characters;
+/// the location code may be empty).
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct StreamCodes {
+    pub network: String,
+    pub station: String,
+    pub location: String,
+    pub channel: String,
+}
+
+impl StreamCodes {
+    /// `NET.STA.LOC.CHA`, the id of the records of this stream.
+    pub fn id(&self) -> String {
+        format!(
+            "{}.{}.{}.{}",
+            self.network, self.station, self.location, self.channel
+        )
+    }
+}
+
+/// Where one data record of a file lies and what its header says: an
+/// entry of a file's index ([`index`]), from which a reader decodes only
+/// the records a time window needs ([`decode_record`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordSpan {
+    /// `NET.STA.LOC.CHA`.
+    pub id: String,
+    /// Byte offset of the record in the file, and its length.
+    pub offset: u64,
+    pub len: usize,
+    /// Time of the first sample, ns since the Unix epoch (time correction applied).
+    pub start_ns: i64,
+    pub rate_hz: f64,
+    pub samples: usize,
+}
+
+impl RecordSpan {
+    /// Time just after the last sample: start + samples / rate.
+    pub fn end_ns(&self) -> i64 {
+        // Saturating: a corrupt rate must not overflow the time (the cast saturates too).
+        self.start_ns
+            .saturating_add((self.samples as f64 * NS_PER_S / self.rate_hz).round() as i64)
+    }
+}
+
+/// Index of a whole MiniSEED file: every data record with samples, in file
+/// order, headers checked but no sample decoded.  Records without samples
+/// (logs, empty records) are left out, as [`read`] leaves them out.
+pub fn index(bytes: &[u8], source: &SourceRef) -> Result<Vec<RecordSpan>> {
+    let mut src = source.clone();
+    src.format = "mseed".into();
+    let mut out = Vec::new();
+    let mut offset = 0usize;
+    while offset < bytes.len() {
+        match parse_record(&bytes[offset..], offset, &src, false)? {
+            None => break,
+            Some((Parsed::Data(r), len)) => {
+                out.push(RecordSpan {
+                    id: r.id,
+                    offset: offset as u64,
+                    len: r.len,
+                    start_ns: r.start_ns,
+                    rate_hz: r.rate_hz,
+                    samples: r.nsamples,
+                });
+                offset += len;
+            }
+            Some((Parsed::Skipped(_), len)) => offset += len,
+        }
+    }
+    Ok(out)
+}
+
+/// Decodes one record, `bytes` being exactly the record that lies at
+/// `span.offset` of the file `source` (errors name that file and offset).
+/// The header is parsed again and must agree with the index entry.
+pub fn decode_record(bytes: &[u8], span: &RecordSpan, source: &SourceRef) -> Result<Segment> {
+    let mut src = source.clone();
+    src.format = "mseed".into();
+    let at = span.offset as usize;
+    match parse_record(bytes, at, &src, true)? {
+        Some((Parsed::Data(r), _)) if r.id == span.id && r.start_ns == span.start_ns => {
+            Ok(Segment {
+                start_ns: r.start_ns,
+                rate_hz: r.rate_hz,
+                samples: r.samples,
+                origin: format!("{} record at byte {at}", src.file),
+            })
+        }
+        _ => Err(Error::input(
+            super::location(&src).at_byte(at as u64),
+            "MiniSEED record changed since the file was indexed (the file is being rewritten?)",
+        )),
+    }
+}
+
 /// Whether `head` starts like a MiniSEED 2 record (sequence number, quality
 /// indicator, plausible BTIME in either byte order), for format sniffing.
 pub fn looks_like(head: &[u8]) -> bool {
@@ -345,237 +445,271 @@ struct SkippedRecord {
 }
 
 fn parse_records(bytes: &[u8], src: &SourceRef) -> Result<(Vec<DataRecord>, Vec<SkippedRecord>)> {
-    let mut skipped = Vec::new();
-    let err =
-        |offset: usize, msg: String| Error::input(super::location(src).at_byte(offset as u64), msg);
-    let mut out = Vec::new();
+    let (mut out, mut skipped) = (Vec::new(), Vec::new());
     let mut offset = 0usize;
     while offset < bytes.len() {
-        let rest = &bytes[offset..];
-        // Trailing padding (zeros or spaces) after the last record is tolerated.
-        if rest.iter().all(|&b| b == 0 || b == b' ') {
-            break;
+        match parse_record(&bytes[offset..], offset, src, true)? {
+            None => break,
+            Some((Parsed::Data(r), len)) => {
+                out.push(r);
+                offset += len;
+            }
+            Some((Parsed::Skipped(k), len)) => {
+                skipped.push(k);
+                offset += len;
+            }
         }
-        if rest.len() < FIXED_HEADER_LEN {
-            return Err(err(
-                offset,
-                format!("truncated MiniSEED record: {} bytes left, a fixed header needs {FIXED_HEADER_LEN}", rest.len()),
-            ));
-        }
-        if rest.starts_with(b"MS") && rest.get(2) == Some(&3) {
-            return Err(err(
-                offset,
-                "MiniSEED 3 records are not supported (only MiniSEED 2)".into(),
-            ));
-        }
-        let seq_ok = rest[..6]
-            .iter()
-            .all(|c| c.is_ascii_digit() || *c == b' ' || *c == 0);
-        let quality = rest[6];
-        if !seq_ok || !matches!(quality, b'D' | b'R' | b'Q' | b'M') {
-            return Err(err(
-                offset,
-                "not a MiniSEED 2 record header (sequence number / quality indicator invalid)"
-                    .into(),
-            ));
-        }
-        // Header byte order: the BTIME year and day must be plausible.
-        let order = [ByteOrder::Big, ByteOrder::Little]
-            .into_iter()
-            .find(|&o| {
-                let y = u16_at(rest, 20, o).unwrap_or(0);
-                let d = u16_at(rest, 22, o).unwrap_or(0);
-                (1900..=2500).contains(&y) && (1..=366).contains(&d)
-            })
-            .ok_or_else(|| {
-                err(
-                    offset,
-                    "record start time (BTIME) is invalid in either byte order".into(),
-                )
-            })?;
-        let h = |at: usize| u16_at(rest, at, order).unwrap_or(0);
-        let station = ascii_field(&rest[8..13]);
-        let location = ascii_field(&rest[13..15]);
-        let channel = ascii_field(&rest[15..18]);
-        let network = ascii_field(&rest[18..20]);
-        let (year, day) = (h(20), h(22));
-        let (hour, minute, second) = (rest[24], rest[25], rest[26]);
-        let fract_100us = h(28);
-        let nsamples = h(30) as usize;
-        let factor = i16_at(rest, 32, order).unwrap_or(0);
-        let multiplier = i16_at(rest, 34, order).unwrap_or(0);
-        let activity = rest[36];
-        let nblockettes = rest[39];
-        let time_correction = u32_at(rest, 40, order).unwrap_or(0) as i32;
-        let data_offset = h(44) as usize;
-        let first_blockette = h(46) as usize;
+    }
+    Ok((out, skipped))
+}
 
-        // Blockette chain.
-        let mut encoding: Option<u8> = None;
-        let mut data_order = order;
-        let mut record_len: Option<usize> = None;
-        let mut microseconds: i64 = 0;
-        let mut frame_count: usize = 0;
-        let mut exact_rate: Option<f64> = None;
-        let mut at = first_blockette;
-        let mut seen = 0usize;
-        while at != 0 {
-            if at < FIXED_HEADER_LEN || seen > nblockettes.max(8) as usize + 8 {
-                return Err(err(
-                    offset,
-                    format!("blockette chain is broken (next blockette at {at})"),
-                ));
-            }
-            let btype = u16_at(rest, at, order).ok_or_else(|| {
-                err(
-                    offset + at,
-                    "truncated MiniSEED record inside a blockette".into(),
-                )
-            })?;
-            let next = u16_at(rest, at + 2, order).unwrap_or(0) as usize;
-            match btype {
-                1000 => {
-                    let b = rest.get(at + 4..at + 7).ok_or_else(|| {
-                        err(
-                            offset + at,
-                            "truncated MiniSEED record inside blockette 1000".into(),
-                        )
-                    })?;
-                    encoding = Some(b[0]);
-                    data_order = if b[1] == 0 {
-                        ByteOrder::Little
-                    } else {
-                        ByteOrder::Big
-                    };
-                    if !(7..=20).contains(&b[2]) {
-                        return Err(err(
-                            offset + at,
-                            format!(
-                                "blockette 1000 record length exponent {} is out of range",
-                                b[2]
-                            ),
-                        ));
-                    }
-                    record_len = Some(1usize << b[2]);
-                }
-                1001 => {
-                    let b = rest.get(at + 4..at + 8).ok_or_else(|| {
-                        err(
-                            offset + at,
-                            "truncated MiniSEED record inside blockette 1001".into(),
-                        )
-                    })?;
-                    microseconds = b[1] as i8 as i64;
-                    frame_count = b[3] as usize;
-                }
-                100 => {
-                    let v = u32_at(rest, at + 4, order).ok_or_else(|| {
-                        err(
-                            offset + at,
-                            "truncated MiniSEED record inside blockette 100".into(),
-                        )
-                    })?;
-                    let r = f32::from_bits(v) as f64;
-                    if r.is_finite() && r > 0.0 {
-                        exact_rate = Some(r);
-                    }
-                }
-                _ => {}
-            }
-            if next != 0 && next <= at {
-                return Err(err(
-                    offset + at,
-                    format!("blockette chain loops back (next blockette at {next})"),
-                ));
-            }
-            at = next;
-            seen += 1;
-        }
-        let record_len = record_len.ok_or_else(|| {
-            err(
-                offset,
-                "MiniSEED record without blockette 1000 (record length and encoding unknown)"
-                    .into(),
-            )
-        })?;
-        if rest.len() < record_len {
-            return Err(err(
-                offset,
-                format!(
-                    "truncated MiniSEED record: blockette 1000 says {record_len} bytes, only {} remain in the file",
-                    rest.len()
-                ),
-            ));
-        }
-        let record = &rest[..record_len];
-        let encoding = encoding.unwrap_or(0);
-        let rate = exact_rate.unwrap_or_else(|| rate_from_factor(factor, multiplier));
-        let id = format!("{network}.{station}.{location}.{channel}");
-        if nsamples == 0 || rate <= 0.0 || encoding == 0 {
-            // Log, detection or empty record: no samples. Noted on the
-            // channel of the same id, if it has data records.
-            skipped.push(SkippedRecord {
-                id: id.clone(),
-                offset,
-                why: if encoding == 0 {
-                    "encoding 0 (ASCII log)"
-                } else if nsamples == 0 {
-                    "0 samples"
-                } else {
-                    "sample rate 0"
-                },
-            });
-            offset += record_len;
-            continue;
-        }
-        if data_offset < FIXED_HEADER_LEN || data_offset > record_len {
-            return Err(err(
-                offset,
-                format!("data offset {data_offset} outside the {record_len}-byte record"),
-            ));
-        }
-        let data = &record[data_offset..];
-        let decoded = decode(data, encoding, data_order, nsamples, frame_count)
-            .map_err(|m| err(offset, format!("{id}: {m}")))?;
+/// What one record holds: samples, or nothing usable (and why).
+enum Parsed {
+    Data(DataRecord),
+    Skipped(SkippedRecord),
+}
 
-        let mut start_ns = epoch_ns_from_ordinal(
-            year as i64,
-            day as u32,
-            hour as u32,
-            minute as u32,
-            second as f64,
-        )
+/// Parses the record at the start of `rest`, which lies at byte `offset`
+/// of the file (for messages): what it holds and its length in bytes;
+/// `None` for trailing padding.  Samples are decoded only when
+/// `decode_samples` (an index of a file needs the headers alone).  Every
+/// header field is checked against the bytes present before it is used.
+fn parse_record(
+    rest: &[u8],
+    offset: usize,
+    src: &SourceRef,
+    decode_samples: bool,
+) -> Result<Option<(Parsed, usize)>> {
+    let err =
+        |offset: usize, msg: String| Error::input(super::location(src).at_byte(offset as u64), msg);
+    // Trailing padding (zeros or spaces) after the last record is tolerated.
+    if rest.iter().all(|&b| b == 0 || b == b' ') {
+        return Ok(None);
+    }
+    if rest.len() < FIXED_HEADER_LEN {
+        return Err(err(
+            offset,
+            format!(
+                "truncated MiniSEED record: {} bytes left, a fixed header needs {FIXED_HEADER_LEN}",
+                rest.len()
+            ),
+        ));
+    }
+    if rest.starts_with(b"MS") && rest.get(2) == Some(&3) {
+        return Err(err(
+            offset,
+            "MiniSEED 3 records are not supported (only MiniSEED 2)".into(),
+        ));
+    }
+    let seq_ok = rest[..6]
+        .iter()
+        .all(|c| c.is_ascii_digit() || *c == b' ' || *c == 0);
+    let quality = rest[6];
+    if !seq_ok || !matches!(quality, b'D' | b'R' | b'Q' | b'M') {
+        return Err(err(
+            offset,
+            "not a MiniSEED 2 record header (sequence number / quality indicator invalid)".into(),
+        ));
+    }
+    // Header byte order: the BTIME year and day must be plausible.
+    let order = [ByteOrder::Big, ByteOrder::Little]
+        .into_iter()
+        .find(|&o| {
+            let y = u16_at(rest, 20, o).unwrap_or(0);
+            let d = u16_at(rest, 22, o).unwrap_or(0);
+            (1900..=2500).contains(&y) && (1..=366).contains(&d)
+        })
         .ok_or_else(|| {
             err(
                 offset,
-                format!("invalid record start time {year},{day} {hour}:{minute}:{second}"),
+                "record start time (BTIME) is invalid in either byte order".into(),
             )
         })?;
-        let mut shift = fract_100us as i64 * 100_000 + microseconds * 1_000;
-        // Activity flag bit 1: time correction already applied to BTIME.
-        if activity & 0x02 == 0 {
-            shift += time_correction as i64 * 100_000;
-        }
-        start_ns = start_ns.checked_add(shift).ok_or_else(|| {
-            err(
+    let h = |at: usize| u16_at(rest, at, order).unwrap_or(0);
+    let station = ascii_field(&rest[8..13]);
+    let location = ascii_field(&rest[13..15]);
+    let channel = ascii_field(&rest[15..18]);
+    let network = ascii_field(&rest[18..20]);
+    let (year, day) = (h(20), h(22));
+    let (hour, minute, second) = (rest[24], rest[25], rest[26]);
+    let fract_100us = h(28);
+    let nsamples = h(30) as usize;
+    let factor = i16_at(rest, 32, order).unwrap_or(0);
+    let multiplier = i16_at(rest, 34, order).unwrap_or(0);
+    let activity = rest[36];
+    let nblockettes = rest[39];
+    let time_correction = u32_at(rest, 40, order).unwrap_or(0) as i32;
+    let data_offset = h(44) as usize;
+    let first_blockette = h(46) as usize;
+
+    // Blockette chain.
+    let mut encoding: Option<u8> = None;
+    let mut data_order = order;
+    let mut record_len: Option<usize> = None;
+    let mut microseconds: i64 = 0;
+    let mut frame_count: usize = 0;
+    let mut exact_rate: Option<f64> = None;
+    let mut at = first_blockette;
+    let mut seen = 0usize;
+    while at != 0 {
+        if at < FIXED_HEADER_LEN || seen > nblockettes.max(8) as usize + 8 {
+            return Err(err(
                 offset,
-                format!("record start time {year},{day} {hour}:{minute}:{second} is out of range"),
+                format!("blockette chain is broken (next blockette at {at})"),
+            ));
+        }
+        let btype = u16_at(rest, at, order).ok_or_else(|| {
+            err(
+                offset + at,
+                "truncated MiniSEED record inside a blockette".into(),
             )
         })?;
-        out.push(DataRecord {
-            id,
-            network,
-            station,
-            location,
-            channel,
-            start_ns,
-            rate_hz: rate,
-            samples: decoded,
-            offset,
-        });
-        offset += record_len;
+        let next = u16_at(rest, at + 2, order).unwrap_or(0) as usize;
+        match btype {
+            1000 => {
+                let b = rest.get(at + 4..at + 7).ok_or_else(|| {
+                    err(
+                        offset + at,
+                        "truncated MiniSEED record inside blockette 1000".into(),
+                    )
+                })?;
+                encoding = Some(b[0]);
+                data_order = if b[1] == 0 {
+                    ByteOrder::Little
+                } else {
+                    ByteOrder::Big
+                };
+                if !(7..=20).contains(&b[2]) {
+                    return Err(err(
+                        offset + at,
+                        format!(
+                            "blockette 1000 record length exponent {} is out of range",
+                            b[2]
+                        ),
+                    ));
+                }
+                record_len = Some(1usize << b[2]);
+            }
+            1001 => {
+                let b = rest.get(at + 4..at + 8).ok_or_else(|| {
+                    err(
+                        offset + at,
+                        "truncated MiniSEED record inside blockette 1001".into(),
+                    )
+                })?;
+                microseconds = b[1] as i8 as i64;
+                frame_count = b[3] as usize;
+            }
+            100 => {
+                let v = u32_at(rest, at + 4, order).ok_or_else(|| {
+                    err(
+                        offset + at,
+                        "truncated MiniSEED record inside blockette 100".into(),
+                    )
+                })?;
+                let r = f32::from_bits(v) as f64;
+                if r.is_finite() && r > 0.0 {
+                    exact_rate = Some(r);
+                }
+            }
+            _ => {}
+        }
+        if next != 0 && next <= at {
+            return Err(err(
+                offset + at,
+                format!("blockette chain loops back (next blockette at {next})"),
+            ));
+        }
+        at = next;
+        seen += 1;
     }
-    Ok((out, skipped))
+    let record_len = record_len.ok_or_else(|| {
+        err(
+            offset,
+            "MiniSEED record without blockette 1000 (record length and encoding unknown)".into(),
+        )
+    })?;
+    if rest.len() < record_len {
+        return Err(err(
+            offset,
+            format!(
+                "truncated MiniSEED record: blockette 1000 says {record_len} bytes, only {} remain in the file",
+                rest.len()
+            ),
+        ));
+    }
+    let record = &rest[..record_len];
+    let encoding = encoding.unwrap_or(0);
+    let rate = exact_rate.unwrap_or_else(|| rate_from_factor(factor, multiplier));
+    let id = format!("{network}.{station}.{location}.{channel}");
+    if nsamples == 0 || rate <= 0.0 || encoding == 0 {
+        // Log, detection or empty record: no samples. Noted on the
+        // channel of the same id, if it has data records.
+        let skipped = SkippedRecord {
+            id: id.clone(),
+            offset,
+            why: if encoding == 0 {
+                "encoding 0 (ASCII log)"
+            } else if nsamples == 0 {
+                "0 samples"
+            } else {
+                "sample rate 0"
+            },
+        };
+        return Ok(Some((Parsed::Skipped(skipped), record_len)));
+    }
+    if data_offset < FIXED_HEADER_LEN || data_offset > record_len {
+        return Err(err(
+            offset,
+            format!("data offset {data_offset} outside the {record_len}-byte record"),
+        ));
+    }
+    let data = &record[data_offset..];
+    let decoded = if decode_samples {
+        decode(data, encoding, data_order, nsamples, frame_count)
+            .map_err(|m| err(offset, format!("{id}: {m}")))?
+    } else {
+        Vec::new()
+    };
+
+    let mut start_ns = epoch_ns_from_ordinal(
+        year as i64,
+        day as u32,
+        hour as u32,
+        minute as u32,
+        second as f64,
+    )
+    .ok_or_else(|| {
+        err(
+            offset,
+            format!("invalid record start time {year},{day} {hour}:{minute}:{second}"),
+        )
+    })?;
+    let mut shift = fract_100us as i64 * 100_000 + microseconds * 1_000;
+    // Activity flag bit 1: time correction already applied to BTIME.
+    if activity & 0x02 == 0 {
+        shift += time_correction as i64 * 100_000;
+    }
+    start_ns = start_ns.checked_add(shift).ok_or_else(|| {
+        err(
+            offset,
+            format!("record start time {year},{day} {hour}:{minute}:{second} is out of range"),
+        )
+    })?;
+    let record = DataRecord {
+        id,
+        network,
+        station,
+        location,
+        channel,
+        start_ns,
+        rate_hz: rate,
+        samples: decoded,
+        nsamples,
+        offset,
+        len: record_len,
+    };
+    Ok(Some((Parsed::Data(record), record_len)))
 }
 
 /// Decodes a record's data section.

@@ -20,6 +20,7 @@ pub mod plot;
 pub use plot::decimate_curve;
 mod sections;
 pub mod table;
+pub mod tracking;
 
 use std::path::{Path, PathBuf};
 

@@ -9,6 +9,7 @@ pub mod hysteresis_tables;
 pub mod matrix_market;
 pub mod mcap_writer;
 pub mod modal_tables;
+pub mod mseed_writer;
 pub mod parquet;
 pub mod provenance;
 pub mod rehearsal_tables;

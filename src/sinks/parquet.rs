@@ -149,6 +149,16 @@ impl TableBuilder {
             .collect();
         self.push(name.as_ref(), ColumnType::Utf8, true, Arc::new(a))
     }
+    /// Timestamp(ns, UTC), not null: absolute times.
+    pub fn timestamp_ns(self, name: impl AsRef<str>, values: Vec<i64>) -> Self {
+        let a = TimestampNanosecondArray::from(values).with_timezone("UTC");
+        self.push(
+            name.as_ref(),
+            ColumnType::TimestampNsUtc,
+            false,
+            Arc::new(a),
+        )
+    }
     /// Timestamp(ns, UTC), nullable: absolute times.
     pub fn opt_timestamp_ns(self, name: impl AsRef<str>, values: Vec<Option<i64>>) -> Self {
         let a = TimestampNanosecondArray::from(values).with_timezone("UTC");

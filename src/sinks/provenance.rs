@@ -40,6 +40,15 @@ impl Provenance {
         }
     }
 
+    /// The provenance of data that is not an event (a continuous archive):
+    /// its identity as given, no steps yet.
+    pub fn of_source(identity: serde_json::Value) -> Self {
+        Provenance {
+            event_json: identity.to_string(),
+            history: ProcessingHistory::default(),
+        }
+    }
+
     /// Reads the provenance back from a table's key/value metadata; `None`
     /// when the table does not carry the event key (a table another tool
     /// wrote).  A missing or unreadable history is taken as empty: the event

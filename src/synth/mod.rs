@@ -20,6 +20,7 @@
 //! The numerical code of this file, [`plan`] and [`ground_motion`] is free of I/O;
 //! [`event`] and [`facade`] write the bundled sample events (`quaketwin synth`).
 
+pub mod archive;
 pub mod event;
 pub mod facade;
 pub mod ground_motion;

@@ -16,7 +16,10 @@ pub use channel::{Axis, Channel, Direction, QaFlag, Role, SourceRef};
 pub use event::{Event, Record, Structure};
 pub use history::{ProcessingHistory, ProcessingStep};
 pub use samples::{SampleStore, Samples};
-pub use time::{epoch_ns_from_civil, epoch_ns_from_ordinal, format_epoch_ns, parse_iso8601_ns};
+pub use time::{
+    day_start_ns, epoch_ns_from_civil, epoch_ns_from_ordinal, format_epoch_ns,
+    ordinal_from_epoch_ns, parse_iso8601_ns, OrdinalTime,
+};
 pub use units::Units;
 
 /// Standard gravity, m/s² (units conversion from `g`).

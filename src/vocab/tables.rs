@@ -352,6 +352,30 @@ declare!(REHEARSAL_SUMMARY, rehearsal_summary, "rehearsal_summary", "rehearsal_s
     RECOMMENDED: "recommended", Bool, required, "", "the smallest safe λ at the design's NS mode count";
 });
 
+declare!(MODAL_TRACKING, modal_tracking, "modal_tracking", "modal_tracking.parquet",
+    "one row per window of a continuous record and tracked mode: frequency, damping, MAC to the reference shape, quality and the anomaly band (`quaketwin track`, docs/monitoring.md)", {
+    WINDOW_START: "window_start", TimestampNsUtc, required, "", "start of the window (UTC)";
+    WINDOW_END: "window_end", TimestampNsUtc, required, "", "end of the window (UTC, exclusive)";
+    MODE: "mode", U32, required, "", "id of the tracked mode: 1-based rank of its reference mode, the same in every window";
+    DIRECTION: "direction", Utf8, required, "", "direction label of this window's shape (`X`, `Y`, `torsion`, an azimuth such as `90deg`, `mixed`; empty when the channels' orientations are unknown)";
+    FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "identified natural frequency in this window";
+    FREQUENCY_STD_HZ: "frequency_std_hz", F64, required, "Hz", "scatter of the frequency over the model orders of the mode's pole column (`frequency_std_hz` of modes.parquet): a quality figure, large when the column is split";
+    DAMPING_RATIO: "damping_ratio", F64, required, "1", "identified modal damping ratio";
+    MAC_TO_REFERENCE: "mac_to_reference", F64, nullable, "1", "MAC between this window's shape and the reference shape on the shared channels (null when paired by frequency and direction: fewer than two shared channels)";
+    REFERENCE_FREQUENCY_HZ: "reference_frequency_hz", F64, required, "Hz", "frequency of the reference mode";
+    MPC: "mpc", F64, required, "1", "modal phase collinearity of the shape (1 = real mode)";
+    POLE_COUNT: "pole_count", U32, required, "", "stable poles (model orders) behind the mode";
+    PRESENT_FRACTION: "present_fraction", F64, required, "1", "share of the window's samples that were recorded (the least complete channel; gaps filled by interpolation do not count)";
+    RMS_LEVEL: "rms_level", F64, required, "m/s^2", "RMS level of the window: √(mean over channels of each channel's variance); in counts when the archive came without StationXML (`quaketwin.units`)";
+    TRAINING: "training", Bool, required, "", "the window lies in the training period of the anomaly band";
+    PREDICTED_FREQUENCY_HZ: "predicted_frequency_hz", F64, nullable, "Hz", "frequency the regression on RMS level and time of day predicts (docs/monitoring.md Eq. M1); null without a band";
+    BAND_LOW_HZ: "band_low_hz", F64, nullable, "Hz", "lower end of the 99 % prediction interval (Eq. M3)";
+    BAND_HIGH_HZ: "band_high_hz", F64, nullable, "Hz", "upper end of the 99 % prediction interval (Eq. M3)";
+    DEVIATION_PERCENT: "deviation_percent", F64, nullable, "%", "100 (f − predicted) / predicted";
+    FLAGGED: "flagged", Bool, nullable, "", "the frequency lies outside the band (Eq. M4); null without a band";
+    ANOMALOUS_WINDOW: "anomalous_window", Bool, required, "", "at least half of this window's modes with a band are flagged (Eq. M5; the same on every row of the window)";
+});
+
 /// Every table quaketwin writes, in pipeline order.
 pub const ALL_TABLES: &[&TableSchema] = &[
     &SAMPLES,
@@ -375,6 +399,7 @@ pub const ALL_TABLES: &[&TableSchema] = &[
     &HYBRID_PROTOTYPE,
     &REHEARSAL_SUMMARY,
     &REHEARSAL,
+    &MODAL_TRACKING,
 ];
 
 /// The declared table of a `quaketwin.schema` name.

@@ -77,6 +77,40 @@ pub fn epoch_ns_from_ordinal(
     jan1.checked_add((day_of_year as i64 - 1) * 86_400 * NS_PER_S)
 }
 
+/// A UTC time in the day-of-year form of SEED headers and SDS file names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OrdinalTime {
+    pub year: i64,
+    /// 1..=366.
+    pub day_of_year: u32,
+    pub hour: u32,
+    pub minute: u32,
+    pub second: u32,
+    /// Nanoseconds within the second.
+    pub nanosecond: u32,
+}
+
+/// The day-of-year form of epoch nanoseconds `ns` (inverse of [`epoch_ns_from_ordinal`]).
+pub fn ordinal_from_epoch_ns(ns: i64) -> OrdinalTime {
+    let secs = ns.div_euclid(NS_PER_S);
+    let days = secs.div_euclid(86_400);
+    let sod = secs.rem_euclid(86_400);
+    let (y, _, _) = civil_from_days(days);
+    OrdinalTime {
+        year: y,
+        day_of_year: (days - days_from_civil(y, 1, 1) + 1) as u32,
+        hour: (sod / 3600) as u32,
+        minute: ((sod / 60) % 60) as u32,
+        second: (sod % 60) as u32,
+        nanosecond: ns.rem_euclid(NS_PER_S) as u32,
+    }
+}
+
+/// Epoch nanoseconds of the UTC midnight that starts the day holding `ns`.
+pub fn day_start_ns(ns: i64) -> i64 {
+    ns.div_euclid(86_400 * NS_PER_S) * 86_400 * NS_PER_S
+}
+
 /// `2018-11-30T17:28:59.334500000Z`
 pub fn format_epoch_ns(ns: i64) -> String {
     let secs = ns.div_euclid(NS_PER_S);

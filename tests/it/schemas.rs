@@ -219,8 +219,25 @@ fn every_table_of_the_sample_runs_matches_its_declaration() {
     let out = shifts.path().join("out");
     run(&pipeline, "synthetic-4storey-ambient", &out);
 
+    // modal_tracking.parquet: a one-hour synthetic archive, 10-minute windows.
+    let archive = tempfile::tempdir().unwrap();
+    let settings = quaketwin::synth::archive::ArchiveSettings {
+        days: 1,
+        day_length_s: 3600.0,
+        rate_hz: 20.0,
+        channels: 4,
+        ..Default::default()
+    };
+    quaketwin::synth::archive::write_archive(archive.path(), &settings).unwrap();
+    let track = archive.path().join("track");
+    let mut opts = quaketwin::track::TrackOptions::new(&archive.path().join("sds"), &track);
+    opts.stationxml = Some(archive.path().join("station.xml"));
+    opts.window = "10m".into();
+    opts.end = Some("2026-01-01T01:00:00Z".into());
+    quaketwin::track::run(&opts).unwrap();
+
     let mut seen = BTreeSet::new();
-    for dir in [quake.path(), design.path(), &out] {
+    for dir in [quake.path(), design.path(), &out, &track] {
         check_outputs(dir, &mut seen);
     }
     let never: Vec<&str> = ALL_TABLES

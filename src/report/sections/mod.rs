@@ -330,12 +330,7 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
         .collect::<Vec<_>>()
         .join(" ");
     let mut page = String::with_capacity(1 << 20);
-    page.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n");
-    // No network at all: the policy blocks every fetch; styles are inline.
-    page.push_str("<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; style-src 'unsafe-inline'; img-src data:\"/>\n");
-    page.push_str("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"/>\n");
-    page.push_str(&format!("<title>{}</title>\n", escape(&title)));
-    page.push_str(&format!("<style>{CSS}</style>\n</head>\n<body>\n"));
+    page.push_str(&page_head(&title));
     page.push_str(&format!(
         "<header><h1>{}</h1><p class=\"meta\">Output directory: <code>{}</code> · quaketwin {}</p><nav>{toc}</nav></header>\n<main>\n",
         escape(&title),
@@ -411,6 +406,18 @@ fn generic(dir: &Path, declared: &TableSchema, settings: &ReportSettings, body: 
     if let Some(t) = require(&loaded, declared, body) {
         body.push_str(&whole_table(t, settings.max_table_rows));
     }
+}
+
+/// The start of a self-contained page up to `<body>`: no network at all
+/// (the policy blocks every fetch), styles inline.
+pub(crate) fn page_head(title: &str) -> String {
+    let mut page = String::new();
+    page.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\"/>\n");
+    page.push_str("<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; style-src 'unsafe-inline'; img-src data:\"/>\n");
+    page.push_str("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"/>\n");
+    page.push_str(&format!("<title>{}</title>\n", escape(title)));
+    page.push_str(&format!("<style>{CSS}</style>\n</head>\n<body>\n"));
+    page
 }
 
 const CSS: &str = r#"

@@ -1,0 +1,251 @@
+//! `tracking.html`: the page of `quaketwin track` — per tracked mode, the
+//! frequency over time with the 99 % band of its regression shaded, the
+//! flagged windows marked, the training period and the anomaly onset as
+//! vertical lines; then a summary table (reference frequency, mean shift of
+//! the flagged windows after training, first flagged window).  Same style
+//! as the event report (inline SVG and CSS, no scripts, no network).
+
+use super::html::{escape, format_number};
+use super::plot::{css_colour, render, Chart, Mark, RefLine, Series};
+use crate::monitor::Tracking;
+use crate::vocab::format_epoch_ns;
+
+const NS_PER_H: f64 = 3.6e12;
+/// Colours (palette indices): identified, flagged, band.
+const IDENTIFIED: usize = 0;
+const FLAGGED: usize = 1;
+const BAND: usize = 2;
+
+/// Shades the band: a translucent polygon through (x, low) and (x, high),
+/// mapped onto the chart's plot area (`data-plot-area` of the rendered SVG;
+/// the chart's ranges are explicit, so the mapping is linear and exact).
+fn shade_band(svg: &str, chart: &Chart, band: &[(f64, f64, f64)]) -> String {
+    let (Some((x0, x1)), Some((y0, y1))) = (chart.x_range, chart.y_range) else {
+        return svg.to_string();
+    };
+    let area: Option<Vec<f64>> = svg
+        .split("data-plot-area=\"")
+        .nth(1)
+        .and_then(|r| r.split('"').next())
+        .map(|a| a.split(' ').filter_map(|v| v.parse().ok()).collect());
+    let Some([px0, py0, px1, py1]) = area.as_deref().and_then(|a| <[f64; 4]>::try_from(a).ok())
+    else {
+        return svg.to_string();
+    };
+    let px = |x: f64| px0 + (x - x0) / (x1 - x0) * (px1 - px0);
+    let py = |y: f64| py1 - (y.clamp(y0, y1) - y0) / (y1 - y0) * (py1 - py0);
+    let mut points: Vec<String> = band
+        .iter()
+        .map(|&(x, _, hi)| format!("{:.1},{:.1}", px(x), py(hi)))
+        .collect();
+    points.extend(
+        band.iter()
+            .rev()
+            .map(|&(x, lo, _)| format!("{:.1},{:.1}", px(x), py(lo))),
+    );
+    let polygon = format!(
+        "<polygon points=\"{}\" fill=\"{}\" fill-opacity=\"0.18\" stroke=\"none\"><title>99 % prediction band</title></polygon>",
+        points.join(" "),
+        css_colour(BAND)
+    );
+    match svg.rfind("</svg>") {
+        Some(at) => format!("{}{polygon}{}", &svg[..at], &svg[at..]),
+        None => svg.to_string(),
+    }
+}
+
+/// One mode's chart: hours since `origin` on x.
+fn mode_chart(t: &Tracking, id: usize, origin: i64) -> String {
+    let hours = |ns: i64| (ns - origin) as f64 / NS_PER_H;
+    let mid = |w: usize| {
+        let win = &t.windows[w];
+        hours(win.start_ns) + 0.5 * (win.end_ns - win.start_ns) as f64 / NS_PER_H
+    };
+    let (mut ok, mut flagged, mut band) = (Vec::new(), Vec::new(), Vec::new());
+    for (r, b) in t.rows.iter().zip(&t.bands).filter(|(r, _)| r.mode_id == id) {
+        let x = mid(r.window);
+        match b {
+            Some(b) if b.flagged => flagged.push((x, r.frequency_hz)),
+            _ => ok.push((x, r.frequency_hz)),
+        }
+        if let Some(b) = b {
+            band.push((x, b.low_hz, b.high_hz));
+        }
+    }
+    if ok.is_empty() && flagged.is_empty() {
+        return "<p class=\"note\">Not found in any window.</p>".into();
+    }
+    let end = t.windows.last().map(|w| hours(w.end_ns)).unwrap_or(1.0);
+    let ys = ok
+        .iter()
+        .chain(&flagged)
+        .map(|p| p.1)
+        .chain(band.iter().flat_map(|b| [b.1, b.2]));
+    let (lo, hi) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| {
+        (a.min(y), b.max(y))
+    });
+    let pad = 0.08 * (hi - lo).max(1e-6 * hi.abs());
+    let mut chart = Chart::new(
+        880,
+        260,
+        "time since the first window (h)",
+        "frequency (Hz)",
+    );
+    chart.x_range = Some((0.0, end.max(1e-9)));
+    chart.y_range = Some((lo - pad, hi + pad));
+    let predicted: Vec<(f64, f64)> = band.iter().map(|b| (b.0, 0.5 * (b.1 + b.2))).collect();
+    if !predicted.is_empty() {
+        chart.series.push(Series::new(
+            "predicted (Eq. M1)",
+            predicted,
+            BAND,
+            Mark::Line,
+        ));
+    }
+    chart.series.push(Series::new(
+        "identified",
+        ok,
+        IDENTIFIED,
+        Mark::FilledCircle,
+    ));
+    if !flagged.is_empty() {
+        chart.series.push(Series::new(
+            "flagged (outside the band)",
+            flagged,
+            FLAGGED,
+            Mark::Cross,
+        ));
+    }
+    let training_end = hours(t.band_settings.training_end_ns);
+    if training_end > 0.0 && training_end < end {
+        chart.ref_lines.push(RefLine {
+            at: training_end,
+            horizontal: false,
+            colour: 6,
+        });
+    }
+    if let Some(i) = t.anomaly_from {
+        chart.ref_lines.push(RefLine {
+            at: hours(t.windows[i].start_ns),
+            horizontal: false,
+            colour: FLAGGED,
+        });
+    }
+    match render(&chart) {
+        Ok(svg) => format!(
+            "{}{}",
+            shade_band(&svg, &chart, &band),
+            super::plot::legend(&chart.series)
+        ),
+        Err(e) => format!("<p class=\"note\">No chart: {}</p>", escape(&e)),
+    }
+}
+
+/// The whole page.
+pub fn page(t: &Tracking, units: &str, streams: &[String]) -> String {
+    let origin = t.windows.first().map(|w| w.start_ns).unwrap_or(0);
+    let training_end = t.band_settings.training_end_ns;
+    let mut p = super::sections::page_head("quaketwin — frequency tracking");
+    p.push_str("<header><h1>Continuous monitoring: frequency tracking</h1>");
+    p.push_str(&format!(
+        "<p class=\"meta\">{} windows from {} · streams {} · RMS in {} · quaketwin {}</p></header>\n<main>\n",
+        t.windows.len(),
+        escape(&format_epoch_ns(origin)),
+        escape(&streams.join(", ")),
+        escape(units),
+        env!("CARGO_PKG_VERSION")
+    ));
+    let identified = t.windows.iter().filter(|w| !w.modes.is_empty()).count();
+    let verdict = match t.anomaly_from {
+        Some(i) => format!(
+            "<div class=\"rating-box r-red\"><p class=\"big\"><b>Anomaly from {}</b></p><p>At least half of the tracked modes left their 99 % band in {} or more consecutive windows (Eq. M5).</p></div>",
+            escape(&format_epoch_ns(t.windows[i].start_ns)),
+            t.band_settings.min_run
+        ),
+        None => "<div class=\"rating-box r-green\"><p class=\"big\"><b>No sustained anomaly</b></p><p>No run of anomalous windows after the training period (Eq. M5).</p></div>".into(),
+    };
+    p.push_str(&verdict);
+    p.push_str(&format!(
+        "<p class=\"lead\">{identified} of {} windows identified; reference modes from {}; band trained on the windows before {} (regression of the frequency on the window's RMS level and the time of day, 99 % prediction interval: docs/monitoring.md).</p>\n",
+        t.windows.len(),
+        escape(&t.reference.source),
+        escape(&format_epoch_ns(training_end)),
+    ));
+    // Summary table.
+    p.push_str("<h2 id=\"summary\">Tracked modes</h2>\n<div class=\"scroll\"><table><tr><th>mode</th><th>direction</th><th>reference f (Hz)</th><th>windows found</th><th>flagged after training</th><th>mean shift of the flagged windows (%)</th><th>first flagged window</th></tr>\n");
+    for (k, m) in t.reference.modes.iter().enumerate() {
+        let id = k + 1;
+        let after: Vec<f64> = t
+            .rows
+            .iter()
+            .zip(&t.bands)
+            .filter(|(r, _)| r.mode_id == id && t.windows[r.window].start_ns >= training_end)
+            .filter_map(|(r, b)| {
+                b.filter(|b| b.flagged).map(|b| {
+                    (
+                        r,
+                        100.0 * (r.frequency_hz - b.predicted_hz) / b.predicted_hz,
+                    )
+                })
+            })
+            .map(|(_, d)| d)
+            .collect();
+        let first = t
+            .rows
+            .iter()
+            .zip(&t.bands)
+            .find(|(r, b)| {
+                r.mode_id == id
+                    && t.windows[r.window].start_ns >= training_end
+                    && b.is_some_and(|b| b.flagged)
+            })
+            .map(|(r, _)| format_epoch_ns(t.windows[r.window].start_ns));
+        let found = t.rows.iter().filter(|r| r.mode_id == id).count();
+        let mean = (!after.is_empty()).then(|| after.iter().sum::<f64>() / after.len() as f64);
+        p.push_str(&format!(
+            "<tr><td class=\"num\">{id}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{found}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td></tr>\n",
+            escape(&m.direction),
+            format_number(m.frequency_hz),
+            after.len(),
+            mean.map(format_number).unwrap_or_else(|| "—".into()),
+            escape(first.as_deref().unwrap_or("—")),
+        ));
+    }
+    p.push_str("</table></div>\n");
+    // Charts.
+    p.push_str("<h2 id=\"frequencies\">Frequency over time</h2>\n<p class=\"note\">Shaded: the 99 % prediction band; black vertical line: end of the training period; vermillion vertical line: start of the sustained anomaly.</p>\n");
+    for (k, m) in t.reference.modes.iter().enumerate() {
+        p.push_str(&format!(
+            "<figure><h3>Mode {} ({} Hz{})</h3>{}</figure>\n",
+            k + 1,
+            format_number(m.frequency_hz),
+            if m.direction.is_empty() {
+                String::new()
+            } else {
+                format!(", {}", escape(&m.direction))
+            },
+            mode_chart(t, k + 1, origin)
+        ));
+    }
+    let skipped: Vec<String> = t
+        .windows
+        .iter()
+        .filter_map(|w| {
+            w.skipped.as_ref().map(|s| {
+                format!(
+                    "<li>{}: {}</li>",
+                    escape(&format_epoch_ns(w.start_ns)),
+                    escape(s)
+                )
+            })
+        })
+        .collect();
+    if !skipped.is_empty() {
+        p.push_str(&format!(
+            "<h2 id=\"skipped\">Skipped windows</h2><ul>{}</ul>\n",
+            skipped.join("")
+        ));
+    }
+    p.push_str("</main>\n</body>\n</html>\n");
+    p
+}

@@ -1,0 +1,788 @@
+//! `quaketwin track`: continuous monitoring from an SDS MiniSEED archive
+//! (issue 17 item 3).  The edges of [`crate::monitor`]: reads the archive
+//! window by window ([`crate::readers::sds`]), applies the StationXML,
+//! identifies the windows in parallel (rayon; each window independent, so
+//! the output does not depend on the thread count), then tracks, fits the
+//! anomaly band and writes `modal_tracking.parquet` and `tracking.html`
+//! (docs/monitoring.md).
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::modal::{ModalSettings, Mode};
+use crate::monitor::anomaly::{self, BandModel, BandSettings};
+use crate::monitor::tracking::{Reference, TrackSettings, TrackedMode};
+use crate::monitor::window::{parse_duration, WindowGrid, NS_PER_S};
+use crate::monitor::{analyse, identify_window, Tracking, WindowModes, WindowSignals};
+use crate::readers::mseed::StreamCodes;
+use crate::readers::sds::{SdsArchive, StreamPattern};
+use crate::readers::stationxml;
+use crate::sinks::parquet::{write_parquet, TableBuilder};
+use crate::sinks::provenance::Provenance;
+use crate::vocab::tables::{modal_tracking as col, MODAL_TRACKING};
+use crate::vocab::{format_epoch_ns, parse_iso8601_ns};
+
+pub const TABLE_FILE: &str = MODAL_TRACKING.file;
+pub const REPORT_FILE: &str = "tracking.html";
+
+/// The command's flags, as typed (checked by [`TrackOptions::plan`] before any work).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct TrackOptions {
+    pub archive: PathBuf,
+    pub out: PathBuf,
+    pub start: Option<String>,
+    pub end: Option<String>,
+    /// `NET.STA.LOC.CHAN` patterns; empty = every stream.
+    pub channels: Vec<String>,
+    pub stationxml: Option<PathBuf>,
+    pub window: String,
+    /// Default: the window length (no overlap).
+    pub step: Option<String>,
+    pub training: String,
+    pub reference: Option<PathBuf>,
+    /// Windows with a smaller share of recorded samples are skipped.
+    pub min_present: f64,
+    /// Period of the environmental cycle of the band (default 24 h).
+    pub cycle: String,
+}
+
+impl Default for TrackOptions {
+    fn default() -> Self {
+        TrackOptions::new(Path::new(""), Path::new(""))
+    }
+}
+
+impl TrackOptions {
+    pub fn new(archive: &Path, out: &Path) -> Self {
+        TrackOptions {
+            archive: archive.to_path_buf(),
+            out: out.to_path_buf(),
+            start: None,
+            end: None,
+            channels: Vec::new(),
+            stationxml: None,
+            window: "1h".into(),
+            step: None,
+            training: "24h".into(),
+            reference: None,
+            min_present: 0.9,
+            cycle: "24h".into(),
+        }
+    }
+}
+
+/// One mode's line of the summary.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ModeSummary {
+    pub mode: usize,
+    pub direction: String,
+    pub reference_frequency_hz: f64,
+    /// Windows where the mode was found.
+    pub windows: usize,
+    pub band: Option<BandModel>,
+    /// Flagged windows after the training period.
+    pub flagged_windows: usize,
+    /// Mean of `deviation_percent` over the flagged windows after training.
+    pub mean_flagged_deviation_percent: Option<f64>,
+    /// First flagged window after training.
+    pub first_flagged: Option<String>,
+}
+
+/// What `quaketwin track` did (`--json`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TrackSummary {
+    pub archive: PathBuf,
+    pub out: PathBuf,
+    pub streams: Vec<String>,
+    /// `m/s^2`, or `counts` without StationXML.
+    pub units: String,
+    pub start: String,
+    pub end: String,
+    pub window_s: f64,
+    pub step_s: f64,
+    pub windows: usize,
+    pub identified_windows: usize,
+    /// Windows skipped and why: (start, reason).
+    pub skipped: Vec<(String, String)>,
+    pub reference: String,
+    pub modes: Vec<ModeSummary>,
+    pub training_end: String,
+    /// First window of the first sustained anomaly (Eq. M5), if any.
+    pub anomaly_from: Option<String>,
+    /// Anomalous windows after training (Eq. M5).
+    pub anomalous_windows: usize,
+    pub seconds: f64,
+    pub files: Vec<PathBuf>,
+}
+
+/// Checked plan of a run: everything parsed before any record is read.
+struct Plan {
+    grid: WindowGrid,
+    patterns: Vec<StreamPattern>,
+    training_ns: i64,
+    cycle_s: f64,
+    reference: Option<(Vec<Mode>, Vec<String>, String)>,
+}
+
+fn time_flag(flag: &str, text: &str) -> Result<i64> {
+    parse_iso8601_ns(text).ok_or_else(|| {
+        Error::usage(format!(
+            "{flag} {text:?} is not a UTC time (example: 2026-01-01T00:00:00Z)"
+        ))
+    })
+}
+
+impl TrackOptions {
+    /// Checks every flag; `span` gives the archive's span for unset --start/--end.
+    fn plan(&self, span: impl FnOnce() -> Result<(i64, i64)>) -> Result<Plan> {
+        let length = parse_duration("--window", &self.window)?;
+        let step = match &self.step {
+            Some(s) => parse_duration("--step", s)?,
+            None => length,
+        };
+        let training_ns = parse_duration("--training", &self.training)?;
+        let cycle_s = parse_duration("--cycle", &self.cycle)? as f64 / NS_PER_S as f64;
+        if !(self.min_present > 0.0 && self.min_present <= 1.0) {
+            return Err(Error::usage(format!(
+                "--min-present must lie in (0, 1], got {}",
+                self.min_present
+            )));
+        }
+        let patterns = self
+            .channels
+            .iter()
+            .map(|p| StreamPattern::parse(p))
+            .collect::<Result<Vec<_>>>()?;
+        let start = self
+            .start
+            .as_deref()
+            .map(|t| time_flag("--start", t))
+            .transpose()?;
+        let end = self
+            .end
+            .as_deref()
+            .map(|t| time_flag("--end", t))
+            .transpose()?;
+        let reference = match &self.reference {
+            None => None,
+            Some(p) => {
+                let (modes, channels) = crate::sinks::modal_tables::read_modes(p)?;
+                if modes.is_empty() {
+                    return Err(Error::input(
+                        crate::error::Location::file(p.display().to_string()),
+                        "the reference holds no mode",
+                    ));
+                }
+                Some((modes, channels, p.display().to_string()))
+            }
+        };
+        let (start, end) = match (start, end) {
+            (Some(s), Some(e)) => (s, e),
+            (s, e) => {
+                let (a, b) = span()?;
+                (s.unwrap_or(a), e.unwrap_or(b))
+            }
+        };
+        Ok(Plan {
+            grid: WindowGrid::new(start, end, length, step)?,
+            patterns,
+            training_ns,
+            cycle_s,
+            reference,
+        })
+    }
+}
+
+/// Per stream: factor from counts to physical units, direction label, group.
+struct StreamCalibration {
+    scale: Vec<f64>,
+    directions: Vec<String>,
+    groups: Vec<String>,
+    units: String,
+}
+
+/// Applies the StationXML (module doc) at time `t_ns` to every stream.
+fn calibrate(streams: &[StreamCodes], xml: Option<&Path>, t_ns: i64) -> Result<StreamCalibration> {
+    let groups = streams
+        .iter()
+        .map(|c| format!("{}.{}", c.station, c.location))
+        .collect();
+    let Some(path) = xml else {
+        crate::console::warn(
+            "track: no StationXML (--stationxml): samples stay in counts, channel orientations are unknown (modes without direction labels); frequencies and damping are unaffected, shapes assume equal gains",
+        );
+        return Ok(StreamCalibration {
+            scale: vec![1.0; streams.len()],
+            directions: vec![String::new(); streams.len()],
+            groups,
+            units: "counts".into(),
+        });
+    };
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let source = crate::vocab::SourceRef {
+        file: path.display().to_string(),
+        member: None,
+        column: None,
+        format: "stationxml".into(),
+    };
+    let meta = stationxml::parse(&bytes, &source)?;
+    let mut scale = Vec::new();
+    let mut directions = Vec::new();
+    let mut missing = Vec::new();
+    for c in streams {
+        let src = crate::vocab::SourceRef {
+            format: "mseed".into(),
+            ..source.clone()
+        };
+        let mut ch = crate::vocab::Channel::new(
+            c.id(),
+            crate::vocab::Units::Counts {
+                counts_per_si: None,
+            },
+            1.0,
+            src,
+        );
+        ch.network = Some(c.network.clone());
+        ch.station = Some(c.station.clone());
+        ch.location_code = Some(c.location.clone());
+        ch.channel_code = Some(c.channel.clone());
+        ch.start_ns = Some(t_ns);
+        let mut rec = [crate::vocab::Record::new(ch, Vec::new())];
+        stationxml::apply(&mut rec, &meta);
+        let ch = &rec[0].channel;
+        match ch.units {
+            crate::vocab::Units::Counts {
+                counts_per_si: Some(g),
+            } => scale.push(1.0 / g),
+            _ => missing.push(c.id()),
+        }
+        directions.push(crate::modal::direction_label(ch));
+    }
+    if !missing.is_empty() {
+        return Err(Error::input(
+            crate::error::Location::file(path.display().to_string()),
+            format!(
+                "no acceleration sensitivity for {} at {}: every tracked stream needs its gain (or leave --stationxml out to work in counts)",
+                missing.join(", "),
+                format_epoch_ns(t_ns)
+            ),
+        ));
+    }
+    Ok(StreamCalibration {
+        scale,
+        directions,
+        groups,
+        units: "m/s^2".into(),
+    })
+}
+
+/// Reads and identifies the window starting at `t0`.
+fn window_modes(
+    archive: &SdsArchive,
+    cal: &StreamCalibration,
+    t0: i64,
+    length: i64,
+    min_present: f64,
+    settings: &ModalSettings,
+) -> WindowModes {
+    let t1 = t0 + length;
+    let read = match archive.read_window(t0, t1) {
+        Ok(Some(w)) => w,
+        Ok(None) => {
+            return WindowModes::skipped(t0, t1, 0.0, "no samples of some stream".into());
+        }
+        Err(e) => return WindowModes::skipped(t0, t1, 0.0, e.to_string()),
+    };
+    if read.present_fraction < min_present {
+        return WindowModes::skipped(
+            t0,
+            t1,
+            read.present_fraction,
+            format!(
+                "{:.1} % of the samples recorded, below --min-present {:.1} %",
+                100.0 * read.present_fraction,
+                100.0 * min_present
+            ),
+        );
+    }
+    let signals = read
+        .signals
+        .into_iter()
+        .zip(&cal.scale)
+        .map(|(s, k)| s.into_iter().map(|v| v * k).collect())
+        .collect();
+    let mut w = identify_window(
+        WindowSignals {
+            start_ns: t0,
+            end_ns: t1,
+            rate_hz: read.rate_hz,
+            ids: archive.streams().iter().map(StreamCodes::id).collect(),
+            directions: cal.directions.clone(),
+            groups: cal.groups.clone(),
+            signals,
+            present_fraction: read.present_fraction,
+        },
+        settings,
+    );
+    w.notes.extend(read.notes);
+    w
+}
+
+/// A checked run, ready to identify windows: flags parsed, archive opened
+/// and selected, StationXML applied.  Workers of a cluster each prepare
+/// their own and identify their share of [`Prepared::starts`]; one process
+/// then [`Prepared::finish`]es with every window.
+pub struct Prepared {
+    opts: TrackOptions,
+    plan: Plan,
+    archive: SdsArchive,
+    cal: StreamCalibration,
+    settings: ModalSettings,
+}
+
+/// Checks the flags (before the archive is walked, except --start/--end
+/// defaults, which need it), opens the archive and applies the StationXML.
+pub fn prepare(opts: &TrackOptions) -> Result<Prepared> {
+    crate::fixed_order_reductions();
+    let mut opened: Option<SdsArchive> = None;
+    let plan = opts.plan(|| {
+        let a = SdsArchive::open(&opts.archive)?;
+        let span = a.span();
+        opened = Some(a);
+        Ok(span)
+    })?;
+    let archive = match opened {
+        Some(a) => a,
+        None => SdsArchive::open(&opts.archive)?,
+    }
+    .select(&plan.patterns)?;
+    if archive.streams().len() < 2 {
+        return Err(Error::input(
+            crate::error::Location::file(opts.archive.display().to_string()),
+            format!(
+                "ambient identification needs at least two streams; the selection holds {}",
+                archive.streams().len()
+            ),
+        ));
+    }
+    let cal = calibrate(
+        archive.streams(),
+        opts.stationxml.as_deref(),
+        plan.grid.start_ns,
+    )?;
+    Ok(Prepared {
+        opts: opts.clone(),
+        plan,
+        archive,
+        cal,
+        settings: ModalSettings::default(),
+    })
+}
+
+impl Prepared {
+    /// Start times of every window of the run, ns.
+    pub fn starts(&self) -> Vec<i64> {
+        self.plan.grid.starts()
+    }
+
+    /// Identifies the windows starting at `starts` (in time order), in
+    /// parallel batches; the day-file indexes of days behind a batch are
+    /// dropped, so memory stays at a few windows.
+    pub fn identify(&self, starts: &[i64], progress: bool) -> Vec<WindowModes> {
+        let bar = crate::console::bar(starts.len() as u64, "track", "windows", !progress);
+        let batch = (2 * rayon::current_num_threads()).max(4);
+        let mut windows: Vec<WindowModes> = Vec::with_capacity(starts.len());
+        for chunk in starts.chunks(batch) {
+            let done: Vec<WindowModes> = chunk
+                .par_iter()
+                .map(|&t0| {
+                    window_modes(
+                        &self.archive,
+                        &self.cal,
+                        t0,
+                        self.plan.grid.length_ns,
+                        self.opts.min_present,
+                        &self.settings,
+                    )
+                })
+                .collect();
+            bar.inc(done.len() as u64);
+            windows.extend(done);
+            if let Some(&next) = chunk.last() {
+                self.archive.forget_before(next + self.plan.grid.step_ns);
+            }
+        }
+        bar.finish_and_clear();
+        windows
+    }
+
+    /// Tracks, fits the bands and writes the outputs from every window of
+    /// the run (in time order), whoever identified them.
+    pub fn finish(
+        self,
+        windows: Vec<WindowModes>,
+        clock: std::time::Instant,
+    ) -> Result<(TrackSummary, Tracking)> {
+        let Prepared {
+            opts,
+            plan,
+            archive,
+            cal,
+            settings,
+        } = self;
+        let opts = &opts;
+        let length = plan.grid.length_ns;
+        for w in windows.iter().filter(|w| w.skipped.is_some()) {
+            crate::console::warn(format!(
+                "track: window {} skipped: {}",
+                format_epoch_ns(w.start_ns),
+                w.skipped.as_deref().unwrap_or("")
+            ));
+        }
+        let reference = plan.reference.map(|(modes, channels, source)| Reference {
+            modes,
+            channels,
+            source,
+        });
+        let band_settings = BandSettings {
+            training_end_ns: plan.grid.start_ns + plan.training_ns,
+            cycle_period_s: plan.cycle_s,
+            confidence: 0.99,
+            min_run: 3,
+        };
+        let tracking = analyse(windows, reference, &TrackSettings::default(), band_settings)?;
+        let streams: Vec<String> = archive.streams().iter().map(StreamCodes::id).collect();
+        let provenance = Provenance::of_source(serde_json::json!({
+            "name": format!("continuous record {}", opts.archive.display()),
+            "archive": opts.archive,
+            "streams": streams,
+            "start": format_epoch_ns(plan.grid.start_ns),
+            "end": format_epoch_ns(plan.grid.end_ns),
+        }))
+        .then_step(
+            "units_to_si",
+            serde_json::json!({
+                "applied": cal.units != "counts",
+                "source": opts.stationxml,
+                "si_per_count": streams.iter().zip(&cal.scale).map(|(id, k)| (id.clone(), *k)).collect::<std::collections::BTreeMap<_, _>>(),
+            }),
+        )
+        .then_step(
+            "track",
+            serde_json::json!({
+                "window_s": length as f64 / 1e9,
+                "step_s": plan.grid.step_ns as f64 / 1e9,
+                "min_present": opts.min_present,
+                "stationxml": opts.stationxml,
+                "units": cal.units,
+                "modal_settings": settings,
+                "tracking": TrackSettings::default(),
+                "band": band_settings,
+                "reference": tracking.reference.source,
+            }),
+        );
+        let summary_files = vec![opts.out.join(TABLE_FILE), opts.out.join(REPORT_FILE)];
+        let out = opts.out.clone();
+        crate::pipeline::run_one_shot(
+            &out,
+            "track",
+            &opts.archive,
+            &[TABLE_FILE, REPORT_FILE],
+            || {
+                write_table(&out.join(TABLE_FILE), &tracking, &cal.units, &provenance)?;
+                let html = crate::report::tracking::page(&tracking, &cal.units, &streams);
+                crate::sinks::atomic::write_bytes_atomically(
+                    &out.join(REPORT_FILE),
+                    html.as_bytes(),
+                )
+            },
+        )?;
+        let summary = summarise(
+            opts,
+            &plan.grid,
+            &tracking,
+            streams,
+            cal.units,
+            summary_files,
+            clock,
+        );
+        Ok((summary, tracking))
+    }
+}
+
+/// Runs `quaketwin track` (module doc) in this process.
+pub fn run(opts: &TrackOptions) -> Result<(TrackSummary, Tracking)> {
+    let clock = std::time::Instant::now();
+    let prepared = prepare(opts)?;
+    let windows = prepared.identify(&prepared.starts(), true);
+    prepared.finish(windows, clock)
+}
+
+fn summarise(
+    opts: &TrackOptions,
+    grid: &WindowGrid,
+    t: &Tracking,
+    streams: Vec<String>,
+    units: String,
+    files: Vec<PathBuf>,
+    clock: std::time::Instant,
+) -> TrackSummary {
+    let training_end = t.band_settings.training_end_ns;
+    let modes = (1..=t.reference.modes.len())
+        .map(|id| {
+            let after: Vec<(&TrackedMode, &anomaly::Band)> = t
+                .rows
+                .iter()
+                .zip(&t.bands)
+                .filter(|(r, _)| r.mode_id == id && t.windows[r.window].start_ns >= training_end)
+                .filter_map(|(r, b)| b.as_ref().map(|b| (r, b)))
+                .filter(|(_, b)| b.flagged)
+                .collect();
+            let deviations: Vec<f64> = after
+                .iter()
+                .map(|(r, b)| 100.0 * (r.frequency_hz - b.predicted_hz) / b.predicted_hz)
+                .collect();
+            let m = &t.reference.modes[id - 1];
+            ModeSummary {
+                mode: id,
+                direction: m.direction.clone(),
+                reference_frequency_hz: m.frequency_hz,
+                windows: t.rows.iter().filter(|r| r.mode_id == id).count(),
+                band: t.models[id - 1].clone(),
+                flagged_windows: after.len(),
+                mean_flagged_deviation_percent: (!deviations.is_empty())
+                    .then(|| deviations.iter().sum::<f64>() / deviations.len() as f64),
+                first_flagged: after
+                    .first()
+                    .map(|(r, _)| format_epoch_ns(t.windows[r.window].start_ns)),
+            }
+        })
+        .collect();
+    TrackSummary {
+        archive: opts.archive.clone(),
+        out: opts.out.clone(),
+        streams,
+        units,
+        start: format_epoch_ns(grid.start_ns),
+        end: format_epoch_ns(grid.end_ns),
+        window_s: grid.length_ns as f64 / 1e9,
+        step_s: grid.step_ns as f64 / 1e9,
+        windows: t.windows.len(),
+        identified_windows: t.windows.iter().filter(|w| !w.modes.is_empty()).count(),
+        skipped: t
+            .windows
+            .iter()
+            .filter_map(|w| {
+                w.skipped
+                    .as_ref()
+                    .map(|s| (format_epoch_ns(w.start_ns), s.clone()))
+            })
+            .collect(),
+        reference: t.reference.source.clone(),
+        modes,
+        training_end: format_epoch_ns(training_end),
+        anomaly_from: t
+            .anomaly_from
+            .map(|i| format_epoch_ns(t.windows[i].start_ns)),
+        anomalous_windows: t
+            .windows
+            .iter()
+            .zip(&t.anomalous)
+            .filter(|(w, a)| **a && w.start_ns >= training_end)
+            .count(),
+        seconds: clock.elapsed().as_secs_f64(),
+        files,
+    }
+}
+
+/// The rows of `modal_tracking.parquet` as one record batch.
+pub fn tracking_batch(t: &Tracking) -> Result<arrow_array::RecordBatch> {
+    let w = |r: &TrackedMode| &t.windows[r.window];
+    let band = |f: fn(&anomaly::Band) -> f64| -> Vec<Option<f64>> {
+        t.bands.iter().map(|b| b.as_ref().map(f)).collect()
+    };
+    let rows = &t.rows;
+    TableBuilder::new(&MODAL_TRACKING)
+        .timestamp_ns(
+            col::WINDOW_START.name,
+            rows.iter().map(|r| w(r).start_ns).collect(),
+        )
+        .timestamp_ns(
+            col::WINDOW_END.name,
+            rows.iter().map(|r| w(r).end_ns).collect(),
+        )
+        .u32(
+            col::MODE.name,
+            rows.iter().map(|r| r.mode_id as u32).collect(),
+        )
+        .str(
+            col::DIRECTION.name,
+            &rows
+                .iter()
+                .map(|r| r.direction.as_str())
+                .collect::<Vec<_>>(),
+        )
+        .f64(
+            col::FREQUENCY_HZ.name,
+            rows.iter().map(|r| r.frequency_hz).collect(),
+        )
+        .f64(
+            col::FREQUENCY_STD_HZ.name,
+            rows.iter().map(|r| r.frequency_std_hz).collect(),
+        )
+        .f64(
+            col::DAMPING_RATIO.name,
+            rows.iter().map(|r| r.damping_ratio).collect(),
+        )
+        .opt_f64(
+            col::MAC_TO_REFERENCE.name,
+            rows.iter()
+                .map(|r| r.mac.is_finite().then_some(r.mac))
+                .collect(),
+        )
+        .f64(
+            col::REFERENCE_FREQUENCY_HZ.name,
+            rows.iter()
+                .map(|r| t.reference.modes[r.mode_id - 1].frequency_hz)
+                .collect(),
+        )
+        .f64(col::MPC.name, rows.iter().map(|r| r.mpc).collect())
+        .u32(
+            col::POLE_COUNT.name,
+            rows.iter().map(|r| r.pole_count as u32).collect(),
+        )
+        .f64(
+            col::PRESENT_FRACTION.name,
+            rows.iter().map(|r| w(r).present_fraction).collect(),
+        )
+        .f64(col::RMS_LEVEL.name, rows.iter().map(|r| w(r).rms).collect())
+        .bool(
+            col::TRAINING.name,
+            rows.iter()
+                .map(|r| w(r).start_ns < t.band_settings.training_end_ns)
+                .collect(),
+        )
+        .opt_f64(col::PREDICTED_FREQUENCY_HZ.name, band(|b| b.predicted_hz))
+        .opt_f64(col::BAND_LOW_HZ.name, band(|b| b.low_hz))
+        .opt_f64(col::BAND_HIGH_HZ.name, band(|b| b.high_hz))
+        .opt_f64(
+            col::DEVIATION_PERCENT.name,
+            rows.iter()
+                .zip(&t.bands)
+                .map(|(r, b)| {
+                    b.as_ref()
+                        .map(|b| 100.0 * (r.frequency_hz - b.predicted_hz) / b.predicted_hz)
+                })
+                .collect(),
+        )
+        .opt_bool(
+            col::FLAGGED.name,
+            t.bands
+                .iter()
+                .map(|b| b.as_ref().map(|b| b.flagged))
+                .collect(),
+        )
+        .bool(
+            col::ANOMALOUS_WINDOW.name,
+            rows.iter().map(|r| t.anomalous[r.window]).collect(),
+        )
+        .build()
+}
+
+/// Table metadata of `modal_tracking.parquet`: provenance, units, the
+/// reference, the band models, the skipped windows and the anomaly.
+pub fn tracking_metadata(
+    t: &Tracking,
+    units: &str,
+    provenance: &Provenance,
+) -> Vec<(String, String)> {
+    let mut m = provenance.metadata();
+    let json = |v: serde_json::Value| v.to_string();
+    m.extend([
+        ("quaketwin.units".to_string(), units.to_string()),
+        (
+            "quaketwin.reference".into(),
+            json(serde_json::json!({
+                "source": t.reference.source,
+                "channels": t.reference.channels,
+                "frequencies_hz": t.reference.modes.iter().map(|m| m.frequency_hz).collect::<Vec<_>>(),
+                "directions": t.reference.modes.iter().map(|m| m.direction.clone()).collect::<Vec<_>>(),
+            })),
+        ),
+        (
+            "quaketwin.band_models".into(),
+            serde_json::to_string(&t.models).unwrap_or_default(),
+        ),
+        (
+            "quaketwin.skipped_windows".into(),
+            json(serde_json::Value::Array(
+                t.windows
+                    .iter()
+                    .filter_map(|w| {
+                        w.skipped.as_ref().map(|s| {
+                            serde_json::json!({"window_start": format_epoch_ns(w.start_ns), "reason": s})
+                        })
+                    })
+                    .collect(),
+            )),
+        ),
+        (
+            "quaketwin.anomaly_from".into(),
+            json(serde_json::json!(t
+                .anomaly_from
+                .map(|i| format_epoch_ns(t.windows[i].start_ns)))),
+        ),
+    ]);
+    m
+}
+
+fn write_table(path: &Path, t: &Tracking, units: &str, provenance: &Provenance) -> Result<()> {
+    write_parquet(
+        path,
+        &[tracking_batch(t)?],
+        &tracking_metadata(t, units, provenance),
+    )
+}
+
+/// The options as JSON (the field names of [`TrackOptions`]; unset fields
+/// take the command's defaults): how the Python package hands them over.
+pub fn options_from_json(text: &str) -> Result<TrackOptions> {
+    serde_json::from_str(text).map_err(|e| Error::usage(format!("track options: {e}")))
+}
+
+/// Identifies the windows starting at `starts` (ns, a share of
+/// [`Prepared::starts`]) and returns them as JSON
+/// ([`crate::monitor::windows_to_json`]): one task of a cluster.
+pub fn identify_windows_json(opts: &TrackOptions, starts: &[i64]) -> Result<String> {
+    let prepared = prepare(opts)?;
+    crate::monitor::windows_to_json(&prepared.identify(starts, false))
+}
+
+/// Finishes a run from windows identified elsewhere (the JSON parts of
+/// [`identify_windows_json`], in any order; sorted by start here): tracks,
+/// fits the bands, writes the outputs.
+pub fn finish_from_json(opts: &TrackOptions, parts: &[String]) -> Result<TrackSummary> {
+    let clock = std::time::Instant::now();
+    let prepared = prepare(opts)?;
+    let mut windows = Vec::new();
+    for p in parts {
+        windows.extend(crate::monitor::windows_from_json(p)?);
+    }
+    windows.sort_by_key(|w| w.start_ns);
+    let expected = prepared.starts();
+    if windows
+        .iter()
+        .map(|w| w.start_ns)
+        .ne(expected.iter().copied())
+    {
+        return Err(Error::usage(format!(
+            "track: {} windows handed over, the run has {}: every window exactly once",
+            windows.len(),
+            expected.len()
+        )));
+    }
+    prepared.finish(windows, clock).map(|(s, _)| s)
+}
