@@ -68,7 +68,7 @@ fn write_event(dir: &Path) {
 fn bench(c: &mut Criterion) {
     let event = tempfile::tempdir().unwrap();
     write_event(event.path());
-    let pipeline = Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/post-earthquake.toml");
+    let pipeline = Path::new(env!("CARGO_MANIFEST_DIR")).join("../pipelines/post-earthquake.toml");
     let mut g = c.benchmark_group("post_earthquake");
     g.sample_size(10);
     g.bench_function("20ch_60s_200Hz_full_pipeline_with_report", |b| {
