@@ -154,7 +154,8 @@ pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
             _ => None,
         })
         .collect();
-    let mut bridge_axes_basis: Option<(f64, f64)> = None;
+    // The deck line the axes were taken from, when a bridge's abutments gave them.
+    let mut axes_from_deck_line: Option<f64> = None;
     let axes = match stated {
         Some(x) => Some(BuildingAxes {
             x_azimuth_deg: x.rem_euclid(360.0),
@@ -174,7 +175,7 @@ pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
             );
             let bridge =
                 deck_line.and_then(|line| bridge_x_axis(&azimuths, line, AXIS_TOLERANCE_DEG));
-            bridge_axes_basis = bridge.zip(deck_line);
+            axes_from_deck_line = deck_line.filter(|_| bridge.is_some());
             bridge
                 .or_else(|| infer_x_axis(&azimuths, AXIS_TOLERANCE_DEG))
                 .map(|x| BuildingAxes {
@@ -206,7 +207,7 @@ pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
                 tolerance_deg: AXIS_TOLERANCE_DEG,
             },
         )?;
-        if let Some((_, deck_line)) = bridge_axes_basis {
+        if let Some(deck_line) = axes_from_deck_line {
             event.notes.push(format!(
                 "building axes inferred from the abutments named in the location texts: a deck along the {} line, so X = longitudinal = {}°, Y = transverse = {}° (CSMIP's Long = X, Tran = Y; state structure.x_axis_azimuth_deg in event.toml to fix them)",
                 if deck_line == 90.0 { "east–west" } else { "north–south" },
