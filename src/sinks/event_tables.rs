@@ -241,37 +241,31 @@ fn samples_batch(r: &Record, motions: &[Motion], from: usize) -> Result<arrow_ar
     let rows = from..from + n;
     let dt = c.dt();
     let t: Vec<f64> = rows.clone().map(|i| i as f64 * dt).collect();
-    let abs_time: Vec<Option<i64>> = rows
-        .clone()
-        .map(|i| c.start_ns.map(|s| s + (i as f64 * dt * 1e9).round() as i64))
-        .collect();
+    let abs_time: Option<Vec<i64>> = c.start_ns.map(|s| {
+        rows.clone()
+            .map(|i| s + (i as f64 * dt * 1e9).round() as i64)
+            .collect()
+    });
+    // Each series is read (or borrowed) once and moved into its column.
     let acc = match motion {
         Some(m) => m.acceleration.get_range(from, n)?.into_owned(),
         None => r.samples.get_range(from, n)?.into_owned(),
     };
-    let (vel, disp): (Vec<Option<f64>>, Vec<Option<f64>>) = match motion {
+    let (vel, disp) = match motion {
         Some(m) => (
-            m.velocity
-                .get_range(from, n)?
-                .iter()
-                .map(|v| Some(*v))
-                .collect(),
-            m.displacement
-                .get_range(from, n)?
-                .iter()
-                .map(|v| Some(*v))
-                .collect(),
+            Some(m.velocity.get_range(from, n)?.into_owned()),
+            Some(m.displacement.get_range(from, n)?.into_owned()),
         ),
-        None => (vec![None; n], vec![None; n]),
+        None => (None, None),
     };
     TableBuilder::new(&SAMPLES)
-        .str(samples::CHANNEL_ID, &vec![c.id.as_str(); n])
+        .repeated_str(samples::CHANNEL_ID, &c.id, n)
         .i64(samples::SAMPLE, rows.map(|i| i as i64).collect())
         .f64(samples::T_S, t)
-        .opt_timestamp_ns(samples::TIME, abs_time)
+        .opt_timestamp_ns_column(samples::TIME, abs_time, n)
         .f64(samples::ACC_M_S2, acc)
-        .opt_f64(samples::VEL_M_S, vel)
-        .opt_f64(samples::DISP_M, disp)
+        .opt_f64_column(samples::VEL_M_S, vel, n)
+        .opt_f64_column(samples::DISP_M, disp, n)
         .build()
 }
 

@@ -141,6 +141,64 @@ impl TableBuilder {
         let a: StringArray = values.iter().map(|s| Some(s.as_ref())).collect();
         self.push(name.as_ref(), ColumnType::Utf8, false, Arc::new(a))
     }
+    /// Utf8, not null: `value` on each of `rows` rows (a channel's id on each
+    /// of its samples), built as one buffer of repeated bytes and computed
+    /// offsets instead of a string per row.
+    pub fn repeated_str(mut self, name: impl AsRef<str>, value: &str, rows: usize) -> Self {
+        let width = value.len();
+        let total = width
+            .checked_mul(rows)
+            .filter(|t| i32::try_from(*t).is_ok());
+        let Some(total) = total else {
+            self.error.get_or_insert_with(|| {
+                format!(
+                    "column {}: {rows} rows of {value:?} exceed 2 GiB",
+                    name.as_ref()
+                )
+            });
+            return self.str(name, &[] as &[&str]);
+        };
+        let mut bytes = Vec::with_capacity(total);
+        for _ in 0..rows {
+            bytes.extend_from_slice(value.as_bytes());
+        }
+        // In range: the last offset is `total`, checked above.
+        let offsets: Vec<i32> = (0..=rows).map(|i| (i * width) as i32).collect();
+        let a = StringArray::new(
+            arrow_buffer::OffsetBuffer::new(offsets.into()),
+            bytes.into(),
+            None,
+        );
+        self.push(name.as_ref(), ColumnType::Utf8, false, Arc::new(a))
+    }
+    /// Float64, nullable: every row valid (`Some(values)`), or `rows` nulls.
+    pub fn opt_f64_column(
+        self,
+        name: impl AsRef<str>,
+        values: Option<Vec<f64>>,
+        rows: usize,
+    ) -> Self {
+        let a: ArrayRef = match values {
+            Some(v) => Arc::new(Float64Array::from(v)),
+            None => Arc::new(Float64Array::new_null(rows)),
+        };
+        self.push(name.as_ref(), ColumnType::F64, true, a)
+    }
+    /// Timestamp(ns, UTC), nullable: every row valid (`Some(values)`), or
+    /// `rows` nulls.
+    pub fn opt_timestamp_ns_column(
+        self,
+        name: impl AsRef<str>,
+        values: Option<Vec<i64>>,
+        rows: usize,
+    ) -> Self {
+        let a = match values {
+            Some(v) => TimestampNanosecondArray::from(v),
+            None => TimestampNanosecondArray::new_null(rows),
+        }
+        .with_timezone("UTC");
+        self.push(name.as_ref(), ColumnType::TimestampNsUtc, true, Arc::new(a))
+    }
     /// Utf8, nullable.
     pub fn opt_str<S: AsRef<str>>(self, name: impl AsRef<str>, values: &[Option<S>]) -> Self {
         let a: StringArray = values

@@ -188,6 +188,45 @@ fn inspect_json_lists_channels_files_and_geometry() {
     assert!(v["geometry"].is_object(), "{}", v["geometry"]);
 }
 
+/// `inspect` lists an event without keeping its samples: its document is
+/// the one a full load gives (what ingest writes as event.json), for the
+/// sample events and for real records whose geometry rotates azimuth pairs
+/// (Eureka 1983) or reads modern CSMIP layouts.
+#[test]
+fn inspect_lists_without_samples_the_document_a_full_load_gives() {
+    let bridges = crate::common::shared_records().join("cesmd-bridges-corpus");
+    let events = [
+        sample("synthetic-4storey-quake"),
+        sample("synthetic-2storey-yielding"),
+        sample("synthetic-4storey-ambient"),
+        sample("synthetic-facade"),
+        bridges.join("painter-st-ce89324/eureka_24aug1983_ce89324p.zip"),
+        bridges.join("painter-st-ce89324/petrolia_05dec2016_72733405_ce89324p.zip"),
+        bridges.join("crowley-ce54730/QualeysCamp_18Sep2004_CE54730.ZIP"),
+    ];
+    for event in &events {
+        let full = quaketwin::event_folder::load(event).unwrap();
+        let listing = quaketwin::event_folder::load_listing(event).unwrap();
+        assert!(
+            listing.event.records.iter().all(|r| r.samples.is_parked()),
+            "{}: a listed record kept its samples",
+            event.display()
+        );
+        assert_eq!(
+            String::from_utf8(quaketwin::stages::ingest::inventory_json(&listing).unwrap()),
+            String::from_utf8(quaketwin::stages::ingest::inventory_json(&full).unwrap()),
+            "{}",
+            event.display()
+        );
+        assert_eq!(
+            quaketwin::commands::render_inventory(&listing),
+            quaketwin::commands::render_inventory(&full),
+            "{}",
+            event.display()
+        );
+    }
+}
+
 /// Many events: one summary per event, in the order given, each naming its
 /// run directory's files.
 #[test]

@@ -153,6 +153,12 @@ fn stated_axes_flip_sensors_onto_the_same_event_written_in_xy() {
         .map(|a| (a.channel.as_str(), a.action.as_str()))
         .collect();
     assert_eq!(flips, vec![("B-X", "flip"), ("F4-Y", "flip")]);
+    // `inspect` lists it without its samples: the same inventory.
+    let listing = event_folder::load_listing(&rotated).unwrap();
+    assert_eq!(
+        quaketwin::stages::ingest::inventory_json(&listing).unwrap(),
+        quaketwin::stages::ingest::inventory_json(&loaded).unwrap()
+    );
     let reference = event_folder::load(&sample("synthetic-4storey-quake")).unwrap();
     for (a, b) in loaded.event.records.iter().zip(&reference.event.records) {
         assert_eq!(a.channel.id, b.channel.id);
