@@ -12,6 +12,13 @@ use quaketwin::console::{self, Verbosity};
 use quaketwin::error::Result;
 use quaketwin::summary::{to_json, RunSummary};
 
+/// mimalloc keeps the memory a stage frees for the next allocation of its
+/// size; glibc's malloc returns channel-sized blocks to the kernel and takes
+/// fresh zeroed pages for the next channel (an hour of 64 channels: 1.29 M
+/// page faults → 0.12 M, 2–3 s of system time fewer, the same peak memory).
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 #[derive(Parser)]
 #[command(
     name = "quaketwin",

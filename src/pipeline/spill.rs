@@ -13,9 +13,9 @@
 //! exactly what was parked.
 
 use std::fs::File;
-use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
 use crate::error::{Error, Result};
 use crate::vocab::SampleStore;
@@ -31,9 +31,11 @@ const CHUNK: usize = 1 << 17;
 /// The spill file (see the module doc).
 pub struct SpillFile {
     path: PathBuf,
-    /// The file and the end of what was written; one lock for both keeps a
-    /// read from racing the seek of a write.
-    inner: Mutex<(File, u64)>,
+    file: File,
+    /// The end of what was reserved: a put takes its range with one atomic
+    /// addition and writes it at its own offset, so channels conditioned in
+    /// parallel park and read back at once, never waiting on each other.
+    end: AtomicU64,
 }
 
 impl SpillFile {
@@ -51,47 +53,93 @@ impl SpillFile {
         std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
         Ok(Arc::new(SpillFile {
             path,
-            inner: Mutex::new((file, 0)),
+            file,
+            end: AtomicU64::new(0),
         }))
     }
+}
 
-    fn lock(&self) -> std::io::Result<std::sync::MutexGuard<'_, (File, u64)>> {
-        self.inner
-            .lock()
-            .map_err(|_| std::io::Error::other("an earlier access to the spill file failed"))
+/// Positional writes and reads (`pwrite`/`pread` on Unix, `seek_write`/
+/// `seek_read` on Windows): the file has no shared cursor to lock.
+#[cfg(unix)]
+fn write_at(file: &File, bytes: &[u8], at: u64) -> std::io::Result<()> {
+    std::os::unix::fs::FileExt::write_all_at(file, bytes, at)
+}
+#[cfg(unix)]
+fn read_at(file: &File, bytes: &mut [u8], at: u64) -> std::io::Result<()> {
+    std::os::unix::fs::FileExt::read_exact_at(file, bytes, at)
+}
+#[cfg(windows)]
+fn write_at(file: &File, mut bytes: &[u8], mut at: u64) -> std::io::Result<()> {
+    while !bytes.is_empty() {
+        let n = std::os::windows::fs::FileExt::seek_write(file, bytes, at)?;
+        if n == 0 {
+            return Err(std::io::ErrorKind::WriteZero.into());
+        }
+        bytes = &bytes[n..];
+        at += n as u64;
     }
+    Ok(())
+}
+#[cfg(windows)]
+fn read_at(file: &File, mut bytes: &mut [u8], mut at: u64) -> std::io::Result<()> {
+    while !bytes.is_empty() {
+        let n = std::os::windows::fs::FileExt::seek_read(file, bytes, at)?;
+        if n == 0 {
+            return Err(std::io::ErrorKind::UnexpectedEof.into());
+        }
+        bytes = &mut bytes[n..];
+        at += n as u64;
+    }
+    Ok(())
 }
 
 impl SampleStore for SpillFile {
     fn put(&self, values: &[f64]) -> std::io::Result<u64> {
-        let mut bytes = Vec::with_capacity(8 * values.len().min(CHUNK));
-        let mut guard = self.lock()?;
-        let (file, end) = &mut *guard;
-        let position = *end;
-        file.seek(SeekFrom::Start(position))?;
-        for chunk in values.chunks(CHUNK) {
-            bytes.clear();
-            for v in chunk {
-                bytes.extend_from_slice(&v.to_le_bytes());
+        let position = self
+            .end
+            .fetch_add(8 * values.len() as u64, Ordering::Relaxed);
+        let mut at = position;
+        if cfg!(target_endian = "little") {
+            // The f64s' own bytes are their little-endian bits: written as
+            // they lie in memory, without a converted copy.
+            for chunk in values.chunks(CHUNK) {
+                write_at(&self.file, bytemuck::cast_slice(chunk), at)?;
+                at += 8 * chunk.len() as u64;
             }
-            file.write_all(&bytes)?;
+        } else {
+            let mut bytes = Vec::with_capacity(8 * values.len().min(CHUNK));
+            for chunk in values.chunks(CHUNK) {
+                bytes.clear();
+                for v in chunk {
+                    bytes.extend_from_slice(&v.to_le_bytes());
+                }
+                write_at(&self.file, &bytes, at)?;
+                at += bytes.len() as u64;
+            }
         }
-        *end += 8 * values.len() as u64;
         Ok(position)
     }
 
     fn get(&self, position: u64, offset: usize, out: &mut [f64]) -> std::io::Result<()> {
-        let mut bytes = vec![0u8; 8 * out.len().min(CHUNK)];
-        let mut guard = self.lock()?;
-        let (file, _) = &mut *guard;
-        file.seek(SeekFrom::Start(position + 8 * offset as u64))?;
-        for chunk in out.chunks_mut(CHUNK) {
-            let b = &mut bytes[..8 * chunk.len()];
-            file.read_exact(b)?;
-            for (v, raw) in chunk.iter_mut().zip(b.chunks_exact(8)) {
-                let mut le = [0u8; 8];
-                le.copy_from_slice(raw);
-                *v = f64::from_le_bytes(le);
+        let mut at = position + 8 * offset as u64;
+        if cfg!(target_endian = "little") {
+            // Read straight into the values (every bit pattern is an f64).
+            for chunk in out.chunks_mut(CHUNK) {
+                read_at(&self.file, bytemuck::cast_slice_mut(chunk), at)?;
+                at += 8 * chunk.len() as u64;
+            }
+        } else {
+            let mut bytes = vec![0u8; 8 * out.len().min(CHUNK)];
+            for chunk in out.chunks_mut(CHUNK) {
+                let b = &mut bytes[..8 * chunk.len()];
+                read_at(&self.file, b, at)?;
+                at += b.len() as u64;
+                for (v, raw) in chunk.iter_mut().zip(b.chunks_exact(8)) {
+                    let mut le = [0u8; 8];
+                    le.copy_from_slice(raw);
+                    *v = f64::from_le_bytes(le);
+                }
             }
         }
         Ok(())
