@@ -288,14 +288,60 @@ pub fn decimal_to_ns(s: &str, ns_per_unit: i128) -> Option<i64> {
 /// bound, exact when no field is quoted; `None` for text with quotes (a
 /// quoted field may hold delimiters and line ends).
 fn most_fields(text: &str, delim: Delim) -> Option<usize> {
-    let per_line = |l: &str| match delim {
-        Delim::Byte(d) => l.bytes().filter(|&b| b == d).count() + 1,
-        Delim::Whitespace => l.split_whitespace().count(),
+    use rayon::prelude::*;
+    let per_line = |l: &[u8]| match delim {
+        Delim::Byte(d) => l.iter().filter(|&&b| b == d).count() + 1,
+        // A line without whitespace or non-ASCII bytes (where Unicode
+        // whitespace could hide) is one field, or none when empty: only
+        // other lines are split (a comma file has none of them).
+        Delim::Whitespace => {
+            let plain = |b: &u8| b.is_ascii() && !(b.is_ascii_whitespace() || *b == 0x0b);
+            // A CRLF line's final CR splits nothing.
+            let l = l.strip_suffix(b"\r").unwrap_or(l);
+            if l.iter().all(plain) {
+                usize::from(!l.is_empty())
+            } else {
+                std::str::from_utf8(l).map_or(0, |s| s.split_whitespace().count())
+            }
+        }
     };
-    match delim {
-        Delim::Byte(_) if text.contains('"') => None,
-        _ => Some(text.split('\n').map(per_line).max().unwrap_or(0)),
+    // In parallel over chunks of whole lines (a 582 MB file is scanned once
+    // per candidate delimiter); chunks end after a newline, so their lines
+    // are the file's.
+    let per_chunk: Vec<Option<usize>> = line_chunks(text.as_bytes())
+        .par_iter()
+        .map(|c| match delim {
+            Delim::Byte(_) if c.contains(&b'"') => None,
+            _ => Some(c.split(|&b| b == b'\n').map(per_line).max().unwrap_or(0)),
+        })
+        .collect();
+    per_chunk
+        .into_iter()
+        .try_fold(0, |m, c| c.map(|c| m.max(c)))
+}
+
+/// [`most_fields`] by delimiter byte (`None`: runs of whitespace), for
+/// checking it against a line-by-line count (tests/it/readers_csv.rs).
+pub fn most_fields_by(text: &str, delimiter: Option<u8>) -> Option<usize> {
+    most_fields(text, delimiter.map_or(Delim::Whitespace, Delim::Byte))
+}
+
+/// `data` cut into chunks of whole lines (each but the last ends with a
+/// newline), several per thread, for parsing or scanning in parallel.
+fn line_chunks(data: &[u8]) -> Vec<&[u8]> {
+    let pieces = 8 * rayon::current_num_threads().max(1);
+    let mut bounds = vec![0usize];
+    for k in 1..pieces {
+        let at = (data.len() * k / pieces).max(*bounds.last().unwrap_or(&0));
+        let end = data[at..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(data.len(), |p| at + p + 1);
+        bounds.push(end);
     }
+    bounds.push(data.len());
+    bounds.dedup();
+    bounds.windows(2).map(|w| &data[w[0]..w[1]]).collect()
 }
 
 /// Where the table is: header row (index into the sniffed rows), first data
@@ -1080,20 +1126,7 @@ fn parse_simple(
         return None;
     }
     let data = body.as_bytes().get(offset..)?;
-    // Chunks of whole lines, several per thread.
-    let pieces = 8 * rayon::current_num_threads().max(1);
-    let mut bounds = vec![0usize];
-    for k in 1..pieces {
-        let at = (data.len() * k / pieces).max(*bounds.last().unwrap_or(&0));
-        let end = data[at..]
-            .iter()
-            .position(|&b| b == b'\n')
-            .map_or(data.len(), |p| at + p + 1);
-        bounds.push(end);
-    }
-    bounds.push(data.len());
-    bounds.dedup();
-    let chunks: Vec<&[u8]> = bounds.windows(2).map(|w| &data[w[0]..w[1]]).collect();
+    let chunks = line_chunks(data);
     // Pass 1: is every chunk simple, and how many lines and rows does it hold?
     let blank = |l: &[u8]| !l.contains(&d) && trim_space(l).is_empty();
     let counts: Vec<Option<(usize, usize)>> = chunks

@@ -457,3 +457,44 @@ fn absurd_spans_are_refused_before_allocating() {
     assert!(check_grid(200, f64::INFINITY, 0.01).is_err());
     assert_eq!(check_grid(200, 1.99, 0.01), Ok(200));
 }
+
+/// The bound of fields per line a delimiter could give — scanned in
+/// parallel, lines without whitespace not split — is the one of splitting
+/// every line, one thread (as first written).
+#[test]
+fn most_fields_in_parallel_is_the_line_by_line_bound() {
+    use quaketwin::readers::csv::most_fields_by;
+    fn line_by_line(text: &str, delimiter: Option<u8>) -> Option<usize> {
+        let per_line = |l: &str| match delimiter {
+            Some(d) => l.bytes().filter(|&b| b == d).count() + 1,
+            None => l.split_whitespace().count(),
+        };
+        match delimiter {
+            Some(_) if text.contains('"') => None,
+            _ => Some(text.split('\n').map(per_line).max().unwrap_or(0)),
+        }
+    }
+    let long: String = (0..5000)
+        .map(|i| format!("{i},{}.5,{}\r\n", i * 2, -i))
+        .collect();
+    let texts = [
+        "t,a,b\n0,1,2\n1,2,3\n".to_string(),
+        "a b  c\n1 2 3 4\n".to_string(),
+        "x\u{a0}y\u{3000}z\n1\n".to_string(),
+        "1\x0b2\x0c3\n\n\r\n".to_string(),
+        "a;b;\"c;d\"\n".to_string(),
+        "1,2\r\n3,4,5\r\n".to_string(),
+        long.replace(',', " "),
+        long,
+    ];
+    for t in &texts {
+        for d in [Some(b','), Some(b'\t'), Some(b';'), None] {
+            assert_eq!(
+                most_fields_by(t, d),
+                line_by_line(t, d),
+                "{d:?} on {:?}",
+                &t[..t.len().min(40)]
+            );
+        }
+    }
+}
