@@ -12,12 +12,25 @@ use quaketwin::console::{self, Verbosity};
 use quaketwin::error::Result;
 use quaketwin::summary::{to_json, RunSummary};
 
-/// mimalloc keeps the memory a stage frees for the next allocation of its
-/// size; glibc's malloc returns channel-sized blocks to the kernel and takes
-/// fresh zeroed pages for the next channel (an hour of 64 channels: 1.29 M
-/// page faults → 0.12 M, 2–3 s of system time fewer, the same peak memory).
+/// mimalloc, told never to return freed memory to the kernel
+/// ([`keep_freed_memory`]), reuses what a channel's work freed for the next
+/// channel; glibc's malloc returns channel-sized blocks to the kernel and
+/// takes fresh pages, which the kernel zeroes, for the next one.  An hour of
+/// 64 channels: 1.29 M page faults → 17 k, ≈ 3 s of system time fewer, peak
+/// memory 974 → 1 017 MB (the peak is what is live at once; freed memory is
+/// reused, not added to).
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+/// `mi_option_purge_delay` (the 16th option of mimalloc v3's `mi_option_t`,
+/// which libmimalloc-sys names no constant for): the delay before freed
+/// memory goes back to the kernel, −1 for never.
+const MI_OPTION_PURGE_DELAY: libmimalloc_sys::mi_option_t = 15;
+
+fn keep_freed_memory() {
+    // SAFETY: sets an option value; mimalloc reads options at each purge.
+    unsafe { libmimalloc_sys::mi_option_set(MI_OPTION_PURGE_DELAY, -1) }
+}
 
 #[derive(Parser)]
 #[command(
@@ -638,6 +651,7 @@ fn run_command(cli: &Cli) -> Result<()> {
 }
 
 fn main() -> ExitCode {
+    keep_freed_memory();
     let cli = Cli::parse();
     console::set_verbosity(if cli.quiet {
         Verbosity::Quiet
