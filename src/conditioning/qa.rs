@@ -173,21 +173,24 @@ pub fn snr_db(data: &[f64], dt: f64, noise_window_s: f64) -> Option<f64> {
         return None;
     }
     let mean = data.iter().sum::<f64>() / data.len() as f64;
-    let mut cumulative = Vec::with_capacity(data.len());
+    let squares = || data.iter().map(|v| (v - mean) * (v - mean));
+    let total: f64 = squares().fold(0.0, |acc, s| acc + s);
+    // The running sum formed again (the same additions in the same order)
+    // instead of kept as a series of the record's length.
+    let (mut start, mut end) = (None, None);
     let mut acc = 0.0;
-    for v in data {
-        acc += (v - mean) * (v - mean);
-        cumulative.push(acc);
+    for (i, s) in squares().enumerate() {
+        acc += s;
+        if start.is_none() && acc >= 0.05 * total {
+            start = Some(i);
+        }
+        if acc >= 0.95 * total {
+            end = Some(i);
+            break;
+        }
     }
-    let total = acc;
-    let start = cumulative
-        .iter()
-        .position(|&c| c >= 0.05 * total)
-        .unwrap_or(0);
-    let end = cumulative
-        .iter()
-        .position(|&c| c >= 0.95 * total)
-        .unwrap_or(data.len() - 1);
+    let start = start.unwrap_or(0);
+    let end = end.unwrap_or(data.len() - 1);
     let signal = rms_about_mean(&data[start..=end.max(start)]);
     Some(20.0 * (signal / noise).log10())
 }
