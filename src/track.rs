@@ -91,9 +91,15 @@ pub struct ModeSummary {
     pub first_flagged: Option<String>,
 }
 
-/// What `quaketwin track` did (`--json`).
-#[derive(Debug, Clone, serde::Serialize)]
+/// What `quaketwin track` did (`--json`).  A run that failed is summarised
+/// too ([`TrackSummary::failed`]): `ok` false, the error, the rest empty.
+#[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct TrackSummary {
+    /// Whether the run ended without error.
+    pub ok: bool,
+    /// The error text when not (printable, capped at
+    /// [`crate::error::MAX_PRINTED_ERROR_CHARS`] characters).
+    pub error: Option<String>,
     pub archive: PathBuf,
     pub out: PathBuf,
     pub streams: Vec<String>,
@@ -116,6 +122,23 @@ pub struct TrackSummary {
     pub anomalous_windows: usize,
     pub seconds: f64,
     pub files: Vec<PathBuf>,
+}
+
+impl TrackSummary {
+    /// The summary of a run of `opts` that failed with `error`: `ok` false,
+    /// the error made printable and capped as on stderr, nothing else found.
+    pub fn failed(opts: &TrackOptions, error: &Error) -> TrackSummary {
+        TrackSummary {
+            ok: false,
+            error: Some(crate::error::printable(
+                &error.to_string(),
+                crate::error::MAX_PRINTED_ERROR_CHARS,
+            )),
+            archive: opts.archive.clone(),
+            out: opts.out.clone(),
+            ..Default::default()
+        }
+    }
 }
 
 /// Checked plan of a run: everything parsed before any record is read.
@@ -562,6 +585,8 @@ fn summarise(
         })
         .collect();
     TrackSummary {
+        ok: true,
+        error: None,
         archive: opts.archive.clone(),
         out: opts.out.clone(),
         streams,

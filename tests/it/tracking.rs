@@ -209,6 +209,7 @@ fn tracking_recovers_the_frequency_history_and_flags_day_two() {
     opts.cycle = "6h".into();
     opts.end = Some("2026-01-01T18:00:00Z".into());
     let (summary, t) = run(&opts).unwrap();
+    assert!(summary.ok && summary.error.is_none());
     assert_eq!(summary.windows, 36);
     assert_eq!(summary.identified_windows, 36, "{:?}", summary.skipped);
     assert_eq!(t.reference.modes.len(), 8, "{}", summary.reference);
@@ -285,6 +286,65 @@ fn track_refuses_bad_flags_before_reading() {
             "{err}"
         );
         assert!(!dir.path().join("o").exists(), "nothing written for {flag}");
+    }
+}
+
+/// `track --json` of a run that fails still prints a summary object on
+/// stdout: `"ok": false` and the error (printable: no control character
+/// of the archive's name reaches the terminal), exit 1 for data problems
+/// (an archive without day files; windows that hold no samples, so no
+/// reference) and 2 for usage (a bad flag).
+#[test]
+fn track_json_of_a_failed_run_is_a_summary_with_the_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let empty = dir.path().join("empty\u{1b}[31marchive");
+    std::fs::create_dir_all(&empty).unwrap();
+    let written = dir.path().join("sds");
+    let start = 1_767_225_600_000_000_000i64;
+    for cha in ["HNE", "HNN"] {
+        write_stream_at(&written, cha, start, 20.0, 2 * 3600 * 20);
+    }
+    let track = |archive: &Path, extra: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_quaketwin"))
+            .args(["-q", "--json", "track"])
+            .arg(archive)
+            .arg("--out")
+            .arg(dir.path().join("out"))
+            .args(extra)
+            .output()
+            .unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout)
+            .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stdout)));
+        (
+            o.status.code(),
+            v,
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let cases: [(&Path, &[&str], i32, &str); 3] = [
+        (&empty, &[], 1, "no SDS day file"),
+        (
+            &written,
+            &[
+                "--start",
+                "2026-02-01T00:00:00Z",
+                "--end",
+                "2026-02-01T03:00:00Z",
+            ],
+            1,
+            "no mode was found",
+        ),
+        (&written, &["--window", "0h"], 2, "--window"),
+    ];
+    for (archive, extra, code, says) in cases {
+        let (status, v, stderr) = track(archive, extra);
+        assert_eq!(status, Some(code), "{extra:?}: {stderr}");
+        assert_eq!(v["ok"], serde_json::Value::Bool(false), "{v}");
+        let error = v["error"].as_str().expect("error text");
+        assert!(error.contains(says), "{error}");
+        assert!(!error.chars().any(|c| c.is_control()), "{error:?}");
+        assert!(stderr.contains(says), "{stderr}");
+        assert!(v["windows"].as_u64() == Some(0) && v["modes"] == serde_json::json!([]));
     }
 }
 
