@@ -26,7 +26,9 @@
 //!   column's mean shape ≥ `min_coherence`), at least `min_physical_fraction`
 //!   of its poles pass the physical filters, and its estimate passes them;
 //! - two accepted columns of the same mode ([`same_mode`]) are a split twin:
-//!   the longer is kept, the other reported;
+//!   the longer is kept, rejoined with the twin's poles of the mode (one
+//!   per order, nearest its median frequency: [`rejoin_twin`]), the other
+//!   reported;
 //! - columns of the same mode broken by a gap (frequencies within
 //!   `merge_frequency_tolerance`, MAC ≥ `merge_mac` of mean shapes) are merged
 //!   first, one pole per order kept; so are mostly physical pieces of one
