@@ -777,14 +777,20 @@ fn a_split_column_is_rejoined_with_its_twin() {
             poles.push(pole(n, 13.50, 0.03));
         }
     }
-    let early_twin = [14.30, 14.15, 14.02, 13.90, 13.80, 13.72, 13.66, 13.62, 13.60];
+    let early_twin = [
+        14.30, 14.15, 14.02, 13.90, 13.80, 13.72, 13.66, 13.62, 13.60,
+    ];
     for (k, f) in early_twin.iter().enumerate() {
         poles.push(pole(36 + 2 * k, *f, 0.03));
     }
     let drift = [13.48, 13.40, 13.38, 13.30, 13.23, 13.15];
     let mode = [13.535, 13.52, 13.522, 13.519, 13.517, 13.51];
     for k in 0..6 {
-        poles.push(pole(54 + 2 * k, drift[k], if k == 0 { 0.026 } else { 0.018 }));
+        poles.push(pole(
+            54 + 2 * k,
+            drift[k],
+            if k == 0 { 0.026 } else { 0.018 },
+        ));
         poles.push(pole(54 + 2 * k, mode[k], 0.03));
     }
     poles.sort_by(|a, b| {

@@ -386,3 +386,77 @@ fn full_three_day_archive_is_tracked_within_tolerance() {
     );
     assert_eq!(within, total, "every mode-window within 0.3 %");
 }
+
+/// StationXML epochs: a stream whose gain changes between two `<Channel
+/// startDate endDate>` epochs is calibrated, per window, with the response
+/// of the epoch holding the window's start; a window across the change
+/// carries a note naming the stream and the time; at a time no epoch holds
+/// there is no calibration (such a window is skipped with that reason); a
+/// stream without a gain in any epoch is refused before any window.
+#[test]
+fn stationxml_epochs_give_each_window_its_response() {
+    use quaketwin::track::response::Responses;
+    let dir = tempfile::tempdir().unwrap();
+    let channel = |cha: &str, az: u32, start: &str, end: &str, gain: f64| {
+        let end = if end.is_empty() {
+            String::new()
+        } else {
+            format!(" endDate=\"{end}\"")
+        };
+        format!(
+            "<Channel code=\"{cha}\" locationCode=\"\" startDate=\"{start}\"{end}>\
+             <Latitude>0</Latitude><Longitude>0</Longitude><Elevation>0</Elevation><Depth>0</Depth>\
+             <Azimuth>{az}</Azimuth><Dip>0</Dip><SampleRate>20</SampleRate>\
+             <Response><InstrumentSensitivity><Value>{gain}</Value><Frequency>1</Frequency>\
+             <InputUnits><Name>m/s**2</Name></InputUnits><OutputUnits><Name>counts</Name></OutputUnits>\
+             </InstrumentSensitivity></Response></Channel>"
+        )
+    };
+    let (t0, noon) = ("2026-01-01T00:00:00Z", "2026-01-01T12:00:00Z");
+    let xml = dir.path().join("station.xml");
+    std::fs::write(
+        &xml,
+        format!(
+            "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\
+             <FDSNStationXML xmlns=\"http://www.fdsn.org/xml/station/1\" schemaVersion=\"1.1\">\
+             <Source>test</Source><Created>{t0}</Created><Network code=\"XX\">\
+             <Station code=\"STA\"><Latitude>0</Latitude><Longitude>0</Longitude><Elevation>0</Elevation>\
+             {}{}{}</Station></Network></FDSNStationXML>",
+            channel("HNE", 90, t0, noon, 4e5),
+            channel("HNE", 90, noon, "", 8e5),
+            channel("HNN", 0, t0, "", 4e5),
+        ),
+    )
+    .unwrap();
+    let streams = [codes("HNE"), codes("HNN")];
+    let r = Responses::load(&xml, &streams).unwrap();
+    let start = 1_767_225_600_000_000_000i64; // 2026-01-01T00:00:00Z
+    let morning = r.at(&streams, start + HOUR_NS).unwrap();
+    let evening = r.at(&streams, start + 13 * HOUR_NS).unwrap();
+    assert_eq!(morning.scale, vec![1.0 / 4e5, 1.0 / 4e5]);
+    assert_eq!(evening.scale, vec![1.0 / 8e5, 1.0 / 4e5]);
+    assert_eq!(morning.directions, evening.directions);
+    let across = r.epoch_changes(&streams, start + 23 * HOUR_NS / 2, start + 25 * HOUR_NS / 2);
+    assert_eq!(across.len(), 1, "{across:?}");
+    assert!(
+        across[0].contains("XX.STA..HNE") && across[0].contains("2026-01-01T12:00:00"),
+        "{}",
+        across[0]
+    );
+    assert!(r
+        .epoch_changes(&streams, start + 13 * HOUR_NS, start + 14 * HOUR_NS)
+        .is_empty());
+    let before = r.at(&streams, start - HOUR_NS).err().unwrap().to_string();
+    assert!(
+        before.contains("XX.STA..HNE")
+            && before.contains("XX.STA..HNN")
+            && before.contains("2025-12-31T23:00:00")
+            && before.contains("station.xml"),
+        "{before}"
+    );
+    let e = Responses::load(&xml, &[codes("HNE"), codes("HNZ")])
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("XX.STA..HNZ") && !e.contains("HNE"), "{e}");
+}
