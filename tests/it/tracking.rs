@@ -180,6 +180,16 @@ fn frequency_errors(t: &Tracking, settings: &ArchiveSettings) -> Vec<(usize, Vec
             })
             .unwrap();
         let e = ((r.frequency_hz - m.frequency_hz) / m.frequency_hz).abs();
+        if e > 0.003 {
+            eprintln!(
+                "window {} mode {}: {:.4} Hz, truth {:.4} Hz ({:+.3} %)",
+                quaketwin::vocab::format_epoch_ns(w.start_ns),
+                r.mode_id,
+                r.frequency_hz,
+                m.frequency_hz,
+                100.0 * (r.frequency_hz - m.frequency_hz) / m.frequency_hz
+            );
+        }
         all.entry(r.mode_id).or_default().push(e);
     }
     all.into_iter().collect()
@@ -228,9 +238,13 @@ fn tracking_recovers_the_frequency_history_and_flags_day_two() {
         100.0 * worst
     );
     // Issue 17 asks for 0.3 % in every window.  Measured: 284 of 288 here
-    // (largest 0.605 %), 574 of 576 on the full archive (largest 0.615 %):
-    // a few windows pick a pole column off by 0.4–0.6 % (docs/monitoring.md,
-    // "Accuracy").  Checked: that share does not grow, and nothing is off by 1 %.
+    // (largest 0.605 %); 576 of 576 on the full archive (largest 0.256 %,
+    // the ignored test below).  The misses here are not split twins: in
+    // these 30-minute 50-Hz windows the mode's own column wanders over the
+    // upper orders (13.5 Hz mode at 10:00: 13.15–13.62 Hz, scatter 0.13 Hz)
+    // and its continuation is a column too short to be a mode
+    // (docs/monitoring.md, "Accuracy").  Checked: that share does not grow,
+    // and nothing is off by 1 %.
     assert!(
         within * 100 >= 98 * total,
         "{within} of {total} within 0.3 %"
