@@ -533,7 +533,15 @@ fn run_command(cli: &Cli) -> Result<()> {
                 min_present: *min_present,
                 cycle: cycle.clone(),
             };
-            let s = commands::track(&opts)?;
+            let s = match commands::track(&opts) {
+                Ok(s) => s,
+                Err(e) => {
+                    // The summary of a failed run on stdout, then the error
+                    // on stderr and its exit code (docs/cli.md, `--json`).
+                    print_json(json, &quaketwin::track::TrackSummary::failed(&opts, &e))?;
+                    return Err(e);
+                }
+            };
             console::info(format!(
                 "track: {} windows ({} identified), {} modes tracked; {}; {:.1} s; wrote {}",
                 s.windows,

@@ -113,3 +113,14 @@ pub fn student_t_upper_quantile(tail: f64, nu: f64) -> f64 {
     }
     0.5 * (lo + hi)
 }
+
+/// Median of `values` (reordered in place): the middle element, the upper
+/// of the two middle ones for an even count; 0 when empty.
+pub fn median_in_place(values: &mut [f64]) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let mid = values.len() / 2;
+    values.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+    values[mid]
+}

@@ -18,11 +18,13 @@ use crate::monitor::window::{parse_duration, WindowGrid, NS_PER_S};
 use crate::monitor::{analyse, identify_window, Tracking, WindowModes, WindowSignals};
 use crate::readers::mseed::StreamCodes;
 use crate::readers::sds::{SdsArchive, StreamPattern};
-use crate::readers::stationxml;
 use crate::sinks::parquet::{write_parquet, TableBuilder};
 use crate::sinks::provenance::Provenance;
 use crate::vocab::tables::{modal_tracking as col, MODAL_TRACKING};
 use crate::vocab::{format_epoch_ns, parse_iso8601_ns};
+
+pub mod response;
+use response::Calibration;
 
 pub const TABLE_FILE: &str = MODAL_TRACKING.file;
 pub const REPORT_FILE: &str = "tracking.html";
@@ -91,9 +93,15 @@ pub struct ModeSummary {
     pub first_flagged: Option<String>,
 }
 
-/// What `quaketwin track` did (`--json`).
-#[derive(Debug, Clone, serde::Serialize)]
+/// What `quaketwin track` did (`--json`).  A run that failed is summarised
+/// too ([`TrackSummary::failed`]): `ok` false, the error, the rest empty.
+#[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct TrackSummary {
+    /// Whether the run ended without error.
+    pub ok: bool,
+    /// The error text when not (printable, capped at
+    /// [`crate::error::MAX_PRINTED_ERROR_CHARS`] characters).
+    pub error: Option<String>,
     pub archive: PathBuf,
     pub out: PathBuf,
     pub streams: Vec<String>,
@@ -116,6 +124,23 @@ pub struct TrackSummary {
     pub anomalous_windows: usize,
     pub seconds: f64,
     pub files: Vec<PathBuf>,
+}
+
+impl TrackSummary {
+    /// The summary of a run of `opts` that failed with `error`: `ok` false,
+    /// the error made printable and capped as on stderr, nothing else found.
+    pub fn failed(opts: &TrackOptions, error: &Error) -> TrackSummary {
+        TrackSummary {
+            ok: false,
+            error: Some(crate::error::printable(
+                &error.to_string(),
+                crate::error::MAX_PRINTED_ERROR_CHARS,
+            )),
+            archive: opts.archive.clone(),
+            out: opts.out.clone(),
+            ..Default::default()
+        }
+    }
 }
 
 /// Checked plan of a run: everything parsed before any record is read.
@@ -196,99 +221,20 @@ impl TrackOptions {
     }
 }
 
-/// Per stream: factor from counts to physical units, direction label, group.
-struct StreamCalibration {
-    scale: Vec<f64>,
-    directions: Vec<String>,
-    groups: Vec<String>,
-    units: String,
-}
-
-/// Applies the StationXML (module doc) at time `t_ns` to every stream.
-fn calibrate(streams: &[StreamCodes], xml: Option<&Path>, t_ns: i64) -> Result<StreamCalibration> {
-    let groups = streams
-        .iter()
-        .map(|c| format!("{}.{}", c.station, c.location))
-        .collect();
-    let Some(path) = xml else {
-        crate::console::warn(
-            "track: no StationXML (--stationxml): samples stay in counts, channel orientations are unknown (modes without direction labels); frequencies and damping are unaffected, shapes assume equal gains",
-        );
-        return Ok(StreamCalibration {
-            scale: vec![1.0; streams.len()],
-            directions: vec![String::new(); streams.len()],
-            groups,
-            units: "counts".into(),
-        });
-    };
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let source = crate::vocab::SourceRef {
-        file: path.display().to_string(),
-        member: None,
-        column: None,
-        format: "stationxml".into(),
-    };
-    let meta = stationxml::parse(&bytes, &source)?;
-    let mut scale = Vec::new();
-    let mut directions = Vec::new();
-    let mut missing = Vec::new();
-    for c in streams {
-        let src = crate::vocab::SourceRef {
-            format: "mseed".into(),
-            ..source.clone()
-        };
-        let mut ch = crate::vocab::Channel::new(
-            c.id(),
-            crate::vocab::Units::Counts {
-                counts_per_si: None,
-            },
-            1.0,
-            src,
-        );
-        ch.network = Some(c.network.clone());
-        ch.station = Some(c.station.clone());
-        ch.location_code = Some(c.location.clone());
-        ch.channel_code = Some(c.channel.clone());
-        ch.start_ns = Some(t_ns);
-        let mut rec = [crate::vocab::Record::new(ch, Vec::new())];
-        stationxml::apply(&mut rec, &meta);
-        let ch = &rec[0].channel;
-        match ch.units {
-            crate::vocab::Units::Counts {
-                counts_per_si: Some(g),
-            } => scale.push(1.0 / g),
-            _ => missing.push(c.id()),
-        }
-        directions.push(crate::modal::direction_label(ch));
-    }
-    if !missing.is_empty() {
-        return Err(Error::input(
-            crate::error::Location::file(path.display().to_string()),
-            format!(
-                "no acceleration sensitivity for {} at {}: every tracked stream needs its gain (or leave --stationxml out to work in counts)",
-                missing.join(", "),
-                format_epoch_ns(t_ns)
-            ),
-        ));
-    }
-    Ok(StreamCalibration {
-        scale,
-        directions,
-        groups,
-        units: "m/s^2".into(),
-    })
-}
-
 /// Reads and identifies the window starting at `t0`.
 fn window_modes(
     archive: &SdsArchive,
-    cal: &StreamCalibration,
+    calibration: &Calibration,
     t0: i64,
     length: i64,
     min_present: f64,
     settings: &ModalSettings,
 ) -> WindowModes {
     let t1 = t0 + length;
+    let cal = match calibration.at(archive.streams(), t0) {
+        Ok(c) => c,
+        Err(e) => return WindowModes::skipped(t0, t1, 0.0, e.to_string()),
+    };
     let read = match archive.read_window(t0, t1) {
         Ok(Some(w)) => w,
         Ok(None) => {
@@ -328,6 +274,8 @@ fn window_modes(
         settings,
     );
     w.notes.extend(read.notes);
+    w.notes
+        .extend(calibration.epoch_changes(archive.streams(), t0, t1));
     w
 }
 
@@ -339,7 +287,7 @@ pub struct Prepared {
     opts: TrackOptions,
     plan: Plan,
     archive: SdsArchive,
-    cal: StreamCalibration,
+    cal: Calibration,
     settings: ModalSettings,
 }
 
@@ -368,11 +316,7 @@ pub fn prepare(opts: &TrackOptions) -> Result<Prepared> {
             ),
         ));
     }
-    let cal = calibrate(
-        archive.streams(),
-        opts.stationxml.as_deref(),
-        plan.grid.start_ns,
-    )?;
+    let cal = Calibration::new(archive.streams(), opts.stationxml.as_deref())?;
     Ok(Prepared {
         opts: opts.clone(),
         plan,
@@ -442,6 +386,14 @@ impl Prepared {
                 w.skipped.as_deref().unwrap_or("")
             ));
         }
+        for w in &windows {
+            for n in w.notes.iter().filter(|n| n.starts_with("StationXML epoch")) {
+                crate::console::warn(format!(
+                    "track: window {}: {n}",
+                    format_epoch_ns(w.start_ns)
+                ));
+            }
+        }
         let reference = plan.reference.map(|(modes, channels, source)| Reference {
             modes,
             channels,
@@ -465,9 +417,11 @@ impl Prepared {
         .then_step(
             "units_to_si",
             serde_json::json!({
-                "applied": cal.units != "counts",
+                "applied": cal.units() != "counts",
                 "source": opts.stationxml,
-                "si_per_count": streams.iter().zip(&cal.scale).map(|(id, k)| (id.clone(), *k)).collect::<std::collections::BTreeMap<_, _>>(),
+                // At the run's start (null when no epoch holds it); later
+                // windows use their own epoch (`track::response`).
+                "si_per_count": cal.at(archive.streams(), plan.grid.start_ns).ok().map(|c| streams.iter().zip(&c.scale).map(|(id, k)| (id.clone(), *k)).collect::<std::collections::BTreeMap<_, _>>()),
             }),
         )
         .then_step(
@@ -477,7 +431,7 @@ impl Prepared {
                 "step_s": plan.grid.step_ns as f64 / 1e9,
                 "min_present": opts.min_present,
                 "stationxml": opts.stationxml,
-                "units": cal.units,
+                "units": cal.units(),
                 "modal_settings": settings,
                 "tracking": TrackSettings::default(),
                 "band": band_settings,
@@ -492,8 +446,8 @@ impl Prepared {
             &opts.archive,
             &[TABLE_FILE, REPORT_FILE],
             || {
-                write_table(&out.join(TABLE_FILE), &tracking, &cal.units, &provenance)?;
-                let html = crate::report::tracking::page(&tracking, &cal.units, &streams);
+                write_table(&out.join(TABLE_FILE), &tracking, cal.units(), &provenance)?;
+                let html = crate::report::tracking::page(&tracking, cal.units(), &streams);
                 crate::sinks::atomic::write_bytes_atomically(
                     &out.join(REPORT_FILE),
                     html.as_bytes(),
@@ -505,7 +459,7 @@ impl Prepared {
             &plan.grid,
             &tracking,
             streams,
-            cal.units,
+            cal.units().to_string(),
             summary_files,
             clock,
         );
@@ -562,6 +516,8 @@ fn summarise(
         })
         .collect();
     TrackSummary {
+        ok: true,
+        error: None,
         archive: opts.archive.clone(),
         out: opts.out.clone(),
         streams,
@@ -724,6 +680,19 @@ pub fn tracking_metadata(
                     .filter_map(|w| {
                         w.skipped.as_ref().map(|s| {
                             serde_json::json!({"window_start": format_epoch_ns(w.start_ns), "reason": s})
+                        })
+                    })
+                    .collect(),
+            )),
+        ),
+        (
+            "quaketwin.window_notes".into(),
+            json(serde_json::Value::Array(
+                t.windows
+                    .iter()
+                    .flat_map(|w| {
+                        w.notes.iter().map(|n| {
+                            serde_json::json!({"window_start": format_epoch_ns(w.start_ns), "note": n})
                         })
                     })
                     .collect(),

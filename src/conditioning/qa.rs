@@ -97,15 +97,6 @@ pub fn detect_flat_segments(data: &[f64], dt: f64, min_duration_s: f64) -> Vec<Q
     flags
 }
 
-fn median_in_place(values: &mut [f64]) -> f64 {
-    if values.is_empty() {
-        return 0.0;
-    }
-    let mid = values.len() / 2;
-    values.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
-    values[mid]
-}
-
 /// Indices of spikes: e_i = x_i − (x_{i−1} + x_{i+1})/2 compared with the
 /// robust scale 1.4826·MAD(e) taken over blocks of 256 samples (the
 /// largest of the block and its two neighbours, so that strong shaking,
@@ -125,9 +116,9 @@ pub fn spike_indices(data: &[f64], threshold: f64) -> Vec<usize> {
         .chunks(BLOCK)
         .map(|c| {
             let mut v = c.to_vec();
-            let med = median_in_place(&mut v);
+            let med = crate::stats::median_in_place(&mut v);
             let mut dev: Vec<f64> = c.iter().map(|x| (x - med).abs()).collect();
-            1.4826 * median_in_place(&mut dev)
+            1.4826 * crate::stats::median_in_place(&mut dev)
         })
         .collect();
     let mut out = Vec::new();

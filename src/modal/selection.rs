@@ -26,7 +26,9 @@
 //!   column's mean shape ≥ `min_coherence`), at least `min_physical_fraction`
 //!   of its poles pass the physical filters, and its estimate passes them;
 //! - two accepted columns of the same mode ([`same_mode`]) are a split twin:
-//!   the longer is kept, the other reported;
+//!   the longer is kept, rejoined with the twin's poles of the mode (one
+//!   per order, nearest its median frequency: [`rejoin_twin`]), the other
+//!   reported;
 //! - columns of the same mode broken by a gap (frequencies within
 //!   `merge_frequency_tolerance`, MAC ≥ `merge_mac` of mean shapes) are merged
 //!   first, one pole per order kept; so are mostly physical pieces of one
@@ -528,12 +530,52 @@ fn converged_part(poles: &[Pole], column: &[usize], fraction: f64) -> Vec<usize>
     }
 }
 
-/// A column promoted to a mode: the poles of its estimate, the mode, and the
-/// column's description (reported if it later turns out to be a split twin).
+/// A column promoted to a mode: its poles, the poles of its estimate, the
+/// mode, and the column's description (reported if it later turns out to be
+/// a split twin).
 struct Accepted {
+    members: Vec<usize>,
     part: Vec<usize>,
     mode: Mode,
     column: RejectedColumn,
+}
+
+/// Rejoins a split column: `twin` holds poles of the mode of `kept` (see
+/// [`same_mode`]).  How a mode's column splits: near the top of the orders
+/// the mode's pole and a spurious neighbour come within the link tolerance,
+/// the greedy linking (nearest to each column's LAST pole) sends the mode's
+/// column onto the neighbour, which drifts away, while the mode's own poles
+/// continue in the neighbour's column, the twin.  The estimate, taken over
+/// the upper orders, then mixed the drift in (synthetic archive,
+/// 2026-01-03T00:00: the 10.553 Hz mode estimated at 10.489 Hz from a column
+/// ending 10.48, 10.40, 10.34, 10.39 Hz, its poles 10.57, 10.53, 10.54,
+/// 10.52 Hz in the twin).  Rule: at each order keep, among the kept
+/// column's pole and the twin's poles within the link tolerance
+/// ([`mode_tolerance`]) of the kept column's median frequency, the pole
+/// nearest that median (robust to the drifting tail), then retake the
+/// estimate over the converged part.
+fn rejoin_twin(poles: &[Pole], kept: &mut Accepted, twin: &[usize], settings: &SelectionSettings) {
+    let mut frequencies: Vec<f64> = kept
+        .members
+        .iter()
+        .map(|&i| poles[i].frequency_hz)
+        .collect();
+    let centre = crate::stats::median_in_place(&mut frequencies);
+    let zeta = kept.mode.damping_ratio;
+    let mut pool = kept.members.clone();
+    pool.extend(twin.iter().copied().filter(|&i| {
+        let tolerance = mode_tolerance(
+            zeta,
+            poles[i].damping_ratio,
+            settings.link_frequency,
+            settings,
+        );
+        (poles[i].frequency_hz - centre).abs() / centre <= tolerance
+    }));
+    kept.members = one_per_order(poles, &pool, centre);
+    kept.part = converged_part(poles, &kept.members, settings.converged_fraction);
+    kept.mode = summarise(poles, &kept.part, false);
+    kept.column.poles = kept.members.len();
 }
 
 /// Automatic selection by pole columns (module doc).  `orders` are the
@@ -647,6 +689,7 @@ pub fn select_automatic(
                     order_max: all.order_max,
                     reason: String::new(),
                 },
+                members: column,
                 part,
                 mode,
             }),
@@ -666,7 +709,8 @@ pub fn select_automatic(
     }
     // One mode, two columns: at high orders a mode can be fitted twice (a
     // split twin a few per cent apart with the same shape).  Keep the longer
-    // column; the twin is reported.
+    // column, rejoined with the twin's poles of the mode ([`rejoin_twin`]);
+    // the twin is reported.
     accepted.sort_by(|a, b| {
         b.column
             .poles
@@ -676,16 +720,19 @@ pub fn select_automatic(
     let mut kept: Vec<Accepted> = Vec::new();
     for candidate in accepted {
         match kept
-            .iter()
+            .iter_mut()
             .find(|k| same_mode(&k.mode, &candidate.mode, settings))
         {
-            Some(k) => rejected.push(RejectedColumn {
-                reason: format!(
-                    "twin of the {:.3} Hz mode (same shape, a longer column)",
-                    k.mode.frequency_hz
-                ),
-                ..candidate.column
-            }),
+            Some(k) => {
+                rejoin_twin(poles, k, &candidate.members, settings);
+                rejected.push(RejectedColumn {
+                    reason: format!(
+                        "twin of the {:.3} Hz mode (same shape, a longer column; its poles near that mode joined it)",
+                        k.mode.frequency_hz
+                    ),
+                    ..candidate.column
+                });
+            }
             None => kept.push(candidate),
         }
     }

@@ -180,6 +180,16 @@ fn frequency_errors(t: &Tracking, settings: &ArchiveSettings) -> Vec<(usize, Vec
             })
             .unwrap();
         let e = ((r.frequency_hz - m.frequency_hz) / m.frequency_hz).abs();
+        if e > 0.003 {
+            eprintln!(
+                "window {} mode {}: {:.4} Hz, truth {:.4} Hz ({:+.3} %)",
+                quaketwin::vocab::format_epoch_ns(w.start_ns),
+                r.mode_id,
+                r.frequency_hz,
+                m.frequency_hz,
+                100.0 * (r.frequency_hz - m.frequency_hz) / m.frequency_hz
+            );
+        }
         all.entry(r.mode_id).or_default().push(e);
     }
     all.into_iter().collect()
@@ -209,6 +219,7 @@ fn tracking_recovers_the_frequency_history_and_flags_day_two() {
     opts.cycle = "6h".into();
     opts.end = Some("2026-01-01T18:00:00Z".into());
     let (summary, t) = run(&opts).unwrap();
+    assert!(summary.ok && summary.error.is_none());
     assert_eq!(summary.windows, 36);
     assert_eq!(summary.identified_windows, 36, "{:?}", summary.skipped);
     assert_eq!(t.reference.modes.len(), 8, "{}", summary.reference);
@@ -227,9 +238,13 @@ fn tracking_recovers_the_frequency_history_and_flags_day_two() {
         100.0 * worst
     );
     // Issue 17 asks for 0.3 % in every window.  Measured: 284 of 288 here
-    // (largest 0.605 %), 574 of 576 on the full archive (largest 0.615 %):
-    // a few windows pick a pole column off by 0.4–0.6 % (docs/monitoring.md,
-    // "Accuracy").  Checked: that share does not grow, and nothing is off by 1 %.
+    // (largest 0.605 %); 576 of 576 on the full archive (largest 0.256 %,
+    // the ignored test below).  The misses here are not split twins: in
+    // these 30-minute 50-Hz windows the mode's own column wanders over the
+    // upper orders (13.5 Hz mode at 10:00: 13.15–13.62 Hz, scatter 0.13 Hz)
+    // and its continuation is a column too short to be a mode
+    // (docs/monitoring.md, "Accuracy").  Checked: that share does not grow,
+    // and nothing is off by 1 %.
     assert!(
         within * 100 >= 98 * total,
         "{within} of {total} within 0.3 %"
@@ -288,11 +303,71 @@ fn track_refuses_bad_flags_before_reading() {
     }
 }
 
+/// `track --json` of a run that fails still prints a summary object on
+/// stdout: `"ok": false` and the error (printable: no control character
+/// of the archive's name reaches the terminal), exit 1 for data problems
+/// (an archive without day files; windows that hold no samples, so no
+/// reference) and 2 for usage (a bad flag).
+#[test]
+fn track_json_of_a_failed_run_is_a_summary_with_the_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let empty = dir.path().join("empty\u{1b}[31marchive");
+    std::fs::create_dir_all(&empty).unwrap();
+    let written = dir.path().join("sds");
+    let start = 1_767_225_600_000_000_000i64;
+    for cha in ["HNE", "HNN"] {
+        write_stream_at(&written, cha, start, 20.0, 2 * 3600 * 20);
+    }
+    let track = |archive: &Path, extra: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_quaketwin"))
+            .args(["-q", "--json", "track"])
+            .arg(archive)
+            .arg("--out")
+            .arg(dir.path().join("out"))
+            .args(extra)
+            .output()
+            .unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout)
+            .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stdout)));
+        (
+            o.status.code(),
+            v,
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let cases: [(&Path, &[&str], i32, &str); 3] = [
+        (&empty, &[], 1, "no SDS day file"),
+        (
+            &written,
+            &[
+                "--start",
+                "2026-02-01T00:00:00Z",
+                "--end",
+                "2026-02-01T03:00:00Z",
+            ],
+            1,
+            "no mode was found",
+        ),
+        (&written, &["--window", "0h"], 2, "--window"),
+    ];
+    for (archive, extra, code, says) in cases {
+        let (status, v, stderr) = track(archive, extra);
+        assert_eq!(status, Some(code), "{extra:?}: {stderr}");
+        assert_eq!(v["ok"], serde_json::Value::Bool(false), "{v}");
+        let error = v["error"].as_str().expect("error text");
+        assert!(error.contains(says), "{error}");
+        assert!(!error.chars().any(|c| c.is_control()), "{error:?}");
+        assert!(stderr.contains(says), "{stderr}");
+        assert!(v["windows"].as_u64() == Some(0) && v["modes"] == serde_json::json!([]));
+    }
+}
+
 /// The full check of issue 17 item 3 (release: `cargo test --release
 /// full_three_day -- --ignored --nocapture`): 3 days × 8 channels × 100 Hz,
 /// 1-hour windows; prints the per-mode errors and the anomaly.  Asserts the
-/// issue's 0.3 % in every window, which is NOT met at present (measured 574
-/// of 576 mode-windows, largest 0.615 %; docs/monitoring.md, "Accuracy").
+/// issue's 0.3 % in every window (measured 576 of 576 mode-windows, largest
+/// 0.256 %; 574 before the split-column rule of the modal selection, largest
+/// 0.615 %; docs/monitoring.md, "Accuracy").
 #[test]
 #[ignore]
 fn full_three_day_archive_is_tracked_within_tolerance() {
@@ -324,4 +399,78 @@ fn full_three_day_archive_is_tracked_within_tolerance() {
         Some("2026-01-02T00:00:00.000000000Z")
     );
     assert_eq!(within, total, "every mode-window within 0.3 %");
+}
+
+/// StationXML epochs: a stream whose gain changes between two `<Channel
+/// startDate endDate>` epochs is calibrated, per window, with the response
+/// of the epoch holding the window's start; a window across the change
+/// carries a note naming the stream and the time; at a time no epoch holds
+/// there is no calibration (such a window is skipped with that reason); a
+/// stream without a gain in any epoch is refused before any window.
+#[test]
+fn stationxml_epochs_give_each_window_its_response() {
+    use quaketwin::track::response::Responses;
+    let dir = tempfile::tempdir().unwrap();
+    let channel = |cha: &str, az: u32, start: &str, end: &str, gain: f64| {
+        let end = if end.is_empty() {
+            String::new()
+        } else {
+            format!(" endDate=\"{end}\"")
+        };
+        format!(
+            "<Channel code=\"{cha}\" locationCode=\"\" startDate=\"{start}\"{end}>\
+             <Latitude>0</Latitude><Longitude>0</Longitude><Elevation>0</Elevation><Depth>0</Depth>\
+             <Azimuth>{az}</Azimuth><Dip>0</Dip><SampleRate>20</SampleRate>\
+             <Response><InstrumentSensitivity><Value>{gain}</Value><Frequency>1</Frequency>\
+             <InputUnits><Name>m/s**2</Name></InputUnits><OutputUnits><Name>counts</Name></OutputUnits>\
+             </InstrumentSensitivity></Response></Channel>"
+        )
+    };
+    let (t0, noon) = ("2026-01-01T00:00:00Z", "2026-01-01T12:00:00Z");
+    let xml = dir.path().join("station.xml");
+    std::fs::write(
+        &xml,
+        format!(
+            "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\
+             <FDSNStationXML xmlns=\"http://www.fdsn.org/xml/station/1\" schemaVersion=\"1.1\">\
+             <Source>test</Source><Created>{t0}</Created><Network code=\"XX\">\
+             <Station code=\"STA\"><Latitude>0</Latitude><Longitude>0</Longitude><Elevation>0</Elevation>\
+             {}{}{}</Station></Network></FDSNStationXML>",
+            channel("HNE", 90, t0, noon, 4e5),
+            channel("HNE", 90, noon, "", 8e5),
+            channel("HNN", 0, t0, "", 4e5),
+        ),
+    )
+    .unwrap();
+    let streams = [codes("HNE"), codes("HNN")];
+    let r = Responses::load(&xml, &streams).unwrap();
+    let start = 1_767_225_600_000_000_000i64; // 2026-01-01T00:00:00Z
+    let morning = r.at(&streams, start + HOUR_NS).unwrap();
+    let evening = r.at(&streams, start + 13 * HOUR_NS).unwrap();
+    assert_eq!(morning.scale, vec![1.0 / 4e5, 1.0 / 4e5]);
+    assert_eq!(evening.scale, vec![1.0 / 8e5, 1.0 / 4e5]);
+    assert_eq!(morning.directions, evening.directions);
+    let across = r.epoch_changes(&streams, start + 23 * HOUR_NS / 2, start + 25 * HOUR_NS / 2);
+    assert_eq!(across.len(), 1, "{across:?}");
+    assert!(
+        across[0].contains("XX.STA..HNE") && across[0].contains("2026-01-01T12:00:00"),
+        "{}",
+        across[0]
+    );
+    assert!(r
+        .epoch_changes(&streams, start + 13 * HOUR_NS, start + 14 * HOUR_NS)
+        .is_empty());
+    let before = r.at(&streams, start - HOUR_NS).err().unwrap().to_string();
+    assert!(
+        before.contains("XX.STA..HNE")
+            && before.contains("XX.STA..HNN")
+            && before.contains("2025-12-31T23:00:00")
+            && before.contains("station.xml"),
+        "{before}"
+    );
+    let e = Responses::load(&xml, &[codes("HNE"), codes("HNZ")])
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("XX.STA..HNZ") && !e.contains("HNE"), "{e}");
 }
