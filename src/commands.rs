@@ -250,6 +250,9 @@ fn path_text(p: &Path) -> Result<String> {
 /// embedded in the binary, so the command works from any directory).
 pub const INGEST_PIPELINE: &str = include_str!("../pipelines/ingest.toml");
 
+/// Where the ingest pipeline's last stage, `metrics`, begins (`quaketwin modal` stops before it).
+const METRICS_STAGE: &str = "[[stage]]\nname = \"metrics\"";
+
 /// `quaketwin ingest EVENT --out DIR [--mcap FILE]`: read, condition,
 /// metrics; optionally the conditioned event as MCAP for replay or viewing.
 pub fn ingest(
@@ -409,8 +412,13 @@ pub fn modal(
             toml::Value::String(file)
         );
     }
+    // The ingest pipeline's read and conditioning, without its metrics stage: response
+    // spectra and drift are not what `modal` is asked for (a fifth of its time, issue 18).
+    let read_and_condition = INGEST_PIPELINE
+        .split_once(METRICS_STAGE)
+        .map_or(INGEST_PIPELINE, |(before, _)| before);
     let text = format!(
-        "{INGEST_PIPELINE}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\n{params}"
+        "{read_and_condition}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\n{params}"
     );
     let mut p = parse_pipeline(&text, "built-in modal pipeline")?;
     // The ingest pipeline's stages plus modal: named as the command, so that

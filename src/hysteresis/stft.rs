@@ -331,7 +331,15 @@ impl FrameTransformer {
 }
 
 /// Per-frame products G_j[i][k] between every `left` and every `right`
-/// representation. Output layout: `out[(j * left.len() + i) * right.len() + k]`.
+/// representation (the frame terms of Q_ik, Eq. 15). Output layout:
+/// `out[(j * left.len() + i) * right.len() + k]`.
+///
+/// Each G_j[i][k] is the sum over the frame's values in their order, exactly as a dot
+/// product would add them; the products of one `left` row with all `right` rows are
+/// accumulated side by side, so the additions of different k overlap instead of each
+/// waiting for the one before (a dot product at a time was bound by the latency of its
+/// additions: the stage's largest cost, issue 18). Same operations, same order: the
+/// same bits.
 pub fn frame_products(
     left: &[&FrameRepresentation],
     right: &[&FrameRepresentation],
@@ -339,12 +347,22 @@ pub fn frame_products(
 ) -> Vec<f64> {
     let (nl, nr) = (left.len(), right.len());
     let mut out = vec![0.0; frames * nl * nr];
+    let mut rows: Vec<&[f64]> = Vec::with_capacity(nr);
     for j in 0..frames {
+        rows.clear();
+        rows.extend(right.iter().map(|r| r.frame(j)));
         for (i, l) in left.iter().enumerate() {
             let a = l.frame(j);
-            for (k, r) in right.iter().enumerate() {
-                let b = r.frame(j);
-                out[(j * nl + i) * nr + k] = a.iter().zip(b).map(|(x, y)| x * y).sum();
+            let sums = &mut out[(j * nl + i) * nr..(j * nl + i + 1) * nr];
+            // −0.0: the start of `Iterator::sum` for floats (x + −0.0 = x for every x).
+            sums.fill(-0.0);
+            for (m, x) in a.iter().enumerate() {
+                for (s, b) in sums.iter_mut().zip(&rows) {
+                    // A shorter `right` row ends its sum where it ends (as `zip` would).
+                    if let Some(y) = b.get(m) {
+                        *s += x * y;
+                    }
+                }
             }
         }
     }
