@@ -331,40 +331,64 @@ impl FrameTransformer {
 }
 
 /// Per-frame products G_j[i][k] between every `left` and every `right`
-/// representation (the frame terms of Q_ik, Eq. 15). Output layout:
+/// representation (the frame terms of Q_ik, Eq. 15), all of one width. Output layout:
 /// `out[(j * left.len() + i) * right.len() + k]`.
 ///
 /// Each G_j[i][k] is the sum over the frame's values in their order, exactly as a dot
-/// product would add them; the products of one `left` row with all `right` rows are
-/// accumulated side by side, so the additions of different k overlap instead of each
-/// waiting for the one before (a dot product at a time was bound by the latency of its
-/// additions: the stage's largest cost, issue 18). Same operations, same order: the
-/// same bits.
+/// product adds them; one `left` row is accumulated against [`PRODUCT_LANES`] `right` rows
+/// side by side, so their additions overlap instead of each waiting for the one before (a
+/// dot product at a time was bound by the latency of its additions: the hysteresis stage's
+/// largest cost, issue 18). Same operations in the same order: the same bits.
 pub fn frame_products(
     left: &[&FrameRepresentation],
     right: &[&FrameRepresentation],
     frames: usize,
 ) -> Vec<f64> {
     let (nl, nr) = (left.len(), right.len());
+    let width = left.first().or(right.first()).map_or(0, |r| r.width);
+    assert!(
+        left.iter().chain(right).all(|r| r.width == width),
+        "frame_products: representations of different widths"
+    );
     let mut out = vec![0.0; frames * nl * nr];
-    let mut rows: Vec<&[f64]> = Vec::with_capacity(nr);
     for j in 0..frames {
-        rows.clear();
-        rows.extend(right.iter().map(|r| r.frame(j)));
         for (i, l) in left.iter().enumerate() {
             let a = l.frame(j);
             let sums = &mut out[(j * nl + i) * nr..(j * nl + i + 1) * nr];
-            // −0.0: the start of `Iterator::sum` for floats (x + −0.0 = x for every x).
-            sums.fill(-0.0);
-            for (m, x) in a.iter().enumerate() {
-                for (s, b) in sums.iter_mut().zip(&rows) {
-                    // A shorter `right` row ends its sum where it ends (as `zip` would).
-                    if let Some(y) = b.get(m) {
-                        *s += x * y;
+            for (block, rows) in sums
+                .chunks_mut(PRODUCT_LANES)
+                .zip(right.chunks(PRODUCT_LANES))
+            {
+                if let (Ok(block), Ok(rows)) = (
+                    <&mut [f64; PRODUCT_LANES]>::try_from(&mut *block),
+                    <&[&FrameRepresentation; PRODUCT_LANES]>::try_from(rows),
+                ) {
+                    *block = dot_lanes(a, rows.map(|r| r.frame(j)));
+                } else {
+                    for (s, r) in block.iter_mut().zip(rows) {
+                        *s = a.iter().zip(r.frame(j)).map(|(x, y)| x * y).sum();
                     }
                 }
             }
         }
     }
     out
+}
+
+/// Right-hand rows accumulated together by [`frame_products`].
+pub const PRODUCT_LANES: usize = 8;
+
+/// The dot products of `a` with each of `rows` (all of `a`'s length), each summed in order
+/// from −0.0 as `Iterator::sum` does.
+fn dot_lanes(a: &[f64], rows: [&[f64]; PRODUCT_LANES]) -> [f64; PRODUCT_LANES] {
+    let n = a.len();
+    let rows = rows.map(|r| &r[..n]);
+    let mut s = [-0.0f64; PRODUCT_LANES];
+    for m in 0..n {
+        let x = a[m];
+        for (s, r) in s.iter_mut().zip(&rows) {
+            *s += x * r[m];
+        }
+    }
+    s
 }

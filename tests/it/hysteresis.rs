@@ -1181,13 +1181,14 @@ fn noisy_linear_response_is_not_identifiable() {
     }
 }
 
-/// The per-frame products accumulate several right-hand rows side by side (issue 18); each
-/// G_j[i][k] must still be the plain dot product of the two frames, bit for bit.
+/// The per-frame products accumulate eight right-hand rows side by side (issue 18); each
+/// G_j[i][k] must still be the plain dot product of the two frames, bit for bit (11 right
+/// rows: one block of eight and a remainder of three).
 #[test]
 fn frame_products_are_the_dot_products_bit_for_bit() {
     let mut rng = quaketwin::rng::Rng::new(18);
     let (frames, width) = (7, 53);
-    let reps: Vec<FrameRepresentation> = (0..5)
+    let reps: Vec<FrameRepresentation> = (0..11)
         .map(|_| FrameRepresentation {
             width,
             values: (0..frames * width).map(|_| rng.normal() * 1e3).collect(),
