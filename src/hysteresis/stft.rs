@@ -336,7 +336,7 @@ impl FrameTransformer {
 ///
 /// Each G_j[i][k] is the sum over the frame's values in their order, exactly as a dot
 /// product adds them; one `left` row is accumulated against [`PRODUCT_LANES`] `right` rows
-/// side by side, so their additions overlap instead of each waiting for the one before (a
+/// (fewer in a last block) side by side, so their additions overlap instead of each waiting for the one before (a
 /// dot product at a time was bound by the latency of its additions: the hysteresis stage's
 /// largest cost, issue 18). Same operations in the same order: the same bits.
 pub fn frame_products(
@@ -359,16 +359,12 @@ pub fn frame_products(
                 .chunks_mut(PRODUCT_LANES)
                 .zip(right.chunks(PRODUCT_LANES))
             {
-                if let (Ok(block), Ok(rows)) = (
-                    <&mut [f64; PRODUCT_LANES]>::try_from(&mut *block),
-                    <&[&FrameRepresentation; PRODUCT_LANES]>::try_from(rows),
-                ) {
-                    *block = dot_lanes(a, rows.map(|r| r.frame(j)));
-                } else {
-                    for (s, r) in block.iter_mut().zip(rows) {
-                        *s = a.iter().zip(r.frame(j)).map(|(x, y)| x * y).sum();
-                    }
-                }
+                // A last block of fewer rows fills its lanes with its first row and keeps
+                // only its own sums (a lane costs little beside the chain of additions).
+                let lanes: [&[f64]; PRODUCT_LANES] =
+                    std::array::from_fn(|q| rows.get(q).unwrap_or(&rows[0]).frame(j));
+                let sums = dot_lanes(a, lanes);
+                block.copy_from_slice(&sums[..block.len()]);
             }
         }
     }
