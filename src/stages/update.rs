@@ -50,9 +50,7 @@ pub struct UpdateParams {
     pub start: StartPoint,
     /// Model modes computed beyond the number of measured modes, as pairing candidates.
     pub extra_model_modes: usize,
-    /// When GA, PSO and SA stop before their evaluation budget: no relative improvement of
-    /// the best objective larger than `tolerance` over `window` iterations, or (GA, PSO) the
-    /// population collapsed to a spread below `collapse` (`twin::optimisers::Convergence`).
+    /// When GA, PSO and SA stop before their budget (`twin::optimisers::Convergence`).
     pub convergence: Convergence,
 }
 
@@ -109,14 +107,8 @@ impl UpdateParams {
                 )));
             }
         }
-        self.convergence
-            .check()
-            .map_err(|e| Error::usage(format!("update: {e}")))?;
-        Ok(self
-            .solvers
-            .iter()
-            .map(|s| s.build_with(self.convergence))
-            .collect())
+        let rule = self.convergence.checked()?;
+        Ok(self.solvers.iter().map(|s| s.build_with(rule)).collect())
     }
 
     pub fn ensemble_options(&self) -> Result<EnsembleOptions> {

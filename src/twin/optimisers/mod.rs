@@ -101,18 +101,23 @@ impl Default for Convergence {
 }
 
 impl Convergence {
-    /// Usage error text for values the rule cannot use.
-    pub fn check(&self) -> Result<(), String> {
+    /// The rule itself, or a usage error naming the setting it cannot use.
+    pub fn checked(self) -> crate::Result<Convergence> {
+        let bad = |m: &str| {
+            Err(crate::error::Error::usage(format!(
+                "update: convergence.{m}"
+            )))
+        };
         if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
-            return Err("convergence.tolerance must be a number ≥ 0".into());
+            return bad("tolerance must be a number ≥ 0");
         }
         if self.window == 0 {
-            return Err("convergence.window must be at least 1".into());
+            return bad("window must be at least 1");
         }
         if !(self.collapse.is_finite() && self.collapse >= 0.0) {
-            return Err("convergence.collapse must be a number ≥ 0".into());
+            return bad("collapse must be a number ≥ 0");
         }
-        Ok(())
+        Ok(self)
     }
 
     /// Whether `candidate` improves on `best` by more than the relative tolerance
