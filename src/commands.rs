@@ -12,16 +12,17 @@ use crate::stages::{load_pipeline, parse_pipeline};
 use crate::vocab::format_epoch_ns;
 
 /// `quaketwin inspect EVENT`: a table of the channels, what was inferred and
-/// what is missing.
+/// what is missing.  The event's samples are not kept (see
+/// [`event_folder::load_listing`]): memory is that of its largest file.
 pub fn inspect(event: &Path) -> Result<String> {
-    let loaded = event_folder::load(event)?;
+    let loaded = event_folder::load_listing(event)?;
     Ok(render_inventory(&loaded))
 }
 
 /// `quaketwin inspect EVENT --json`: the inventory as JSON (the same
 /// document the ingest stage writes as `event.json`).
 pub fn inspect_json(event: &Path) -> Result<String> {
-    let loaded = event_folder::load(event)?;
+    let loaded = event_folder::load_listing(event)?;
     let bytes = crate::stages::ingest::inventory_json(&loaded)?;
     Ok(String::from_utf8_lossy(&bytes).into_owned() + "\n")
 }
@@ -250,9 +251,6 @@ fn path_text(p: &Path) -> Result<String> {
 /// embedded in the binary, so the command works from any directory).
 pub const INGEST_PIPELINE: &str = include_str!("../pipelines/ingest.toml");
 
-/// Where the ingest pipeline's last stage, `metrics`, begins (`quaketwin modal` stops before it).
-const METRICS_STAGE: &str = "[[stage]]\nname = \"metrics\"";
-
 /// `quaketwin ingest EVENT --out DIR [--mcap FILE]`: read, condition,
 /// metrics; optionally the conditioned event as MCAP for replay or viewing.
 pub fn ingest(
@@ -412,13 +410,8 @@ pub fn modal(
             toml::Value::String(file)
         );
     }
-    // The ingest pipeline's read and conditioning, without its metrics stage: response
-    // spectra and drift are not what `modal` is asked for (a fifth of its time, issue 18).
-    let read_and_condition = INGEST_PIPELINE
-        .split_once(METRICS_STAGE)
-        .map_or(INGEST_PIPELINE, |(before, _)| before);
     let text = format!(
-        "{read_and_condition}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\n{params}"
+        "{INGEST_PIPELINE}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\n{params}"
     );
     let mut p = parse_pipeline(&text, "built-in modal pipeline")?;
     // The ingest pipeline's stages plus modal: named as the command, so that

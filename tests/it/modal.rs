@@ -738,21 +738,3 @@ fn lowest_spectral_peak_is_the_lowest_clear_one() {
         None
     );
 }
-
-/// `quaketwin modal` reads, conditions and identifies; it does not compute the strong-motion
-/// metrics of `ingest` (issue 18: they were a fifth of its time and not what it is asked for).
-#[test]
-fn modal_command_runs_no_metrics_stage() {
-    let event = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("sample-records/synthetic-4storey-ambient");
-    let out = tempfile::tempdir().unwrap();
-    let flags = quaketwin::commands::ModalFlags {
-        method: "auto".into(),
-        ..Default::default()
-    };
-    let outcomes = quaketwin::commands::modal(&event, out.path(), &flags, true).unwrap();
-    let names: Vec<&str> = outcomes.iter().map(|(n, _)| n.as_str()).collect();
-    assert_eq!(names, ["ingest", "condition", "modal"]);
-    assert!(out.path().join("modes.parquet").exists());
-    assert!(!out.path().join("channels.parquet").exists());
-}
