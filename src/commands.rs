@@ -12,17 +12,16 @@ use crate::stages::{load_pipeline, parse_pipeline};
 use crate::vocab::format_epoch_ns;
 
 /// `quaketwin inspect EVENT`: a table of the channels, what was inferred and
-/// what is missing.  The event's samples are not kept (see
-/// [`event_folder::load_listing`]): memory is that of its largest file.
+/// what is missing.
 pub fn inspect(event: &Path) -> Result<String> {
-    let loaded = event_folder::load_listing(event)?;
+    let loaded = event_folder::load(event)?;
     Ok(render_inventory(&loaded))
 }
 
 /// `quaketwin inspect EVENT --json`: the inventory as JSON (the same
 /// document the ingest stage writes as `event.json`).
 pub fn inspect_json(event: &Path) -> Result<String> {
-    let loaded = event_folder::load_listing(event)?;
+    let loaded = event_folder::load(event)?;
     let bytes = crate::stages::ingest::inventory_json(&loaded)?;
     Ok(String::from_utf8_lossy(&bytes).into_owned() + "\n")
 }
