@@ -331,22 +331,60 @@ impl FrameTransformer {
 }
 
 /// Per-frame products G_j[i][k] between every `left` and every `right`
-/// representation. Output layout: `out[(j * left.len() + i) * right.len() + k]`.
+/// representation (the frame terms of Q_ik, Eq. 15), all of one width. Output layout:
+/// `out[(j * left.len() + i) * right.len() + k]`.
+///
+/// Each G_j[i][k] is the sum over the frame's values in their order, exactly as a dot
+/// product adds them; one `left` row is accumulated against [`PRODUCT_LANES`] `right` rows
+/// (fewer in a last block) side by side, so their additions overlap instead of each waiting for the one before (a
+/// dot product at a time was bound by the latency of its additions: the hysteresis stage's
+/// largest cost, issue 18). Same operations in the same order: the same bits.
 pub fn frame_products(
     left: &[&FrameRepresentation],
     right: &[&FrameRepresentation],
     frames: usize,
 ) -> Vec<f64> {
     let (nl, nr) = (left.len(), right.len());
+    let width = left.first().or(right.first()).map_or(0, |r| r.width);
+    assert!(
+        left.iter().chain(right).all(|r| r.width == width),
+        "frame_products: representations of different widths"
+    );
     let mut out = vec![0.0; frames * nl * nr];
     for j in 0..frames {
         for (i, l) in left.iter().enumerate() {
             let a = l.frame(j);
-            for (k, r) in right.iter().enumerate() {
-                let b = r.frame(j);
-                out[(j * nl + i) * nr + k] = a.iter().zip(b).map(|(x, y)| x * y).sum();
+            let sums = &mut out[(j * nl + i) * nr..(j * nl + i + 1) * nr];
+            for (block, rows) in sums
+                .chunks_mut(PRODUCT_LANES)
+                .zip(right.chunks(PRODUCT_LANES))
+            {
+                // A last block of fewer rows fills its lanes with its first row and keeps
+                // only its own sums (a lane costs little beside the chain of additions).
+                let lanes: [&[f64]; PRODUCT_LANES] =
+                    std::array::from_fn(|q| rows.get(q).unwrap_or(&rows[0]).frame(j));
+                let sums = dot_lanes(a, lanes);
+                block.copy_from_slice(&sums[..block.len()]);
             }
         }
     }
     out
+}
+
+/// Right-hand rows accumulated together by [`frame_products`].
+pub const PRODUCT_LANES: usize = 8;
+
+/// The dot products of `a` with each of `rows` (all of `a`'s length), each summed in order
+/// from −0.0 as `Iterator::sum` does.
+fn dot_lanes(a: &[f64], rows: [&[f64]; PRODUCT_LANES]) -> [f64; PRODUCT_LANES] {
+    let n = a.len();
+    let rows = rows.map(|r| &r[..n]);
+    let mut s = [-0.0f64; PRODUCT_LANES];
+    for m in 0..n {
+        let x = a[m];
+        for (s, r) in s.iter_mut().zip(&rows) {
+            *s += x * r[m];
+        }
+    }
+    s
 }

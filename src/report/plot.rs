@@ -699,35 +699,49 @@ pub fn decimate_curve(points: &[(f64, f64)], max_points: usize) -> Vec<(f64, f64
         step *= 1.25;
         stepped = step_points(&norm, &base, step);
     }
-    let keep_with = |tol: f64| -> Vec<bool> {
-        let mut keep = stepped.clone();
-        let mut stack: Vec<(usize, usize)> = forced.windows(2).map(|w| (w[0], w[1])).collect();
-        while let Some((a, b)) = stack.pop() {
-            if b <= a + 1 {
-                continue;
-            }
-            let (p, q) = (norm[a], norm[b]);
-            let (dx, dy) = (q.0 - p.0, q.1 - p.1);
-            let len = (dx * dx + dy * dy).sqrt();
-            let (mut worst, mut at) = (-1.0, a);
-            for (i, r) in norm.iter().enumerate().take(b).skip(a + 1) {
-                let d = if len > 0.0 {
-                    ((r.0 - p.0) * dy - (r.1 - p.1) * dx).abs() / len
-                } else {
-                    ((r.0 - p.0).powi(2) + (r.1 - p.1).powi(2)).sqrt()
-                };
-                if d > worst {
-                    worst = d;
-                    at = i;
-                }
-            }
-            if worst > tol {
-                keep[at] = true;
-                stack.push((a, at));
-                stack.push((at, b));
+    // Ramer–Douglas–Peucker splits the chord (a, b) at its farthest point whatever the
+    // tolerance, so the split tree is the same for every tolerance: build it once, recording
+    // for each split point the smallest chord distance on its path from the root. RDP at
+    // tolerance `tol` keeps exactly the points whose recorded distance exceeds `tol` (a split
+    // happens when its own distance, and those of every split above it, exceed `tol`).
+    let mut split_at = vec![f64::NEG_INFINITY; norm.len()];
+    let mut stack: Vec<(usize, usize, f64)> = forced
+        .windows(2)
+        .map(|w| (w[0], w[1], f64::INFINITY))
+        .collect();
+    while let Some((a, b, above)) = stack.pop() {
+        if b <= a + 1 {
+            continue;
+        }
+        let (p, q) = (norm[a], norm[b]);
+        let (dx, dy) = (q.0 - p.0, q.1 - p.1);
+        let len = (dx * dx + dy * dy).sqrt();
+        let (mut worst, mut at) = (-1.0, a);
+        for (i, r) in norm.iter().enumerate().take(b).skip(a + 1) {
+            let d = if len > 0.0 {
+                ((r.0 - p.0) * dy - (r.1 - p.1) * dx).abs() / len
+            } else {
+                ((r.0 - p.0).powi(2) + (r.1 - p.1).powi(2)).sqrt()
+            };
+            if d > worst {
+                worst = d;
+                at = i;
             }
         }
-        keep
+        // The bisection's tolerances are all positive: a chord at distance 0 never splits.
+        if worst > 0.0 {
+            let reach = worst.min(above);
+            split_at[at] = reach;
+            stack.push((a, at, reach));
+            stack.push((at, b, reach));
+        }
+    }
+    let keep_with = |tol: f64| -> Vec<bool> {
+        stepped
+            .iter()
+            .zip(&split_at)
+            .map(|(s, d)| *s || *d > tol)
+            .collect()
     };
     // Bisect the tolerance (normalised units) to the largest count ≤ budget.
     let (mut lo, mut hi) = (0.0f64, 2.0f64);

@@ -14,7 +14,7 @@ use crate::sinks::twin_tables::{read_measured_modes, write_twin_modes, write_twi
 use crate::twin::ensemble::{EnsembleOptions, Selection};
 use crate::twin::load_twin;
 use crate::twin::objective::ObjectiveOptions;
-use crate::twin::optimisers::{Optimiser, SolverName};
+use crate::twin::optimisers::{Convergence, Optimiser, SolverName};
 use crate::twin::update::{update_twin_with, StartPoint};
 
 pub const KIND: StageKind = StageKind {
@@ -50,6 +50,8 @@ pub struct UpdateParams {
     pub start: StartPoint,
     /// Model modes computed beyond the number of measured modes, as pairing candidates.
     pub extra_model_modes: usize,
+    /// When GA, PSO and SA stop before their budget (`twin::optimisers::Convergence`).
+    pub convergence: Convergence,
 }
 
 impl Default for UpdateParams {
@@ -63,6 +65,7 @@ impl Default for UpdateParams {
             selection: Selection::FirstRanked,
             start: StartPoint::Twin,
             extra_model_modes: ObjectiveOptions::default().extra_model_modes,
+            convergence: Convergence::default(),
         }
     }
 }
@@ -85,7 +88,7 @@ impl UpdateParams {
     }
 
     /// Checks the parameters before any file is read: solvers listed once
-    /// each and at least one, rounds and tolerance positive.
+    /// each and at least one, rounds and tolerance positive, a usable convergence rule.
     pub fn validate(&self) -> Result<()> {
         self.build_solvers()?;
         self.ensemble_options()?;
@@ -104,7 +107,8 @@ impl UpdateParams {
                 )));
             }
         }
-        Ok(self.solvers.iter().map(|s| s.build()).collect())
+        let rule = self.convergence.checked()?;
+        Ok(self.solvers.iter().map(|s| s.build_with(rule)).collect())
     }
 
     pub fn ensemble_options(&self) -> Result<EnsembleOptions> {

@@ -1180,3 +1180,30 @@ fn noisy_linear_response_is_not_identifiable() {
         Err(e) => panic!("unexpected error {e}"),
     }
 }
+
+/// The per-frame products accumulate eight right-hand rows side by side (issue 18); each
+/// G_j[i][k] must still be the plain dot product of the two frames, bit for bit (11 right
+/// rows: one block of eight and a remainder of three).
+#[test]
+fn frame_products_are_the_dot_products_bit_for_bit() {
+    let mut rng = quaketwin::rng::Rng::new(18);
+    let (frames, width) = (7, 53);
+    let reps: Vec<FrameRepresentation> = (0..11)
+        .map(|_| FrameRepresentation {
+            width,
+            values: (0..frames * width).map(|_| rng.normal() * 1e3).collect(),
+        })
+        .collect();
+    let left: Vec<&FrameRepresentation> = reps[..2].iter().collect();
+    let right: Vec<&FrameRepresentation> = reps.iter().collect();
+    let g = frame_products(&left, &right, frames);
+    for j in 0..frames {
+        for (i, l) in left.iter().enumerate() {
+            for (k, r) in right.iter().enumerate() {
+                let dot: f64 = l.frame(j).iter().zip(r.frame(j)).map(|(x, y)| x * y).sum();
+                let got = g[(j * left.len() + i) * right.len() + k];
+                assert_eq!(got.to_bits(), dot.to_bits(), "frame {j}, {i} × {k}");
+            }
+        }
+    }
+}

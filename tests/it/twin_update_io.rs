@@ -477,3 +477,68 @@ fn pipeline_stage_reads_the_event_twin_and_modes_parquet() {
         "{e:?}"
     );
 }
+
+#[test]
+fn convergence_rule_is_checked_before_any_file_is_read() {
+    use quaketwin::twin::optimisers::Convergence;
+    for bad in [
+        Convergence {
+            window: 0,
+            ..Default::default()
+        },
+        Convergence {
+            tolerance: -1.0,
+            ..Default::default()
+        },
+        Convergence {
+            collapse: f64::NAN,
+            ..Default::default()
+        },
+    ] {
+        let p = UpdateParams {
+            convergence: bad,
+            ..quick_params()
+        };
+        let e = p.validate().unwrap_err();
+        assert!(
+            matches!(e, Error::Usage(ref m) if m.contains("convergence")),
+            "{bad:?}: {e:?}"
+        );
+    }
+    let p = UpdateParams::from_toml(
+        "convergence = { tolerance = 1e-8, window = 25 }\n",
+        "settings.toml",
+    )
+    .unwrap();
+    assert_eq!(p.convergence.window, 25);
+    assert_eq!(p.convergence.collapse, Convergence::default().collapse);
+}
+
+/// The stall count of the convergence rule: progress is a decrease of the best value by more
+/// than the relative tolerance from where progress was last counted, so small steps add up.
+#[test]
+fn stall_counts_iterations_without_relative_progress() {
+    use quaketwin::twin::optimisers::{Convergence, Stall};
+    let rule = Convergence {
+        tolerance: 1e-3,
+        window: 3,
+        collapse: 0.0,
+    };
+    let mut s = Stall::new(rule, 1.0);
+    assert!(!s.update(0.9995)); // 5e-4: not progress (1)
+    assert!(!s.update(0.9991)); // 9e-4 from 1.0: not yet (2)
+    assert!(!s.update(0.998)); // 2e-3 from 1.0: progress, count restarts
+    assert!(!s.update(0.998)); // (1)
+    assert!(!s.update(0.998)); // (2)
+    assert!(s.update(0.998)); // (3): the window has passed
+    let mut from_inf = Stall::new(rule, f64::INFINITY);
+    assert!(!from_inf.update(5.0)); // any finite value is progress from +∞
+                                    // Collapse: every coordinate spans less than `collapse` (0 never fires).
+    assert!(!rule.collapsed(&[vec![0.5, 0.2], vec![0.5, 0.2]]));
+    let rule = Convergence {
+        collapse: 1e-6,
+        ..rule
+    };
+    assert!(rule.collapsed(&[vec![0.5, 0.2], vec![0.5 + 1e-7, 0.2]]));
+    assert!(!rule.collapsed(&[vec![0.5, 0.2], vec![0.5, 0.3]]));
+}

@@ -1,18 +1,19 @@
 //! Real-coded genetic algorithm (Goldberg 1989): tournament selection, blend (BLX-α)
 //! crossover, Gaussian mutation with a shrinking scale, elitism. The seed point, when given,
-//! is one individual of the first generation.
+//! is one individual of the first generation. Stops after `max_generations` or earlier by
+//! `convergence` (stall of the best value, or a collapsed population).
 
-use super::{argmin, evaluate_batch, Bounds, Objective, OptimResult, Optimiser};
+use super::{
+    argmin, evaluate_batch, Bounds, Convergence, Objective, OptimResult, Optimiser, Stall,
+};
 use crate::rng::Rng;
 
 #[derive(Debug, Clone)]
 pub struct GeneticAlgorithm {
     pub population: usize,
     pub max_generations: usize,
-    /// Stop after this many generations without a relative improvement of the best value
-    /// larger than `tolerance`.
-    pub stall_generations: usize,
-    pub tolerance: f64,
+    /// Stop earlier: stall over a window of generations, or population collapse.
+    pub convergence: Convergence,
     pub elite: usize,
     pub crossover_fraction: f64,
     pub blend_alpha: f64,
@@ -26,8 +27,7 @@ impl Default for GeneticAlgorithm {
         GeneticAlgorithm {
             population: 40,
             max_generations: 80,
-            stall_generations: 20,
-            tolerance: 1e-9,
+            convergence: Convergence::default(),
             elite: 2,
             crossover_fraction: 0.8,
             blend_alpha: 0.3,
@@ -62,9 +62,10 @@ impl Optimiser for GeneticAlgorithm {
         let mut evaluations = pop_size;
         let b = argmin(&values);
         let (mut best_u, mut best_v) = (pop[b].clone(), values[b]);
-        let mut stall = 0;
+        let mut stall = Stall::new(self.convergence, best_v);
         let mut generation = 0;
-        while generation < self.max_generations && stall < self.stall_generations {
+        let mut converged = false;
+        while generation < self.max_generations && !converged {
             generation += 1;
             let mut order: Vec<usize> = (0..pop_size).collect();
             order.sort_by(|&a, &c| values[a].total_cmp(&values[c]).then(a.cmp(&c)));
@@ -109,15 +110,11 @@ impl Optimiser for GeneticAlgorithm {
             values = evaluate_batch(f, bounds, &pop);
             evaluations += pop_size;
             let b = argmin(&values);
-            if values[b] < best_v - self.tolerance * best_v.abs().max(1e-300) {
-                stall = 0;
-            } else {
-                stall += 1;
-            }
             if values[b] < best_v {
                 best_v = values[b];
                 best_u = pop[b].clone();
             }
+            converged = stall.update(best_v) || self.convergence.collapsed(&pop);
         }
         OptimResult {
             x: bounds.to_x(&best_u),

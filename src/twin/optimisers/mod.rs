@@ -68,6 +68,114 @@ impl Bounds {
     }
 }
 
+/// When an optimiser stops before its evaluation budget (the `update` stage's `convergence`
+/// param, docs/pipelines.md): the budget is set by convergence, not by a fixed count.
+///
+/// - Stall: the best objective J* has not improved by more than `tolerance`·|J*| (relative)
+///   for `window` consecutive iterations — GA generations, PSO iterations, SA steps.
+/// - Collapse (GA, PSO): every parameter's spread over the population (max − min, in the
+///   unit cube of the bounds) is below `collapse`: the population sits on one point and can
+///   only repeat it.
+///
+/// Pattern search and quasi-Newton keep their own convergence tests (mesh size, step length),
+/// which already stop them at a point.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Convergence {
+    /// Relative improvement of the best objective that counts as progress.
+    pub tolerance: f64,
+    /// Iterations without progress before the optimiser stops.
+    pub window: usize,
+    /// Population spread (unit cube) below which GA and PSO stop.
+    pub collapse: f64,
+}
+
+impl Default for Convergence {
+    fn default() -> Self {
+        Convergence {
+            tolerance: 1e-6,
+            window: 10,
+            collapse: 1e-6,
+        }
+    }
+}
+
+impl Convergence {
+    /// The rule itself, or a usage error naming the setting it cannot use.
+    pub fn checked(self) -> crate::Result<Convergence> {
+        let bad = |m: &str| {
+            Err(crate::error::Error::usage(format!(
+                "update: convergence.{m}"
+            )))
+        };
+        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
+            return bad("tolerance must be a number ≥ 0");
+        }
+        if self.window == 0 {
+            return bad("window must be at least 1");
+        }
+        if !(self.collapse.is_finite() && self.collapse >= 0.0) {
+            return bad("collapse must be a number ≥ 0");
+        }
+        Ok(self)
+    }
+
+    /// Whether `candidate` improves on `best` by more than the relative tolerance
+    /// (any finite value improves on +∞).
+    pub fn improves(&self, candidate: f64, best: f64) -> bool {
+        if best.is_infinite() {
+            return candidate < best;
+        }
+        candidate < best - self.tolerance * best.abs().max(1e-300)
+    }
+
+    /// Whether every coordinate of `points` (unit cube) spans less than `collapse`.
+    pub fn collapsed(&self, points: &[Vec<f64>]) -> bool {
+        let Some(first) = points.first() else {
+            return true;
+        };
+        (0..first.len()).all(|d| {
+            let (lo, hi) = points
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                    (l.min(p[d]), h.max(p[d]))
+                });
+            hi - lo < self.collapse
+        })
+    }
+}
+
+/// The stall count of [`Convergence`]: iterations since the best value last improved by more
+/// than the tolerance.
+#[derive(Debug, Clone)]
+pub struct Stall {
+    rule: Convergence,
+    /// Best value when progress was last counted.
+    reference: f64,
+    since: usize,
+}
+
+impl Stall {
+    pub fn new(rule: Convergence, best: f64) -> Self {
+        Stall {
+            rule,
+            reference: best,
+            since: 0,
+        }
+    }
+    /// Records the best value after one more iteration; true when the window has passed
+    /// without progress.
+    pub fn update(&mut self, best: f64) -> bool {
+        if self.rule.improves(best, self.reference) {
+            self.reference = best;
+            self.since = 0;
+        } else {
+            self.since += 1;
+        }
+        self.since >= self.rule.window
+    }
+}
+
 /// Outcome of one optimisation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OptimResult {
@@ -159,10 +267,23 @@ impl SolverName {
     ];
     /// The solver with its default settings.
     pub fn build(self) -> Box<dyn Optimiser> {
+        self.build_with(Convergence::default())
+    }
+    /// The solver with its default settings and the stopping rule `convergence`.
+    pub fn build_with(self, convergence: Convergence) -> Box<dyn Optimiser> {
         match self {
-            SolverName::GeneticAlgorithm => Box::new(GeneticAlgorithm::default()),
-            SolverName::ParticleSwarm => Box::new(ParticleSwarm::default()),
-            SolverName::SimulatedAnnealing => Box::new(SimulatedAnnealing::default()),
+            SolverName::GeneticAlgorithm => Box::new(GeneticAlgorithm {
+                convergence,
+                ..Default::default()
+            }),
+            SolverName::ParticleSwarm => Box::new(ParticleSwarm {
+                convergence,
+                ..Default::default()
+            }),
+            SolverName::SimulatedAnnealing => Box::new(SimulatedAnnealing {
+                convergence,
+                ..Default::default()
+            }),
             SolverName::PatternSearch => Box::new(PatternSearch::default()),
             SolverName::QuasiNewton => Box::new(QuasiNewton::default()),
         }

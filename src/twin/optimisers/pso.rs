@@ -1,16 +1,19 @@
 //! Particle swarm optimisation (Kennedy & Eberhart 1995) with the constriction coefficients
 //! of Clerc & Kennedy (w = 0.7298, c1 = c2 = 1.49618), global-best topology, velocity clamp,
-//! absorbing walls. The seed point, when given, is particle 0 (at rest).
+//! absorbing walls. The seed point, when given, is particle 0 (at rest). Stops after
+//! `max_iterations` or earlier by `convergence` (stall of the best value, or a collapsed swarm).
 
-use super::{argmin, evaluate_batch, Bounds, Objective, OptimResult, Optimiser};
+use super::{
+    argmin, evaluate_batch, Bounds, Convergence, Objective, OptimResult, Optimiser, Stall,
+};
 use crate::rng::Rng;
 
 #[derive(Debug, Clone)]
 pub struct ParticleSwarm {
     pub particles: usize,
     pub max_iterations: usize,
-    pub stall_iterations: usize,
-    pub tolerance: f64,
+    /// Stop earlier: stall over a window of iterations, or swarm collapse.
+    pub convergence: Convergence,
     pub inertia: f64,
     pub cognitive: f64,
     pub social: f64,
@@ -23,8 +26,7 @@ impl Default for ParticleSwarm {
         ParticleSwarm {
             particles: 30,
             max_iterations: 100,
-            stall_iterations: 20,
-            tolerance: 1e-9,
+            convergence: Convergence::default(),
             inertia: 0.7298,
             cognitive: 1.49618,
             social: 1.49618,
@@ -64,9 +66,10 @@ impl Optimiser for ParticleSwarm {
         let mut personal_v = values.clone();
         let g = argmin(&personal_v);
         let (mut best_u, mut best_v) = (personal[g].clone(), personal_v[g]);
-        let mut stall = 0;
+        let mut stall = Stall::new(self.convergence, best_v);
         let mut iteration = 0;
-        while iteration < self.max_iterations && stall < self.stall_iterations {
+        let mut converged = false;
+        while iteration < self.max_iterations && !converged {
             iteration += 1;
             for i in 0..n {
                 for d in 0..dim {
@@ -92,15 +95,11 @@ impl Optimiser for ParticleSwarm {
                 }
             }
             let g = argmin(&personal_v);
-            if personal_v[g] < best_v - self.tolerance * best_v.abs().max(1e-300) {
-                stall = 0;
-            } else {
-                stall += 1;
-            }
             if personal_v[g] < best_v {
                 best_v = personal_v[g];
                 best_u = personal[g].clone();
             }
+            converged = stall.update(best_v) || self.convergence.collapsed(&x);
         }
         OptimResult {
             x: bounds.to_x(&best_u),

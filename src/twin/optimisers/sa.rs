@@ -2,9 +2,11 @@
 //! Gaussian moves whose length shrinks with the temperature, Metropolis acceptance on the
 //! relative increase Δ/|f_current|, geometric cooling. Each step draws a fixed batch of
 //! proposals evaluated in parallel and scans them in order, moving at the first accepted one
-//! (the batch size is fixed, so the result does not depend on the thread count).
+//! (the batch size is fixed, so the result does not depend on the thread count). Stops after
+//! `max_evaluations` or earlier by `convergence` (stall of the
+//! best value over a window of steps).
 
-use super::{evaluate_batch, Bounds, Objective, OptimResult, Optimiser};
+use super::{evaluate_batch, Bounds, Convergence, Objective, OptimResult, Optimiser, Stall};
 use crate::rng::Rng;
 
 #[derive(Debug, Clone)]
@@ -16,8 +18,8 @@ pub struct SimulatedAnnealing {
     pub min_step: f64,
     pub batch: usize,
     pub max_evaluations: usize,
-    /// Stop after this many evaluations without improving the best value.
-    pub stall_evaluations: usize,
+    /// Stop earlier: stall of the best value over a window of steps.
+    pub convergence: Convergence,
 }
 
 impl Default for SimulatedAnnealing {
@@ -29,7 +31,7 @@ impl Default for SimulatedAnnealing {
             min_step: 1e-4,
             batch: 4,
             max_evaluations: 2500,
-            stall_evaluations: 600,
+            convergence: Convergence::default(),
         }
     }
 }
@@ -55,10 +57,11 @@ impl Optimiser for SimulatedAnnealing {
         let mut cur_v = evaluate_batch(f, bounds, std::slice::from_ref(&cur))[0];
         let mut evaluations = 1;
         let (mut best_u, mut best_v) = (cur.clone(), cur_v);
-        let mut since_best = 0;
+        let mut stall = Stall::new(self.convergence, best_v);
+        let mut converged = false;
         let mut temperature = self.initial_temperature;
         let mut steps = 0;
-        while evaluations < self.max_evaluations && since_best < self.stall_evaluations {
+        while evaluations < self.max_evaluations && !converged {
             steps += 1;
             let step =
                 (self.initial_step * temperature / self.initial_temperature).max(self.min_step);
@@ -71,7 +74,6 @@ impl Optimiser for SimulatedAnnealing {
                 .collect();
             let values = evaluate_batch(f, bounds, &proposals);
             evaluations += proposals.len();
-            since_best += proposals.len();
             // Acceptance draws are taken for every proposal so the stream does not depend on
             // which one is accepted.
             let draws: Vec<f64> = (0..proposals.len()).map(|_| rng.uniform()).collect();
@@ -79,7 +81,6 @@ impl Optimiser for SimulatedAnnealing {
                 if v < best_v {
                     best_v = v;
                     best_u = p.clone();
-                    since_best = 0;
                 }
                 let delta = (v - cur_v) / cur_v.abs().max(1e-300);
                 let accept =
@@ -91,6 +92,7 @@ impl Optimiser for SimulatedAnnealing {
                 }
             }
             temperature *= self.cooling;
+            converged = stall.update(best_v);
         }
         OptimResult {
             x: bounds.to_x(&best_u),
