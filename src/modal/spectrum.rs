@@ -5,7 +5,8 @@
 //! semi-definite, its singular values are its eigenvalues.
 
 use crate::error::{Error, Result};
-use faer::{c64, Mat, Side};
+use faer::linalg::matmul::triangular::{self, BlockStructure};
+use faer::{c64, Accum, Mat, MatMut, Par, Side};
 use realfft::RealFftPlanner;
 
 /// Singular values of the PSD matrix per frequency bin.
@@ -71,19 +72,35 @@ pub fn spectral_overlay<S: AsRef<[f64]> + Sync>(
                 Ok(spec)
             })
             .collect::<Result<_>>()?;
-        // Segment by segment into each bin's matrix, as one running sum per
-        // entry; the upper triangle is the conjugate of the lower one exactly
-        // (the same products), so only the lower one is summed.
-        psd.par_chunks_mut(l * l).enumerate().for_each(|(k, m)| {
-            for s in 0..count {
-                for a in 0..l {
-                    let za = spectra[a][s * bins + k];
-                    for b in 0..=a {
-                        m[a * l + b] += za * spectra[b][s * bins + k].conj();
+        // Each bin's matrix gains X Xᴴ, X the block's spectra at that bin
+        // (channels × segments): one lower-triangular matrix product per bin
+        // (faer's kernels, sequential inside a bin, so the sums do not depend
+        // on the threads) instead of a running sum per entry, whose chain of
+        // dependent additions set the pace (the overlay took most of the
+        // modal stage of a 64-channel hour).  The upper triangle is never
+        // formed: it is the conjugate of the lower one.
+        psd.par_chunks_mut(l * l).enumerate().for_each_init(
+            || Mat::<c64>::zeros(l, BLOCK),
+            |x, (k, m)| {
+                for s in 0..count {
+                    for (a, spectrum) in spectra.iter().enumerate() {
+                        x[(a, s)] = spectrum[s * bins + k];
                     }
                 }
-            }
-        });
+                let block_spectra = x.as_ref().subcols(0, count);
+                triangular::matmul(
+                    MatMut::from_column_major_slice_mut(m, l, l),
+                    BlockStructure::TriangularLower,
+                    Accum::Add,
+                    block_spectra,
+                    BlockStructure::Rectangular,
+                    block_spectra.adjoint(),
+                    BlockStructure::Rectangular,
+                    c64::new(1.0, 0.0),
+                    Par::Seq,
+                );
+            },
+        );
     }
     // One-sided density scaling: 2 Δt / (Σw² · segments), except DC and Nyquist.
     let singular_values: Vec<Vec<f64>> = psd
@@ -92,11 +109,12 @@ pub fn spectral_overlay<S: AsRef<[f64]> + Sync>(
         .map(|(k, m)| {
             let factor = if k == 0 || k == bins - 1 { 1.0 } else { 2.0 } * dt
                 / (window_power * segments as f64);
+            // Column-major, lower triangle (a ≥ b) summed.
             let entry = |a: usize, b: usize| {
                 if b <= a {
-                    m[a * l + b]
+                    m[a + b * l]
                 } else {
-                    m[b * l + a].conj()
+                    m[b + a * l].conj()
                 }
             };
             let mat = Mat::<c64>::from_fn(l, l, |a, b| entry(a, b) * factor);
