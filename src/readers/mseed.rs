@@ -55,6 +55,10 @@ struct DataRecord {
     samples: Vec<f64>,
     /// Samples the header announces (`samples` is empty when not decoded).
     nsamples: usize,
+    /// `nsamples`, or fewer when the data section could not hold them (a
+    /// header is not trusted before it is checked against the bytes: room
+    /// reserved for a channel's records is at most what they can decode to).
+    nsamples_bound: usize,
     /// Byte offset of the record in the file (for error messages).
     offset: usize,
     /// Record length, bytes.
@@ -91,19 +95,57 @@ pub fn join_segments(mut segments: Vec<Segment>) -> std::result::Result<Joined, 
     let Some(first) = segments.first() else {
         return Err("no samples".into());
     };
-    let rate = first.rate_hz;
-    if !(rate.is_finite() && rate > 0.0) {
-        return Err(format!(
-            "invalid sampling rate {rate} Hz ({})",
-            first.origin
-        ));
+    let capacity = segments.iter().map(|s| s.samples.len()).sum();
+    let mut joiner = Joiner::new(first.start_ns, first.rate_hz, &first.origin, capacity)?;
+    // Each segment is freed as soon as it is appended.
+    for seg in segments {
+        joiner.push(seg)?;
     }
-    let start_ns = first.start_ns;
-    let dt_ns = NS_PER_S / rate;
-    let mut samples: Vec<f64> = Vec::new();
-    let mut qa = Vec::new();
-    let mut filled_total = 0usize;
-    for seg in &segments {
+    Ok(joiner.finish())
+}
+
+/// [`join_segments`] a segment at a time, the segments coming in order of
+/// start time: a reader decodes a record, pushes it and drops it, so a
+/// channel is held once (the joined series), not twice.
+pub struct Joiner {
+    start_ns: i64,
+    rate_hz: f64,
+    dt_ns: f64,
+    samples: Vec<f64>,
+    qa: Vec<QaFlag>,
+    filled_total: usize,
+}
+
+impl Joiner {
+    /// A series starting at `start_ns` on the grid of `rate_hz` (of the
+    /// segment `origin`, for messages), with room for `capacity` samples
+    /// (exact for contiguous segments: a vector grown by doubling would
+    /// reach twice a day-long channel).
+    pub fn new(
+        start_ns: i64,
+        rate_hz: f64,
+        origin: &str,
+        capacity: usize,
+    ) -> std::result::Result<Self, String> {
+        if !(rate_hz.is_finite() && rate_hz > 0.0) {
+            return Err(format!("invalid sampling rate {rate_hz} Hz ({origin})"));
+        }
+        Ok(Joiner {
+            start_ns,
+            rate_hz,
+            dt_ns: NS_PER_S / rate_hz,
+            samples: Vec::with_capacity(capacity),
+            qa: Vec::new(),
+            filled_total: 0,
+        })
+    }
+
+    /// Appends the next segment (an empty one is ignored).
+    pub fn push(&mut self, seg: Segment) -> std::result::Result<(), String> {
+        if seg.samples.is_empty() {
+            return Ok(());
+        }
+        let (rate, start_ns, dt_ns) = (self.rate_hz, self.start_ns, self.dt_ns);
         if ((seg.rate_hz - rate) / rate).abs() > 1e-6 {
             return Err(format!(
                 "sampling rate changes from {rate} Hz to {} Hz ({})",
@@ -112,10 +154,10 @@ pub fn join_segments(mut segments: Vec<Segment>) -> std::result::Result<Joined, 
         }
         // Position of this segment's first sample on the grid of the first segment.
         let offset_samples = (seg.start_ns as i128 - start_ns as i128) as f64 / dt_ns;
-        let expected = samples.len() as f64;
+        let expected = self.samples.len() as f64;
         let shift = offset_samples - expected;
-        if samples.is_empty() || shift.abs() <= 0.5 {
-            samples.extend_from_slice(&seg.samples);
+        if self.samples.is_empty() || shift.abs() <= 0.5 {
+            self.samples.extend_from_slice(&seg.samples);
         } else if shift > 0.5 {
             // Gap: fill with a straight line between the bordering samples.
             // A corrupt time stamp must not make us allocate years of samples.
@@ -128,33 +170,33 @@ pub fn join_segments(mut segments: Vec<Segment>) -> std::result::Result<Joined, 
                 ));
             }
             let missing = shift.round() as usize;
-            let left = samples.last().copied().unwrap_or(0.0);
+            let left = self.samples.last().copied().unwrap_or(0.0);
             let right = seg.samples[0];
             for k in 1..=missing {
                 let w = k as f64 / (missing + 1) as f64;
-                samples.push(left + (right - left) * w);
+                self.samples.push(left + (right - left) * w);
             }
-            filled_total += missing;
-            qa.push(QaFlag::Gap {
+            self.filled_total += missing;
+            self.qa.push(QaFlag::Gap {
                 at_s: expected / rate,
                 duration_s: shift / rate,
             });
-            samples.extend_from_slice(&seg.samples);
+            self.samples.extend_from_slice(&seg.samples);
         } else {
             // Overlap of `overlap` samples: keep what we have.
             let overlap = (-shift).round() as usize;
-            let begin = samples.len().saturating_sub(overlap);
-            let kept = &samples[begin..];
+            let begin = self.samples.len().saturating_sub(overlap);
+            let kept = &self.samples[begin..];
             let differs = kept
                 .iter()
                 .zip(seg.samples.iter())
                 .any(|(a, b)| a != b && !(a.is_nan() && b.is_nan()));
             if differs {
-                qa.push(QaFlag::Gap {
+                self.qa.push(QaFlag::Gap {
                     at_s: begin as f64 / rate,
                     duration_s: shift / rate,
                 });
-                qa.push(QaFlag::Note {
+                self.qa.push(QaFlag::Note {
                     text: format!(
                         "overlap of {overlap} samples at {:.6} s ({}) with different values: the earlier samples were kept",
                         begin as f64 / rate,
@@ -163,23 +205,29 @@ pub fn join_segments(mut segments: Vec<Segment>) -> std::result::Result<Joined, 
                 });
             }
             if overlap < seg.samples.len() {
-                samples.extend_from_slice(&seg.samples[overlap..]);
+                self.samples.extend_from_slice(&seg.samples[overlap..]);
             }
         }
+        Ok(())
     }
-    if filled_total > 0 {
-        qa.push(QaFlag::Note {
-            text: format!(
-                "{filled_total} missing samples filled by linear interpolation across gaps"
-            ),
-        });
+
+    /// The joined series and its flags.
+    pub fn finish(mut self) -> Joined {
+        if self.filled_total > 0 {
+            self.qa.push(QaFlag::Note {
+                text: format!(
+                    "{} missing samples filled by linear interpolation across gaps",
+                    self.filled_total
+                ),
+            });
+        }
+        Joined {
+            start_ns: self.start_ns,
+            rate_hz: self.rate_hz,
+            samples: self.samples,
+            qa: self.qa,
+        }
     }
-    Ok(Joined {
-        start_ns,
-        rate_hz: rate,
-        samples,
-        qa,
-    })
 }
 
 /// Reads a whole MiniSEED file: one record per `NET.STA.LOC.CHA`, in order of
@@ -187,7 +235,11 @@ pub fn join_segments(mut segments: Vec<Segment>) -> std::result::Result<Joined, 
 pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
     let mut src = source.clone();
     src.format = "mseed".into();
-    let (data_records, skipped) = parse_records(bytes, &src)?;
+    // Headers first (every record checked, no sample decoded), then each
+    // channel's records decoded one at a time into its joined series: a
+    // day-long channel is held once, not as thousands of record vectors
+    // beside the series they are copied into.
+    let (data_records, skipped) = parse_records(bytes, &src, false)?;
     // Group by channel, keeping the order of first appearance (stable output).
     let mut order: Vec<String> = Vec::new();
     let mut groups: BTreeMap<String, Vec<DataRecord>> = BTreeMap::new();
@@ -199,27 +251,44 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     }
     let mut records = Vec::new();
     for id in order {
-        let Some(group) = groups.remove(&id) else {
+        let Some(mut group) = groups.remove(&id) else {
             continue;
         };
+        group.sort_by_key(|r| r.start_ns);
         let first = group[0].clone();
-        let segments: Vec<Segment> = group
-            .into_iter()
-            .map(|r| Segment {
-                start_ns: r.start_ns,
-                rate_hz: r.rate_hz,
-                samples: r.samples,
-                origin: format!("record at byte {}", r.offset),
-            })
-            .collect();
-        let joined = join_segments(segments).map_err(|m| {
+        let in_channel = |offset: usize, m: String| {
             Error::input(
                 super::location(&src)
                     .with_channel(&id)
-                    .at_byte(first.offset as u64),
+                    .at_byte(offset as u64),
                 m,
             )
-        })?;
+        };
+        let capacity = group.iter().map(|r| r.nsamples_bound).sum();
+        let origin = |r: &DataRecord| format!("record at byte {}", r.offset);
+        let mut joiner = Joiner::new(first.start_ns, first.rate_hz, &origin(&first), capacity)
+            .map_err(|m| in_channel(first.offset, m))?;
+        for r in &group {
+            let decoded = match parse_record(&bytes[r.offset..], r.offset, &src, true)? {
+                Some((Parsed::Data(d), _)) => d.samples,
+                // The same bytes parsed a moment ago as a data record.
+                _ => {
+                    return Err(in_channel(
+                        r.offset,
+                        "MiniSEED record changed while read".into(),
+                    ))
+                }
+            };
+            joiner
+                .push(Segment {
+                    start_ns: r.start_ns,
+                    rate_hz: r.rate_hz,
+                    samples: decoded,
+                    origin: origin(r),
+                })
+                .map_err(|m| in_channel(first.offset, m))?;
+        }
+        let joined = joiner.finish();
         let mut ch = Channel::new(
             id.clone(),
             Units::Counts {
@@ -444,11 +513,16 @@ struct SkippedRecord {
     why: &'static str,
 }
 
-fn parse_records(bytes: &[u8], src: &SourceRef) -> Result<(Vec<DataRecord>, Vec<SkippedRecord>)> {
+/// Every record of a file (decoded when `decode_samples`) and those skipped.
+fn parse_records(
+    bytes: &[u8],
+    src: &SourceRef,
+    decode_samples: bool,
+) -> Result<(Vec<DataRecord>, Vec<SkippedRecord>)> {
     let (mut out, mut skipped) = (Vec::new(), Vec::new());
     let mut offset = 0usize;
     while offset < bytes.len() {
-        match parse_record(&bytes[offset..], offset, src, true)? {
+        match parse_record(&bytes[offset..], offset, src, decode_samples)? {
             None => break,
             Some((Parsed::Data(r), len)) => {
                 out.push(r);
@@ -665,6 +739,15 @@ fn parse_record(
         ));
     }
     let data = &record[data_offset..];
+    let room = match encoding {
+        1 => data.len() / 2,
+        3 | 4 => data.len() / 4,
+        5 => data.len() / 8,
+        // A 64-byte frame: 15 words of at most 4 (Steim-1) or 7 (Steim-2) differences.
+        10 => data.len() / 64 * 60,
+        11 => data.len() / 64 * 105,
+        _ => 0,
+    };
     let decoded = if decode_samples {
         decode(data, encoding, data_order, nsamples, frame_count)
             .map_err(|m| err(offset, format!("{id}: {m}")))?
@@ -706,6 +789,7 @@ fn parse_record(
         rate_hz: rate,
         samples: decoded,
         nsamples,
+        nsamples_bound: nsamples.min(room),
         offset,
         len: record_len,
     };

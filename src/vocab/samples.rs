@@ -32,13 +32,31 @@ pub trait SampleStore: Send + Sync {
     fn get(&self, position: u64, offset: usize, out: &mut [f64]) -> std::io::Result<()>;
     /// What the store is, for error messages (e.g. the spill file's directory).
     fn describe(&self) -> String;
+    /// The `len` values stored at `position` will not be read again: the
+    /// store may give their space back (the spill file punches a hole, so
+    /// its disk follows what is still parked, not all that ever was).
+    /// Best effort; the default keeps them.
+    fn release(&self, _position: u64, _len: usize) {}
+}
+
+/// A range of values put in a store, released when the last parked
+/// [`Samples`] reading it (clones share it) is dropped or brought back into
+/// memory.
+struct StoredRange {
+    store: Arc<dyn SampleStore>,
+    position: u64,
+    len: usize,
+}
+
+impl Drop for StoredRange {
+    fn drop(&mut self) {
+        self.store.release(self.position, self.len);
+    }
 }
 
 /// Samples parked in a store.
 struct Parked {
-    store: Arc<dyn SampleStore>,
-    position: u64,
-    len: usize,
+    range: Arc<StoredRange>,
     /// Read back negated (a sign flip recorded while parked).
     negate: bool,
     /// What dereferencing read, kept until released.
@@ -47,11 +65,11 @@ struct Parked {
 
 impl Parked {
     fn read(&self) -> std::io::Result<Vec<f64>> {
-        self.read_range(0, self.len)
+        self.read_range(0, self.range.len)
     }
     fn read_range(&self, start: usize, len: usize) -> std::io::Result<Vec<f64>> {
         let mut v = vec![0.0; len];
-        self.store.get(self.position, start, &mut v)?;
+        self.range.store.get(self.range.position, start, &mut v)?;
         if self.negate {
             v.iter_mut().for_each(|x| *x = -*x);
         }
@@ -64,7 +82,7 @@ impl Parked {
         self.read().unwrap_or_else(|e| {
             panic!(
                 "reading back parked samples from {}: {e}",
-                self.store.describe()
+                self.range.store.describe()
             )
         })
     }
@@ -87,7 +105,7 @@ impl Samples {
     pub fn len(&self) -> usize {
         match &self.0 {
             Repr::Memory(v) => v.len(),
-            Repr::Parked(p) => p.len,
+            Repr::Parked(p) => p.range.len,
         }
     }
 
@@ -111,9 +129,11 @@ impl Samples {
             Repr::Memory(v) => {
                 let position = store.put(v)?;
                 self.0 = Repr::Parked(Parked {
-                    store: store.clone(),
-                    position,
-                    len: v.len(),
+                    range: Arc::new(StoredRange {
+                        store: store.clone(),
+                        position,
+                        len: v.len(),
+                    }),
                     negate: false,
                     cache: OnceLock::new(),
                 });
@@ -173,7 +193,7 @@ impl Samples {
     fn store_name(&self) -> String {
         match &self.0 {
             Repr::Memory(_) => "memory".into(),
-            Repr::Parked(p) => p.store.describe(),
+            Repr::Parked(p) => p.range.store.describe(),
         }
     }
 
@@ -255,9 +275,7 @@ impl Clone for Samples {
         match &self.0 {
             Repr::Memory(v) => Samples::new(v.clone()),
             Repr::Parked(p) => Samples(Repr::Parked(Parked {
-                store: p.store.clone(),
-                position: p.position,
-                len: p.len,
+                range: p.range.clone(),
                 negate: p.negate,
                 cache: OnceLock::new(),
             })),
@@ -281,7 +299,12 @@ impl std::fmt::Debug for Samples {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match &self.0 {
             Repr::Memory(v) => v.fmt(f),
-            Repr::Parked(p) => write!(f, "<{} samples parked in {}>", p.len, p.store.describe()),
+            Repr::Parked(p) => write!(
+                f,
+                "<{} samples parked in {}>",
+                p.range.len,
+                p.range.store.describe()
+            ),
         }
     }
 }

@@ -157,6 +157,93 @@ fn parked_samples_read_back_exactly_and_share_their_store() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
 
+/// A store in memory that counts what is released.
+#[derive(Default)]
+struct CountingStore {
+    values: VecStore,
+    released: std::sync::Mutex<Vec<(u64, usize)>>,
+}
+
+impl SampleStore for CountingStore {
+    fn put(&self, values: &[f64]) -> std::io::Result<u64> {
+        self.values.put(values)
+    }
+    fn get(&self, position: u64, offset: usize, out: &mut [f64]) -> std::io::Result<()> {
+        self.values.get(position, offset, out)
+    }
+    fn describe(&self) -> String {
+        "a counting test store".into()
+    }
+    fn release(&self, position: u64, len: usize) {
+        self.released.lock().unwrap().push((position, len));
+    }
+}
+
+#[test]
+fn parked_samples_are_released_when_nothing_reads_them_any_more() {
+    let counting = Arc::new(CountingStore::default());
+    let store: Arc<dyn SampleStore> = counting.clone();
+    let released = || counting.released.lock().unwrap().clone();
+    let mut s = Samples::new(vec![1.5; 100]);
+    s.park(&store).unwrap();
+    let mut t = Samples::new(vec![2.5; 40]);
+    t.park(&store).unwrap();
+    // A clone shares the stored range: released with the last reader only.
+    let c = s.clone();
+    drop(s);
+    assert!(released().is_empty(), "{:?}", released());
+    assert_eq!(&c[..], &[1.5; 100][..]);
+    drop(c);
+    assert_eq!(released(), [(0, 100)]);
+    // Brought back into memory for good: the stored copy is released.
+    t.iter_mut().for_each(|v| *v += 1.0);
+    assert_eq!(released(), [(0, 100), (100, 40)]);
+    assert_eq!(&t[..], &[3.5; 40][..]);
+}
+
+/// The run's spill file gives back the disk of released ranges (Linux:
+/// the file is unlinked, so its blocks are read through /proc/self/fd).
+#[cfg(target_os = "linux")]
+#[test]
+fn the_spill_file_punches_a_hole_where_samples_were_released() {
+    use std::os::unix::fs::MetadataExt;
+    let dir = tempfile::tempdir().unwrap();
+    let spill = quaketwin::pipeline::spill::SpillFile::create(dir.path()).unwrap();
+    let blocks = || {
+        let fd = std::fs::read_dir("/proc/self/fd")
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .find(|e| {
+                std::fs::read_link(e.path()).is_ok_and(|t| {
+                    t.starts_with(dir.path()) && t.to_string_lossy().contains(".samples.")
+                })
+            })
+            .expect("the spill file is open");
+        std::fs::metadata(fd.path()).unwrap().blocks()
+    };
+    let n = 1 << 20; // 8 MiB of f64 each
+    let mut a = Samples::new(vec![1.0; n]);
+    a.park(&spill).unwrap();
+    let mut b = Samples::new((0..n).map(|i| i as f64).collect());
+    b.park(&spill).unwrap();
+    let before = blocks();
+    assert!(before * 512 >= 2 * 8 * n as u64, "{before} blocks");
+    drop(a);
+    let after = blocks();
+    // All of a's 8 MiB but the file system block it shares with b.
+    assert!(
+        (before - after) * 512 >= 8 * n as u64 - 8192,
+        "{before} → {after} blocks"
+    );
+    // What is still parked reads back exactly.
+    assert!(b
+        .load()
+        .unwrap()
+        .iter()
+        .enumerate()
+        .all(|(i, v)| *v == i as f64));
+}
+
 fn csv_source() -> SourceRef {
     SourceRef {
         file: "t.csv".into(),
