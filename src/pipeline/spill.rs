@@ -148,40 +148,6 @@ impl SampleStore for SpillFile {
     fn describe(&self) -> String {
         format!("the run's spill file {}", self.path.display())
     }
-
-    /// Punches a hole where the released values were (Linux): the file
-    /// keeps its size, its blocks go back to the file system.  A day of 64
-    /// channels parks 8.8 GB of raw samples that conditioning replaces; the
-    /// hole gives that disk back as each channel is conditioned.  A file
-    /// system that cannot punch holes keeps the blocks (no error: the
-    /// values are merely kept until the run ends, as before).
-    fn release(&self, position: u64, len: usize) {
-        #[cfg(target_os = "linux")]
-        {
-            use std::os::fd::AsRawFd;
-            let (Ok(offset), Ok(length)) = (
-                libc::off_t::try_from(position),
-                libc::off_t::try_from(8 * len as u64),
-            ) else {
-                return;
-            };
-            if length > 0 {
-                // SAFETY: fallocate on our own open descriptor, over a range
-                // of the file no live value reads any more; it touches no
-                // memory of ours.
-                unsafe {
-                    libc::fallocate(
-                        self.file.as_raw_fd(),
-                        libc::FALLOC_FL_PUNCH_HOLE | libc::FALLOC_FL_KEEP_SIZE,
-                        offset,
-                        length,
-                    );
-                }
-            }
-        }
-        #[cfg(not(target_os = "linux"))]
-        let _ = (position, len);
-    }
 }
 
 impl Drop for SpillFile {

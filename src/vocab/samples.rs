@@ -32,31 +32,13 @@ pub trait SampleStore: Send + Sync {
     fn get(&self, position: u64, offset: usize, out: &mut [f64]) -> std::io::Result<()>;
     /// What the store is, for error messages (e.g. the spill file's directory).
     fn describe(&self) -> String;
-    /// The `len` values stored at `position` will not be read again: the
-    /// store may give their space back (the spill file punches a hole, so
-    /// its disk follows what is still parked, not all that ever was).
-    /// Best effort; the default keeps them.
-    fn release(&self, _position: u64, _len: usize) {}
-}
-
-/// A range of values put in a store, released when the last parked
-/// [`Samples`] reading it (clones share it) is dropped or brought back into
-/// memory.
-struct StoredRange {
-    store: Arc<dyn SampleStore>,
-    position: u64,
-    len: usize,
-}
-
-impl Drop for StoredRange {
-    fn drop(&mut self) {
-        self.store.release(self.position, self.len);
-    }
 }
 
 /// Samples parked in a store.
 struct Parked {
-    range: Arc<StoredRange>,
+    store: Arc<dyn SampleStore>,
+    position: u64,
+    len: usize,
     /// Read back negated (a sign flip recorded while parked).
     negate: bool,
     /// What dereferencing read, kept until released.
@@ -65,11 +47,11 @@ struct Parked {
 
 impl Parked {
     fn read(&self) -> std::io::Result<Vec<f64>> {
-        self.read_range(0, self.range.len)
+        self.read_range(0, self.len)
     }
     fn read_range(&self, start: usize, len: usize) -> std::io::Result<Vec<f64>> {
         let mut v = vec![0.0; len];
-        self.range.store.get(self.range.position, start, &mut v)?;
+        self.store.get(self.position, start, &mut v)?;
         if self.negate {
             v.iter_mut().for_each(|x| *x = -*x);
         }
@@ -82,7 +64,7 @@ impl Parked {
         self.read().unwrap_or_else(|e| {
             panic!(
                 "reading back parked samples from {}: {e}",
-                self.range.store.describe()
+                self.store.describe()
             )
         })
     }
@@ -105,7 +87,7 @@ impl Samples {
     pub fn len(&self) -> usize {
         match &self.0 {
             Repr::Memory(v) => v.len(),
-            Repr::Parked(p) => p.range.len,
+            Repr::Parked(p) => p.len,
         }
     }
 
@@ -129,11 +111,9 @@ impl Samples {
             Repr::Memory(v) => {
                 let position = store.put(v)?;
                 self.0 = Repr::Parked(Parked {
-                    range: Arc::new(StoredRange {
-                        store: store.clone(),
-                        position,
-                        len: v.len(),
-                    }),
+                    store: store.clone(),
+                    position,
+                    len: v.len(),
                     negate: false,
                     cache: OnceLock::new(),
                 });
@@ -193,7 +173,7 @@ impl Samples {
     fn store_name(&self) -> String {
         match &self.0 {
             Repr::Memory(_) => "memory".into(),
-            Repr::Parked(p) => p.range.store.describe(),
+            Repr::Parked(p) => p.store.describe(),
         }
     }
 
@@ -275,7 +255,9 @@ impl Clone for Samples {
         match &self.0 {
             Repr::Memory(v) => Samples::new(v.clone()),
             Repr::Parked(p) => Samples(Repr::Parked(Parked {
-                range: p.range.clone(),
+                store: p.store.clone(),
+                position: p.position,
+                len: p.len,
                 negate: p.negate,
                 cache: OnceLock::new(),
             })),
@@ -299,12 +281,7 @@ impl std::fmt::Debug for Samples {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match &self.0 {
             Repr::Memory(v) => v.fmt(f),
-            Repr::Parked(p) => write!(
-                f,
-                "<{} samples parked in {}>",
-                p.range.len,
-                p.range.store.describe()
-            ),
+            Repr::Parked(p) => write!(f, "<{} samples parked in {}>", p.len, p.store.describe()),
         }
     }
 }
