@@ -41,32 +41,77 @@ fn scaled_time(i: usize, n: usize) -> f64 {
 /// Gaussian elimination with partial pivoting). Returns the Legendre
 /// coefficients.
 pub fn fit_polynomial(data: &[f64], order: usize) -> Result<Vec<f64>> {
-    let n = data.len();
-    let m = order + 1;
-    if n < m {
-        return Err(Error::numerical(format!(
-            "polynomial of order {order} needs at least {m} samples, got {n}"
-        )));
+    let mut fit = PolynomialFit::new(data.len(), order)?;
+    for &y in data {
+        fit.push(y);
     }
-    let mut gram = vec![0.0; m * m];
-    let mut rhs = vec![0.0; m];
-    let mut basis = vec![0.0; m];
-    for (i, &y) in data.iter().enumerate() {
-        legendre_values(scaled_time(i, n), order, &mut basis);
+    fit.solve()
+}
+
+/// [`fit_polynomial`] a sample at a time (the same sums in the same order,
+/// so the same coefficients): for a series formed as it goes by and never
+/// held, such as the displacement whose drift polynomial the integration
+/// needs before it forms the displacement (`integrate`).
+pub struct PolynomialFit {
+    n: usize,
+    order: usize,
+    gram: Vec<f64>,
+    rhs: Vec<f64>,
+    basis: Vec<f64>,
+    /// Index of the next sample.
+    next: usize,
+}
+
+impl PolynomialFit {
+    /// A fit of degree `order` to `n` samples (at least `order + 1`).
+    pub fn new(n: usize, order: usize) -> Result<Self> {
+        let m = order + 1;
+        if n < m {
+            return Err(Error::numerical(format!(
+                "polynomial of order {order} needs at least {m} samples, got {n}"
+            )));
+        }
+        Ok(PolynomialFit {
+            n,
+            order,
+            gram: vec![0.0; m * m],
+            rhs: vec![0.0; m],
+            basis: vec![0.0; m],
+            next: 0,
+        })
+    }
+
+    /// The next sample.
+    #[inline]
+    pub fn push(&mut self, y: f64) {
+        let m = self.order + 1;
+        legendre_values(scaled_time(self.next, self.n), self.order, &mut self.basis);
         for r in 0..m {
-            rhs[r] += basis[r] * y;
+            self.rhs[r] += self.basis[r] * y;
             for c in 0..=r {
-                gram[r * m + c] += basis[r] * basis[c];
+                self.gram[r * m + c] += self.basis[r] * self.basis[c];
             }
         }
+        self.next += 1;
     }
-    for r in 0..m {
-        for c in r + 1..m {
-            gram[r * m + c] = gram[c * m + r];
+
+    /// The Legendre coefficients (every one of the `n` samples pushed).
+    pub fn solve(mut self) -> Result<Vec<f64>> {
+        if self.next != self.n {
+            return Err(Error::numerical(format!(
+                "polynomial fit given {} of its {} samples",
+                self.next, self.n
+            )));
         }
+        let m = self.order + 1;
+        for r in 0..m {
+            for c in r + 1..m {
+                self.gram[r * m + c] = self.gram[c * m + r];
+            }
+        }
+        solve_dense(&mut self.gram, &mut self.rhs, m)?;
+        Ok(self.rhs)
     }
-    solve_dense(&mut gram, &mut rhs, m)?;
-    Ok(rhs)
 }
 
 /// Values of a Legendre-basis polynomial (from `fit_polynomial`) on the n-sample grid.

@@ -17,11 +17,11 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::baseline::{fit_polynomial, for_each_polynomial_value};
+use super::baseline::{fit_polynomial, for_each_polynomial_value, PolynomialFit};
 use super::butterworth::{butter_sos, BandType};
 use super::sosfilt::sosfiltfilt;
 use crate::error::{Error, Result};
-use crate::numeric::cumulative_trapezoid;
+use crate::numeric::{cumulative_trapezoid, RunningTrapezoid};
 use crate::vocab::Samples;
 
 /// How integration drift is controlled.
@@ -89,6 +89,16 @@ pub struct Motion {
     pub displacement: Samples,
 }
 
+/// ds/dt of the scaled time s = 2 i/(n−1) − 1 the polynomials are fitted
+/// against: 2 / ((n−1) dt).
+fn scaled_time_rate(n: usize, dt: f64) -> f64 {
+    if n > 1 {
+        2.0 / ((n - 1) as f64 * dt)
+    } else {
+        0.0
+    }
+}
+
 /// Removes a least-squares polynomial of `order` from `target` and its
 /// time derivatives from `lower` (first derivative) and `lowest` (second).
 fn remove_consistent_polynomial(
@@ -100,12 +110,7 @@ fn remove_consistent_polynomial(
 ) -> Result<()> {
     let n = target.len();
     let coefficients = fit_polynomial(target, order)?;
-    // Scaled time s = 2 i/(n−1) − 1 ⇒ ds/dt = 2 / ((n−1) dt).
-    let ds_dt = if n > 1 {
-        2.0 / ((n - 1) as f64 * dt)
-    } else {
-        0.0
-    };
+    let ds_dt = scaled_time_rate(n, dt);
     let mut lowest = lowest;
     for_each_polynomial_value(&coefficients, n, |i, value, d1, d2| {
         target[i] -= value;
@@ -136,45 +141,80 @@ pub fn integrate_motion_of(
     dt: f64,
     drift: &DriftControl,
 ) -> Result<Motion> {
+    integrate_motion_parking(channel_id, acceleration, dt, drift, &|v| {
+        Ok(Samples::new(v))
+    })
+}
+
+/// As [`integrate_motion_of`], each series handed to `park` as soon as it is
+/// final (the condition stage parks it in the run's spill file), so that a
+/// day-long channel holds two series of its length at a time, not three:
+/// with polynomial drift control the displacement's polynomial is fitted to
+/// the displacement formed as it goes by (the same values, summed in the
+/// same order), the acceleration takes its share of the correction and
+/// goes, and only then is the displacement formed.  The values are those of
+/// correcting all three series together; `park` returning the series in
+/// memory gives [`integrate_motion_of`].
+pub fn integrate_motion_parking(
+    channel_id: &str,
+    acceleration: Vec<f64>,
+    dt: f64,
+    drift: &DriftControl,
+    park: &dyn Fn(Vec<f64>) -> Result<Samples>,
+) -> Result<Motion> {
     if !(dt.is_finite() && dt > 0.0) {
         return Err(Error::usage(format!(
             "sampling interval must be positive, got {dt}"
         )));
     }
     let mut acc = acceleration;
+    let n = acc.len();
     let mut vel = cumulative_trapezoid(&acc, dt);
-    let disp;
-    match drift {
+    let (acceleration, velocity, displacement) = match drift {
         DriftControl::None => {
-            disp = cumulative_trapezoid(&vel, dt);
+            let acceleration = park(acc)?;
+            let disp = cumulative_trapezoid(&vel, dt);
+            (acceleration, park(vel)?, park(disp)?)
         }
         DriftControl::Polynomial {
             velocity_order,
             displacement_order,
         } => {
             remove_consistent_polynomial(&mut vel, &mut acc, None, *velocity_order, dt)?;
-            let mut d = cumulative_trapezoid(&vel, dt);
-            remove_consistent_polynomial(
-                &mut d,
-                &mut vel,
-                Some(&mut acc),
-                *displacement_order,
-                dt,
-            )?;
-            disp = d;
+            let mut fit = PolynomialFit::new(n, *displacement_order)?;
+            let mut running = RunningTrapezoid::new(dt);
+            for &v in &vel {
+                fit.push(running.next(v));
+            }
+            let coefficients = fit.solve()?;
+            let ds_dt = scaled_time_rate(n, dt);
+            for_each_polynomial_value(&coefficients, n, |i, _, _, second| {
+                acc[i] -= second * ds_dt * ds_dt;
+            });
+            let acceleration = park(acc)?;
+            let mut disp = cumulative_trapezoid(&vel, dt);
+            for_each_polynomial_value(&coefficients, n, |i, value, first, _| {
+                disp[i] -= value;
+                vel[i] -= first * ds_dt;
+            });
+            (acceleration, park(vel)?, park(disp)?)
         }
         DriftControl::Highpass { corner_hz, order } => {
+            let acceleration = park(acc)?;
             let sos = butter_sos(*order, BandType::Highpass, &[*corner_hz], 1.0 / dt)?;
             vel = sosfiltfilt(&sos, &vel)?;
             let d = cumulative_trapezoid(&vel, dt);
-            disp = sosfiltfilt(&sos, &d)?;
+            let velocity = park(vel)?;
+            let disp = sosfiltfilt(&sos, &d)?;
+            drop(d);
+            (acceleration, velocity, park(disp)?)
         }
-    }
+    };
     Ok(Motion {
         channel_id: channel_id.to_string(),
         dt,
-        acceleration: acc.into(),
-        velocity: vel.into(),
-        displacement: disp.into(),
+        acceleration,
+        velocity,
+        displacement,
     })
 }

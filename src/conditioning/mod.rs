@@ -14,7 +14,9 @@ pub mod sosfilt;
 
 pub use baseline::{cosine_taper, remove_linear_trend, remove_mean, remove_polynomial};
 pub use butterworth::{butter_sos, BandType, Section};
-pub use integrate::{integrate_motion, integrate_motion_of, DriftControl, Motion};
+pub use integrate::{
+    integrate_motion, integrate_motion_of, integrate_motion_parking, DriftControl, Motion,
+};
 pub use qa::{quality_flags, QaSettings};
 pub use resample::{align_records, resample_to_rate, Alignment};
 pub use sosfilt::{sosfilt, sosfilt_zi, sosfiltfilt, sosfiltfilt_channels, sosfiltfilt_padlen};
@@ -24,7 +26,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use crate::error::{Error, Location, Result};
-use crate::vocab::{Event, QaFlag, Record, Units};
+use crate::vocab::{Event, QaFlag, Record, Samples, Units};
 
 /// Baseline removal before filtering.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -360,12 +362,17 @@ pub fn condition_event_with_motion(
     event: &mut Event,
     settings: &ConditioningSettings,
 ) -> Result<Vec<Motion>> {
-    condition_event_each(event, settings, &|_, _| Ok(()))
+    condition_event_each(event, settings, None, &|_, _| Ok(()))
 }
 
 /// What `done` receives: a conditioned record and, for an acceleration
 /// channel when integration is configured, its motion.
 pub type ChannelDone<'a> = dyn Fn(&mut Record, Option<&mut Motion>) -> Result<()> + Sync + 'a;
+
+/// Where a motion's series go as soon as each is final (the condition
+/// stage's spill file: `integrate::integrate_motion_parking`); without one
+/// they stay in memory.
+pub type ParkSeries<'a> = dyn Fn(Vec<f64>) -> Result<Samples> + Sync + 'a;
 
 /// As [`condition_event_with_motion`], a channel at a time (issue 14 item 5):
 /// each record goes through every step — the checks, QA, units, then the
@@ -376,21 +383,23 @@ pub type ChannelDone<'a> = dyn Fn(&mut Record, Option<&mut Motion>) -> Result<()
 /// that failed, and in it the first channel) are those of running each step
 /// over all records before the next.  An `align` step needs every record at
 /// once: with one, the steps run one after the other over all records, and
-/// `done` is called at the end.
+/// `done` is called at the end.  `park`, when given, takes each series of a
+/// motion as soon as it is final ([`ParkSeries`]).
 pub fn condition_event_each(
     event: &mut Event,
     settings: &ConditioningSettings,
+    park: Option<&ParkSeries<'_>>,
     done: &ChannelDone<'_>,
 ) -> Result<Vec<Motion>> {
     let channels = if settings.step("align").is_some() {
-        condition_step_by_step(&mut event.records, settings, done)?
+        condition_step_by_step(&mut event.records, settings, park, done)?
     } else {
         let records = std::mem::take(&mut event.records);
         // Channels of more than LONG_CHANNEL samples (a day at 200 Hz) are
         // conditioned one at a time: two in flight would double the memory.
         let long = records.iter().any(|r| r.samples.len() > LONG_CHANNEL);
         let one = |r: Record| -> std::result::Result<Channel1, Failed> {
-            let mut c = condition_channel(r, settings)?;
+            let mut c = condition_channel(r, settings, park)?;
             if let Err(e) = done(&mut c.record, c.motion.as_mut()) {
                 return Err((usize::MAX, e, c.record));
             }
@@ -502,6 +511,7 @@ fn earliest_failure(
 fn condition_channel(
     mut record: Record,
     settings: &ConditioningSettings,
+    park: Option<&ParkSeries<'_>>,
 ) -> std::result::Result<Channel1, Failed> {
     let mut trace = match check_qa_units(&mut record, settings) {
         Ok(t) => t,
@@ -509,7 +519,7 @@ fn condition_channel(
     };
     let mut motion = None;
     for (i, step) in settings.steps.iter().enumerate() {
-        match apply_step(&mut record, i, step, &mut trace) {
+        match apply_step(&mut record, i, step, &mut trace, park) {
             Ok(Some(m)) => motion = Some(m),
             Ok(None) => {}
             Err(e) => return Err((2 + i, e, record)),
@@ -526,6 +536,7 @@ fn condition_channel(
 fn condition_step_by_step(
     records: &mut Vec<Record>,
     settings: &ConditioningSettings,
+    park: Option<&ParkSeries<'_>>,
     done: &ChannelDone<'_>,
 ) -> Result<Conditioned1> {
     // The checks and units of every record; the earliest failure, as above.
@@ -555,7 +566,7 @@ fn condition_step_by_step(
         let results: Vec<Result<Option<Motion>>> = records
             .par_iter_mut()
             .zip(traces.par_iter_mut())
-            .map(|(r, t)| apply_step(r, i, step, t))
+            .map(|(r, t)| apply_step(r, i, step, t, park))
             .collect();
         for (k, m) in results.into_iter().enumerate() {
             if let Some(m) = m? {
@@ -634,6 +645,7 @@ fn apply_step(
     index: usize,
     step: &Step,
     trace: &mut Trace,
+    park: Option<&ParkSeries<'_>>,
 ) -> Result<Option<Motion>> {
     match step {
         Step::Resample { rate_hz } => {
@@ -686,8 +698,15 @@ fn apply_step(
             // given back by `share_acceleration` once the channel is done.
             let dt = r.channel.dt();
             let acc = std::mem::take(r.samples.as_mut_vec());
-            let m = integrate_motion_of(&r.channel.id, acc, dt, &integration.drift)
-                .map_err(|e| in_record(r, e))?;
+            let in_memory = |v: Vec<f64>| Ok(Samples::new(v));
+            let m = integrate_motion_parking(
+                &r.channel.id,
+                acc,
+                dt,
+                &integration.drift,
+                park.unwrap_or(&in_memory),
+            )
+            .map_err(|e| in_record(r, e))?;
             return Ok(Some(m));
         }
     }

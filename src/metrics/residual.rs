@@ -34,7 +34,7 @@
 
 use crate::conditioning::{butter_sos, sosfiltfilt, sosfiltfilt_padlen, BandType};
 use crate::error::{Error, Result};
-use crate::numeric::cumulative_trapezoid;
+use crate::numeric::RunningTrapezoid;
 
 /// Shortest post-event window, as a share of the record (a record that ends
 /// during strong shaking still gets a window, and a wider σ).
@@ -96,30 +96,47 @@ pub fn residual_drift_of(relative: &[f64], dt: f64) -> Result<ResidualDrift> {
             "residual drift: the record holds non-finite samples",
         ));
     }
-    // The noise floor first, and the velocity dropped once the displacement
-    // and the offset are formed: at most three series of the record's length
-    // are held at once (the same operations as in any order).
+    // The noise floor first; then the velocity and the displacement are
+    // formed as they go by, twice (the same operations, so the same values
+    // as the series): once for the offset, once for the window means.  Of a
+    // day-long storey only the relative acceleration is held (and, while
+    // the noise floor is measured, its filtered copy).
     let noise = white_noise_std(relative, dt)?;
     let (d5_95, t5) = super::significant_duration(relative, dt, 0.05, 0.95)?;
     let last = (n - 1) as f64 * dt;
     let start_s = (t5 + d5_95).min(last * (1.0 - MIN_WINDOW_FRACTION));
     let first = ((start_s / dt).ceil() as usize).min(n - 2);
     let t = |i: usize| i as f64 * dt;
-    let velocity = cumulative_trapezoid(relative, dt);
     // c = Σ v t / Σ t² over W (velocity error c t, through the origin).
     let (mut vt, mut tt) = (0.0, 0.0);
-    for (i, v) in velocity.iter().enumerate().skip(first) {
-        vt += v * t(i);
-        tt += t(i) * t(i);
+    let mut velocity = RunningTrapezoid::new(dt);
+    for (i, &r) in relative.iter().enumerate() {
+        let v = velocity.next(r);
+        if i >= first {
+            vt += v * t(i);
+            tt += t(i) * t(i);
+        }
     }
     let offset = if tt > 0.0 { vt / tt } else { 0.0 };
-    let displacement = cumulative_trapezoid(&velocity, dt);
-    drop(velocity);
-    let corrected = |i: usize| displacement[i] - 0.5 * offset * t(i) * t(i);
-    let mean = |from: usize, to: usize| (from..to).map(corrected).sum::<f64>() / (to - from) as f64;
-    let drift = mean(first, n);
+    // Sums of the corrected displacement over W and its two halves, each in
+    // order from −0.0 as `Iterator::sum` adds.
     let middle = first + (n - first) / 2;
-    let halves = (mean(first, middle) - mean(middle, n)).abs();
+    let (mut all, mut early, mut late) = (-0.0, -0.0, -0.0);
+    let (mut velocity, mut displacement) = (RunningTrapezoid::new(dt), RunningTrapezoid::new(dt));
+    for (i, &r) in relative.iter().enumerate() {
+        let d = displacement.next(velocity.next(r));
+        if i >= first {
+            let corrected = d - 0.5 * offset * t(i) * t(i);
+            all += corrected;
+            if i < middle {
+                early += corrected;
+            } else {
+                late += corrected;
+            }
+        }
+    }
+    let drift = all / (n - first) as f64;
+    let halves = (early / (middle - first) as f64 - late / (n - middle) as f64).abs();
     let t_mid = 0.5 * (t(first) + last);
     let walk = noise * (dt * t_mid.powi(3) / 3.0).sqrt();
     Ok(ResidualDrift {

@@ -2,14 +2,14 @@
 //! (resampling/alignment, detrend, taper, zero-phase band-pass, integration;
 //! METHODS §1) → `samples.parquet`.
 
-use crate::conditioning::{condition_event_each, ConditioningSettings, Motion};
+use crate::conditioning::{condition_event_each, ConditioningSettings, Motion, ParkSeries};
 use crate::pipeline::context::park;
 use serde::Deserialize;
 
 use crate::error::Result;
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::event_tables;
-use crate::vocab::Event;
+use crate::vocab::{Event, Samples};
 
 pub const KIND: StageKind = StageKind {
     kind: "condition",
@@ -70,19 +70,30 @@ impl Stage for Condition {
         // Cloning a parked event copies its channels' descriptions, not their samples.
         let mut event = ctx.loaded_event()?.event.clone();
         let spill = ctx.parked();
-        let motions = condition_event_each(&mut event, &self.settings, &|record, motion| {
-            let Some(spill) = &spill else {
-                return Ok(());
-            };
-            // An integrated record's samples are its motion's acceleration
-            // (shared once parked, `conditioning::condition_event_each`).
-            if let Some(m) = motion {
-                park(&mut m.acceleration, spill)?;
-                park(&mut m.velocity, spill)?;
-                park(&mut m.displacement, spill)?;
+        // A parked event's motions are parked series by series as each is
+        // final (two series of a day-long channel in memory, not three).
+        let park_series = |values: Vec<f64>| -> Result<Samples> {
+            let mut samples = Samples::new(values);
+            if let Some(spill) = &spill {
+                park(&mut samples, spill)?;
             }
-            park(&mut record.samples, spill)
-        })?;
+            Ok(samples)
+        };
+        let parking: Option<&ParkSeries> = spill.as_ref().map(|_| &park_series as &ParkSeries);
+        let motions =
+            condition_event_each(&mut event, &self.settings, parking, &|record, motion| {
+                let Some(spill) = &spill else {
+                    return Ok(());
+                };
+                // An integrated record's samples are its motion's acceleration
+                // (shared once parked, `conditioning::condition_event_each`).
+                if let Some(m) = motion {
+                    park(&mut m.acceleration, spill)?;
+                    park(&mut m.velocity, spill)?;
+                    park(&mut m.displacement, spill)?;
+                }
+                park(&mut record.samples, spill)
+            })?;
         event_tables::write_samples(&ctx.out_dir.join(&self.samples_file), &event, &motions)?;
         Ok(Some(Box::new(Conditioned { event, motions })))
     }

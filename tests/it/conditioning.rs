@@ -696,3 +696,80 @@ fn trapezoid_starts_at_zero_and_is_exact_for_a_line() {
         vec![0.0, 0.25, 1.0]
     );
 }
+
+/// The integration that parks each series as soon as it is final (two
+/// series of a day-long channel held, not three) gives the values of
+/// correcting all three together — the three-series algorithm, written out
+/// here — bit for bit, for every drift control; and it parks the
+/// acceleration first, then the velocity, then the displacement.
+#[test]
+fn integration_parking_each_series_when_final_gives_the_three_series_values() {
+    use quaketwin::conditioning::baseline::{fit_polynomial, for_each_polynomial_value};
+    use quaketwin::conditioning::integrate_motion_parking;
+    use quaketwin::vocab::Samples;
+    use std::sync::Mutex;
+    let dt = 0.005;
+    let acc: Vec<f64> = (0..20_000)
+        .map(|i| {
+            let t = i as f64 * dt;
+            (3.1 * t).sin() * (-0.05 * t).exp() + 0.01 * (17.0 * t).cos() + 1e-3
+        })
+        .collect();
+    // Removes the polynomial fitted to `target` from it and its derivatives
+    // from the lower derivatives (the correction, all series at once).
+    let remove = |target: &mut [f64], lower: &mut [f64], lowest: Option<&mut [f64]>, order| {
+        let n = target.len();
+        let c = fit_polynomial(target, order).unwrap();
+        let ds_dt = 2.0 / ((n - 1) as f64 * dt);
+        let mut lowest = lowest;
+        for_each_polynomial_value(&c, n, |i, v, d1, d2| {
+            target[i] -= v;
+            lower[i] -= d1 * ds_dt;
+            if let Some(l) = lowest.as_deref_mut() {
+                l[i] -= d2 * ds_dt * ds_dt;
+            }
+        });
+    };
+    let mut a = acc.clone();
+    let mut v = cumulative_trapezoid(&a, dt);
+    remove(&mut v, &mut a, None, 1);
+    let mut u = cumulative_trapezoid(&v, dt);
+    remove(&mut u, &mut v, Some(&mut a), 2);
+    let bits = |s: &[f64]| s.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let parked = Mutex::new(Vec::new());
+    let park = |values: Vec<f64>| {
+        parked.lock().unwrap().push(bits(&values));
+        Ok(Samples::new(values))
+    };
+    let polynomial = DriftControl::Polynomial {
+        velocity_order: 1,
+        displacement_order: 2,
+    };
+    let m = integrate_motion_parking("c", acc.clone(), dt, &polynomial, &park).unwrap();
+    assert_eq!(bits(&m.acceleration), bits(&a));
+    assert_eq!(bits(&m.velocity), bits(&v));
+    assert_eq!(bits(&m.displacement), bits(&u));
+    assert_eq!(*parked.lock().unwrap(), [bits(&a), bits(&v), bits(&u)]);
+    // No drift control and the high-pass: integrals of the series before.
+    let none = integrate_motion_parking("c", acc.clone(), dt, &DriftControl::None, &park).unwrap();
+    let v0 = cumulative_trapezoid(&acc, dt);
+    assert_eq!(bits(&none.velocity), bits(&v0));
+    assert_eq!(
+        bits(&none.displacement),
+        bits(&cumulative_trapezoid(&v0, dt))
+    );
+    let highpass = DriftControl::Highpass {
+        corner_hz: 0.1,
+        order: 4,
+    };
+    let hp = integrate_motion_parking("c", acc.clone(), dt, &highpass, &park).unwrap();
+    let sos = butter_sos(4, BandType::Highpass, &[0.1], 1.0 / dt).unwrap();
+    let vh = sosfiltfilt(&sos, &v0).unwrap();
+    let uh = sosfiltfilt(&sos, &cumulative_trapezoid(&vh, dt)).unwrap();
+    assert_eq!(bits(&hp.acceleration), bits(&acc));
+    assert_eq!(bits(&hp.velocity), bits(&vh));
+    assert_eq!(bits(&hp.displacement), bits(&uh));
+    // The in-memory integration is the same function.
+    let in_memory = integrate_motion("c", &acc, dt, &polynomial).unwrap();
+    assert_eq!(bits(&in_memory.displacement), bits(&u));
+}
