@@ -14,7 +14,8 @@
 #                   float32 MiniSEED file per channel, 276 MB per hour: a day
 #                   fits a small disk)
 #   --channels N    the first N of the 64 channels (a day of all 64 needs about
-#                   70 GB of disk for the outputs and the spill file)
+#                   61 GB of disk: 4 GB of event, 21.4 GB of outputs and a
+#                   35 GB spill file, measured in session 13)
 #   --work DIR      where the event and outputs go (default: a new directory
 #                   under ${TMPDIR:-/tmp}); never inside the repository
 #   --structure     state storey heights and masses in event.toml
