@@ -578,7 +578,12 @@ enum TimeCells {
 pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<FileContents> {
     let mut src = source.clone();
     src.format = "csv".into();
-    let text = String::from_utf8_lossy(bytes);
+    // Valid UTF-8 (nearly every file) is checked by `from_utf8`, whose ASCII
+    // fast path is several times quicker than the lossy conversion's scan.
+    let text = match std::str::from_utf8(bytes) {
+        Ok(text) => std::borrow::Cow::Borrowed(text),
+        Err(_) => String::from_utf8_lossy(bytes),
+    };
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let loc = |line: usize| super::location(&src).at_line(line + 1);
     let csv_err = |e: csv::Error| {
