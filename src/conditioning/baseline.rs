@@ -26,6 +26,29 @@ fn legendre_values(x: f64, order: usize, out: &mut [f64]) {
     }
 }
 
+/// Samples whose Legendre values are computed side by side: the same
+/// operations per sample, in vector registers (the recurrence's divisions,
+/// one chain per sample, were most of the polynomial drift control's time).
+const LANES: usize = 8;
+
+/// [`legendre_values`] at the scaled times of samples `start..start + LANES`
+/// of n (`out[k][l]`: P_k at sample start + l; lanes past the end repeat the
+/// last sample).  Each lane's value is `legendre_values`'s, bit for bit.
+fn legendre_block(start: usize, n: usize, order: usize, out: &mut [[f64; LANES]]) {
+    let x: [f64; LANES] =
+        std::array::from_fn(|l| scaled_time((start + l).min(n.saturating_sub(1)), n));
+    out[0] = [1.0; LANES];
+    if order >= 1 {
+        out[1] = x;
+    }
+    for k in 1..order {
+        let kf = k as f64;
+        let (p, q) = (out[k], out[k - 1]);
+        out[k + 1] =
+            std::array::from_fn(|l| ((2.0 * kf + 1.0) * x[l] * p[l] - kf * q[l]) / (kf + 1.0));
+    }
+}
+
 /// Maps sample index i of n to t ∈ [−1, 1].
 fn scaled_time(i: usize, n: usize) -> f64 {
     if n <= 1 {
@@ -158,28 +181,30 @@ pub fn for_each_polynomial_value(
         return;
     }
     let order = coefficients.len() - 1;
-    let mut p = vec![0.0; order + 1];
-    let mut dp = vec![0.0; order + 1];
-    let mut ddp = vec![0.0; order + 1];
-    for i in 0..n {
-        legendre_values(scaled_time(i, n), order, &mut p);
+    let mut p = vec![[0.0; LANES]; order + 1];
+    let mut dp = vec![[0.0; LANES]; order + 1];
+    let mut ddp = vec![[0.0; LANES]; order + 1];
+    for start in (0..n).step_by(LANES) {
+        legendre_block(start, n, order, &mut p);
         for k in 0..=order {
-            dp[k] = match k {
+            let f = (2 * k).saturating_sub(1) as f64;
+            dp[k] = std::array::from_fn(|l| match k {
                 0 => 0.0,
                 1 => 1.0,
-                _ => dp[k - 2] + (2 * k - 1) as f64 * p[k - 1],
-            };
-            ddp[k] = match k {
+                _ => dp[k - 2][l] + f * p[k - 1][l],
+            });
+            ddp[k] = std::array::from_fn(|l| match k {
                 0 | 1 => 0.0,
-                _ => ddp[k - 2] + (2 * k - 1) as f64 * dp[k - 1],
-            };
+                _ => ddp[k - 2][l] + f * dp[k - 1][l],
+            });
         }
-        each(
-            i,
-            p.iter().zip(coefficients).map(|(b, c)| b * c).sum(),
-            dp.iter().zip(coefficients).map(|(b, c)| b * c).sum(),
-            ddp.iter().zip(coefficients).map(|(b, c)| b * c).sum(),
-        );
+        // Each sum as `Iterator::sum` forms it, sample by sample in order.
+        let sum = |b: &[[f64; LANES]], l: usize| -> f64 {
+            b.iter().zip(coefficients).map(|(b, c)| b[l] * c).sum()
+        };
+        for l in 0..LANES.min(n - start) {
+            each(start + l, sum(&p, l), sum(&dp, l), sum(&ddp, l));
+        }
     }
 }
 

@@ -308,11 +308,30 @@ fn most_fields(text: &str, delim: Delim) -> Option<usize> {
     // In parallel over chunks of whole lines (a 582 MB file is scanned once
     // per candidate delimiter); chunks end after a newline, so their lines
     // are the file's.
+    //
+    // Most candidates split nothing (a comma file has no tab, semicolon or
+    // space): a chunk without the delimiter has one field per line, and a
+    // chunk of plain bytes and newlines one per non-empty line — both found
+    // by a scan of the bytes instead of the lines one by one (these scans
+    // were 7 % of a 5 MB comma file's `modal`).
+    let whole_chunk = |c: &[u8]| match delim {
+        Delim::Byte(d) => (!c.contains(&d)).then_some(1),
+        Delim::Whitespace => {
+            // A fold without early exit, so that the byte tests vectorise.
+            let odd =
+                |b: u8| !(b == b'\n' || (b.is_ascii() && !(b.is_ascii_whitespace() || b == 0x0b)));
+            (!c.iter().fold(false, |any, &b| any | odd(b)))
+                .then(|| usize::from(c.iter().any(|&b| b != b'\n')))
+        }
+    };
     let per_chunk: Vec<Option<usize>> = line_chunks(text.as_bytes())
         .par_iter()
         .map(|c| match delim {
             Delim::Byte(_) if c.contains(&b'"') => None,
-            _ => Some(c.split(|&b| b == b'\n').map(per_line).max().unwrap_or(0)),
+            _ => Some(
+                whole_chunk(c)
+                    .unwrap_or_else(|| c.split(|&b| b == b'\n').map(per_line).max().unwrap_or(0)),
+            ),
         })
         .collect();
     per_chunk
@@ -559,7 +578,12 @@ enum TimeCells {
 pub fn read(bytes: &[u8], source: &SourceRef, opts: &ReadOptions) -> Result<FileContents> {
     let mut src = source.clone();
     src.format = "csv".into();
-    let text = String::from_utf8_lossy(bytes);
+    // Valid UTF-8 (nearly every file) is checked by `from_utf8`, whose ASCII
+    // fast path is several times quicker than the lossy conversion's scan.
+    let text = match std::str::from_utf8(bytes) {
+        Ok(text) => std::borrow::Cow::Borrowed(text),
+        Err(_) => String::from_utf8_lossy(bytes),
+    };
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let loc = |line: usize| super::location(&src).at_line(line + 1);
     let csv_err = |e: csv::Error| {

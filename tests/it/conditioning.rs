@@ -773,3 +773,61 @@ fn integration_parking_each_series_when_final_gives_the_three_series_values() {
     let in_memory = integrate_motion("c", &acc, dt, &polynomial).unwrap();
     assert_eq!(bits(&in_memory.displacement), bits(&u));
 }
+
+/// The polynomial baseline is evaluated and fitted several samples side by
+/// side: each value and derivative must be the one of a sample at a time,
+/// bit for bit (the Legendre recurrence and the sums in the same order).
+#[test]
+fn polynomial_baseline_in_blocks_is_sample_by_sample() {
+    use quaketwin::conditioning::baseline::{fit_polynomial, for_each_polynomial_value};
+    // Legendre values and their first two derivatives at sample i of n, a
+    // sample at a time (Bonnet and derivative recurrences).
+    let legendre = |i: usize, n: usize, order: usize| -> [Vec<f64>; 3] {
+        let x = if n <= 1 {
+            0.0
+        } else {
+            2.0 * i as f64 / (n - 1) as f64 - 1.0
+        };
+        let mut p = vec![1.0; order + 1];
+        if order >= 1 {
+            p[1] = x;
+        }
+        for k in 1..order {
+            let kf = k as f64;
+            p[k + 1] = ((2.0 * kf + 1.0) * x * p[k] - kf * p[k - 1]) / (kf + 1.0);
+        }
+        let (mut dp, mut ddp) = (vec![0.0; order + 1], vec![0.0; order + 1]);
+        for k in 1..=order {
+            dp[k] = if k == 1 {
+                1.0
+            } else {
+                dp[k - 2] + (2 * k - 1) as f64 * p[k - 1]
+            };
+            if k >= 2 {
+                ddp[k] = ddp[k - 2] + (2 * k - 1) as f64 * dp[k - 1];
+            }
+        }
+        [p, dp, ddp]
+    };
+    for n in [1, 2, 7, 8, 9, 23, 64, 101] {
+        let data: Vec<f64> = (0..n)
+            .map(|i| (i as f64 * 0.37).sin() * 3.0 + i as f64 * 0.01)
+            .collect();
+        for order in 0..=5usize.min(n - 1) {
+            let c = fit_polynomial(&data, order).unwrap();
+            let mut seen = 0;
+            for_each_polynomial_value(&c, n, |i, v, d1, d2| {
+                assert_eq!(i, seen);
+                let want = legendre(i, n, order)
+                    .map(|b| b.iter().zip(&c).map(|(b, c)| b * c).sum::<f64>().to_bits());
+                assert_eq!(
+                    [v.to_bits(), d1.to_bits(), d2.to_bits()],
+                    want,
+                    "n {n} order {order} sample {i}"
+                );
+                seen += 1;
+            });
+            assert_eq!(seen, n);
+        }
+    }
+}

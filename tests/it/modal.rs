@@ -2,7 +2,7 @@
 //! real records.  Accuracy figures are printed (run with `--nocapture`).
 
 use faer::c64;
-use quaketwin::modal::hankel::{dot, hankel_gram, HankelRow};
+use quaketwin::modal::hankel::{cross_covariances, dot, hankel_gram, HankelRow};
 use quaketwin::modal::poles::poles_of_order;
 use quaketwin::modal::preprocess::{antialias_taps, apply, decimate};
 use quaketwin::modal::{
@@ -573,6 +573,45 @@ fn gram_matches_explicit_hankel_product() {
         }
     }
     assert!((dot(&x, &y) - x.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>()).abs() < 1e-12);
+}
+
+/// The covariances are formed several lags at a time (lengths that differ by
+/// up to three samples, so some sums end in a different whole chunk): each
+/// must still be the one dot product per entry, bit for bit.
+#[test]
+fn cross_covariances_are_the_dot_products_bit_for_bit() {
+    let signal = |seed: usize, len: usize| -> Vec<f64> {
+        (0..len)
+            .map(|i| {
+                ((i * (7 + seed) % 13) as f64 - 6.0) * 0.37 + (i as f64 * 0.11 * seed as f64).sin()
+            })
+            .collect()
+    };
+    let (y0, y1, x0, x1) = (
+        signal(1, 103),
+        signal(2, 101),
+        signal(3, 102),
+        signal(4, 110),
+    );
+    let outputs: Vec<&[f64]> = vec![&y0, &y1];
+    let refs: Vec<&[f64]> = vec![&x0, &x1];
+    let n = 101;
+    for max_lag in [0, 2, 6, 9, 104] {
+        let cov = cross_covariances(&outputs, &refs, max_lag);
+        assert_eq!(cov.len(), max_lag + 1);
+        for (k, r) in cov.iter().enumerate() {
+            for (i, &v) in r.iter().enumerate() {
+                let (y, x) = (outputs[i / 2], refs[i % 2]);
+                let count = n - k.min(n);
+                let want = if count == 0 {
+                    0.0
+                } else {
+                    dot(&y[k..k + count], &x[..count]) / count as f64
+                };
+                assert_eq!(v.to_bits(), want.to_bits(), "lag {k} entry {i}");
+            }
+        }
+    }
 }
 
 #[test]

@@ -485,6 +485,11 @@ fn most_fields_in_parallel_is_the_line_by_line_bound() {
         "a;b;\"c;d\"\n".to_string(),
         "1,2\r\n3,4,5\r\n".to_string(),
         long.replace(',', " "),
+        // Line feeds alone: whole chunks without a delimiter or whitespace
+        // are counted without splitting their lines.
+        long.replace('\r', ""),
+        long.replace('\r', "").replace(',', "\n"),
+        "\n\n\n".to_string(),
         long,
     ];
     for t in &texts {
