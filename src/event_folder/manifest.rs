@@ -52,6 +52,15 @@ pub struct StructureSection {
     /// Plan position (X, Y, metres) of the floors' centre of mass: the
     /// reference point of the rigid-floor combination.
     pub centre_of_mass_m: Option<[f64; 2]>,
+    /// Number of storeys above the base (the roof is level `storeys`).
+    pub storeys: Option<u32>,
+    /// Total height above the base, metres.
+    pub height_m: Option<f64>,
+    /// Model building type (HAZUS code: "C1", "S1", "W1", "URM", …).
+    #[serde(rename = "type")]
+    pub building_type: Option<String>,
+    /// "building", "bridge", …
+    pub kind: Option<String>,
 }
 
 impl StructureSection {
@@ -63,6 +72,13 @@ impl StructureSection {
             twin: self.twin.clone(),
             x_axis_azimuth_deg: self.x_axis_azimuth_deg,
             centre_of_mass_m: self.centre_of_mass_m,
+            storeys: self.storeys,
+            height_m: self.height_m.or_else(|| {
+                (!self.storey_heights_m.is_empty()).then(|| self.storey_heights_m.iter().sum())
+            }),
+            building_type: self.building_type.clone(),
+            kind: self.kind.clone(),
+            inferred: Vec::new(),
         }
     }
 }
@@ -273,6 +289,31 @@ impl Manifest {
                         s.storey_heights_m.len()
                     ),
                 ));
+            }
+            if let Some(n) = s.storeys {
+                if n == 0 || n > 300 {
+                    return Err(Error::input(
+                        loc(),
+                        format!("structure.storeys = {n}: a structure has 1 to 300 storeys"),
+                    ));
+                }
+                if !s.storey_heights_m.is_empty() && s.storey_heights_m.len() != n as usize {
+                    return Err(Error::input(
+                        loc(),
+                        format!(
+                            "structure.storeys = {n} but structure.storey_heights_m lists {} storeys",
+                            s.storey_heights_m.len()
+                        ),
+                    ));
+                }
+            }
+            if let Some(h) = s.height_m {
+                if !(h.is_finite() && h >= MIN_STOREY_HEIGHT_M && h <= 1000.0) {
+                    return Err(Error::input(
+                        loc(),
+                        format!("structure.height_m = {h}: not a structure's height in metres"),
+                    ));
+                }
             }
             if s.masses_kg.iter().any(|m| !(m.is_finite() && *m > 0.0)) {
                 return Err(Error::input(

@@ -51,6 +51,26 @@ pub struct Structure {
     /// the centroid of each floor's sensors).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub centre_of_mass_m: Option<[f64; 2]>,
+    /// Number of storeys above the base (level 0): the roof is level
+    /// `storeys`.  From the manifest (`structure.storeys`), else inferred from
+    /// the headers (e.g. a CSMIP station name "Van Nuys - 7-story Hotel");
+    /// how it was found is in `inferred`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub storeys: Option<u32>,
+    /// Total height above the base, metres, when stated (or the sum of
+    /// `storey_heights_m`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height_m: Option<f64>,
+    /// Model building type (HAZUS code such as "C1", "S1", "URM"), when stated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub building_type: Option<String>,
+    /// Kind of structure: "building", "bridge", … when stated or inferred.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<String>,
+    /// What of the structure was inferred rather than stated, with how
+    /// ("storeys=7 from station name \"Van Nuys - 7-story Hotel\"").
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub inferred: Vec<String>,
 }
 
 /// An earthquake (or ambient) event as ingested: records of every channel,
