@@ -27,6 +27,11 @@ pub fn inspect_json(event: &Path) -> Result<String> {
     Ok(String::from_utf8_lossy(&bytes).into_owned() + "\n")
 }
 
+/// `quaketwin init EVENT [-o FILE] [--force]`: see [`event_folder::init::run`].
+pub fn init(event: &Path, out: Option<&Path>, force: bool) -> Result<Option<String>> {
+    event_folder::init::run(event, out, force)
+}
+
 /// Human-readable inventory of a loaded event.
 pub fn render_inventory(loaded: &LoadedEvent) -> String {
     let e = &loaded.event;
@@ -50,6 +55,20 @@ pub fn render_inventory(loaded: &LoadedEvent) -> String {
                 .map(|t| format!(", twin {t}"))
                 .unwrap_or_default()
         );
+    }
+    if let Some(st) = &e.structure {
+        let said = [
+            st.kind.as_ref().map(|k| format!("kind {k}")),
+            st.storeys.map(|n| format!("{n} storeys")),
+            st.height_m.map(|h| format!("height {h} m")),
+        ];
+        let said: Vec<String> = said.into_iter().flatten().collect();
+        if !said.is_empty() {
+            let _ = writeln!(s, "          {}", said.join(", "));
+        }
+        for i in &st.inferred {
+            let _ = writeln!(s, "          inferred: {i}");
+        }
     }
     let _ = writeln!(s, "\nfiles ({}):", loaded.files.len());
     for f in &loaded.files {
