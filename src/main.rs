@@ -69,11 +69,6 @@ enum Command {
         /// Event folder or zip.
         event: PathBuf,
     },
-    /// Read an event folder, condition it and compute strong-motion metrics
-    /// (channels.parquet, samples.parquet, spectra.parquet, drift.parquet).
-    #[command(after_help = "Examples:
-  quaketwin ingest sample-records/synthetic-4storey-quake --out out/quake
-  quaketwin ingest sample-records/synthetic-4storey-quake --out out/quake --mcap out/quake/event.mcap")]
     /// Write the event.toml of what the headers say: event, structure,
     /// one [[channel]] per channel, the unknowns as commented fields.
     #[command(after_help = "Examples:
@@ -89,6 +84,11 @@ enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Read an event folder, condition it and compute strong-motion metrics
+    /// (channels.parquet, samples.parquet, spectra.parquet, drift.parquet).
+    #[command(after_help = "Examples:
+  quaketwin ingest sample-records/synthetic-4storey-quake --out out/quake
+  quaketwin ingest sample-records/synthetic-4storey-quake --out out/quake --mcap out/quake/event.mcap")]
     Ingest {
         /// Event folder or zip.
         event: PathBuf,
