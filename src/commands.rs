@@ -27,6 +27,56 @@ pub fn inspect_json(event: &Path) -> Result<String> {
     Ok(String::from_utf8_lossy(&bytes).into_owned() + "\n")
 }
 
+/// `quaketwin init EVENT [-o FILE] [--force]`: the manifest text, written
+/// to `out` atomically when given (refusing an existing file without
+/// `force`, and any path inside the event, whose inputs are never
+/// modified).  Returns the text when it is for standard output, else `None`.
+pub fn init(event: &Path, out: Option<&Path>, force: bool) -> Result<Option<String>> {
+    use crate::error::Error;
+    let loaded = event_folder::load_headers(event)?;
+    let text =
+        event_folder::init::manifest_text(&loaded, &event.display().to_string(), event.is_file());
+    let Some(out) = out else {
+        return Ok(Some(text));
+    };
+    // Never into the input: the event itself, or anywhere inside a folder event.
+    let absolute = |p: &std::path::Path| -> std::path::PathBuf {
+        let p = if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            std::env::current_dir()
+                .map(|d| d.join(p))
+                .unwrap_or_else(|_| p.to_path_buf())
+        };
+        // The parent exists (or the write fails anyway): resolve it, keep the name.
+        match (
+            p.parent().and_then(|d| d.canonicalize().ok()),
+            p.file_name(),
+        ) {
+            (Some(d), Some(n)) => d.join(n),
+            _ => p,
+        }
+    };
+    let event_abs = event.canonicalize().map_err(|e| Error::io(event, e))?;
+    let out_abs = absolute(out);
+    if out_abs == event_abs || out_abs.starts_with(&event_abs) {
+        return Err(Error::usage(format!(
+            "{}: inside the event {}, whose files quaketwin never modifies; write the manifest elsewhere and copy it in yourself",
+            out.display(),
+            event.display()
+        )));
+    }
+    crate::sinks::atomic::check_replaceable(out)?;
+    if !force && std::fs::symlink_metadata(out).is_ok() {
+        return Err(Error::usage(format!(
+            "{} exists: give --force to replace it",
+            out.display()
+        )));
+    }
+    crate::sinks::atomic::write_bytes_atomically(out, text.as_bytes())?;
+    Ok(None)
+}
+
 /// Human-readable inventory of a loaded event.
 pub fn render_inventory(loaded: &LoadedEvent) -> String {
     let e = &loaded.event;
@@ -50,6 +100,20 @@ pub fn render_inventory(loaded: &LoadedEvent) -> String {
                 .map(|t| format!(", twin {t}"))
                 .unwrap_or_default()
         );
+    }
+    if let Some(st) = &e.structure {
+        let said = [
+            st.kind.as_ref().map(|k| format!("kind {k}")),
+            st.storeys.map(|n| format!("{n} storeys")),
+            st.height_m.map(|h| format!("height {h} m")),
+        ];
+        let said: Vec<String> = said.into_iter().flatten().collect();
+        if !said.is_empty() {
+            let _ = writeln!(s, "          {}", said.join(", "));
+        }
+        for i in &st.inferred {
+            let _ = writeln!(s, "          inferred: {i}");
+        }
     }
     let _ = writeln!(s, "\nfiles ({}):", loaded.files.len());
     for f in &loaded.files {

@@ -69,6 +69,21 @@ enum Command {
         /// Event folder or zip.
         event: PathBuf,
     },
+    /// Write the event.toml of what the headers say: event, structure,
+    /// one [[channel]] per channel, the unknowns as commented fields.
+    #[command(after_help = "Examples:
+  quaketwin init building.zip
+  quaketwin init building.zip -o building-event.toml")]
+    Init {
+        /// Event folder or zip.
+        event: PathBuf,
+        /// Write to FILE (atomically) instead of standard output; never inside the event.
+        #[arg(short = 'o', long = "out", value_name = "FILE")]
+        out: Option<PathBuf>,
+        /// Replace FILE when it exists.
+        #[arg(long)]
+        force: bool,
+    },
     /// Read an event folder, condition it and compute strong-motion metrics
     /// (channels.parquet, samples.parquet, spectra.parquet, drift.parquet).
     #[command(after_help = "Examples:
@@ -393,6 +408,12 @@ fn run_command(cli: &Cli) -> Result<()> {
                 commands::inspect(event)?
             };
             print!("{text}");
+            Ok(())
+        }
+        Command::Init { event, out, force } => {
+            if let Some(text) = commands::init(event, out.as_deref(), *force)? {
+                print!("{text}");
+            }
             Ok(())
         }
         Command::Ingest { event, out, mcap } => {

@@ -4,8 +4,11 @@
 //! inferred and what later stages will miss.  See docs/event-folder.md.
 
 mod archive;
+pub mod init;
+pub mod lengths;
 pub mod manifest;
 mod referenced;
+pub mod structure;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -118,6 +121,30 @@ impl crate::vocab::SampleStore for LetGo {
 /// file is read (a pipeline run parks a big event's samples there, so the
 /// files are read in the memory of one: issue 14 item 5).
 pub fn load_parking(
+    path: &Path,
+    limits: &ArchiveLimits,
+    park: &mut dyn FnMut(&mut Record) -> Result<()>,
+) -> Result<LoadedEvent> {
+    let mut loaded = load_as_stated(path, limits, park)?;
+    loaded.geometry = crate::geometry::apply_building_geometry(&mut loaded.event)?;
+    Ok(loaded)
+}
+
+/// The event as the files and the manifest state it, with what was
+/// inferred from the headers (levels, roles, structure) but **before** the
+/// building geometry: channels keep the directions their headers give
+/// (what `quaketwin init` writes).  Samples are let go as in
+/// [`load_listing`].
+pub fn load_headers(path: &Path) -> Result<LoadedEvent> {
+    let store: std::sync::Arc<dyn crate::vocab::SampleStore> = std::sync::Arc::new(LetGo);
+    load_as_stated(path, &ArchiveLimits::default(), &mut |rec| {
+        rec.samples
+            .park(&store)
+            .map_err(|e| Error::io(store.describe(), e))
+    })
+}
+
+fn load_as_stated(
     path: &Path,
     limits: &ArchiveLimits,
     park: &mut dyn FnMut(&mut Record) -> Result<()>,
@@ -241,12 +268,23 @@ pub fn load_parking(
     } else {
         // All names, so an uncorrected V1 beside its corrected V2 is skipped.
         let names: Vec<String> = files.iter().map(|f| f.display_name()).collect();
+        let heads: Vec<(String, &[u8])> = files
+            .iter()
+            .map(|f| (f.display_name(), f.head.as_slice()))
+            .collect();
+        let smc_duplicates = readers::smc::uncorrected_duplicates(&heads);
+        let mut unreadable_csv: Option<Error> = None;
         for file in &files {
             if is_manifest(file) {
                 continue;
             }
-            let format = match readers::classify_in_folder(&file.display_name(), &file.head, &names)
-            {
+            let verdict = match smc_duplicates.get(&file.display_name()) {
+                Some(v2) => readers::Sniffed::Skip(format!(
+                    "uncorrected SMC V1 duplicate of the corrected {v2} of the same channel (which is read)"
+                )),
+                None => readers::classify_in_folder(&file.display_name(), &file.head, &names),
+            };
+            let format = match verdict {
                 readers::Sniffed::Record(f) => f,
                 readers::Sniffed::Skip(reason) => {
                     reports.push(FileReport {
@@ -267,7 +305,22 @@ pub fn load_parking(
                 });
                 continue;
             }
-            let contents = read_file(file, format, &ReadOptions::default())?;
+            let contents = match read_file(file, format, &ReadOptions::default()) {
+                // A CSV beside the records is often station information,
+                // not a record: skipped with the reader's reason (fatal
+                // only when the folder has no other record).
+                Err(e) if format == Format::Csv => {
+                    reports.push(FileReport {
+                        name: file.display_name(),
+                        format: None,
+                        channels: 0,
+                        skipped: Some(format!("CSV file that is not a record ({e})")),
+                    });
+                    unreadable_csv.get_or_insert(e);
+                    continue;
+                }
+                other => other?,
+            };
             reports.push(FileReport {
                 name: file.display_name(),
                 format: Some(format.name()),
@@ -280,6 +333,9 @@ pub fn load_parking(
                 park(&mut rec)?;
                 records.push(rec);
             }
+        }
+        if let (true, Some(e)) = (records.is_empty(), unreadable_csv) {
+            return Err(e);
         }
     }
 
@@ -301,7 +357,11 @@ pub fn load_parking(
         readers::stationxml::apply(&mut records, &station_meta);
     }
 
-    make_ids_unique(&mut records);
+    // Channels of one recorder a few samples apart: one common window.
+    let (trimmed, trim_notes) = lengths::trim_near_equal_lengths(&mut records);
+    for i in trimmed {
+        park(&mut records[i])?;
+    }
     let mut event = Event {
         name: default_name,
         ..Default::default()
@@ -353,6 +413,28 @@ pub fn load_parking(
         event.history.push(step, params);
     }
     event.records = records;
+    // Levels, ids with the location and the structure from the headers.
+    let mut facts = structure::HeaderFacts::default();
+    for h in &hints {
+        if let Some(n) = h
+            .station_name
+            .as_ref()
+            .filter(|n| !facts.station_names.contains(n))
+        {
+            facts.station_names.push(n.clone());
+        }
+        if let Some(k) = h
+            .structure_kind
+            .as_ref()
+            .filter(|k| !facts.stated_kinds.contains(k))
+        {
+            facts.stated_kinds.push(k.clone());
+        }
+    }
+    let structure_notes = structure::infer_structure(&mut event, &facts, !listed_channels);
+    make_ids_unique(&mut event.records);
+    event.notes.extend(trim_notes);
+    event.notes.extend(structure_notes);
     infer_and_report_missing(&mut event, manifest.is_some());
     if event.records.is_empty() {
         return Err(Error::input(
@@ -360,13 +442,12 @@ pub fn load_parking(
             "no record files found in the event",
         ));
     }
-    let geometry = crate::geometry::apply_building_geometry(&mut event)?;
     Ok(LoadedEvent {
         event,
         files: reports,
         file_spectra: spectra,
         manifest,
-        geometry,
+        geometry: Default::default(),
     })
 }
 
@@ -724,7 +805,7 @@ fn infer_and_report_missing(event: &mut Event, has_manifest: bool) {
     }
     match &event.structure {
         None => event.notes.push(
-            "no [structure] section: storey heights (drift ratios) and masses (Bouc-Wen) unknown"
+            "no [structure] section, and none inferred from the headers: storey heights (drift ratios) and masses (Bouc-Wen) unknown"
                 .into(),
         ),
         Some(s) => {

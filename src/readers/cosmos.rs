@@ -15,7 +15,8 @@
 //! Header indices used (0-based, COSMOS v1.20 tables): integers [1] data
 //! type (1 acceleration, 2 velocity, 3 displacement), [2] physical units,
 //! [19]/[20] reference azimuths, [39] year, [40] day of year, [43] hour,
-//! [44] minute, [49] station channel number, [53] orientation from north
+//! [44] minute, [18] station/structure type (10 building, 11 bridge…: the event
+//! folder reads the kind of structure from it), [49] station channel number, [53] orientation from north
 //! (or a code: 400 up … 700 H1), [54] orientation from the reference,
 //! [55] location index; reals [0..3] station latitude, longitude, elevation
 //! (m), [9..13] hypocentre and magnitude, [21] recorder LSB (µV/count), [29]
@@ -136,6 +137,12 @@ fn read_channel(
         return Ok(next);
     }
 
+    if contents.event.station_name.is_none() {
+        contents.event.station_name = identity.station_name.clone();
+    }
+    if contents.event.structure_kind.is_none() {
+        contents.event.structure_kind = header.int_at(18).and_then(structure_kind);
+    }
     let units = calibrate_counts(units, &header, &mut inferred);
     let mut channel = Channel::new(id, units, rate, source.clone());
     channel.network = identity.network;
@@ -769,4 +776,24 @@ fn text_time(line: &str, key: &str) -> Option<i64> {
         return None;
     }
     parse_iso8601_ns(&format!("{date}T{time}"))
+}
+
+/// Kind of structure from the station/structure type code, integer header
+/// field 18 (0-based; COSMOS v1.20 Table 6, as USGS gmprocess reads it):
+/// 10 building, 5 base of a building, 11 bridge, 12 dam, 13 wharf, 14
+/// tunnel, 6 free field.  Other codes (shelters, vaults, arrays) name no
+/// structure.
+fn structure_kind(code: i64) -> Option<(String, String)> {
+    let kind = match code {
+        5 | 10 => "building",
+        11 => "bridge",
+        12 => "dam",
+        13 => "wharf",
+        14 => "tunnel",
+        _ => return None,
+    };
+    Some((
+        kind.to_string(),
+        format!("COSMOS integer header field 18 (station/structure type) = {code}"),
+    ))
 }

@@ -102,6 +102,10 @@ struct TextHeader {
     station_chan: Option<i64>,
     location: Option<String>,
     station: Option<String>,
+    /// The station's name: a header line naming the storeys
+    /// ("Sherman Oaks - 13-story Commercial Bldg"), else the line after
+    /// `STATION NO.`.
+    station_name: Option<String>,
     latitude: Option<f64>,
     longitude: Option<f64>,
     start_ns: Option<i64>,
@@ -147,8 +151,20 @@ fn parse_text_header(lines: &Lines, from: usize, to: usize) -> TextHeader {
                 h.station_chan = textfmt::parse_int(line[p + 8..].split(')').next().unwrap_or(""));
             }
         }
+        if h.station_name.is_none() && (upper.contains("STORY") || upper.contains("STOREY")) {
+            h.station_name = Some(line.trim().to_string());
+        }
         if h.station.is_none() {
             if let Some(p) = upper.find("STATION NO.") {
+                let next = lines.get(i + 1).trim();
+                let next_upper = next.to_ascii_uppercase();
+                if i + 1 < to
+                    && !next.is_empty()
+                    && !next_upper.starts_with("CHAN")
+                    && next.chars().any(|c| c.is_ascii_alphabetic())
+                {
+                    h.station_name.get_or_insert_with(|| next.to_string());
+                }
                 let mut it = line[p + 11..].split_whitespace();
                 h.station = it
                     .next()
@@ -325,6 +341,9 @@ fn read_channel(
         contents.event.origin_ns = th.origin_ns;
         contents.event.hypocenter = th.hypocenter;
         contents.event.magnitude = th.magnitude;
+    }
+    if contents.event.station_name.is_none() {
+        contents.event.station_name = th.station_name.clone();
     }
 
     match volume {
@@ -540,19 +559,26 @@ fn read_series(
                 format!("{} numbers do not form (time, value) pairs", values.len()),
             ));
         }
-        let times: Vec<f64> = values.iter().step_by(2).copied().collect();
-        let accel_raw: Vec<f64> = values.iter().skip(1).step_by(2).copied().collect();
-        if let Some(k) = times.windows(2).position(|w| w[1] <= w[0]) {
+        let raw_times: Vec<f64> = values.iter().step_by(2).copied().collect();
+        let raw_accel: Vec<f64> = values.iter().skip(1).step_by(2).copied().collect();
+        if !super::resample::looks_like_pair_times(&raw_times) {
+            let backwards = raw_times.windows(2).filter(|w| w[1] < w[0]).count();
             return Err(lines.err_ch(
-                i + (2 * k + 2) / 10,
+                i,
                 id,
                 format!(
-                    "times are not increasing at pair {} ({} then {})",
-                    k + 2,
-                    times[k],
-                    times[k + 1]
+                    "the (time, value) pairs' times do not go forward: {backwards} of {} steps go backwards (at most 5 % are dropped as digitising slips)",
+                    raw_times.len() - 1
                 ),
             ));
+        }
+        // Repeated stamps merged, backwards ones dropped (noted).
+        let (times, accel_raw, cleaning) =
+            super::resample::clean_pair_times(&raw_times, &raw_accel);
+        if !cleaning.is_clean() {
+            qa.push(QaFlag::Note {
+                text: cleaning.describe(&format!("{}", lines.source())),
+            });
         }
         // Units from the text header ("UNITS OF UNCOR ACCEL ARE SEC AND G/10").
         let word = th_units_word(lines, at).ok_or_else(|| {

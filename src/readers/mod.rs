@@ -45,6 +45,14 @@ pub struct EventHints {
     pub origin_ns: Option<i64>,
     pub magnitude: Option<f64>,
     pub hypocenter: Option<(f64, f64, f64)>,
+    /// The station's name as the header gives it ("Van Nuys - 7-story
+    /// Hotel", SMC `station = …`): the event folder reads the storey count
+    /// and the kind of structure from it.
+    pub station_name: Option<String>,
+    /// Kind of structure a header field states (COSMOS integer 18, the
+    /// station/structure type code): "building", "bridge", "dam", …, with
+    /// the code, for `Structure.inferred`.
+    pub structure_kind: Option<(String, String)>,
 }
 
 /// A response spectrum stated by a file (CSMIP V3, COSMOS spectra), kept for

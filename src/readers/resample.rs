@@ -73,3 +73,76 @@ pub fn median_step(times: &[f64]) -> f64 {
         0.5 * (d[m - 1] + d[m])
     }
 }
+
+/// What [`clean_pair_times`] did to a series of (time, value) pairs.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PairCleaning {
+    /// Pairs whose time repeated the previous kept time: merged into it
+    /// (the values averaged).
+    pub merged_repeats: usize,
+    /// Pairs whose time went back before the previous kept time: dropped.
+    pub dropped_backwards: usize,
+}
+
+impl PairCleaning {
+    pub fn is_clean(&self) -> bool {
+        self.merged_repeats == 0 && self.dropped_backwards == 0
+    }
+    /// The note a reader attaches to the channel (the caller names the file).
+    pub fn describe(&self, file: &str) -> String {
+        format!(
+            "{file}: {} repeated time stamp(s) merged (values averaged) and {} time stamp(s) going back in time dropped before resampling the (time, value) pairs (digitised-film pathology)",
+            self.merged_repeats, self.dropped_backwards
+        )
+    }
+}
+
+/// Real digitised-film records (SMC V1, CSMIP V1 pairs) hold repeated and
+/// occasionally backwards time stamps.  Makes the times strictly increasing:
+/// a pair at the same time as the previous kept one is merged into it (mean
+/// of the values, so no reading is preferred), a pair before it is dropped
+/// (a digitiser slip: interpolating across it would fold the record).
+pub fn clean_pair_times(times: &[f64], values: &[f64]) -> (Vec<f64>, Vec<f64>, PairCleaning) {
+    let mut t_out: Vec<f64> = Vec::with_capacity(times.len());
+    let mut v_out: Vec<f64> = Vec::with_capacity(times.len());
+    let mut counts: Vec<usize> = Vec::with_capacity(times.len());
+    let mut report = PairCleaning::default();
+    for (&t, &v) in times.iter().zip(values) {
+        match t_out.last() {
+            Some(&last) if t == last => {
+                let k = counts.len() - 1;
+                let n = counts[k] as f64;
+                v_out[k] = (v_out[k] * n + v) / (n + 1.0);
+                counts[k] += 1;
+                report.merged_repeats += 1;
+            }
+            Some(&last) if t < last => report.dropped_backwards += 1,
+            _ => {
+                t_out.push(t);
+                v_out.push(v);
+                counts.push(1);
+            }
+        }
+    }
+    (t_out, v_out, report)
+}
+
+/// Whether `times` read as the time column of (time, value) pairs: finite,
+/// not negative at the start, ending after they start, and going forward
+/// (or repeating) at nearly every step.  An evenly sampled acceleration
+/// series misread as pairs puts accelerations in the time column, whose
+/// steps go up and down about equally often.
+pub fn looks_like_pair_times(times: &[f64]) -> bool {
+    let (Some(&first), Some(&last)) = (times.first(), times.last()) else {
+        return false;
+    };
+    if times.len() < 2 || !(first >= 0.0) || !(last > first) || times.iter().any(|t| !t.is_finite())
+    {
+        return false;
+    }
+    let steps = times.len() - 1;
+    let forward_or_equal = times.windows(2).filter(|w| w[1] >= w[0]).count();
+    let forward = times.windows(2).filter(|w| w[1] > w[0]).count();
+    // At most 5 % of the steps backwards, at least half strictly forward.
+    forward_or_equal * 20 >= steps * 19 && forward * 2 >= steps
+}

@@ -36,7 +36,7 @@
 //!   header has none), flagged `QaFlag::Resampled`, and the step is recorded
 //!   in the channel's `inferred` list.
 
-use super::resample::{median_step, resample_linear};
+use super::resample::{clean_pair_times, looks_like_pair_times, median_step, resample_linear};
 use super::textfmt::{self, Layout, Lines};
 use super::{FileContents, ReadOptions};
 use crate::error::Result;
@@ -180,6 +180,24 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
         ),
         None => (String::new(), String::new()),
     };
+    // `<tag=value>` fields of the text header and comment lines (NSMP
+    // building files: `|<loclbl=Roof>`; `<SCNL>STA.CHN.NET.LOC`).
+    let tags: Vec<(String, String)> = (0..data_start)
+        .filter(|&i| i < TEXT_LINES || lines.get(i).starts_with('|'))
+        .flat_map(|i| textfmt::angle_tags(lines.get(i)))
+        .collect();
+    let tag = |name: &str| tags.iter().find(|(t, _)| t == name).map(|(_, v)| v.clone());
+    let location_label = tag("loclbl");
+    let scnl: Option<Vec<String>> = tag("scnl")
+        .map(|s| {
+            s.split_whitespace()
+                .next()
+                .unwrap_or("")
+                .split('.')
+                .map(str::to_string)
+                .collect::<Vec<_>>()
+        })
+        .filter(|p| p.len() == 4);
     let direction = Direction::parse(&component)
         .or_else(|| int_at(13).map(|a| Direction::Azimuth((a as f64).rem_euclid(360.0))));
     let station = if station_code.is_empty() {
@@ -205,9 +223,11 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     // pairs or the values (2 × pairs) — both occur in real files — so the
     // numbers actually present decide: pairs with increasing times, first
     // in the pair-count reading, then in the value-count one.
+    // Times that go forward at nearly every step: real film digitisations
+    // repeat stamps and step back now and then (cleaned below).
     let increasing_times = |n_values: usize| {
         let times: Vec<f64> = values[..n_values].iter().step_by(2).copied().collect();
-        times[0] >= 0.0 && times.windows(2).all(|w| w[1] > w[0])
+        looks_like_pair_times(&times)
     };
     let maybe_pairs = uncorrected || rate.is_none();
     let n_pairs = if maybe_pairs
@@ -223,7 +243,7 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
         && increasing_times(npts)
     {
         inferred.push(format!(
-            "integer header field 17 = {npts} counts values, not pairs: the data section holds {} numbers forming {} (time, value) pairs with increasing times",
+            "integer header field 17 = {npts} counts values, not pairs: the data section holds {} numbers forming {} (time, value) pairs with times going forward",
             values.len(),
             npts / 2
         ));
@@ -233,8 +253,21 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     };
     let (samples, rate_hz) = if let Some(n_pairs) = n_pairs {
         let used = 2 * n_pairs;
-        let times: Vec<f64> = values[..used].iter().step_by(2).copied().collect();
-        let accel: Vec<f64> = values[..used].iter().skip(1).step_by(2).copied().collect();
+        let raw_times: Vec<f64> = values[..used].iter().step_by(2).copied().collect();
+        let raw_accel: Vec<f64> = values[..used].iter().skip(1).step_by(2).copied().collect();
+        let (times, accel, cleaning) = clean_pair_times(&raw_times, &raw_accel);
+        if !cleaning.is_clean() {
+            qa.push(QaFlag::Note {
+                text: cleaning.describe(&source.to_string()),
+            });
+        }
+        if times.len() < 2 {
+            return Err(lines.err_ch(
+                data_start,
+                &id,
+                "fewer than two (time, value) pairs with distinct times",
+            ));
+        }
         let dt = match rate {
             Some(r) => 1.0 / r,
             None => median_step(&times),
@@ -280,7 +313,15 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
             ));
         }
         let rate = rate.ok_or_else(|| {
-            lines.err(real_start, "real header field 2 (sampling rate) is missing, and the data are not (time, value) pairs")
+            let times: Vec<f64> = values.iter().step_by(2).copied().collect();
+            let backwards = times.windows(2).filter(|w| w[1] < w[0]).count();
+            lines.err(
+                real_start,
+                format!(
+                    "real header field 2 (sampling rate) is missing, so the samples cannot be placed in time: read as (time, value) pairs, {backwards} of {} time steps go backwards (more than 5 %), so they are not a time column either; state `sampling_rate_hz` in event.toml",
+                    times.len().saturating_sub(1)
+                ),
+            )
         })?;
         if values.len() > npts {
             let at = textfmt::line_of_value(&marks, npts)
@@ -299,7 +340,19 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     let mut channel = Channel::new(id, Units::CmPerS2, rate_hz, source.clone());
     channel.station = Some(station).filter(|s| !s.is_empty());
     channel.channel_code = Some(component.clone()).filter(|s| !s.is_empty());
-    channel.location_text = Some(station_name).filter(|s| !s.is_empty());
+    if let Some(p) = &scnl {
+        channel.network = Some(p[2].clone()).filter(|s| !s.is_empty());
+        channel.location_code = Some(p[3].clone()).filter(|s| !s.is_empty() && s != "--");
+    }
+    // The sensor's location: its `<loclbl>` label, else (as before) the
+    // station line, whose words may still name a ground or structure sensor.
+    channel.location_text = match &location_label {
+        Some(l) => {
+            inferred.push(format!("location {l:?} from the header's <loclbl> tag"));
+            Some(l.clone())
+        }
+        None => Some(station_name.clone()).filter(|s| !s.is_empty()),
+    };
     channel.direction = direction;
     if direction.is_none() {
         channel.missing.push("direction".into());
@@ -325,6 +378,7 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
         .collect::<Vec<_>>()
         .join(" ");
     contents.event.name = Some(name).filter(|s| !s.is_empty());
+    contents.event.station_name = Some(station_name).filter(|s| !s.is_empty());
     contents.event.magnitude =
         textfmt::number_after(lines.get(4), "Moment Mag=").or_else(|| real_at(5));
     if let (Some(lat), Some(lon), Some(depth_km)) = (real_at(2), real_at(3), real_at(4)) {
@@ -476,4 +530,55 @@ fn text_date(line: &str) -> Option<(String, i64, bool)> {
     let ns = epoch_ns_from_civil(y, mo as u32, d as u32, h as u32, m as u32, 0.0)?;
     let shown = tokens[..if hhmm.is_some() { 4 } else { 3 }].join(" ");
     Some((shown, ns, hhmm.is_some()))
+}
+
+/// Uncorrected SMC files (`1 UNCORRECTED ACCELEROGRAM`) of a folder that
+/// duplicate a corrected one (`2 CORRECTED ACCELEROGRAM`) of the same
+/// channel — same station code (text line 3), component (line 6) and
+/// `<loclbl>` — as NSMP zips ship them side by side: name → the corrected
+/// file's name.  `files` are (name, first bytes) pairs; a V1 without its V2
+/// is not listed (it is read).
+pub fn uncorrected_duplicates(
+    files: &[(String, &[u8])],
+) -> std::collections::BTreeMap<String, String> {
+    let key_of = |head: &[u8]| -> Option<(u8, String)> {
+        let text = String::from_utf8_lossy(head);
+        let lines: Vec<&str> = text.lines().collect();
+        let first = lines.first()?.trim().to_ascii_uppercase();
+        let volume = if first.contains("UNCORRECTED ACCELEROGRAM") {
+            1
+        } else if first.contains("CORRECTED ACCELEROGRAM") {
+            2
+        } else {
+            return None;
+        };
+        let station: String = lines.get(2)?.chars().take(4).collect();
+        let line6 = lines.get(5)?.to_ascii_lowercase();
+        let component = line6
+            .find("component=")
+            .map(|p| line6[p + 10..].trim().to_string())?;
+        let label = lines
+            .iter()
+            .enumerate()
+            .filter(|(i, l)| *i < TEXT_LINES || l.starts_with('|'))
+            .flat_map(|(_, l)| textfmt::angle_tags(l))
+            .find(|(t, _)| t == "loclbl")
+            .map(|(_, v)| v.to_ascii_lowercase())
+            .unwrap_or_default();
+        Some((volume, format!("{}|{component}|{label}", station.trim())))
+    };
+    let keyed: Vec<(&String, u8, String)> = files
+        .iter()
+        .filter(|(n, _)| n.to_ascii_lowercase().ends_with(".smc"))
+        .filter_map(|(n, h)| key_of(h).map(|(v, k)| (n, v, k)))
+        .collect();
+    let mut out = std::collections::BTreeMap::new();
+    for (name, v, key) in keyed.iter().filter(|(_, v, _)| *v == 1) {
+        debug_assert_eq!(*v, 1);
+        if let Some((v2, _, _)) = keyed.iter().find(|(_, v, k)| *v == 2 && k == key) {
+            let base = v2.rsplit([':', '/', '\\']).next().unwrap_or(v2);
+            out.insert((*name).clone(), base.to_string());
+        }
+    }
+    out
 }

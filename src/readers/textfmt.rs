@@ -52,6 +52,11 @@ impl<'a> Lines<'a> {
         Error::input(self.location().at_line(i + 1), message)
     }
     /// Error at 0-based line `i` for a channel.
+    /// The file (and zip member) the lines come from.
+    pub fn source(&self) -> &SourceRef {
+        self.source
+    }
+
     pub fn err_ch(&self, i: usize, channel: &str, message: impl Into<String>) -> Error {
         Error::input(
             self.location().with_channel(channel).at_line(i + 1),
@@ -481,4 +486,36 @@ pub fn signed_degrees(s: &str) -> Option<f64> {
         'S' | 'W' => Some(-v),
         _ => None,
     }
+}
+
+/// `<tag=value>` and `<tag>value` fields of a header or comment line (SMC
+/// comment lines `|<loclbl=Roof>`, COSMOS `|<SCNL>BMR.BNZ.AK.--`), read
+/// leniently: any case (tags are returned lower-case), anywhere in the line,
+/// spaces around `=` allowed.  For `<tag>value` the value runs to the next
+/// `<` or the end of the line; empty values are left out.
+pub fn angle_tags(line: &str) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let mut rest = line;
+    while let Some(open) = rest.find('<') {
+        let after = &rest[open + 1..];
+        let Some(close) = after.find('>') else { break };
+        let inside = &after[..close];
+        let tail = &after[close + 1..];
+        let (tag, value) = match inside.split_once('=') {
+            Some((t, v)) => (t.trim(), v.trim().to_string()),
+            None => {
+                let end = tail.find('<').unwrap_or(tail.len());
+                (inside.trim(), tail[..end].trim().to_string())
+            }
+        };
+        let tag_ok = !tag.is_empty()
+            && tag
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+        if tag_ok && !value.is_empty() {
+            out.push((tag.to_ascii_lowercase(), value));
+        }
+        rest = tail;
+    }
+    out
 }

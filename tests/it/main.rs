@@ -47,6 +47,7 @@ mod report;
 mod report_browser;
 mod schemas;
 mod stage_params;
+mod structure_inference;
 mod synth;
 mod tracking;
 mod twin;

@@ -4,7 +4,7 @@ use super::{present_columns, require, Loaded};
 use crate::report::html::{missing_columns_note, note, table, Cell};
 use crate::vocab::tables::{self, channels};
 
-const CHANNEL_COLUMNS: [&str; 16] = [
+const CHANNEL_COLUMNS: [&str; 17] = [
     channels::CHANNEL_ID.name,
     channels::LEVEL.name,
     channels::DIRECTION.name,
@@ -21,6 +21,7 @@ const CHANNEL_COLUMNS: [&str; 16] = [
     channels::SNR_DB.name,
     channels::QA_FLAGS.name,
     channels::MISSING.name,
+    channels::INFERRED.name,
 ];
 
 pub(super) fn channel_section(channels: &Loaded) -> String {
@@ -42,7 +43,7 @@ pub(super) fn channel_section(channels: &Loaded) -> String {
         .collect();
     body.push_str(&note(
         "Units: m/s² (pga), m/s (pgv, arias, cav), m (pgd), s (d5_95), dB (snr). \
-         QA flags and missing metadata as tags; — = not available. \
+         QA flags, missing metadata and what was inferred (and how) as tags; — = not available. \
          Directions: X, Y, Z are the building axes every stage works in (applied once at ingest); \
          \"azimuth N°\" marks a channel whose relation to them is unknown (event.json notes say why; \
          structure.x_axis_azimuth_deg in event.toml settles it) — stages working in X/Y leave it out.",
