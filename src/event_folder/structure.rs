@@ -8,7 +8,10 @@
 //! Level convention (docs/event-folder.md): level 0 = the base (basement,
 //! ground, foundation, "1st floor"); "Nth floor" = level N − 1 (the US
 //! convention of CSMIP and NSMP: the 1st floor is the ground floor); the
-//! roof = level `storeys`; a penthouse = `storeys + 1`.  Free-field sensors
+//! roof = level `storeys`; a penthouse = `storeys + 1`.  When one structure
+//! has both a "Ground floor" and a "1st floor" sensor, the floors count from
+//! the ground floor (British/European convention: "Nth floor" = level N).
+//! Free-field sensors
 //! have no level.  Bridges (deck, abutments, piers) get no levels.
 
 use crate::vocab::Event;
@@ -350,11 +353,17 @@ pub fn infer_structure(event: &mut Event, facts: &HeaderFacts, tag_ids: bool) ->
     // Levels: buildings only (a bridge's "ground" sensor is no storey).
     let mut levels: Vec<Option<(i32, String)>> = vec![None; places.len()];
     if is_building {
+        // A "Ground floor" sensor beside a "1st floor" one: the two are not
+        // the same slab, so the floors count from the ground floor (the
+        // British/European convention: the 1st floor is one storey up).
+        let european = places.iter().flatten().any(|p| *p == Place::Base("GROUND"))
+            && places.iter().flatten().any(|p| *p == Place::Floor(1));
+        let floor_level = |n: u32| if european { n as i32 } else { n as i32 - 1 };
         let floor_top = places
             .iter()
             .flatten()
             .filter_map(|p| match p {
-                Place::Floor(n) => Some(*n as i32 - 1),
+                Place::Floor(n) => Some(floor_level(*n)),
                 _ => None,
             })
             .max();
@@ -385,11 +394,17 @@ pub fn infer_structure(event: &mut Event, facts: &HeaderFacts, tag_ids: bool) ->
         for (k, p) in places.iter().enumerate() {
             levels[k] = match p {
                 Some(Place::Base(w)) => Some((0, format!("{w} = level 0 (the base)"))),
+                Some(Place::Floor(n)) if european => Some((
+                    floor_level(*n),
+                    format!(
+                        "floor {n} = level {n} (a ground-floor and a 1st-floor sensor: the 1st floor is one storey above the ground floor)"
+                    ),
+                )),
                 Some(Place::Floor(n)) => Some((
-                    *n as i32 - 1,
+                    floor_level(*n),
                     format!(
                         "floor {n} = level {} (US convention: the 1st floor is the ground floor)",
-                        *n as i32 - 1
+                        floor_level(*n)
                     ),
                 )),
                 Some(Place::Roof) => roof.clone(),

@@ -530,3 +530,49 @@ fn channels_a_few_samples_apart_are_trimmed_to_their_common_window() {
     assert!(loaded.event.records.iter().any(|r| r.len() == 1000));
     assert!(loaded.event.notes.iter().any(|n| n.contains("left alone")));
 }
+
+#[test]
+fn a_ground_floor_beside_a_first_floor_counts_floors_from_the_ground() {
+    use quaketwin::event_folder::structure::{infer_structure, HeaderFacts};
+    use quaketwin::vocab::{Channel, Event, Record, SourceRef, Units};
+    let record = |id: &str, location: &str| {
+        let mut ch = Channel::new(id, Units::MPerS2, 100.0, SourceRef::default());
+        ch.location_text = Some(location.to_string());
+        Record::new(ch, vec![0.0; 8])
+    };
+    let labelled = |labels: &[&str]| {
+        let mut event = Event {
+            records: labels
+                .iter()
+                .enumerate()
+                .map(|(k, l)| record(&format!("c{k}"), l))
+                .collect(),
+            ..Default::default()
+        };
+        let facts = HeaderFacts {
+            station_names: vec!["Test - 3-story Office Bldg".into()],
+            ..Default::default()
+        };
+        infer_structure(&mut event, &facts, false);
+        event
+            .records
+            .iter()
+            .map(|r| r.channel.level)
+            .collect::<Vec<_>>()
+    };
+    // Ground, 1st, 2nd and 3rd floors of a 3-storey frame: European counting.
+    assert_eq!(
+        labelled(&[
+            "Ground Floor",
+            "1st Floor",
+            "2nd Floor",
+            "3rd Floor (Top floor)"
+        ]),
+        vec![Some(0), Some(1), Some(2), Some(3)]
+    );
+    // The same labels without a ground-floor sensor: the US convention.
+    assert_eq!(
+        labelled(&["Basement", "2nd Floor", "Roof"]),
+        vec![Some(0), Some(1), Some(3)]
+    );
+}
