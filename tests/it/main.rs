@@ -48,6 +48,7 @@ mod report_browser;
 mod schemas;
 mod stage_params;
 mod synth;
+mod synth_benchmarks;
 mod tracking;
 mod twin;
 mod twin_update_io;
