@@ -251,6 +251,11 @@ fn truth(folder: &str) -> toml::Table {
     toml::from_str(&text).unwrap()
 }
 
+/// A TOML number (`3600000` or `0.1`) as f64.
+fn num(v: &toml::Value) -> f64 {
+    v.as_float().or(v.as_integer().map(|i| i as f64)).unwrap()
+}
+
 fn floats(v: &toml::Value) -> Vec<f64> {
     v.as_array()
         .unwrap()
@@ -396,7 +401,7 @@ fn yielding_benchmark_ground_storey_degrades_as_stated() {
     let t = truth("synthetic-6storey-yielding");
     let x = &t["direction"].as_array().unwrap()[0];
     let k0 = floats(&x["storey_stiffness_n_per_m"])[0];
-    let k_final = x["storey1_final_stiffness_n_per_m"].as_float().unwrap();
+    let k_final = num(&x["storey1_final_stiffness_n_per_m"]);
     assert!(k_final < 0.8 * k0, "{k_final} vs {k0}");
     let f0 = floats(&x["initial_frequencies_hz"])[0];
     let f1 = floats(&x["final_frequencies_hz"])[0];
@@ -418,16 +423,13 @@ fn yielding_benchmark_ground_storey_degrades_as_stated() {
     let b = YieldingShearBuilding {
         masses_kg: floats(&x["masses_kg"]),
         storey_stiffness_n_per_m: floats(&x["storey_stiffness_n_per_m"]),
-        yield_force_n: x["yield_force_n"].as_float().unwrap(),
-        hardening_ratio: x["hardening_ratio"].as_float().unwrap(),
-        degradation_exponent: x["degradation_exponent"].as_float().unwrap(),
-        damping_ratio: x["damping_ratio"].as_float().unwrap(),
+        yield_force_n: num(&x["yield_force_n"]),
+        hardening_ratio: num(&x["hardening_ratio"]),
+        degradation_exponent: num(&x["degradation_exponent"]),
+        damping_ratio: num(&x["damping_ratio"]),
     };
-    let spec = quaketwin::synth::GroundMotionSpec::strong_50s(
-        2026 + 6001,
-        100.0,
-        t["pga_x_m_s2"].as_float().unwrap(),
-    );
+    let spec =
+        quaketwin::synth::GroundMotionSpec::strong_50s(2026 + 6001, 100.0, num(&t["pga_x_m_s2"]));
     let mut ag = vec![0.0; 500];
     ag.extend(quaketwin::synth::synthetic_ground_motion(&spec).unwrap());
     ag.extend(vec![0.0; 2000]);
