@@ -380,6 +380,9 @@ pub fn synth(out: &Path, seed: u64) -> Result<Vec<std::path::PathBuf>> {
     };
     let mut written = crate::synth::event::write_sample_events(out, &settings)?;
     written.push(crate::synth::facade::write_facade_sample(out, seed)?);
+    written.push(crate::synth::realistic::nsmp::write(out, seed)?);
+    written.push(crate::synth::realistic::tall::write(out, seed)?);
+    written.push(crate::synth::realistic::degrading::write(out, seed)?);
     Ok(written)
 }
 
@@ -698,38 +701,67 @@ pub fn rehearse(
 /// Expands the EVENT arguments: a folder with no manifest whose
 /// sub-folders each hold an `event.toml` is a folder of event folders.
 pub fn expand_events(events: &[std::path::PathBuf]) -> Vec<std::path::PathBuf> {
+    let subfolders = |e: &Path| -> Vec<std::path::PathBuf> {
+        let mut subs: Vec<_> = std::fs::read_dir(e)
+            .map(|rd| {
+                rd.flatten()
+                    .map(|d| d.path())
+                    .filter(|p| p.is_dir())
+                    .collect()
+            })
+            .unwrap_or_default();
+        subs.sort();
+        subs
+    };
     let mut out = Vec::new();
     for e in events {
-        let is_collection = e.is_dir() && !e.join(crate::event_folder::MANIFEST_NAME).exists() && {
-            let subs: Vec<_> = std::fs::read_dir(e)
-                .map(|rd| {
-                    rd.flatten()
-                        .map(|d| d.path())
-                        .filter(|p| p.is_dir())
-                        .collect()
-                })
-                .unwrap_or_default();
-            !subs.is_empty()
-                && subs
-                    .iter()
-                    .all(|p| p.join(crate::event_folder::MANIFEST_NAME).exists())
+        let subs = if e.is_dir() && !e.join(crate::event_folder::MANIFEST_NAME).exists() {
+            subfolders(e)
+        } else {
+            Vec::new()
         };
+        // A folder of event folders: every subfolder is an event (it has a
+        // manifest, or records of its own as the networks publish them, with
+        // no manifest), and the folder itself holds no record.
+        let is_collection = !subs.is_empty()
+            && !holds_records(e)
+            && subs
+                .iter()
+                .all(|p| p.join(crate::event_folder::MANIFEST_NAME).exists() || holds_records(p));
         if is_collection {
-            let mut subs: Vec<_> = std::fs::read_dir(e)
-                .map(|rd| {
-                    rd.flatten()
-                        .map(|d| d.path())
-                        .filter(|p| p.is_dir())
-                        .collect()
-                })
-                .unwrap_or_default();
-            subs.sort();
             out.extend(subs);
         } else {
             out.push(e.clone());
         }
     }
     out
+}
+
+/// Whether `dir` holds, at its top level, a zip or a file the readers
+/// classify as a record (from its name and first bytes).
+fn holds_records(dir: &Path) -> bool {
+    use std::io::Read as _;
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return false;
+    };
+    rd.flatten()
+        .map(|d| d.path())
+        .filter(|p| p.is_file())
+        .any(|p| {
+            let name = p
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            if name.to_ascii_lowercase().ends_with(".zip") {
+                return true;
+            }
+            let mut head = Vec::new();
+            let read = std::fs::File::open(&p).and_then(|f| {
+                f.take(crate::readers::SNIFF_BYTES as u64)
+                    .read_to_end(&mut head)
+            });
+            read.is_ok() && crate::readers::sniff(&name, &head).is_some()
+        })
 }
 
 /// The Hive partition of one event, `structure=<name>/event=<name>` (the

@@ -18,13 +18,20 @@
 //! [`plan`] is the same model with rigid floors moving in plan (x, y, θ per
 //! floor, eccentric masses: torsion), simulated by the same recursion.
 //! The numerical code of this file, [`plan`] and [`ground_motion`] is free of I/O;
-//! [`event`] and [`facade`] write the bundled sample events (`quaketwin synth`).
+//! [`event`] and [`facade`] write the bundled sample events (`quaketwin synth`);
+//! [`realistic`] the building benchmarks written as the networks publish them
+//! (through [`smc_writer`] and [`csmip_writer`]), one of them a yielding
+//! building integrated by [`yielding`].
 
 pub mod archive;
+pub mod csmip_writer;
 pub mod event;
 pub mod facade;
 pub mod ground_motion;
 pub mod plan;
+pub mod realistic;
+pub mod smc_writer;
+pub mod yielding;
 
 use crate::rng::Rng;
 pub use ground_motion::{

@@ -80,6 +80,9 @@ pub struct PlanResponse {
     /// Accelerations of the floors' degrees of freedom relative to the
     /// base, `[3(level − 1) + k][sample]` (k: 0 = x, 1 = y in m/s²; 2 = θ in rad/s²).
     pub relative_acceleration: Vec<Vec<f64>>,
+    /// Displacements of the floors' degrees of freedom relative to the base,
+    /// laid out as `relative_acceleration` (m; rad for θ).
+    pub relative_displacement: Vec<Vec<f64>>,
     /// The building's centre of mass (the point the x, y DoFs refer to), m.
     pub mass_eccentricity_m: [f64; 2],
 }
@@ -241,13 +244,14 @@ impl PlanBuilding {
         }
         let truth = self.modes()?;
         let (gx, gy) = (&truth.modes.participation, &truth.participation_y);
-        let (_, acc) = simulate_modal(&truth.modes, dt, base_x.len(), |j, k| {
+        let (disp, acc) = simulate_modal(&truth.modes, dt, base_x.len(), |j, k| {
             -(gx[j] * base_x[k] + gy[j] * base_y[k])
         });
         Ok(PlanResponse {
             dt,
             base_acceleration: [base_x.to_vec(), base_y.to_vec()],
             relative_acceleration: acc,
+            relative_displacement: disp,
             mass_eccentricity_m: self.mass_eccentricity_m,
         })
     }
@@ -280,11 +284,12 @@ impl PlanBuilding {
         let load_std: Vec<f64> = (0..self.levels())
             .flat_map(|_| [force_std_n, force_std_n, torque_std_n_m])
             .collect();
-        let (_, acc, _) = ambient_response(&truth.modes, n_samples, dt, &load_std, rng);
+        let (disp, acc, _) = ambient_response(&truth.modes, n_samples, dt, &load_std, rng);
         Ok(PlanResponse {
             dt,
             base_acceleration: [vec![0.0; n_samples], vec![0.0; n_samples]],
             relative_acceleration: acc,
+            relative_displacement: disp,
             mass_eccentricity_m: self.mass_eccentricity_m,
         })
     }
@@ -295,6 +300,30 @@ impl PlanResponse {
     /// motion; on floor `level` at plan point P the rigid-floor motion
     /// a_x = ü_x − θ̈ (P_y − e_y) + a_gx, a_y = ü_y + θ̈ (P_x − e_x) + a_gy.
     pub fn sensor_acceleration(&self, sensor: &Sensor) -> Result<Vec<f64>> {
+        let base = match sensor.axis {
+            Axis::X => &self.base_acceleration[0],
+            Axis::Y => &self.base_acceleration[1],
+            Axis::Z => &self.base_acceleration[0], // refused below
+        };
+        let relative = self.rigid_floor_point(&self.relative_acceleration, sensor)?;
+        Ok(match relative {
+            None => base.clone(),
+            Some(r) => r.iter().zip(base).map(|(a, g)| a + g).collect(),
+        })
+    }
+
+    /// Displacement relative to the base at a sensor's point and axis (m):
+    /// u_x − θ (P_y − e_y) or u_y + θ (P_x − e_x); zeros at the base.
+    pub fn sensor_relative_displacement(&self, sensor: &Sensor) -> Result<Vec<f64>> {
+        let n = self.base_acceleration[0].len();
+        Ok(self
+            .rigid_floor_point(&self.relative_displacement, sensor)?
+            .unwrap_or_else(|| vec![0.0; n]))
+    }
+
+    /// The rigid-floor motion of `dofs` (relative to the base) at the
+    /// sensor's point along its axis; `None` at the base (level 0).
+    fn rigid_floor_point(&self, dofs: &[Vec<f64>], sensor: &Sensor) -> Result<Option<Vec<f64>>> {
         let k = match sensor.axis {
             Axis::X => 0,
             Axis::Y => 1,
@@ -305,15 +334,11 @@ impl PlanResponse {
                 )))
             }
         };
-        let base = &self.base_acceleration[k];
         if sensor.level == 0 {
-            return Ok(base.clone());
+            return Ok(None);
         }
         let first = DOFS_PER_FLOOR * (sensor.level - 1);
-        let (u, theta) = match (
-            self.relative_acceleration.get(first + k),
-            self.relative_acceleration.get(first + 2),
-        ) {
+        let (u, theta) = match (dofs.get(first + k), dofs.get(first + 2)) {
             (Some(u), Some(theta)) => (u, theta),
             _ => {
                 return Err(Error::usage(format!(
@@ -325,11 +350,9 @@ impl PlanResponse {
         let [px, py] = sensor.position_m;
         let [ex, ey] = self.mass_eccentricity_m;
         let arm = if k == 0 { -(py - ey) } else { px - ex };
-        Ok(u.iter()
-            .zip(theta)
-            .zip(base)
-            .map(|((a, t), g)| a + arm * t + g)
-            .collect())
+        Ok(Some(
+            u.iter().zip(theta).map(|(a, t)| a + arm * t).collect(),
+        ))
     }
 
     /// Records as the instrumented building delivers them (m/s²): one per

@@ -49,6 +49,7 @@ mod schemas;
 mod stage_params;
 mod structure_inference;
 mod synth;
+mod synth_benchmarks;
 mod tracking;
 mod twin;
 mod twin_update_io;

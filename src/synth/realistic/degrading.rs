@@ -1,0 +1,237 @@
+//! Benchmark (c): a 6-storey commercial frame whose ground storey yields and
+//! loses stiffness ([`YieldingShearBuilding`]: degrading bilinear storey 1,
+//! linear storeys above, Rayleigh damping 3 %, central differences at
+//! 4000 Hz), one chain per direction, under a strong 50 s synthetic record,
+//! instrumented at the ground floor (X, Y, up), the 3rd floor (level 2) and
+//! the roof (level 6) in both directions, written as a CESMD-style zip of
+//! CSMIP V2 files (`CHAN001.V2` …), no manifest, `truth.toml` beside it.
+//! X points to azimuth 360°, Y to 270°.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use super::{
+    civil, drift_table, level_heights, level_label, v2_processed, weekday, write_file, zip_bytes,
+};
+use crate::error::{Error, Result};
+use crate::synth::csmip_writer::{csmip_v2_text, CsmipChannel, CsmipOrientation};
+use crate::synth::yielding::{YieldingResponse, YieldingShearBuilding};
+use crate::synth::{synthetic_ground_motion, GroundMotionSpec};
+
+pub const FOLDER: &str = "synthetic-6storey-yielding";
+pub const ZIP_NAME: &str = "ce99906p.zip";
+pub const STOREYS: usize = 6;
+pub const STATION: u32 = 99906;
+pub const STOREY_HEIGHTS_M: [f64; STOREYS] = [4.5, 3.8, 3.8, 3.8, 3.8, 3.8];
+pub const LEVELS: [usize; 3] = [0, 2, 6];
+const RATE_HZ: f64 = 100.0;
+const SUBSTEPS: usize = 40;
+const PRE_EVENT_S: f64 = 5.0;
+const POST_EVENT_S: f64 = 20.0;
+const BAND_HZ: (f64, f64) = (0.10, 40.0);
+/// Peak ground acceleration along X (Y: 80 % of it), m/s².
+const PGA_M_S2: f64 = 4.0;
+
+/// The frame per direction (X, Y): the X ground storey is the weak one.
+pub fn buildings() -> [YieldingShearBuilding; 2] {
+    let masses = vec![6.5e5, 6.5e5, 6.5e5, 6.5e5, 6.5e5, 5.5e5];
+    [
+        YieldingShearBuilding {
+            masses_kg: masses.clone(),
+            storey_stiffness_n_per_m: vec![4.0e8, 7.0e8, 6.5e8, 6.0e8, 5.0e8, 4.0e8],
+            yield_force_n: 3.6e6,
+            hardening_ratio: 0.1,
+            degradation_exponent: 0.5,
+            damping_ratio: 0.03,
+        },
+        YieldingShearBuilding {
+            masses_kg: masses,
+            storey_stiffness_n_per_m: vec![5.5e8, 8.5e8, 8.0e8, 7.0e8, 6.0e8, 5.0e8],
+            yield_force_n: 8.0e6,
+            hardening_ratio: 0.1,
+            degradation_exponent: 0.5,
+            damping_ratio: 0.03,
+        },
+    ]
+}
+
+pub fn write(out: &Path, seed: u64) -> Result<PathBuf> {
+    let dir = out.join(FOLDER);
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    let frames = buildings();
+    let pga = PGA_M_S2;
+    let dt = 1.0 / RATE_HZ;
+    let pad = |mut a: Vec<f64>| {
+        let mut v = vec![0.0; (PRE_EVENT_S * RATE_HZ) as usize];
+        v.append(&mut a);
+        v.extend(std::iter::repeat_n(0.0, (POST_EVENT_S * RATE_HZ) as usize));
+        v
+    };
+    let gx = pad(synthetic_ground_motion(&GroundMotionSpec::strong_50s(
+        seed.wrapping_add(6001),
+        RATE_HZ,
+        pga,
+    ))?);
+    let gy = pad(synthetic_ground_motion(&GroundMotionSpec::strong_50s(
+        seed.wrapping_add(6002),
+        RATE_HZ,
+        0.8 * pga,
+    ))?);
+    let mut vertical = GroundMotionSpec::strong_50s(seed.wrapping_add(6003), RATE_HZ, 0.5 * pga);
+    vertical.ground_frequency_hz = 6.0;
+    let gz = pad(synthetic_ground_motion(&vertical)?);
+    let rx = frames[0].simulate(&gx, dt, SUBSTEPS)?;
+    let ry = frames[1].simulate(&gy, dt, SUBSTEPS)?;
+    let start_utc = civil("2026-08-03T21:47:09.600Z", 0)?;
+    let start_local = civil("2026-08-03T21:47:09.600Z", -7)?;
+    let mut chans: Vec<(usize, CsmipOrientation, &[f64])> = Vec::new();
+    for &level in &LEVELS {
+        let (x, y): (&[f64], &[f64]) = if level == 0 {
+            (&gx, &gy)
+        } else {
+            (
+                &rx.absolute_acceleration[level - 1],
+                &ry.absolute_acceleration[level - 1],
+            )
+        };
+        chans.push((level, CsmipOrientation::AzimuthDeg(360), x));
+        chans.push((level, CsmipOrientation::AzimuthDeg(270), y));
+        if level == 0 {
+            chans.push((level, CsmipOrientation::Up, &gz));
+        }
+    }
+    let total = chans.len() as u32;
+    let mut members = Vec::new();
+    for (k, (level, orientation, acc)) in chans.iter().enumerate() {
+        // Noise-free apart from the processing, as the 2-storey yielding sample.
+        let [a, v, d] = v2_processed(acc, RATE_HZ, BAND_HZ)?;
+        let text = csmip_v2_text(&CsmipChannel {
+            station_number: STATION,
+            station_name: "Sample City - 6-story Commercial Bldg".into(),
+            latitude: 34.181,
+            longitude: -118.592,
+            recorder: "Etna2".into(),
+            serial: 3817,
+            recorder_channel: k as u32 + 1,
+            recorder_channels: total,
+            station_channel: k as u32 + 1,
+            station_channels: total,
+            orientation: *orientation,
+            location: level_label(*level, STOREYS, "Ground Floor"),
+            start_utc,
+            start_local,
+            local_weekday: weekday(&start_local).into(),
+            local_zone: "PDT".into(),
+            band_hz: BAND_HZ,
+            sampling_rate_hz: RATE_HZ,
+            accel_cm_s2: &a,
+            veloc_cm_s: &v,
+            displ_cm: &d,
+        });
+        members.push((format!("CHAN{:03}.V2", k + 1), text.into_bytes()));
+    }
+    write_file(&dir, ZIP_NAME, &zip_bytes(&members, &start_utc)?)?;
+    write_file(
+        &dir,
+        "truth.toml",
+        truth(&frames, &[("X", &rx), ("Y", &ry)], seed)?.as_bytes(),
+    )?;
+    Ok(dir)
+}
+
+fn truth(
+    frames: &[YieldingShearBuilding; 2],
+    resp: &[(&str, &YieldingResponse)],
+    seed: u64,
+) -> Result<String> {
+    let z = level_heights(&STOREY_HEIGHTS_M);
+    let mut s = String::new();
+    let _ = writeln!(s, "# Truth of a synthetic event generated by `quaketwin synth` (seed {seed}); not a record file.");
+    let _ = writeln!(s, "# 6-storey shear frame per direction: storey 1 a degrading bilinear spring (kinematic hardening,");
+    let _ = writeln!(s, "# elastic stiffness k0 (dy/dmax)^rho), storeys 2-6 linear; Rayleigh damping on K0 (modes 1 and 3);");
+    let _ = writeln!(s, "# central differences at {} Hz, recorded at {RATE_HZ} Hz, noise-free. X at azimuth 360°, Y at 270°.", RATE_HZ * SUBSTEPS as f64);
+    let _ = writeln!(
+        s,
+        "# Levels: 0 = base (Ground Floor), N = floor N+1 (level 2 = 3rd Floor), 6 = Roof."
+    );
+    let _ = writeln!(s, "# Residual drift: storey 1's plastic drift at the end (its drift at rest); the storeys above end at zero.");
+    let _ = writeln!(
+        s,
+        "model = \"yielding shear building (synth::yielding)\"\nseed = {seed}\nstoreys = {STOREYS}"
+    );
+    let _ = writeln!(s, "storey_heights_m = {STOREY_HEIGHTS_M:?}\nrecord_rate_hz = {RATE_HZ}\npga_x_m_s2 = {PGA_M_S2}");
+    for (b, (axis, r)) in frames.iter().zip(resp) {
+        let initial = b.initial().modes()?;
+        let k_final = r.final_storey1_stiffness_n_per_m;
+        let after = b.with_storey1_stiffness(k_final).modes()?;
+        let _ = writeln!(
+            s,
+            "\n[[direction]]\naxis = \"{axis}\"\nazimuth_deg = {}\nmasses_kg = {:?}\nstorey_stiffness_n_per_m = {:?}",
+            if *axis == "X" { 360 } else { 270 },
+            b.masses_kg, b.storey_stiffness_n_per_m
+        );
+        let _ = writeln!(s, "yield_force_n = {}\nhardening_ratio = {}\ndegradation_exponent = {}\ndamping_ratio = {}", b.yield_force_n, b.hardening_ratio, b.degradation_exponent, b.damping_ratio);
+        let _ = writeln!(
+            s,
+            "storey1_yield_drift_m = {}\nstorey1_max_drift_m = {}",
+            b.yield_force_n / b.storey_stiffness_n_per_m[0],
+            r.storey1_max_drift_m
+        );
+        let _ = writeln!(
+            s,
+            "storey1_final_stiffness_n_per_m = {k_final}\nstorey1_residual_drift_m = {}",
+            r.final_storey1_plastic_drift_m
+        );
+        let _ = writeln!(
+            s,
+            "initial_frequencies_hz = {:?}\nfinal_frequencies_hz = {:?}",
+            initial.frequencies_hz, after.frequencies_hz
+        );
+    }
+    for (axis, r) in resp {
+        let disp = |l: usize| {
+            if l == 0 {
+                None
+            } else {
+                Some(r.relative_displacement[l - 1].as_slice())
+            }
+        };
+        // At rest only storey 1 keeps a drift: level l ≥ 1 sits at the plastic drift.
+        let rest = |l: usize| {
+            if l == 0 {
+                0.0
+            } else {
+                r.final_storey1_plastic_drift_m
+            }
+        };
+        for st in 1..=STOREYS {
+            let labels = [("storey", st.to_string()), ("axis", format!("\"{axis}\""))];
+            drift_table(
+                &mut s,
+                "storey_drift",
+                &labels,
+                disp(st - 1),
+                &r.relative_displacement[st - 1],
+                STOREY_HEIGHTS_M[st - 1],
+                rest(st) - rest(st - 1),
+            );
+        }
+        for w in LEVELS.windows(2) {
+            let labels = [
+                ("from_level", w[0].to_string()),
+                ("to_level", w[1].to_string()),
+                ("axis", format!("\"{axis}\"")),
+            ];
+            drift_table(
+                &mut s,
+                "segment_drift",
+                &labels,
+                disp(w[0]),
+                &r.relative_displacement[w[1] - 1],
+                z[w[1]] - z[w[0]],
+                rest(w[1]) - rest(w[0]),
+            );
+        }
+    }
+    Ok(s)
+}
