@@ -87,7 +87,8 @@ pub fn screen(modes: &[Mode], output_ids: &[String]) -> (Vec<Option<String>>, Ve
         a.pole_count
             .cmp(&b.pole_count)
             .then(
-                (b.frequency_std_hz / b.frequency_hz).total_cmp(&(a.frequency_std_hz / a.frequency_hz)),
+                (b.frequency_std_hz / b.frequency_hz)
+                    .total_cmp(&(a.frequency_std_hz / a.frequency_hz)),
             )
             .then(b.frequency_hz.total_cmp(&a.frequency_hz))
             .is_gt()

@@ -428,7 +428,9 @@ pub const BAND_MARGIN_ABOVE: f64 = 10.0;
 /// [f₁/3, min(10 f₁, 20 Hz)].
 pub fn band_around(f1_hz: f64) -> [f64; 2] {
     let lo = f1_hz / BAND_MARGIN_BELOW;
-    let hi = (BAND_MARGIN_ABOVE * f1_hz).min(DEFAULT_BAND_HZ[1]).max(2.0 * lo);
+    let hi = (BAND_MARGIN_ABOVE * f1_hz)
+        .min(DEFAULT_BAND_HZ[1])
+        .max(2.0 * lo);
     [lo, hi]
 }
 
@@ -487,7 +489,9 @@ pub fn band_low_edge_of_event(event: &Event) -> Result<Option<(f64, String)>> {
         .records
         .iter()
         .filter(|r| {
-            !r.channel.is_floor_motion() && r.channel.role == Role::Output && !is_vertical(&r.channel)
+            !r.channel.is_floor_motion()
+                && r.channel.role == Role::Output
+                && !is_vertical(&r.channel)
         })
         .collect();
     let Some(rate) = outputs.first().map(|r| r.channel.sampling_rate_hz) else {
@@ -717,7 +721,7 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
                 ((HORIZON_PERIODS * fs / f).ceil() as usize).min(MAX_HORIZON_BLOCK_WIDTH / l.max(1))
             });
             // … and by the data.
-            let p_data = (2..=p_band.max(p_order).max(3))
+            let p_data = (2..=p_band.max(p_order).max(p_peak).max(3))
                 .take_while(|&p| needed(p).1 <= n)
                 .last()
                 .unwrap_or(0);

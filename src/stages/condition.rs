@@ -83,7 +83,10 @@ struct Condition {
 /// edge of `event`'s band of interest when that lies below it (`high_pass =
 /// "auto"`); a note says so.
 #[doc(hidden)] // public for tests/it/modal_buildings.rs
-pub fn with_auto_high_pass(settings: &ConditioningSettings, event: &Event) -> Result<ConditioningSettings> {
+pub fn with_auto_high_pass(
+    settings: &ConditioningSettings,
+    event: &Event,
+) -> Result<ConditioningSettings> {
     let mut settings = settings.clone();
     let has_high_pass = settings.steps.iter().any(|s| {
         matches!(s, Step::Filter(f) if matches!(f.band, BandType::Highpass | BandType::Bandpass))
@@ -133,20 +136,19 @@ impl Stage for Condition {
         } else {
             self.settings.clone()
         };
-        let motions =
-            condition_event_each(&mut event, &settings, parking, &|record, motion| {
-                let Some(spill) = &spill else {
-                    return Ok(());
-                };
-                // An integrated record's samples are its motion's acceleration
-                // (shared once parked, `conditioning::condition_event_each`).
-                if let Some(m) = motion {
-                    park(&mut m.acceleration, spill)?;
-                    park(&mut m.velocity, spill)?;
-                    park(&mut m.displacement, spill)?;
-                }
-                park(&mut record.samples, spill)
-            })?;
+        let motions = condition_event_each(&mut event, &settings, parking, &|record, motion| {
+            let Some(spill) = &spill else {
+                return Ok(());
+            };
+            // An integrated record's samples are its motion's acceleration
+            // (shared once parked, `conditioning::condition_event_each`).
+            if let Some(m) = motion {
+                park(&mut m.acceleration, spill)?;
+                park(&mut m.velocity, spill)?;
+                park(&mut m.displacement, spill)?;
+            }
+            park(&mut record.samples, spill)
+        })?;
         event_tables::write_samples(&ctx.out_dir.join(&self.samples_file), &event, &motions)?;
         Ok(Some(Box::new(Conditioned { event, motions })))
     }

@@ -11,8 +11,8 @@ use super::condition::Conditioned;
 use super::prepost::{self, ReferenceParams, ReferenceRun};
 use crate::error::{Error, Result};
 use crate::modal::{
-    band_around, fundamental_estimate, identify_event, identify_event_or_output_only, output_spectral_overlay,
-    ChannelChoice, Method, ModalResult, ModalSettings,
+    band_around, fundamental_estimate, identify_event, identify_event_or_output_only,
+    output_spectral_overlay, ChannelChoice, Method, ModalResult, ModalSettings,
 };
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::modal_tables as tables;
