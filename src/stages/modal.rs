@@ -59,9 +59,8 @@ pub struct ModalParams {
     /// `auto`, `ssi-cov`, `ssi-data` or `io` ([`MethodChoice`]).
     pub method: MethodChoice,
     /// Band of interest [low, high] Hz; unset = around the structure's
-    /// estimated fundamental when its height or storey count is known
-    /// (`modal::fundamental_estimate`), else from the records' spectra
-    /// (`modal::band_from_spectra`).
+    /// estimated fundamental (`modal::fundamental_estimate`), else from the
+    /// records' spectra (`modal::band_from_spectra`).
     pub band_hz: Option<[f64; 2]>,
     /// Model orders swept: [first, last, step]; unset = 2, 4, … up to what
     /// the data support (at most 60).
