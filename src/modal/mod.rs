@@ -31,6 +31,7 @@
 pub mod compare;
 pub mod direction;
 pub mod fallback;
+pub mod global;
 pub mod hankel;
 pub mod poles;
 pub mod preprocess;
@@ -134,6 +135,15 @@ pub struct ModalSettings {
     /// Sets the automatic decimation, block rows and the poles' band filter.
     #[serde(default)]
     pub band_hz: Option<[f64; 2]>,
+    /// The structure's estimated fundamental frequency, Hz
+    /// ([`fundamental_estimate`]): the lowest frequency of interest of the
+    /// block rows' horizon when the records show no clear spectral peak.
+    #[serde(default)]
+    pub fundamental_estimate_hz: Option<f64>,
+    /// Why `band_hz` is what it is (stated, or the structure's estimate);
+    /// goes into the notes.
+    #[serde(default)]
+    pub band_basis: Option<String>,
     /// Block rows p (past = future horizon).  `None` = automatic: half a
     /// period of the band's low end, bounded by the data (enough Hankel
     /// columns) and by [`MAX_BLOCK_WIDTH`], never below what the highest
@@ -160,6 +170,8 @@ impl Default for ModalSettings {
         ModalSettings {
             method: Method::SsiCov,
             band_hz: None,
+            fundamental_estimate_hz: None,
+            band_basis: None,
             block_rows: None,
             orders: None,
             reference_channels: None,
@@ -216,8 +228,12 @@ pub struct ModalResult {
     pub poles: Vec<Pole>,
     /// Selected modes, ascending frequency.
     pub modes: Vec<Mode>,
-    /// Pole columns that looked physical but were not promoted, and why.
+    /// Pole columns that looked physical but were not promoted, and why
+    /// (local modes and near-duplicates among them, [`global`]).
     pub rejected: Vec<RejectedColumn>,
+    /// Modes whose shape lives on one channel ([`global`]): listed here,
+    /// never among `modes`.
+    pub local_modes: Vec<global::LocalMode>,
     /// Pre-processing applied, in order.
     pub preprocessing: Vec<ProcessingStep>,
     /// How the settings were resolved and what was left out.
@@ -352,20 +368,169 @@ fn validate(input: &ModalInput, method: Method) -> Result<()> {
     Ok(())
 }
 
-/// Band of interest from a structure's height (issue 13), when the manifest
-/// gives storey heights: fundamental period T₁ ≈ 0.0488·H^0.75 s (H in m; the
-/// approximate-period formula of ASCE 7-16 Eq. 12.8-7, C_t = 0.0488 in SI,
-/// x = 0.75), band [f₁/4, 6 f₁] within [0.2, 20] Hz: room for the first two or
-/// three modes per direction and torsion even when T₁ is off by a factor 2.
-pub fn band_for_structure(structure: &crate::vocab::Structure) -> Option<[f64; 2]> {
-    let height: f64 = structure.storey_heights_m.iter().sum();
-    if !(height.is_finite() && height > 0.0) {
-        return None;
+/// Empirical fundamental frequency of a building, Hz, and how it was
+/// estimated (issue 31), from what the structure states:
+/// - a height H (`height_m`, else the sum of `storey_heights_m`): EN 1998-1
+///   (Eurocode 8) §4.3.3.2.2 Eq. (4.6), T₁ = C_t · H^(3/4), H in m, with
+///   C_t = 0.085 for steel moment frames (HAZUS S1 or a type naming steel),
+///   0.075 for reinforced-concrete moment frames (C1, or naming concrete/RC)
+///   and 0.050 for every other stated type; 0.075 when the type is unknown
+///   (the band's margin of a factor 3 each way covers 0.050–0.085);
+/// - else a storey count N: T₁ ≈ 0.1 · N s (the rule of thumb of ASCE 7-16
+///   Eq. 12.8-8 for moment frames).
+///
+/// `None` without either (bridges, or a building that states neither).
+pub fn fundamental_estimate(structure: &crate::vocab::Structure) -> Option<(f64, String)> {
+    let summed: f64 = structure.storey_heights_m.iter().sum();
+    let height = structure
+        .height_m
+        .filter(|h| h.is_finite() && *h > 0.0)
+        .or((summed.is_finite() && summed > 0.0).then_some(summed));
+    if let Some(h) = height {
+        let kind = structure
+            .building_type
+            .as_deref()
+            .unwrap_or("")
+            .to_ascii_lowercase();
+        let (ct, what) = if kind.is_empty() {
+            (0.075, "type unknown: C_t = 0.075")
+        } else if kind == "s1" || kind.contains("steel") {
+            (0.085, "steel moment frame: C_t = 0.085")
+        } else if kind == "c1" || kind.contains("concrete") || kind.starts_with("rc") {
+            (0.075, "concrete moment frame: C_t = 0.075")
+        } else {
+            (0.05, "other type: C_t = 0.050")
+        };
+        let period = ct * h.powf(0.75);
+        return Some((
+            1.0 / period,
+            format!("EC8 Eq. 4.6 T1 = C_t·H^0.75 = {period:.3} s (H = {h:.1} m, {what})"),
+        ));
     }
-    let f1 = 1.0 / (0.0488 * height.powf(0.75));
-    let lo = (f1 / 4.0).clamp(DEFAULT_BAND_HZ[0], DEFAULT_BAND_HZ[1] / 2.0);
-    let hi = (6.0 * f1).clamp(2.0 * lo, DEFAULT_BAND_HZ[1]);
-    Some([lo, hi])
+    let storeys = structure.storeys.filter(|&n| n > 0)?;
+    let period = 0.1 * storeys as f64;
+    Some((
+        1.0 / period,
+        format!("T1 ≈ 0.1·N = {period:.2} s (N = {storeys} storeys, ASCE 7-16 Eq. 12.8-8)"),
+    ))
+}
+
+/// Margin of the band of interest around an estimated fundamental f₁: from
+/// f₁ / [`BAND_MARGIN_BELOW`] (the empirical periods scatter by a factor ≈ 2
+/// about the measured ones) …
+pub const BAND_MARGIN_BELOW: f64 = 3.0;
+/// … to [`BAND_MARGIN_ABOVE`] · f₁ (the second and third modes of each
+/// direction and torsion), never above the top of [`DEFAULT_BAND_HZ`] (the
+/// shipped conditioning low-passes at 20 Hz).
+pub const BAND_MARGIN_ABOVE: f64 = 10.0;
+
+/// Band of interest from an estimated fundamental `f1_hz` (issue 31):
+/// [f₁/3, min(10 f₁, 20 Hz)].
+pub fn band_around(f1_hz: f64) -> [f64; 2] {
+    let lo = f1_hz / BAND_MARGIN_BELOW;
+    let hi = (BAND_MARGIN_ABOVE * f1_hz)
+        .min(DEFAULT_BAND_HZ[1])
+        .max(2.0 * lo);
+    [lo, hi]
+}
+
+/// Band of interest from a structure's height or storey count
+/// ([`fundamental_estimate`], [`band_around`]); `None` when neither is known.
+pub fn band_for_structure(structure: &crate::vocab::Structure) -> Option<[f64; 2]> {
+    fundamental_estimate(structure).map(|(f1, _)| band_around(f1))
+}
+
+/// Lowest frequency searched for a spectral peak when the structure says
+/// nothing of its height, Hz: a 60-storey building's fundamental (≈ 0.15 Hz)
+/// lies above it; below it an accelerogram's spectrum is baseline noise.
+pub const SPECTRAL_SEARCH_LOW_HZ: f64 = 0.1;
+
+/// The lowest clear peak of the records' averaged output spectrum
+/// ([`spectrum::lowest_spectral_peak_hz`]) between
+/// [`SPECTRAL_SEARCH_LOW_HZ`] and the top of `band`: segments of 40 s (a
+/// resolution of 0.025 Hz) or a quarter of the record.
+pub fn lowest_peak_of_records<S: AsRef<[f64]>>(outputs: &[S], dt: f64, top_hz: f64) -> Option<f64> {
+    let n = outputs.iter().map(|s| s.as_ref().len()).min().unwrap_or(0);
+    let seg = ((40.0 / dt).ceil() as usize).min(n / 4);
+    let owned: Vec<Vec<f64>> = outputs.iter().map(|s| s.as_ref().to_vec()).collect();
+    spectrum::lowest_spectral_peak_hz(&owned, dt, seg, [SPECTRAL_SEARCH_LOW_HZ, top_hz])
+}
+
+/// The band of interest of a record whose structure states no height
+/// (issue 31): [`DEFAULT_BAND_HZ`], its low end lowered to f_p / 3 when the
+/// records' lowest clear spectral peak f_p ([`lowest_peak_of_records`]) lies
+/// below 3 × 0.2 Hz (a tall building).  Returns the band and the peak.
+pub fn band_from_spectra<S: AsRef<[f64]>>(outputs: &[S], dt: f64) -> ([f64; 2], Option<f64>) {
+    let top = DEFAULT_BAND_HZ[1].min(0.4 / dt);
+    let peak = lowest_peak_of_records(outputs, dt, top);
+    let lo = peak.map_or(DEFAULT_BAND_HZ[0], |f| {
+        (f / BAND_MARGIN_BELOW).min(DEFAULT_BAND_HZ[0])
+    });
+    ([lo, DEFAULT_BAND_HZ[1]], peak)
+}
+
+/// The low edge of the band of interest of `event` before any filtering
+/// (issue 31), and why: around the structure's estimated fundamental
+/// ([`fundamental_estimate`], [`band_around`]), else f_p / 3 with f_p the
+/// lowest clear spectral peak ([`lowest_peak_of_records`]) of its horizontal
+/// response channels (role output; those at the most common sampling rate,
+/// cut to the shortest).  `None` when neither is known.  The condition
+/// stage's `high_pass = "auto"` keeps its high-pass corner at or below it,
+/// so that the conditioning never cuts inside the band identification uses.
+pub fn band_low_edge_of_event(event: &Event) -> Result<Option<(f64, String)>> {
+    if let Some((f1, why)) = event.structure.as_ref().and_then(fundamental_estimate) {
+        let lo = band_around(f1)[0];
+        return Ok(Some((
+            lo,
+            format!("f1/3 of the structure's estimated fundamental {f1:.3} Hz ({why})"),
+        )));
+    }
+    let outputs: Vec<&Record> = event
+        .records
+        .iter()
+        .filter(|r| {
+            !r.channel.is_floor_motion()
+                && r.channel.role == Role::Output
+                && !is_vertical(&r.channel)
+        })
+        .collect();
+    let Some(rate) = outputs.first().map(|r| r.channel.sampling_rate_hz) else {
+        return Ok(None);
+    };
+    let same: Vec<Vec<f64>> = outputs
+        .iter()
+        .filter(|r| r.channel.sampling_rate_hz == rate)
+        .map(|r| Ok(r.samples.get()?.into_owned()))
+        .collect::<Result<_>>()?;
+    let n = same.iter().map(Vec::len).min().unwrap_or(0);
+    let cut: Vec<&[f64]> = same.iter().map(|s| &s[..n]).collect();
+    let peak = lowest_peak_of_records(&cut, 1.0 / rate, DEFAULT_BAND_HZ[1].min(0.4 * rate));
+    Ok(peak.map(|f| {
+        (
+            f / BAND_MARGIN_BELOW,
+            format!("f/3 of the records' lowest clear spectral peak {f:.3} Hz (no storey count or height stated)"),
+        )
+    }))
+}
+
+/// Hankel horizon of the automatic block rows: this many periods of the
+/// lowest frequency of interest (issue 31: at least one — 1.5 biased the 600-s 5-storey ambient
+/// records by 0.9 % and gave a sixth mode; the 7-storey
+/// building's ≈ 1.04 Hz fundamental was missed with 0.18 s).
+pub const HORIZON_PERIODS: f64 = 1.0;
+
+/// SSI-COV keeps its issue-13 horizon of half a period of the lowest
+/// frequency of interest: its covariance lags reach twice the horizon (the
+/// future block rows), and one period biased the 600-s 5-storey ambient
+/// records (`modal::ambient_*`) by 0.5 % and gave a sixth mode.
+/// SSI-DATA keeps its cost bound alone (0): one period biased the same
+/// records by 0.5 % — left open (issue 31).
+fn horizon_periods(method: Method) -> f64 {
+    match method {
+        Method::SsiCov => 0.5,
+        Method::SsiData => 0.0,
+        Method::Io => HORIZON_PERIODS,
+    }
 }
 
 /// The settings resolved for one record (issue 13): what [`identify`] will do.
@@ -405,7 +570,32 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
     let mut notes = Vec::new();
     let fs0 = 1.0 / input.dt;
     let n0 = input.outputs.first().map_or(0, |s| s.len());
-    let [lo, hi] = settings.band_hz.unwrap_or(DEFAULT_BAND_HZ);
+    let (band, spectral_peak) = match settings.band_hz {
+        Some(band) => {
+            notes.push(format!(
+                "band of interest {:.3}–{:.3} Hz: {}",
+                band[0],
+                band[1],
+                settings.band_basis.as_deref().unwrap_or("stated")
+            ));
+            (band, None)
+        }
+        None => {
+            let (band, peak) = band_from_spectra(&input.outputs, input.dt);
+            notes.push(match peak {
+                Some(f) => format!(
+                    "band of interest {:.3}–{:.3} Hz: no storey count or height stated; the records' lowest clear spectral peak is {f:.3} Hz (band low end min(0.2, f/3))",
+                    band[0], band[1]
+                ),
+                None => format!(
+                    "band of interest {:.3}–{:.3} Hz: no storey count or height stated and no clear spectral peak (default)",
+                    band[0], band[1]
+                ),
+            });
+            (band, peak)
+        }
+    };
+    let [lo, hi] = band;
     if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) {
         return Err(Error::usage(format!(
             "modal: band [{lo}, {hi}] Hz must satisfy 0 < low < high"
@@ -426,6 +616,17 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
     } else {
         hi
     };
+    let l = input.outputs.len();
+    // The lowest frequency of interest: the lowest clear peak of the
+    // records' spectrum in the band, or the structure's estimated
+    // fundamental, whichever is lower (issue 31).
+    let seg = ((2.0 * fs0 / lo).ceil() as usize).min(n0 / 4);
+    let lowest_peak = spectrum::lowest_spectral_peak_hz(&input.outputs, input.dt, seg, [lo, hi])
+        .or(spectral_peak.filter(|f| (lo..=hi).contains(f)));
+    let lowest_of_interest = match (lowest_peak, settings.fundamental_estimate_hz) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    };
     let decimation = match settings.preprocessing.decimation {
         Some(0) => return Err(Error::usage("modal: decimation must be at least 1")),
         Some(d) => d,
@@ -435,7 +636,32 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
                 "decimation {d} (automatic: sampling rate {:.4} Hz ≥ {SAMPLES_PER_TOP_PERIOD} × band top {hi} Hz)",
                 fs0 / d as f64
             ));
-            d
+            // The horizon of HORIZON_PERIODS periods of the lowest frequency
+            // of interest must fit the cost bound p · l ≤
+            // MAX_HORIZON_BLOCK_WIDTH: decimate more when it does not (the
+            // band top follows, below), rather than cap the horizon.
+            let fits = |d: usize| {
+                lowest_of_interest.is_none_or(|f| {
+                    horizon_periods(settings.method) == 0.0
+                        || (horizon_periods(settings.method) * fs0 / d as f64 / f).ceil() as usize
+                            * l.max(1)
+                            <= MAX_HORIZON_BLOCK_WIDTH
+                })
+            };
+            // Never so far that the band's low end reaches the usable top.
+            let most = ((0.4 * fs0 / (2.0 * lo)).floor() as usize).max(d);
+            match (d..=most).find(|&k| fits(k)) {
+                Some(k) if k > d => {
+                    notes.push(format!(
+                        "decimation raised to {k}: a horizon of {} period(s) of {:.3} Hz with {l} outputs must fit p·l ≤ {MAX_HORIZON_BLOCK_WIDTH}",
+                        horizon_periods(settings.method),
+                        lowest_of_interest.unwrap_or(0.0)
+                    ));
+                    k
+                }
+                Some(_) => d,
+                None => most,
+            }
         }
     };
     let fs = fs0 / decimation as f64;
@@ -454,7 +680,6 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
         )));
     }
     let n = n0.div_ceil(decimation);
-    let l = input.outputs.len();
     let m = if settings.method == Method::Io {
         input.inputs.len()
     } else {
@@ -505,18 +730,18 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
                 .and_then(|o| o.last().copied())
                 .unwrap_or(0);
             let p_order = want_order.div_ceil(columns_per_block) + 2;
-            // … bounded by the cost, but at least half a period of the
-            // record's lowest clear spectral peak (up to a larger bound) …
+            // … bounded by the cost, but at least HORIZON_PERIODS periods of
+            // the lowest frequency of interest (up to a larger bound, which
+            // the automatic decimation keeps it within) …
             let p_cost = (MAX_BLOCK_WIDTH / l.max(1)).max(3);
-            let seg = ((2.0 * fs0 / lo).ceil() as usize).min(n0 / 4);
-            let lowest_peak = (settings.method == Method::SsiCov)
-                .then(|| spectrum::lowest_spectral_peak_hz(&input.outputs, input.dt, seg, [lo, hi]))
-                .flatten();
-            let p_peak = lowest_peak.map_or(0, |f| {
-                ((fs / (2.0 * f)).ceil() as usize).min(MAX_HORIZON_BLOCK_WIDTH / l.max(1))
-            });
+            let p_peak = lowest_of_interest
+                .filter(|_| horizon_periods(settings.method) > 0.0)
+                .map_or(0, |f| {
+                    ((horizon_periods(settings.method) * fs / f).ceil() as usize)
+                        .min(MAX_HORIZON_BLOCK_WIDTH / l.max(1))
+                });
             // … and by the data.
-            let p_data = (2..=p_band.max(p_order).max(3))
+            let p_data = (2..=p_band.max(p_order).max(p_peak).max(3))
                 .take_while(|&p| needed(p).1 <= n)
                 .last()
                 .unwrap_or(0);
@@ -535,9 +760,16 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
                 .max(p_peak)
                 .min(p_data)
                 .max(2);
-            let peak_note = lowest_peak.map_or(String::from("no horizon from the spectrum"), |f| {
-                format!("half a period of the lowest spectral peak {f:.3} Hz = {p_peak}")
-            });
+            let peak_note = lowest_of_interest.map_or(
+                String::from("no lowest frequency of interest (no spectral peak, no estimate)"),
+                |f| {
+                    format!(
+                        "{} period(s) of the lowest frequency of interest {f:.3} Hz = {p_peak} ({:.2} s)",
+                        horizon_periods(settings.method),
+                        p_peak as f64 / fs
+                    )
+                },
+            );
             notes.push(format!(
                 "block rows {p} (automatic: half a period of {lo} Hz = {p_band}, highest order needs {p_order}, cost bound {p_cost}, {peak_note}, data bound {p_data})"
             ));
@@ -734,7 +966,30 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
     for m in modes.iter_mut() {
         m.direction = direction::label(&m.shape, &input.output_directions, &input.output_groups);
     }
-    notes.extend(lone_channel_directions(input, &modes));
+    // Global modes only (issue 31): local modes and near-duplicates are
+    // withdrawn from the structural modes (the manual override is the
+    // user's choice and stays as picked).
+    let (screen, local_modes) = if settings.manual_frequencies_hz.is_none() {
+        global::screen(&modes, &input.output_ids)
+    } else {
+        (vec![None; modes.len()], Vec::new())
+    };
+    for m in &local_modes {
+        notes.push(format!(
+            "local mode {:.3} Hz (ζ {:.1} %): {:.0} % of its shape's energy on channel {}: listed apart, not a structural mode",
+            m.frequency_hz,
+            100.0 * m.damping_ratio,
+            100.0 * m.energy_share,
+            m.channel
+        ));
+    }
+    let structural: Vec<Mode> = modes
+        .iter()
+        .zip(&screen)
+        .filter(|(_, why)| why.is_none())
+        .map(|(m, _)| m.clone())
+        .collect();
+    notes.extend(lone_channel_directions(input, &structural));
     let mut preprocessing = steps;
     preprocessing.push(ProcessingStep {
         step: "band_limits".into(),
@@ -745,7 +1000,7 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
             "applies_to": "identified poles",
         }),
     });
-    Ok(ModalResult {
+    let mut result = ModalResult {
         method: settings.method,
         block_rows,
         band_hz: plan.band_hz,
@@ -763,10 +1018,13 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
         poles,
         modes,
         rejected,
+        local_modes,
         preprocessing,
         notes,
         warnings,
-    })
+    };
+    result.withdraw_modes(&screen);
+    Ok(result)
 }
 
 /// A note per horizontal direction (X, Y) watched by one output channel

@@ -62,6 +62,24 @@ pub fn modal_metadata(
         ),
         ("quaketwin.decimation".into(), result.decimation.to_string()),
         (
+            "quaketwin.local_modes".into(),
+            serde_json::Value::Array(
+                result
+                    .local_modes
+                    .iter()
+                    .map(|m| {
+                        serde_json::json!({
+                            "frequency_hz": m.frequency_hz,
+                            "damping_ratio": m.damping_ratio,
+                            "channel": m.channel,
+                            "energy_share": m.energy_share,
+                        })
+                    })
+                    .collect(),
+            )
+            .to_string(),
+        ),
+        (
             "quaketwin.rejected_columns".into(),
             serde_json::Value::Array(
                 result

@@ -2,7 +2,9 @@
 //! (resampling/alignment, detrend, taper, zero-phase band-pass, integration;
 //! METHODS §1) → `samples.parquet`.
 
-use crate::conditioning::{condition_event_each, ConditioningSettings, Motion, ParkSeries};
+use crate::conditioning::{
+    condition_event_each, BandType, ConditioningSettings, Motion, ParkSeries, Step,
+};
 use crate::pipeline::context::park;
 use serde::Deserialize;
 
@@ -29,6 +31,12 @@ pub const SAMPLES_FILE: &str = crate::vocab::tables::SAMPLES.file;
 #[serde(deny_unknown_fields)]
 struct OutputParams {
     samples_file: Option<String>,
+    /// `"auto"` (default): the filter's high-pass corner (the low corner of
+    /// a band-pass) is lowered, for this event, to the low edge of the band
+    /// modal identification uses (`modal::band_low_edge_of_event`) when
+    /// that lies below it — a tall building's 0.15–0.2 Hz fundamental
+    /// survives; `"stated"`: the corner as written.
+    high_pass: Option<String>,
 }
 
 /// The product: the conditioned event and, per acceleration channel, its
@@ -41,7 +49,7 @@ pub struct Conditioned {
 
 fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
     let (settings, output): (ConditioningSettings, OutputParams) =
-        src.params_split(&["samples_file"])?;
+        src.params_split(&["samples_file", "high_pass"])?;
     settings.validate().map_err(|e| src.invalid(e))?;
     let samples_file = output.samples_file.unwrap_or_else(|| SAMPLES_FILE.into());
     if !samples_file.ends_with(".parquet") {
@@ -49,15 +57,58 @@ fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
             "samples_file {samples_file:?} must be a .parquet file name"
         )));
     }
+    let auto_high_pass = match output.high_pass.as_deref() {
+        None | Some("auto") => true,
+        Some("stated") => false,
+        Some(other) => {
+            return Err(src.invalid(format!(
+                "high_pass {other:?}: expected \"auto\" or \"stated\""
+            )))
+        }
+    };
     Ok(Box::new(Condition {
         settings,
         samples_file,
+        auto_high_pass,
     }))
 }
 
 struct Condition {
     settings: ConditioningSettings,
     samples_file: String,
+    auto_high_pass: bool,
+}
+
+/// `settings` with the high-pass corner of its filter lowered to the low
+/// edge of `event`'s band of interest when that lies below it (`high_pass =
+/// "auto"`); a note says so.
+#[doc(hidden)] // public for tests/it/modal_buildings.rs
+pub fn with_auto_high_pass(
+    settings: &ConditioningSettings,
+    event: &Event,
+) -> Result<ConditioningSettings> {
+    let mut settings = settings.clone();
+    let has_high_pass = settings.steps.iter().any(|s| {
+        matches!(s, Step::Filter(f) if matches!(f.band, BandType::Highpass | BandType::Bandpass))
+    });
+    if !has_high_pass {
+        return Ok(settings);
+    }
+    let Some((edge, why)) = crate::modal::band_low_edge_of_event(event)? else {
+        return Ok(settings);
+    };
+    for step in settings.steps.iter_mut() {
+        if let Step::Filter(f) = step {
+            if matches!(f.band, BandType::Highpass | BandType::Bandpass) && edge < f.corners_hz[0] {
+                crate::console::note(format!(
+                    "condition ({}): high-pass corner {} Hz lowered to {edge:.3} Hz, the low edge of the band of interest: {why}",
+                    event.name, f.corners_hz[0]
+                ));
+                f.corners_hz[0] = edge;
+            }
+        }
+    }
+    Ok(settings)
 }
 
 impl Stage for Condition {
@@ -80,20 +131,24 @@ impl Stage for Condition {
             Ok(samples)
         };
         let parking: Option<&ParkSeries> = spill.as_ref().map(|_| &park_series as &ParkSeries);
-        let motions =
-            condition_event_each(&mut event, &self.settings, parking, &|record, motion| {
-                let Some(spill) = &spill else {
-                    return Ok(());
-                };
-                // An integrated record's samples are its motion's acceleration
-                // (shared once parked, `conditioning::condition_event_each`).
-                if let Some(m) = motion {
-                    park(&mut m.acceleration, spill)?;
-                    park(&mut m.velocity, spill)?;
-                    park(&mut m.displacement, spill)?;
-                }
-                park(&mut record.samples, spill)
-            })?;
+        let settings = if self.auto_high_pass {
+            with_auto_high_pass(&self.settings, &event)?
+        } else {
+            self.settings.clone()
+        };
+        let motions = condition_event_each(&mut event, &settings, parking, &|record, motion| {
+            let Some(spill) = &spill else {
+                return Ok(());
+            };
+            // An integrated record's samples are its motion's acceleration
+            // (shared once parked, `conditioning::condition_event_each`).
+            if let Some(m) = motion {
+                park(&mut m.acceleration, spill)?;
+                park(&mut m.velocity, spill)?;
+                park(&mut m.displacement, spill)?;
+            }
+            park(&mut record.samples, spill)
+        })?;
         event_tables::write_samples(&ctx.out_dir.join(&self.samples_file), &event, &motions)?;
         Ok(Some(Box::new(Conditioned { event, motions })))
     }

@@ -11,8 +11,8 @@ use super::condition::Conditioned;
 use super::prepost::{self, ReferenceParams, ReferenceRun};
 use crate::error::{Error, Result};
 use crate::modal::{
-    band_for_structure, identify_event, identify_event_or_output_only, output_spectral_overlay,
-    ChannelChoice, Method, ModalResult, ModalSettings,
+    band_around, fundamental_estimate, identify_event, identify_event_or_output_only,
+    output_spectral_overlay, ChannelChoice, Method, ModalResult, ModalSettings,
 };
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::modal_tables as tables;
@@ -58,8 +58,9 @@ pub struct ModesFile {
 pub struct ModalParams {
     /// `auto`, `ssi-cov`, `ssi-data` or `io` ([`MethodChoice`]).
     pub method: MethodChoice,
-    /// Band of interest [low, high] Hz; unset = from the structure's height
-    /// when the manifest gives storey heights, else 0.2–20 Hz.
+    /// Band of interest [low, high] Hz; unset = around the structure's
+    /// estimated fundamental (`modal::fundamental_estimate`), else from the
+    /// records' spectra (`modal::band_from_spectra`).
     pub band_hz: Option<[f64; 2]>,
     /// Model orders swept: [first, last, step]; unset = 2, 4, … up to what
     /// the data support (at most 60).
@@ -160,11 +161,22 @@ impl ModalParams {
             MethodChoice::Io => Method::Io,
         };
         self.validate()?;
+        let estimate = event.structure.as_ref().and_then(fundamental_estimate);
+        let (band_hz, band_basis) = match (self.band_hz, &estimate) {
+            (Some(band), _) => (Some(band), Some("stated (band_hz)".to_string())),
+            (None, Some((f1, why))) => (
+                Some(band_around(*f1)),
+                Some(format!(
+                    "f1/3 … min(10·f1, 20 Hz) around the structure's estimated fundamental f1 = {f1:.3} Hz: {why}"
+                )),
+            ),
+            (None, None) => (None, None),
+        };
         let mut s = ModalSettings {
             method,
-            band_hz: self
-                .band_hz
-                .or_else(|| event.structure.as_ref().and_then(band_for_structure)),
+            band_hz,
+            fundamental_estimate_hz: estimate.map(|(f1, _)| f1),
+            band_basis,
             block_rows: self.block_rows,
             orders: self
                 .orders

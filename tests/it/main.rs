@@ -33,6 +33,7 @@ mod hysteresis_real;
 mod hysteresis_window;
 mod metrics;
 mod modal;
+mod modal_buildings;
 mod modal_synthetic;
 mod outdir;
 mod pipeline;
