@@ -445,6 +445,21 @@ pub fn band_for_structure(structure: &crate::vocab::Structure) -> Option<[f64; 2
 /// lies above it; below it an accelerogram's spectrum is baseline noise.
 pub const SPECTRAL_SEARCH_LOW_HZ: f64 = 0.1;
 
+/// Whether the structure is stated or inferred to be a bridge: its band
+/// stays [`DEFAULT_BAND_HZ`] (no spectral search below it).  A bridge's
+/// records are short and their lowest spectral peaks below 0.5 Hz are the
+/// ground motion's (Meloland 1979: 0.35 Hz); the long-span bridges whose
+/// modes lie lower are stated with `band_hz`.
+pub fn is_bridge(structure: Option<&crate::vocab::Structure>) -> bool {
+    structure
+        .and_then(|s| s.kind.as_deref())
+        .is_some_and(|k| k.eq_ignore_ascii_case("bridge"))
+}
+
+/// Cycles of a spectral peak a segment must hold for the peak to count
+/// ([`lowest_peak_of_records`]): 4 (a 40-s segment resolves 0.1 Hz).
+pub const MIN_CYCLES_PER_SEGMENT: f64 = 4.0;
+
 /// The lowest clear peak of the records' averaged output spectrum
 /// ([`spectrum::lowest_spectral_peak_hz`]) between
 /// [`SPECTRAL_SEARCH_LOW_HZ`] and the top of `band`: segments of 40 s (a
@@ -452,8 +467,15 @@ pub const SPECTRAL_SEARCH_LOW_HZ: f64 = 0.1;
 pub fn lowest_peak_of_records<S: AsRef<[f64]>>(outputs: &[S], dt: f64, top_hz: f64) -> Option<f64> {
     let n = outputs.iter().map(|s| s.as_ref().len()).min().unwrap_or(0);
     let seg = ((40.0 / dt).ceil() as usize).min(n / 4);
+    // A peak needs a few cycles in a segment to be told from the spectrum's
+    // low-frequency end (its resolution is 1/T): a 22.8-s bridge record's
+    // 5.7-s segments put a ground-motion "peak" at 0.35 Hz.
+    let low = SPECTRAL_SEARCH_LOW_HZ.max(MIN_CYCLES_PER_SEGMENT / (seg as f64 * dt));
+    if !(low < top_hz) {
+        return None;
+    }
     let owned: Vec<Vec<f64>> = outputs.iter().map(|s| s.as_ref().to_vec()).collect();
-    spectrum::lowest_spectral_peak_hz(&owned, dt, seg, [SPECTRAL_SEARCH_LOW_HZ, top_hz])
+    spectrum::lowest_spectral_peak_hz(&owned, dt, seg, [low, top_hz])
 }
 
 /// The band of interest of a record whose structure states no height
@@ -469,9 +491,19 @@ pub fn band_from_spectra<S: AsRef<[f64]>>(outputs: &[S], dt: f64) -> ([f64; 2], 
     ([lo, DEFAULT_BAND_HZ[1]], peak)
 }
 
+/// How far below a MEASURED spectral peak f_p the high-pass corner may sit:
+/// f_p / 2.  The structure's estimate needs the wide margin of
+/// [`BAND_MARGIN_BELOW`] (empirical periods scatter by a factor ≈ 2); a peak
+/// read off the records does not, and the shipped 4th-order zero-phase
+/// Butterworth high-pass at f_p / 2 passes f_p with gain 1/(1 + 2⁻⁸) = 0.996
+/// (two passes).  A wider margin moved the corner of bridges whose lowest
+/// peak is near 1 Hz (Trinidad 1980: 0.5 → 0.365 Hz) and let the ground
+/// motion's long periods into their identification.
+pub const FILTER_MARGIN_BELOW_PEAK: f64 = 2.0;
+
 /// The low edge of the band of interest of `event` before any filtering
 /// (issue 31), and why: around the structure's estimated fundamental
-/// ([`fundamental_estimate`], [`band_around`]), else f_p / 3 with f_p the
+/// ([`fundamental_estimate`], [`band_around`]), else f_p / 2 with f_p the
 /// lowest clear spectral peak ([`lowest_peak_of_records`]) of its horizontal
 /// response channels (role output; those at the most common sampling rate,
 /// cut to the shortest).  `None` when neither is known.  The condition
@@ -484,6 +516,9 @@ pub fn band_low_edge_of_event(event: &Event) -> Result<Option<(f64, String)>> {
             lo,
             format!("f1/3 of the structure's estimated fundamental {f1:.3} Hz ({why})"),
         )));
+    }
+    if is_bridge(event.structure.as_ref()) {
+        return Ok(None);
     }
     let outputs: Vec<&Record> = event
         .records
@@ -507,8 +542,8 @@ pub fn band_low_edge_of_event(event: &Event) -> Result<Option<(f64, String)>> {
     let peak = lowest_peak_of_records(&cut, 1.0 / rate, DEFAULT_BAND_HZ[1].min(0.4 * rate));
     Ok(peak.map(|f| {
         (
-            f / BAND_MARGIN_BELOW,
-            format!("f/3 of the records' lowest clear spectral peak {f:.3} Hz (no storey count or height stated)"),
+            f / FILTER_MARGIN_BELOW_PEAK,
+            format!("f/2 of the records' lowest clear spectral peak {f:.3} Hz (no storey count or height stated)"),
         )
     }))
 }

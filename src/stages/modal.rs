@@ -170,6 +170,10 @@ impl ModalParams {
                     "f1/3 … min(10·f1, 20 Hz) around the structure's estimated fundamental f1 = {f1:.3} Hz: {why}"
                 )),
             ),
+            (None, None) if crate::modal::is_bridge(event.structure.as_ref()) => (
+                Some(crate::modal::DEFAULT_BAND_HZ),
+                Some("default band: a bridge (structure.kind), whose records' spectra are not searched below it; state band_hz for a long-span bridge".to_string()),
+            ),
             (None, None) => (None, None),
         };
         let mut s = ModalSettings {

@@ -25,6 +25,7 @@
 //! poles of every event are a different scatter (docs/real-records).
 
 use crate::common::{column_f64, column_str, shared_record};
+use quaketwin::modal::global::{dominant_channel, LOCAL_ENERGY_SHARE};
 use quaketwin::modal::{compare_events, ModeSet, PairingSettings};
 use quaketwin::sinks::modal_tables::read_modes;
 use std::path::{Path, PathBuf};
@@ -131,6 +132,25 @@ fn check_transverse_consistency(folder: &str, expected_small: usize) {
             list.join(", ")
         );
     }
+    // Issue 31 item 4: no structural mode lives on one channel, and the
+    // bridge's modes near its transverse frequency carry one label in
+    // every event (checked over all its events, small or strong).
+    let mut labels_near_transverse: Vec<(String, f64, String)> = Vec::new();
+    for r in runs.iter().filter(|r| r.out.join("modes.parquet").exists()) {
+        let (modes, channels) = modes_of(r);
+        for m in &modes {
+            let (k, share) = dominant_channel(&m.shape).expect("a mode has a shape");
+            assert!(
+                share <= LOCAL_ENERGY_SHARE,
+                "{folder} {}: mode {:.3} Hz holds {:.1} % of its shape's energy on channel {} alone: a local mode reported as structural",
+                r.name,
+                m.frequency_hz,
+                100.0 * share,
+                channels[k]
+            );
+            labels_near_transverse.push((r.name.clone(), m.frequency_hz, m.direction.clone()));
+        }
+    }
     let small: Vec<&EventRun> = runs
         .iter()
         .filter(|r| r.peak_g > 0.0 && r.peak_g < SMALL_PEAK_G)
@@ -160,6 +180,14 @@ fn check_transverse_consistency(folder: &str, expected_small: usize) {
             )
         });
     let f_ref = ref_modes[transverse].frequency_hz;
+    for (name, f, direction) in &labels_near_transverse {
+        if (f / f_ref - 1.0).abs() <= 0.05 {
+            assert_eq!(
+                direction, "Y",
+                "{folder} {name}: mode {f:.3} Hz, within 5 % of the transverse {f_ref:.3} Hz, is labelled {direction}"
+            );
+        }
+    }
     for r in &small[1..] {
         let (modes, channels) = modes_of(r);
         let comparison = compare_events(
