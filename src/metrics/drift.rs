@@ -75,11 +75,22 @@ impl HeightSource {
     }
 }
 
+/// Largest residual drift, as a multiple of its row's tabled peak drift,
+/// that an offset reached during the motion can show.  The tabled peak comes
+/// from band-passed displacements, and a zero-phase high-pass of an offset D
+/// reached within a cycle leaves ±D/2 on either side of it: the tabled peak
+/// of a real residual is at least about D/2 (the noise-free yielding sample:
+/// D = 1.13 × the tabled peak at its second storey, a real permanent drift).
+/// Beyond twice the peak the offset cannot have been reached during the
+/// motion — a baseline error (an offset step, a tilt) that double
+/// integration turned into a drift.  Assumes the band keeps the structure's
+/// fundamental (a band-pass that removes it removes the peak too).
+pub const ARTEFACT_PEAK_FACTOR: f64 = 2.0;
+
 /// What a residual drift is worth (the rule, in this order):
-/// `Artefact` when |D| exceeds the peak drift of its own segment (a static
-/// offset reached during the motion cannot exceed the motion's peak: a
-/// baseline error); else `Resolved` when |D| ≥ 2σ; else `Unresolved`.
-/// Only resolved residuals are rated.
+/// `Unresolved` when |D| < 2σ (it does not stand out of its own noise);
+/// else `Artefact` when |D| > [`ARTEFACT_PEAK_FACTOR`] × the peak drift of
+/// its own row; else `Resolved`.  Only resolved residuals are rated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ResidualStatus {
     Resolved,
@@ -96,21 +107,22 @@ impl ResidualStatus {
         }
     }
 
-    /// The status of `residual` against its segment's peak drift, m.
+    /// The status of `residual` against its row's peak drift, m.
     pub fn of(residual: &ResidualDrift, peak_drift_m: f64) -> ResidualStatus {
-        if residual.drift_m.abs() > peak_drift_m {
-            ResidualStatus::Artefact
-        } else if residual.resolved() {
-            ResidualStatus::Resolved
-        } else {
+        if !residual.resolved() {
             ResidualStatus::Unresolved
+        } else if residual.drift_m.abs() > ARTEFACT_PEAK_FACTOR * peak_drift_m {
+            ResidualStatus::Artefact
+        } else {
+            ResidualStatus::Resolved
         }
     }
 }
 
 /// Method text of each kind of row (the `method` column).
 pub const MEASURED_METHOD: &str = "relative displacement of the two levels";
-pub const SEGMENT_METHOD: &str = "relative displacement of the segment's end levels / segment height";
+pub const SEGMENT_METHOD: &str =
+    "relative displacement of the segment's end levels / segment height";
 pub const ESTIMATE_METHOD: &str = "not-a-knot cubic spline of the displacement profile over the instrumented levels, at each time step";
 
 /// One row of the drift table: a storey, a segment or a storey estimate.
@@ -365,7 +377,7 @@ pub fn storey_drift(
     let mut table = DriftTable::default();
     // One motion per level and direction: the rigid-floor combination where
     // a level has several channels (geometry::floor).
-    let mut by_dir: BTreeMap<String, Vec<Level>> = BTreeMap::new();
+    let mut by_dir: BTreeMap<String, Vec<Level<'_>>> = BTreeMap::new();
     let mut levels_seen = false;
     for (dir, list) in levels_by_direction(&event.records) {
         levels_seen = true;
@@ -420,7 +432,7 @@ pub fn storey_drift(
 /// The rows of one direction (its levels sorted).
 fn direction_rows(
     dir: &str,
-    list: &[Level],
+    list: &[Level<'_>],
     heights: &StoreyHeights,
     residual: &Residuals,
     table: &mut DriftTable,
@@ -506,7 +518,7 @@ fn direction_rows(
 /// (module doc; [`super::profile`]), inserted after each segment's row.
 fn estimate_rows(
     dir: &str,
-    list: &[Level],
+    list: &[Level<'_>],
     heights: &StoreyHeights,
     segments: &[usize],
     table: &mut DriftTable,

@@ -13,10 +13,19 @@
 //! three levels the parabola through them, with four the cubic — the
 //! polynomial of lowest degree through the data, which is what a smooth
 //! profile of a few modes (shear- or flexural-beam shapes) is closest to.
-//! On the first mode of a uniform shear beam, sin(πz/2H), sampled at the
-//! base, mid-height and roof (the typical NSMP/CSMIP instrumentation), the
-//! parabola gives every storey drift of a 12-storey building within 15 % of
-//! the largest storey drift of its segment.
+//! No end condition is imposed because the building type decides it: a
+//! shear frame's roof storey carries only the roof's inertia (slope → 0 at
+//! the top), a flexural wall's top storeys drift most (curvature → 0); the
+//! data decide the profile's concavity.  Cubic-spline interpolation of the
+//! response between instrumented floors: Limongelli, *Optimal location of
+//! sensors for reconstruction of seismic responses through spline function
+//! interpolation*, Earthquake Engng Struct. Dyn. 32 (2003) 1055–1074.
+//! Accuracy, measured on a uniform 12-storey shear building instrumented at
+//! levels 0, 6 and 12 (tests/it/metrics.rs): on its first mode every storey
+//! drift within 15 % of the largest of its segment; on its earthquake
+//! response (peaks over time) within 16 % except the roof storey (31 %: the
+//! shear frame's small roof slope), and the largest estimate of each segment
+//! within 16 % of the true largest.
 //!
 //! The spline is linear in the data: S(z) = Σ_j w_j(z) u_j, so the drift of
 //! a storey between elevations a and b is Σ_j (w_j(b) − w_j(a)) u_j(t), a

@@ -304,12 +304,11 @@ pub fn write_drift(path: &Path, event: &Event, table: &DriftTable) -> Result<()>
     let rows = &table.rows;
     let text = |f: fn(&DriftRow) -> String| rows.iter().map(f).collect::<Vec<_>>();
     let number = |f: fn(&DriftRow) -> f64| rows.iter().map(f).collect::<Vec<_>>();
-    let residual =
-        |f: fn(&DriftRow, &ResidualDrift) -> f64| -> Vec<Option<f64>> {
-            rows.iter()
-                .map(|r| r.residual.as_ref().map(|x| f(r, x)))
-                .collect()
-        };
+    let residual = |f: fn(&DriftRow, &ResidualDrift) -> f64| -> Vec<Option<f64>> {
+        rows.iter()
+            .map(|r| r.residual.as_ref().map(|x| f(r, x)))
+            .collect()
+    };
     let batch = TableBuilder::new(&DRIFT)
         .str(drift::DIRECTION, &text(|r| r.direction.clone()))
         .i32(drift::STOREY, rows.iter().map(|r| r.storey).collect())
@@ -328,10 +327,19 @@ pub fn write_drift(path: &Path, event: &Event, table: &DriftTable) -> Result<()>
             residual(|_, x| x.window_start_s),
         )
         .str(drift::KIND, &text(|r| r.kind.name().into()))
-        .i32(drift::LOWER_LEVEL, rows.iter().map(|r| r.lower_level).collect())
-        .i32(drift::UPPER_LEVEL, rows.iter().map(|r| r.upper_level).collect())
+        .i32(
+            drift::LOWER_LEVEL,
+            rows.iter().map(|r| r.lower_level).collect(),
+        )
+        .i32(
+            drift::UPPER_LEVEL,
+            rows.iter().map(|r| r.upper_level).collect(),
+        )
         .str(drift::METHOD, &text(|r| r.method.into()))
-        .str(drift::HEIGHT_SOURCE, &text(|r| r.height_source.name().into()))
+        .str(
+            drift::HEIGHT_SOURCE,
+            &text(|r| r.height_source.name().into()),
+        )
         .opt_str(
             drift::RESIDUAL_STATUS,
             &rows

@@ -42,7 +42,7 @@ impl Residual {
     /// Why an unrated residual is not rated.
     pub fn why_not_rated(&self) -> &'static str {
         if self.artefact() {
-            "artefact: |D| > the peak drift (not rated)"
+            "artefact: |D| > 2 × the peak drift (not rated)"
         } else {
             "not resolved (|D| < 2σ)"
         }
@@ -108,7 +108,9 @@ pub(super) fn subject(t: &Table, r: usize) -> String {
             let storeys = t
                 .number(drift::UPPER_LEVEL.name)
                 .zip(t.number(drift::LOWER_LEVEL.name))
-                .and_then(|(u, l)| Some(u.get(r).copied().flatten()? - l.get(r).copied().flatten()?))
+                .and_then(|(u, l)| {
+                    Some(u.get(r).copied().flatten()? - l.get(r).copied().flatten()?)
+                })
                 .filter(|n| *n > 0.0)
                 .unwrap_or(1.0);
             format!(" (assumed storey height {} m)", format_number(h / storeys))
@@ -158,9 +160,10 @@ pub(super) const RESIDUAL_METHOD: &str = "Residual drift: the storey's relative 
      Arias intensity, at least the last 10 % of the record), where the storey is at rest: a constant acceleration offset c is \
      fitted to the velocity there (v ≈ c t), and the residual drift is the mean over that window of the displacement minus \
      c t²/2. ± σ: the random walk that sensor noise (its density estimated in 0.6–0.9 × Nyquist) makes after double \
-     integration, with the window's instability — a lower bound for non-white noise. A residual drift larger than its own \
-     row's peak drift is an artefact (an offset reached during the motion cannot exceed the motion's peak: a baseline error), \
-     flagged and never rated; otherwise it is rated only where |D| ≥ 2σ (resolved).";
+     integration, with the window's instability — a lower bound for non-white noise. A residual drift is rated only where \
+     |D| ≥ 2σ (resolved) and it is not an artefact: more than twice its own row's peak drift, an offset the motion cannot have \
+     reached (the band-pass takes at most about half of a real offset out of the tabled peak) — a baseline error, flagged and \
+     never rated.";
 
 /// The kinds of rows and how the rating uses them.
 const KINDS_NOTE: &str = "Rows: <b>measured</b> — a storey between two instrumented levels; <b>segment</b> — several storeys \
@@ -351,8 +354,12 @@ fn profile(t: &Table, ratio: &[Option<f64>], settings: &ReportSettings) -> Strin
         let (segments, storeys): (Vec<usize>, Vec<usize>) = rows
             .iter()
             .partition(|&&r| RowKind::of(t, r).kind == "segment");
-        let mut pts: Vec<(f64, f64)> =
-            rows_points(t, &storeys, drift::PEAK_DRIFT_RATIO.name, drift::STOREY.name);
+        let mut pts: Vec<(f64, f64)> = rows_points(
+            t,
+            &storeys,
+            drift::PEAK_DRIFT_RATIO.name,
+            drift::STOREY.name,
+        );
         pts.sort_by(|a, b| a.1.total_cmp(&b.1));
         chart.series.push(Series::new(
             format!("direction {}", dir.join("")),
@@ -365,7 +372,9 @@ fn profile(t: &Table, ratio: &[Option<f64>], settings: &ReportSettings) -> Strin
             .iter()
             .filter_map(|&r| {
                 let mid = 0.5
-                    * (level(drift::LOWER_LEVEL.name, r)? + 1.0 + level(drift::UPPER_LEVEL.name, r)?);
+                    * (level(drift::LOWER_LEVEL.name, r)?
+                        + 1.0
+                        + level(drift::UPPER_LEVEL.name, r)?);
                 Some((ratio.get(r).copied().flatten()?, mid))
             })
             .collect();

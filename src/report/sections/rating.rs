@@ -46,7 +46,7 @@ fn residual_gap(drift: &Loaded) -> String {
     let mut why = Vec::new();
     if artefacts > 0 {
         why.push(format!(
-            "{artefacts} an artefact (|D| larger than the row's own peak drift: a baseline error, never rated)"
+            "{artefacts} an artefact (|D| more than twice the row's own peak drift: a baseline error, never rated)"
         ));
     }
     if artefacts < values.len() {
