@@ -593,6 +593,35 @@ mod instrumented_segments {
             "{:?}",
             assumed.notes
         );
+        // The rating from them is provisional: in the verdict (the --json
+        // summary's `assessment`) and on the page.
+        let (verdict, html) = rated(&event(None, truth().absolute[11].clone()), &assumed);
+        assert!(
+            verdict.rating.is_some() && verdict.provisional,
+            "{verdict:?}"
+        );
+        assert!(verdict.drivers.iter().all(|d| d.provisional
+            && d.subject.contains("levels")
+            && d.subject.contains("assumed storey height 3.0")));
+        assert!(html.contains("(provisional)") && html.contains("PROVISIONAL"));
+        let (verdict, _) = rated(&event(self::stated(), truth().absolute[11].clone()), stated);
+        assert!(!verdict.provisional && verdict.drivers.iter().all(|d| !d.provisional));
+    }
+
+    /// drift.parquet of `table` written, and the report's verdict and page.
+    fn rated(source: &Event, table: &DriftTable) -> (quaketwin::report::Verdict, String) {
+        let out = tempfile::tempdir().unwrap();
+        quaketwin::sinks::event_tables::write_drift(
+            &out.path().join("drift.parquet"),
+            source,
+            table,
+        )
+        .unwrap();
+        let settings = quaketwin::report::ReportSettings::default();
+        (
+            quaketwin::report::verdict(out.path(), &settings).unwrap(),
+            quaketwin::report::render_report(out.path(), &settings).unwrap(),
+        )
     }
 
     /// A step in the roof record's baseline after the shaking (a sensor
@@ -729,6 +758,13 @@ mod instrumented_segments {
                 .any(|n| n.contains("only level 0") && n.contains("two levels")),
             "{:?}",
             table.notes
+        );
+        // The report says why, in the drift section and the missing criteria.
+        let (verdict, html) = rated(&source, &table);
+        assert!(verdict.rating.is_none());
+        assert!(
+            html.matches("only level 0 (B-X) is instrumented").count() >= 2,
+            "the drift section and the rating's missing criteria give the reason"
         );
     }
 }
