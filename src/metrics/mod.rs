@@ -3,10 +3,14 @@
 //! inter-storey drift ratios. Inputs in SI (m/s², m/s, m); no I/O.
 
 pub mod drift;
+pub mod profile;
 pub mod residual;
 pub mod spectra;
 
-pub use drift::{storey_drift, storey_residual_drifts, DriftRow};
+pub use drift::{
+    storey_drift, storey_residual_drifts, DriftKind, DriftRow, DriftTable, HeightSource,
+    ResidualStatus, StoreyHeights,
+};
 pub use residual::{residual_drift, ResidualDrift};
 pub use spectra::{default_periods, response_spectrum, sdof_response, ResponseSpectrum};
 
@@ -170,6 +174,10 @@ pub struct MetricsSettings {
     pub damping: f64,
     /// Oscillator periods, s (T = 0 is added in front).
     pub periods_s: Vec<f64>,
+    /// Storey height assumed where the structure states neither storey
+    /// heights nor a total height with a storey count, m (drift ratios and
+    /// their ratings then provisional; `drift::DEFAULT_ASSUMED_STOREY_HEIGHT_M`).
+    pub assumed_storey_height_m: f64,
 }
 
 impl MetricsSettings {
@@ -180,6 +188,12 @@ impl MetricsSettings {
             return Err(crate::error::Error::usage(format!(
                 "damping = {}: must be a fraction of critical in [0, 1)",
                 self.damping
+            )));
+        }
+        if !(self.assumed_storey_height_m.is_finite() && self.assumed_storey_height_m > 0.0) {
+            return Err(crate::error::Error::usage(format!(
+                "assumed_storey_height_m = {}: must be a positive height in metres",
+                self.assumed_storey_height_m
             )));
         }
         if let Some(t) = self
@@ -200,6 +214,7 @@ impl Default for MetricsSettings {
         MetricsSettings {
             damping: 0.05,
             periods_s: default_periods(),
+            assumed_storey_height_m: drift::DEFAULT_ASSUMED_STOREY_HEIGHT_M,
         }
     }
 }

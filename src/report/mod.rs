@@ -214,6 +214,9 @@ pub struct Assessment {
     pub rating: Rating,
     /// The file the value comes from.
     pub source: String,
+    /// The value rests on an assumption that may be wrong (a drift ratio
+    /// over an assumed storey height): the rating it gives is provisional.
+    pub provisional: bool,
 }
 
 /// The overall rating of a run's outputs: the worst rating of every rated
@@ -223,6 +226,9 @@ pub struct Assessment {
 pub struct Verdict {
     pub rating: Option<Rating>,
     pub drivers: Vec<Assessment>,
+    /// The rating is provisional: a rated value rests on an assumption (an
+    /// assumed storey height) and no value free of one already gives RED.
+    pub provisional: bool,
     /// Every rated value, in page order.
     pub assessments: Vec<Assessment>,
 }
@@ -239,9 +245,16 @@ impl Verdict {
             }
         }
         drivers.sort_by(|a, b| a.criterion.cmp(&b.criterion));
+        // An assumption can move any rating but a RED that a value free of
+        // assumptions gives (the worst there is).
+        let firm_red = assessments
+            .iter()
+            .any(|a| a.rating == Rating::Red && !a.provisional);
+        let provisional = assessments.iter().any(|a| a.provisional) && !firm_red;
         Verdict {
             rating,
             drivers,
+            provisional,
             assessments,
         }
     }

@@ -13,7 +13,7 @@ use arrow_array::{Array, Float64Array, StringArray};
 use super::parquet::{write_parquet, write_parquet_stream, ReadTable, TableBuilder};
 use crate::conditioning::Motion;
 use crate::error::{Error, Result};
-use crate::metrics::{DriftRow, StrongMotionMetrics};
+use crate::metrics::{DriftRow, DriftTable, ResidualDrift, StrongMotionMetrics};
 use crate::vocab::tables::{channels, drift, samples, spectra, CHANNELS, DRIFT, SAMPLES, SPECTRA};
 use crate::vocab::{Channel, Direction, Event, ProcessingHistory, Record, SampleStore, Samples};
 use std::sync::Arc;
@@ -298,59 +298,66 @@ pub fn write_spectra(path: &Path, event: &Event, metrics: &[StrongMotionMetrics]
     write_parquet(path, &[batch], &event_metadata(event))
 }
 
-/// `drift.parquet`.
-pub fn write_drift(path: &Path, event: &Event, rows: &[DriftRow]) -> Result<()> {
+/// `drift.parquet`; the table's notes (why drift is missing, heights
+/// assumed, records trimmed to a common window) in `quaketwin.notes`.
+pub fn write_drift(path: &Path, event: &Event, table: &DriftTable) -> Result<()> {
+    let rows = &table.rows;
+    let text = |f: fn(&DriftRow) -> String| rows.iter().map(f).collect::<Vec<_>>();
+    let number = |f: fn(&DriftRow) -> f64| rows.iter().map(f).collect::<Vec<_>>();
+    let residual = |f: fn(&DriftRow, &ResidualDrift) -> f64| -> Vec<Option<f64>> {
+        rows.iter()
+            .map(|r| r.residual.as_ref().map(|x| f(r, x)))
+            .collect()
+    };
     let batch = TableBuilder::new(&DRIFT)
-        .str(
-            drift::DIRECTION,
-            &rows.iter().map(|r| r.direction.clone()).collect::<Vec<_>>(),
-        )
+        .str(drift::DIRECTION, &text(|r| r.direction.clone()))
         .i32(drift::STOREY, rows.iter().map(|r| r.storey).collect())
-        .str(
-            drift::LOWER_CHANNEL,
-            &rows
-                .iter()
-                .map(|r| r.lower_channel.clone())
-                .collect::<Vec<_>>(),
-        )
-        .str(
-            drift::UPPER_CHANNEL,
-            &rows
-                .iter()
-                .map(|r| r.upper_channel.clone())
-                .collect::<Vec<_>>(),
-        )
-        .f64(
-            drift::STOREY_HEIGHT_M,
-            rows.iter().map(|r| r.storey_height_m).collect(),
-        )
-        .f64(
-            drift::PEAK_DRIFT_RATIO,
-            rows.iter().map(|r| r.peak_drift_ratio).collect(),
-        )
-        .opt_f64(
-            drift::RESIDUAL_DRIFT_M,
-            rows.iter().map(|r| r.residual.map(|x| x.drift_m)).collect(),
-        )
-        .opt_f64(
-            drift::RESIDUAL_DRIFT_STD_M,
-            rows.iter().map(|r| r.residual.map(|x| x.std_m)).collect(),
-        )
+        .str(drift::LOWER_CHANNEL, &text(|r| r.lower_channel.clone()))
+        .str(drift::UPPER_CHANNEL, &text(|r| r.upper_channel.clone()))
+        .f64(drift::STOREY_HEIGHT_M, number(|r| r.storey_height_m))
+        .f64(drift::PEAK_DRIFT_RATIO, number(|r| r.peak_drift_ratio))
+        .opt_f64(drift::RESIDUAL_DRIFT_M, residual(|_, x| x.drift_m))
+        .opt_f64(drift::RESIDUAL_DRIFT_STD_M, residual(|_, x| x.std_m))
         .opt_f64(
             drift::RESIDUAL_DRIFT_RATIO,
-            rows.iter()
-                .map(|r| r.residual.map(|x| x.drift_m / r.storey_height_m))
-                .collect(),
+            residual(|r, x| x.drift_m / r.storey_height_m),
         )
         .opt_f64(
             drift::RESIDUAL_WINDOW_START_S,
-            rows.iter()
-                .map(|r| r.residual.map(|x| x.window_start_s))
-                .collect(),
+            residual(|_, x| x.window_start_s),
+        )
+        .str(drift::KIND, &text(|r| r.kind.name().into()))
+        .i32(
+            drift::LOWER_LEVEL,
+            rows.iter().map(|r| r.lower_level).collect(),
+        )
+        .i32(
+            drift::UPPER_LEVEL,
+            rows.iter().map(|r| r.upper_level).collect(),
+        )
+        .str(drift::METHOD, &text(|r| r.method.into()))
+        .str(
+            drift::HEIGHT_SOURCE,
+            &text(|r| r.height_source.name().into()),
+        )
+        .opt_str(
+            drift::RESIDUAL_STATUS,
+            &rows
+                .iter()
+                .map(|r| r.residual_status.map(|s| s.name()))
+                .collect::<Vec<_>>(),
         )
         .build()?;
-    write_parquet(path, &[batch], &event_metadata(event))
+    let mut metadata = event_metadata(event);
+    metadata.push((
+        DRIFT_NOTES_KEY.into(),
+        serde_json::to_string(&table.notes).unwrap_or_default(),
+    ));
+    write_parquet(path, &[batch], &metadata)
 }
+
+/// Metadata key of drift.parquet's notes (JSON list of strings).
+pub const DRIFT_NOTES_KEY: &str = "quaketwin.notes";
 
 /// Loads a conditioned event back from `samples.parquet` (channels and
 /// history from its metadata, samples from its columns).

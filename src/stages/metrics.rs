@@ -1,6 +1,6 @@
 //! `metrics`: strong-motion metrics and response spectra per channel, drift
-//! ratios per storey (peak from the conditioned records, residual from the
-//! records as recorded) → `channels.parquet`, `spectra.parquet`, `drift.parquet`.
+//! ratios per storey or instrumented segment (peak from the conditioned
+//! records, residual from the records as recorded; `metrics::drift`) → `channels.parquet`, `spectra.parquet`, `drift.parquet`.
 
 use rayon::prelude::*;
 
@@ -59,7 +59,15 @@ impl Stage for Metrics {
         } else {
             motions.par_iter().map(one).collect::<Result<Vec<_>>>()?
         };
-        let drift = storey_drift(event, motions, &residual)?;
+        let drift = storey_drift(
+            event,
+            motions,
+            &residual,
+            self.settings.assumed_storey_height_m,
+        )?;
+        for note in &drift.notes {
+            crate::console::detail(format!("metrics: {note}"));
+        }
         event_tables::write_channels(&out.join(CHANNELS_FILE), event, &metrics)?;
         event_tables::write_spectra(&out.join(SPECTRA_FILE), event, &metrics)?;
         event_tables::write_drift(&out.join(DRIFT_FILE), event, &drift)?;

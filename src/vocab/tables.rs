@@ -107,17 +107,23 @@ declare!(SPECTRA, spectra, "spectra", "spectra.parquet",
 });
 
 declare!(DRIFT, drift, "drift", "drift.parquet",
-    "one row per storey and direction: peak inter-storey drift ratios", {
+    "one row per storey or instrumented segment and direction: peak drift ratios (measured, segment average, or per-storey estimate: `kind`)", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y` or an azimuth";
-    STOREY: "storey", I32, required, "", "storey L joins levels L−1 and L";
-    LOWER_CHANNEL: "lower_channel", Utf8, required, "", "channel at level L−1";
-    UPPER_CHANNEL: "upper_channel", Utf8, required, "", "channel at level L";
-    STOREY_HEIGHT_M: "storey_height_m", F64, required, "m", "from `structure.storey_heights_m`";
-    PEAK_DRIFT_RATIO: "peak_drift_ratio", F64, required, "1", "max over time of |u_L − u_{L−1}| / h_L (band-passed displacements of the condition stage: the oscillation only)";
-    RESIDUAL_DRIFT_M: "residual_drift_m", F64, nullable, "m", "permanent drift u_L − u_{L−1} after the event (signed), from the relative acceleration as recorded (no filter) integrated twice and baseline-corrected on the post-event window (docs/report.md); null when the two levels' records are not on a common time base";
+    STOREY: "storey", I32, required, "", "upper level of the row: storey L joins levels L−1 and L; for a `segment` row its upper level (`lower_level`–`upper_level`)";
+    LOWER_CHANNEL: "lower_channel", Utf8, required, "", "record at the lower level (an `estimate`: the lower record of its segment)";
+    UPPER_CHANNEL: "upper_channel", Utf8, required, "", "record at the upper level (an `estimate`: the upper record of its segment)";
+    STOREY_HEIGHT_M: "storey_height_m", F64, required, "m", "height of the storey, or of the segment (sum of its storeys); where from: `height_source`";
+    PEAK_DRIFT_RATIO: "peak_drift_ratio", F64, required, "1", "max over time of |u_upper − u_lower| / h (band-passed displacements of the condition stage: the oscillation only); a `segment` row: the segment's average ratio; an `estimate`: from the interpolated profile (`method`)";
+    RESIDUAL_DRIFT_M: "residual_drift_m", F64, nullable, "m", "permanent drift u_upper − u_lower after the event (signed), from the relative acceleration as recorded (no filter) integrated twice and baseline-corrected on the post-event window (docs/report.md); null for an `estimate` and when the two levels' records are not on a common time base";
     RESIDUAL_DRIFT_STD_M: "residual_drift_std_m", F64, nullable, "m", "uncertainty of `residual_drift_m`: sensor-noise random walk (white-noise estimate from 0.6–0.9 × Nyquist) and post-event window instability; a lower bound for non-white noise";
-    RESIDUAL_DRIFT_RATIO: "residual_drift_ratio", F64, nullable, "1", "residual_drift_m / h_L";
+    RESIDUAL_DRIFT_RATIO: "residual_drift_ratio", F64, nullable, "1", "residual_drift_m / h";
     RESIDUAL_WINDOW_START_S: "residual_window_start_s", F64, nullable, "s", "start of the post-event window (95 % of the relative acceleration's Arias intensity, at most 90 % of the record)";
+    KIND: "kind", Utf8, required, "", "`measured` (one storey between instrumented levels), `segment` (several storeys between instrumented levels: the average ratio, a lower bound of its largest storey drift), `estimate` (one storey inside a segment: interpolated, not measured; never rated)";
+    LOWER_LEVEL: "lower_level", I32, required, "", "lower level of the row (level 0 = the base)";
+    UPPER_LEVEL: "upper_level", I32, required, "", "upper level of the row";
+    METHOD: "method", Utf8, required, "", "how the value was formed (an `estimate`: the interpolation of the displacement profile)";
+    HEIGHT_SOURCE: "height_source", Utf8, required, "", "`stated` (`structure.storey_heights_m`), `from total height` (`height_m / storeys`), `assumed` (metrics param `assumed_storey_height_m`: the ratio and its rating are provisional)";
+    RESIDUAL_STATUS: "residual_status", Utf8, nullable, "", "`unresolved` (|D| < 2σ), else `artefact` (|D| more than twice the row's own peak drift: impossible for an offset reached during the motion, the band-pass taking at most about half of such an offset out of the peak — docs/report.md), else `resolved`; only `resolved` is rated; null without a residual";
 });
 
 declare!(STABILIZATION, stabilization, "stabilization", "stabilization.parquet",

@@ -267,6 +267,12 @@ fn the_writer_refuses_a_table_that_does_not_match_its_declaration() {
         .opt_f64(drift::RESIDUAL_DRIFT_STD_M, vec![Some(0.001)])
         .opt_f64(drift::RESIDUAL_DRIFT_RATIO, vec![Some(0.002 / 3.0)])
         .opt_f64(drift::RESIDUAL_WINDOW_START_S, vec![None])
+        .str(drift::KIND, &["measured"])
+        .i32(drift::LOWER_LEVEL, vec![0])
+        .i32(drift::UPPER_LEVEL, vec![1])
+        .str(drift::METHOD, &["relative displacement of the two levels"])
+        .str(drift::HEIGHT_SOURCE, &["stated"])
+        .opt_str(drift::RESIDUAL_STATUS, &[Some("resolved")])
         .build()
         .unwrap();
     let unit = |name: &str| {

@@ -198,6 +198,7 @@ fn rate_direction(
             value: v,
             rating,
             source: tables::DAMAGE.file.into(),
+            provisional: false,
         });
     }
     vec![

@@ -46,8 +46,13 @@ fn corrected_residuals(drift_table: &Loaded) -> BTreeMap<(String, String), Resid
         ) else {
             continue;
         };
+        // The segment's lower level (tables before `lower_level`: storeys only).
+        let lower = t
+            .key(drift::LOWER_LEVEL.name, r)
+            .and_then(|s| s.parse::<i32>().ok())
+            .unwrap_or(storey - 1);
         if let Some(res) = residual(t, r) {
-            out.insert((dir, format!("L{}–L{storey}", storey - 1)), res);
+            out.insert((dir, format!("L{lower}–L{storey}")), res);
         }
     }
     out

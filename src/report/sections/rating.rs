@@ -2,7 +2,7 @@
 //! the values that drive it, every criterion with its thresholds and what it
 //! rated, and the criteria that could not be used and why.
 
-use super::drift::{residual, PEAK_CRITERION, RESIDUAL_CRITERION};
+use super::drift::{notes_of, residual, PEAK_CRITERION, RESIDUAL_CRITERION};
 use super::{stage_of, Loaded, Outputs};
 use crate::report::format_number;
 use crate::report::html::{escape, note, short_number, table, Cell};
@@ -34,13 +34,46 @@ fn residual_gap(drift: &Loaded) -> String {
     }
     let values: Vec<_> = (0..t.rows).filter_map(|r| residual(t, r)).collect();
     if values.is_empty() {
-        return "no storey has unfiltered records of both levels on a common time base".into();
+        return "no storey or segment has unfiltered records of both levels on a common time base"
+            .into();
     }
-    let widest = values.iter().filter_map(|v| v.std_m).fold(0.0f64, f64::max);
-    format!(
-        "not resolved at any storey: |D| < 2σ (σ up to {} m: sensor noise integrated twice)",
-        format_number(widest)
-    )
+    let artefacts = values.iter().filter(|v| v.artefact()).count();
+    let widest = values
+        .iter()
+        .filter(|v| !v.artefact())
+        .filter_map(|v| v.std_m)
+        .fold(0.0f64, f64::max);
+    let mut why = Vec::new();
+    if artefacts > 0 {
+        why.push(format!(
+            "{artefacts} an artefact (|D| more than twice the row's own peak drift: a baseline error, never rated)"
+        ));
+    }
+    if artefacts < values.len() {
+        why.push(format!(
+            "{} not resolved: |D| < 2σ (σ up to {} m: sensor noise integrated twice)",
+            values.len() - artefacts,
+            format_number(widest)
+        ));
+    }
+    format!("no resolved residual drift: {}", why.join("; "))
+}
+
+/// Why drift.parquet gives no peak drift to rate.
+fn peak_gap(drift: &Loaded) -> String {
+    if let Loaded::Ok(t) = drift {
+        let notes = notes_of(t);
+        if !notes.is_empty() {
+            let lead = if t.rows == 0 {
+                "no drift could be formed"
+            } else {
+                "drift.parquet holds no ratable value"
+            };
+            return format!("{lead}: {}", notes.join("; "));
+        }
+    }
+    file_gap(tables::DRIFT.file, drift)
+        .unwrap_or_else(|| "drift.parquet holds no ratable value".into())
 }
 
 fn thresholds_text(t: &Thresholds) -> String {
@@ -71,16 +104,23 @@ pub(super) fn rating_section(
                 .iter()
                 .map(|a| {
                     format!(
-                        "{} = {} at {} ({})",
+                        "{} = {} at {} ({}){}",
                         escape(&a.criterion),
                         format_number(a.value),
                         escape(&a.subject),
-                        escape(&a.source)
+                        escape(&a.source),
+                        if a.provisional { ": provisional" } else { "" }
                     )
                 })
                 .collect();
+            let provisional = if verdict.provisional {
+                "<p id=\"rating-provisional\"><b>PROVISIONAL</b>: rated on drift ratios over ASSUMED storey heights (no heights stated for the structure); state structure.storey_heights_m, or height_m and storeys, in event.toml.</p>"
+            } else {
+                ""
+            };
             body.push_str(&format!(
-                "<div class=\"rating-box {cls}\" id=\"overall-rating\"><p class=\"big\">{badge}</p><p>{meaning}.</p><p>Driven by: {}.</p></div>",
+                "<div class=\"rating-box {cls}\" id=\"overall-rating\"><p class=\"big\">{badge}{}</p><p>{meaning}.</p><p>Driven by: {}.</p>{provisional}</div>",
+                if verdict.provisional { " (provisional)" } else { "" },
                 driven.join("; "),
                 cls = match w {
                     Rating::Green => "r-green",
@@ -99,8 +139,7 @@ pub(super) fn rating_section(
             PEAK_CRITERION.to_string(),
             settings.drift,
             tables::DRIFT.file,
-            file_gap(tables::DRIFT.file, &o.drift)
-                .unwrap_or_else(|| "drift.parquet holds no ratable value".into()),
+            peak_gap(&o.drift),
         ),
         (
             RESIDUAL_CRITERION.to_string(),

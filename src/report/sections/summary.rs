@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use serde_json::Value;
 
-use super::drift::{residual, residual_text};
+use super::drift::{notes_of, residual, residual_text, RowKind};
 use super::event::{json_text, magnitude_text};
 use super::{damage, rating_cell, stage_of, twin, Loaded, Outputs};
 use crate::report::format_number;
@@ -158,31 +158,64 @@ fn shaking(loaded: &Loaded) -> String {
     )
 }
 
-/// Per storey: peak drift ratio and residual drift, each with its rating.
+/// Per storey or segment: peak drift ratio and residual drift, each with
+/// its rating (estimates shown, not rated; assumed heights said).
 fn storeys(loaded: &Loaded, settings: &ReportSettings) -> String {
     let Some(t) = ok(loaded) else {
+        if let Loaded::Ok(t) = loaded {
+            let notes = notes_of(t);
+            if !notes.is_empty() {
+                return format!(
+                    "<p class=\"note\">No drift: {}</p>",
+                    escape(&notes.join("; "))
+                );
+            }
+        }
         return gap(tables::DRIFT.file, loaded);
     };
     let peak = t.number(drift::PEAK_DRIFT_RATIO.name);
     let rows: Vec<Vec<Cell>> = (0..t.rows)
         .map(|r| {
+            let kind = RowKind::of(t, r);
             let v = peak.and_then(|p| p.get(r).copied().flatten());
             let res = residual(t, r);
             let residual_rating = res
-                .filter(|x| x.resolved())
+                .as_ref()
+                .filter(|x| x.resolved() && kind.rated())
                 .and_then(|x| settings.residual_drift.rate(x.ratio?.abs()));
+            let place = match kind.kind.as_str() {
+                "segment" => format!(
+                    "{}–{} (segment)",
+                    t.key(drift::LOWER_LEVEL.name, r).unwrap_or_default(),
+                    t.key(drift::UPPER_LEVEL.name, r).unwrap_or_default()
+                ),
+                "estimate" => format!(
+                    "{} (estimate)",
+                    t.key(drift::STOREY.name, r).unwrap_or_default()
+                ),
+                _ => t.key(drift::STOREY.name, r).unwrap_or_default(),
+            };
+            let assumed = if kind.assumed_height.is_some() {
+                " (assumed height)"
+            } else {
+                ""
+            };
             vec![
                 Cell::text(&t.key(drift::DIRECTION.name, r).unwrap_or_default()),
-                Cell::text(&t.key(drift::STOREY.name, r).unwrap_or_default()),
+                Cell::text(&place),
                 Cell {
                     value: v,
                     class: Some("num"),
                     ..Cell::text(
-                        &v.map(|v| format!("{:.3} %", 100.0 * v))
+                        &v.map(|v| format!("{:.3} %{assumed}", 100.0 * v))
                             .unwrap_or("—".into()),
                     )
                 },
-                rating_cell(v.and_then(|v| settings.drift.rate(v))),
+                if kind.rated() {
+                    rating_cell(v.and_then(|v| settings.drift.rate(v)))
+                } else {
+                    Cell::text("not rated")
+                },
                 match &res {
                     Some(x) => Cell {
                         value: Some(x.drift_m),
@@ -193,6 +226,7 @@ fn storeys(loaded: &Loaded, settings: &ReportSettings) -> String {
                 },
                 match (res, residual_rating) {
                     (_, Some(g)) => rating_cell(Some(g)),
+                    (Some(x), None) if x.artefact() => Cell::text("artefact"),
                     (Some(_), None) => Cell::text("not resolved"),
                     (None, None) => Cell::text("—"),
                 },
