@@ -445,6 +445,35 @@ pub fn band_for_structure(structure: &crate::vocab::Structure) -> Option<[f64; 2
 /// lies above it; below it an accelerogram's spectrum is baseline noise.
 pub const SPECTRAL_SEARCH_LOW_HZ: f64 = 0.1;
 
+/// The band of interest the modal stage hands to [`plan`], and why:
+/// `stated` (the `band_hz` param); else around the structure's estimated
+/// fundamental ([`fundamental_estimate`], [`band_around`]); else, for a
+/// bridge ([`is_bridge`]), [`DEFAULT_BAND_HZ`]; else `None` (the plan takes
+/// it from the records' spectra, [`band_from_spectra`]).
+pub fn band_of_structure(
+    stated: Option<[f64; 2]>,
+    structure: Option<&crate::vocab::Structure>,
+) -> (Option<[f64; 2]>, Option<String>) {
+    if let Some(band) = stated {
+        return (Some(band), Some("stated (band_hz)".to_string()));
+    }
+    if let Some((f1, why)) = structure.and_then(fundamental_estimate) {
+        return (
+            Some(band_around(f1)),
+            Some(format!(
+                "f1/3 … min(10·f1, 20 Hz) around the structure's estimated fundamental f1 = {f1:.3} Hz: {why}"
+            )),
+        );
+    }
+    if is_bridge(structure) {
+        return (
+            Some(DEFAULT_BAND_HZ),
+            Some("default band: a bridge (structure.kind), whose records' spectra are not searched below it; state band_hz for a long-span bridge".to_string()),
+        );
+    }
+    (None, None)
+}
+
 /// Whether the structure is stated or inferred to be a bridge: its band
 /// stays [`DEFAULT_BAND_HZ`] (no spectral search below it).  A bridge's
 /// records are short and their lowest spectral peaks below 0.5 Hz are the

@@ -11,8 +11,8 @@ use super::condition::Conditioned;
 use super::prepost::{self, ReferenceParams, ReferenceRun};
 use crate::error::{Error, Result};
 use crate::modal::{
-    band_around, fundamental_estimate, identify_event, identify_event_or_output_only,
-    output_spectral_overlay, ChannelChoice, Method, ModalResult, ModalSettings,
+    fundamental_estimate, identify_event, identify_event_or_output_only, output_spectral_overlay,
+    ChannelChoice, Method, ModalResult, ModalSettings,
 };
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::modal_tables as tables;
@@ -162,20 +162,8 @@ impl ModalParams {
         };
         self.validate()?;
         let estimate = event.structure.as_ref().and_then(fundamental_estimate);
-        let (band_hz, band_basis) = match (self.band_hz, &estimate) {
-            (Some(band), _) => (Some(band), Some("stated (band_hz)".to_string())),
-            (None, Some((f1, why))) => (
-                Some(band_around(*f1)),
-                Some(format!(
-                    "f1/3 … min(10·f1, 20 Hz) around the structure's estimated fundamental f1 = {f1:.3} Hz: {why}"
-                )),
-            ),
-            (None, None) if crate::modal::is_bridge(event.structure.as_ref()) => (
-                Some(crate::modal::DEFAULT_BAND_HZ),
-                Some("default band: a bridge (structure.kind), whose records' spectra are not searched below it; state band_hz for a long-span bridge".to_string()),
-            ),
-            (None, None) => (None, None),
-        };
+        let (band_hz, band_basis) =
+            crate::modal::band_of_structure(self.band_hz, event.structure.as_ref());
         let mut s = ModalSettings {
             method,
             band_hz,

@@ -116,6 +116,32 @@ pub fn column_f64(path: &std::path::Path, name: &str) -> Vec<f64> {
     out
 }
 
+/// An integer column (Int32 or Int64) of a Parquet file, all row groups
+/// (nulls as `i64::MIN`).
+pub fn column_i64(path: &std::path::Path, name: &str) -> Vec<i64> {
+    use arrow_array::Array;
+    let mut out = Vec::new();
+    for b in batches(path) {
+        let col = b
+            .column_by_name(name)
+            .unwrap_or_else(|| panic!("{}: no column {name}", path.display()));
+        if let Some(a) = col.as_any().downcast_ref::<arrow_array::Int32Array>() {
+            out.extend((0..a.len()).map(|i| {
+                if a.is_null(i) {
+                    i64::MIN
+                } else {
+                    a.value(i) as i64
+                }
+            }));
+        } else if let Some(a) = col.as_any().downcast_ref::<arrow_array::Int64Array>() {
+            out.extend((0..a.len()).map(|i| if a.is_null(i) { i64::MIN } else { a.value(i) }));
+        } else {
+            panic!("{}: {name} is not an integer column", path.display());
+        }
+    }
+    out
+}
+
 /// A Utf8 column of a Parquet file, all row groups (nulls as "").
 pub fn column_str(path: &std::path::Path, name: &str) -> Vec<String> {
     use arrow_array::Array;

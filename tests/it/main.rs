@@ -15,6 +15,7 @@ mod architecture;
 
 mod big_input;
 mod bridge_consistency;
+mod buildings;
 mod cli_output;
 mod conditioning;
 mod dataset;
