@@ -723,8 +723,17 @@ pub fn expand_events(events: &[std::path::PathBuf]) -> Vec<std::path::PathBuf> {
         // A folder of event folders: every subfolder is an event (it has a
         // manifest, or records of its own as the networks publish them, with
         // no manifest), and the folder itself holds no record.
+        // Subfolders named after the levels of one structure ("Ground
+        // Floor", "1st Floor", "Roof") are that structure's sensors, not
+        // events of their own.
         let is_collection = !subs.is_empty()
             && !holds_records(e)
+            && !subs.iter().any(|p| {
+                p.file_name()
+                    .and_then(|n| n.to_str())
+                    .and_then(crate::event_folder::structure::place_from_text)
+                    .is_some()
+            })
             && subs
                 .iter()
                 .all(|p| p.join(crate::event_folder::MANIFEST_NAME).exists() || holds_records(p));

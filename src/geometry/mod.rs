@@ -83,6 +83,38 @@ pub fn infer_x_axis(azimuths: &[f64], tolerance_deg: f64) -> Option<f64> {
     lines.first().map(|(l, _)| *l)
 }
 
+/// The X axis of a building recorded at azimuths only, from its geometry
+/// alone (issue 31: one structure's direction labels are the same in every
+/// event, whichever channels an event lacks): the sensor lines (azimuths
+/// folded mod 180°, merged within `tolerance_deg`) that have a perpendicular
+/// partner line are the building's axis pairs; X is the one of smallest
+/// azimuth in [0°, 180°).  Counting channels per line ([`infer_x_axis`]) can
+/// swap X and Y between two events of one building when a channel is dead
+/// in one of them.  `None` when no two lines are perpendicular.
+pub fn building_x_axis(azimuths: &[f64], tolerance_deg: f64) -> Option<f64> {
+    let mut folded: Vec<f64> = azimuths.iter().map(|a| a.rem_euclid(180.0)).collect();
+    folded.sort_by(f64::total_cmp);
+    let apart = |a: f64, b: f64| {
+        let d = (a - b).rem_euclid(180.0);
+        d.min(180.0 - d)
+    };
+    let mut lines: Vec<f64> = Vec::new();
+    for a in folded {
+        if !lines.iter().any(|l| apart(a, *l) <= tolerance_deg) {
+            lines.push(a);
+        }
+    }
+    lines
+        .iter()
+        .copied()
+        .filter(|l| {
+            lines
+                .iter()
+                .any(|m| (apart(*l, *m) - 90.0).abs() <= tolerance_deg)
+        })
+        .min_by(f64::total_cmp)
+}
+
 /// The line of a bridge's deck, from where its abutments are: location texts
 /// that name an east or west abutment (CSMIP: "Deck: Near East Abutment",
 /// "On Ground Near West Abutment") place the abutments at the two ends of an
@@ -176,7 +208,17 @@ pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
             let bridge =
                 deck_line.and_then(|line| bridge_x_axis(&azimuths, line, AXIS_TOLERANCE_DEG));
             axes_from_deck_line = deck_line.filter(|_| bridge.is_some());
+            let building = event
+                .structure
+                .as_ref()
+                .and_then(|s| s.kind.as_deref())
+                .is_some_and(|k| k.eq_ignore_ascii_case("building"));
             bridge
+                .or_else(|| {
+                    building
+                        .then(|| building_x_axis(&azimuths, AXIS_TOLERANCE_DEG))
+                        .flatten()
+                })
                 .or_else(|| infer_x_axis(&azimuths, AXIS_TOLERANCE_DEG))
                 .map(|x| BuildingAxes {
                     x_azimuth_deg: x,

@@ -438,3 +438,23 @@ fn a_bridge_x_axis_is_the_sensor_line_along_its_deck() {
     assert_eq!(bridge_x_axis(&[20.0, 110.0], 90.0, 5.0), Some(110.0));
     assert_eq!(bridge_x_axis(&[45.0], 90.0, 5.0), None);
 }
+
+/// Issue 31 item 4: a building's X axis from its geometry alone — the same
+/// in two events of one building whether or not a channel is missing.
+#[test]
+fn building_axes_do_not_depend_on_how_many_channels_an_event_has() {
+    use quaketwin::geometry::{building_x_axis, infer_x_axis};
+    // Three sensors along the 110° line, one along the 20° line…
+    let full = [110.0, 290.0, 110.0, 20.0];
+    // …and the same building with one 110° channel dead.
+    let lacking = [110.0, 20.0];
+    assert_eq!(building_x_axis(&full, 5.0), Some(20.0));
+    assert_eq!(building_x_axis(&lacking, 5.0), Some(20.0));
+    // The channel-count rule swaps the axes between the two events.
+    assert_eq!(infer_x_axis(&full, 5.0), Some(110.0));
+    assert_eq!(infer_x_axis(&lacking, 5.0), Some(20.0));
+    // Lines merged within the tolerance across 0°/180°; a stray line with no
+    // perpendicular partner is not an axis.
+    assert_eq!(building_x_axis(&[179.0, 89.5, 45.0], 5.0), Some(89.5));
+    assert_eq!(building_x_axis(&[30.0, 75.0], 5.0), None);
+}

@@ -576,3 +576,18 @@ fn a_ground_floor_beside_a_first_floor_counts_floors_from_the_ground() {
         vec![Some(0), Some(1), Some(3)]
     );
 }
+
+/// A structure's folder whose subfolders are named after its levels (the
+/// shared mini shake-table: "Ground Floor", "1st Floor", …) is one event,
+/// not a folder of events; a folder of benchmark events still is one.
+#[test]
+fn floor_subfolders_are_one_structure_not_a_collection_of_events() {
+    use quaketwin::commands::expand_events;
+    let floors = crate::common::shared_record("mdof-mini-shake-table-flexible-3story");
+    assert_eq!(
+        expand_events(std::slice::from_ref(&floors)),
+        vec![floors.clone()]
+    );
+    let samples = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("sample-records");
+    assert!(expand_events(std::slice::from_ref(&samples)).len() >= 7);
+}
