@@ -1009,12 +1009,12 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
         filters.frequency_min_hz.unwrap_or(0.0),
         filters.frequency_max_hz.unwrap_or(0.95 * nyquist),
     ];
-    let (mut modes, rejected, warnings) = match &settings.manual_frequencies_hz {
-        Some(f) => (
-            selection::select_manual(&mut poles, f, settings.manual_band)?,
-            Vec::new(),
-            Vec::new(),
-        ),
+    let (mut modes, rejected, warnings, promoted) = match &settings.manual_frequencies_hz {
+        Some(f) => {
+            let manual = selection::select_manual(&mut poles, f, settings.manual_band)?;
+            let promoted = vec![false; manual.len()];
+            (manual, Vec::new(), Vec::new(), promoted)
+        }
         None => {
             let sel = selection::select_automatic(
                 &mut poles,
@@ -1024,7 +1024,7 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
                 &settings.selection,
             );
             let w = selection_warnings(&poles, &sel, &filters, band);
-            (sel.modes, sel.rejected, w)
+            (sel.modes, sel.rejected, w, sel.promoted)
         }
     };
     for m in modes.iter_mut() {
@@ -1033,11 +1033,21 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
     // Global modes only (issue 31): local modes and near-duplicates are
     // withdrawn from the structural modes (the manual override is the
     // user's choice and stays as picked).
-    let (screen, local_modes) = if settings.manual_frequencies_hz.is_none() {
+    let (mut screen, local_modes) = if settings.manual_frequencies_hz.is_none() {
         global::screen(&modes, &input.output_ids)
     } else {
         (vec![None; modes.len()], Vec::new())
     };
+    // A short column promoted by its shapes' coherence is a mode only when
+    // its shape is a torsion (`selection::SelectionSettings::coherent_promotion_mac`).
+    for ((m, why), promoted) in modes.iter().zip(screen.iter_mut()).zip(&promoted) {
+        if *promoted && why.is_none() && m.direction != "torsion" {
+            *why = Some(format!(
+                "a short column ({} poles) promoted by its shapes' coherence, kept only for a torsion; its shape is {}",
+                m.pole_count, m.direction
+            ));
+        }
+    }
     for m in &local_modes {
         notes.push(format!(
             "local mode {:.3} Hz (ζ {:.1} %): {:.0} % of its shape's energy on channel {}: listed apart, not a structural mode",

@@ -858,3 +858,74 @@ fn a_split_column_is_rejoined_with_its_twin() {
         .filter(|p| p.mode == Some(0))
         .all(|p| (p.frequency_hz - 13.51).abs() < 0.05));
 }
+
+/// Issue 31 item 3: a weakly excited mode whose column is shorter than the
+/// 12-pole rule (the 7-storey building's 8-pole torsion) is promoted when
+/// its shapes are coherent (MAC ≥ 0.995) at every order from its first, and
+/// flagged as promoted (the modal identification keeps it only for a
+/// torsion); the same column with wandering shapes is rejected.
+#[test]
+fn a_short_coherent_column_is_promoted_and_flagged() {
+    use quaketwin::modal::selection::select_automatic;
+    use quaketwin::modal::{PhysicalFilters, Pole, SelectionSettings};
+    let pole = |order: usize, f: f64, shape: &[f64]| Pole {
+        order,
+        frequency_hz: f,
+        damping_ratio: 0.02,
+        shape: shape.iter().map(|&v| c64::new(v, 0.0)).collect(),
+        mpc: 1.0,
+        mpd_deg: 0.0,
+        stable_frequency: true,
+        stable_damping: true,
+        stable_shape: true,
+        physical: true,
+        mode: None,
+    };
+    let orders: Vec<usize> = (2..=42).step_by(2).collect();
+    let run = |wander: f64| {
+        let mut poles = Vec::new();
+        for &n in &orders {
+            // The fundamental: a pole at every order from 4.
+            if n >= 4 {
+                poles.push(pole(n, 1.04, &[1.0, 0.6, 0.9, 0.55]));
+            }
+            // The torsion: 8 poles, the top 8 orders, opposite ends in
+            // opposite phase; `wander` drifts its shape order by order
+            // (consecutive poles still link, MAC ≥ 0.99).
+            if n >= 28 {
+                let k = (n - 28) as f64 / 2.0;
+                let d = wander * (k - 3.5);
+                poles.push(pole(
+                    n,
+                    1.60 + 0.0005 * k,
+                    &[1.0, 0.5 + d, -0.9, -0.45 + 0.5 * d],
+                ));
+            }
+        }
+        poles.sort_by(|a, b| {
+            (a.order, a.frequency_hz)
+                .partial_cmp(&(b.order, b.frequency_hz))
+                .unwrap()
+        });
+        select_automatic(
+            &mut poles,
+            &orders,
+            &PhysicalFilters::default(),
+            50.0,
+            &SelectionSettings::default(),
+        )
+    };
+    let coherent = run(0.0);
+    let fs: Vec<f64> = coherent.modes.iter().map(|m| m.frequency_hz).collect();
+    assert_eq!(fs.len(), 2, "{fs:?}");
+    assert!((fs[1] - 1.60).abs() < 0.01, "{fs:?}");
+    assert_eq!(coherent.promoted, vec![false, true]);
+    // Shapes that drift (consecutive MAC ≥ 0.998, mean MAC with the
+    // column's mean shape 0.990 < 0.995): not promoted.
+    let wandering = run(0.06);
+    assert_eq!(wandering.modes.len(), 1, "{:?}", wandering.modes);
+    assert!(wandering
+        .rejected
+        .iter()
+        .any(|r| (r.frequency_hz - 1.60).abs() < 0.01 && r.reason.contains("only 8 poles")));
+}
