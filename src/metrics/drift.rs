@@ -63,6 +63,11 @@ pub enum HeightSource {
     FromTotalHeight,
     /// The metrics stage's `assumed_storey_height_m`: ratings provisional.
     Assumed,
+    /// A segment ending at a roof whose level was ASSUMED (the storey count
+    /// is unknown: `event_folder::structure` puts the roof one level above
+    /// the highest labelled floor): how many storeys it spans is unknown, so
+    /// its ratio is shown over the assumed storeys but never rated.
+    RoofLevelAssumed,
 }
 
 impl HeightSource {
@@ -71,6 +76,7 @@ impl HeightSource {
             HeightSource::Stated => "stated",
             HeightSource::FromTotalHeight => "from total height",
             HeightSource::Assumed => "assumed",
+            HeightSource::RoofLevelAssumed => "unknown: roof level assumed",
         }
     }
 }
@@ -421,7 +427,8 @@ pub fn storey_drift(
             "storey heights from the total height: {} m each (structure.height_m / storeys)",
             heights.heights_m.first().copied().unwrap_or(0.0)
         )),
-        HeightSource::Stated => {}
+        // Set per segment in `direction_rows`, never by `resolve`.
+        HeightSource::Stated | HeightSource::RoofLevelAssumed => {}
     }
     for (dir, list) in &by_dir {
         direction_rows(dir, list, &heights, residual, &mut table)?;
@@ -480,6 +487,16 @@ fn direction_rows(
             h,
         )?;
         let res = residual.get(&(dir.to_string(), l0, l1)).copied();
+        let roof_assumed = [&r0.channel, &r1.channel].iter().any(|c| {
+            c.inferred
+                .iter()
+                .any(|i| i.starts_with("level=") && i.contains("ASSUMED"))
+        });
+        if roof_assumed {
+            table.notes.push(format!(
+                "{what}: the roof's level is assumed (storey count unknown): the segment's height is unknown, its drift ratio is shown over the assumed storeys and not rated; state structure.storeys in event.toml"
+            ));
+        }
         let kind = if l1 == l0 + 1 {
             DriftKind::Measured
         } else {
@@ -499,7 +516,11 @@ fn direction_rows(
             lower_channel: r0.channel.id.clone(),
             upper_channel: r1.channel.id.clone(),
             storey_height_m: h,
-            height_source: heights.source,
+            height_source: if roof_assumed {
+                HeightSource::RoofLevelAssumed
+            } else {
+                heights.source
+            },
             peak_drift_ratio: ratio,
             residual: res,
             residual_status: res.map(|x| ResidualStatus::of(&x, ratio * h)),

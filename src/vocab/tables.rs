@@ -122,7 +122,7 @@ declare!(DRIFT, drift, "drift", "drift.parquet",
     LOWER_LEVEL: "lower_level", I32, required, "", "lower level of the row (level 0 = the base)";
     UPPER_LEVEL: "upper_level", I32, required, "", "upper level of the row";
     METHOD: "method", Utf8, required, "", "how the value was formed (an `estimate`: the interpolation of the displacement profile)";
-    HEIGHT_SOURCE: "height_source", Utf8, required, "", "`stated` (`structure.storey_heights_m`), `from total height` (`height_m / storeys`), `assumed` (metrics param `assumed_storey_height_m`: the ratio and its rating are provisional)";
+    HEIGHT_SOURCE: "height_source", Utf8, required, "", "`stated` (`structure.storey_heights_m`), `from total height` (`height_m / storeys`), `assumed` (metrics param `assumed_storey_height_m`: the ratio and its rating are provisional), `unknown: roof level assumed` (storey count unknown: shown, never rated)";
     RESIDUAL_STATUS: "residual_status", Utf8, nullable, "", "`unresolved` (|D| < 2σ), else `artefact` (|D| more than twice the row's own peak drift: impossible for an offset reached during the motion, the band-pass taking at most about half of such an offset out of the peak — docs/report.md), else `resolved`; only `resolved` is rated; null without a residual";
 });
 

@@ -591,3 +591,52 @@ fn floor_subfolders_are_one_structure_not_a_collection_of_events() {
     let samples = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("sample-records");
     assert!(expand_events(std::slice::from_ref(&samples)).len() >= 7);
 }
+
+/// A building whose storey count no header states: the roof's level is
+/// assumed, so the segment up to it has an unknown height — its drift is
+/// shown and never rated (the 4th floor → roof segment of a 7-storey
+/// building would otherwise be one assumed storey for three real ones).
+#[test]
+fn a_segment_up_to_an_assumed_roof_level_is_shown_and_not_rated() {
+    let dir = tempfile::tempdir().unwrap();
+    let zip = write(
+        dir.path(),
+        "b.zip",
+        &zip_bytes(&building_members(
+            "Sample City; Steel Frame Bldg",
+            [3000; 3],
+        )),
+    );
+    let out = dir.path().join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_quaketwin"))
+        .args(["--quiet", "run"])
+        .arg(
+            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("pipelines/post-earthquake.toml"),
+        )
+        .arg(&zip)
+        .arg("--out")
+        .arg(&out)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let f = out.join("drift.parquet");
+    let sources = crate::common::column_str(&f, "height_source");
+    let upper = crate::common::column_i64(&f, "upper_level");
+    let kinds = crate::common::column_str(&f, "kind");
+    let mut roof_rows = 0;
+    for i in 0..sources.len() {
+        if kinds[i] != "estimate" && upper[i] == 4 {
+            assert_eq!(sources[i], "unknown: roof level assumed");
+            roof_rows += 1;
+        }
+    }
+    assert!(roof_rows > 0, "{sources:?} {upper:?}");
+    // Rated: only the basement → 4th floor segments.
+    for a in summary["assessment"]["assessments"].as_array().unwrap() {
+        let subject = a["subject"].as_str().unwrap();
+        assert!(subject.contains("levels 0–3"), "rated {subject}");
+    }
+}

@@ -65,12 +65,17 @@ pub(super) fn residual(t: &Table, r: usize) -> Option<Residual> {
 pub(super) struct RowKind {
     pub kind: String,
     pub assumed_height: Option<f64>,
+    /// The segment reaches a roof whose level was assumed: its height is
+    /// unknown, the row is shown and not rated.
+    pub roof_level_assumed: bool,
 }
 
 impl RowKind {
     pub fn of(t: &Table, r: usize) -> RowKind {
-        let assumed = t.key(drift::HEIGHT_SOURCE.name, r).as_deref() == Some("assumed");
+        let source = t.key(drift::HEIGHT_SOURCE.name, r);
+        let assumed = source.as_deref() == Some("assumed");
         RowKind {
+            roof_level_assumed: source.as_deref() == Some("unknown: roof level assumed"),
             kind: t
                 .key(drift::KIND.name, r)
                 .unwrap_or_else(|| "measured".into()),
@@ -82,9 +87,10 @@ impl RowKind {
                 .flatten(),
         }
     }
-    /// Estimates are shown, never rated.
+    /// Estimates, and segments up to an assumed roof level, are shown,
+    /// never rated.
     pub fn rated(&self) -> bool {
-        self.kind != "estimate"
+        self.kind != "estimate" && !self.roof_level_assumed
     }
 }
 
@@ -274,6 +280,7 @@ pub(super) fn drift_section(
         row.push(Cell::of(t, drift::PEAK_DRIFT_RATIO.name, r));
         row.push(percent_cell(v));
         row.push(match (kind.rated(), rating) {
+            (false, _) if kind.roof_level_assumed => Cell::text("roof level assumed: not rated"),
             (false, _) => Cell::text("estimate: not rated"),
             (true, rating) => rating_cell(rating),
         });
