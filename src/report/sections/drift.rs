@@ -200,7 +200,8 @@ pub(super) fn drift_section(
     let Some(t) = require(loaded, &tables::DRIFT, &mut body) else {
         return body;
     };
-    let known = [
+    // The columns the table shows, then those the text below explains.
+    let shown = [
         drift::DIRECTION.name,
         drift::KIND.name,
         drift::STOREY.name,
@@ -210,14 +211,20 @@ pub(super) fn drift_section(
         drift::UPPER_CHANNEL.name,
         drift::STOREY_HEIGHT_M.name,
         drift::HEIGHT_SOURCE.name,
-        drift::PEAK_DRIFT_RATIO.name,
-        drift::RESIDUAL_DRIFT_M.name,
-        drift::RESIDUAL_DRIFT_STD_M.name,
-        drift::RESIDUAL_DRIFT_RATIO.name,
-        drift::RESIDUAL_WINDOW_START_S.name,
-        drift::METHOD.name,
-        drift::RESIDUAL_STATUS.name,
     ];
+    let known: Vec<&str> = shown
+        .iter()
+        .copied()
+        .chain([
+            drift::PEAK_DRIFT_RATIO.name,
+            drift::RESIDUAL_DRIFT_M.name,
+            drift::RESIDUAL_DRIFT_STD_M.name,
+            drift::RESIDUAL_DRIFT_RATIO.name,
+            drift::RESIDUAL_WINDOW_START_S.name,
+            drift::METHOD.name,
+            drift::RESIDUAL_STATUS.name,
+        ])
+        .collect();
     body.push_str(&column_notes(t, &known));
     let Some(ratio) = t.number(drift::PEAK_DRIFT_RATIO.name) else {
         return body;
@@ -246,17 +253,6 @@ pub(super) fn drift_section(
         short_number(rth.yellow),
         short_number(rth.red)
     )));
-    let shown = [
-        drift::DIRECTION.name,
-        drift::KIND.name,
-        drift::STOREY.name,
-        drift::LOWER_LEVEL.name,
-        drift::UPPER_LEVEL.name,
-        drift::LOWER_CHANNEL.name,
-        drift::UPPER_CHANNEL.name,
-        drift::STOREY_HEIGHT_M.name,
-        drift::HEIGHT_SOURCE.name,
-    ];
     let present = present_columns(t, &shown);
     let mut headers: Vec<String> = present.iter().map(|s| s.to_string()).collect();
     headers.extend(

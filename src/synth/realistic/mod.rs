@@ -183,6 +183,52 @@ pub fn drift_table(
     let _ = writeln!(s, "residual_drift_ratio = {:.6e}", residual_m / height_m);
 }
 
+/// The `[[storey_drift]]` rows of storeys 1..=n and the `[[segment_drift]]`
+/// rows between consecutive instrumented `levels` of one axis, n =
+/// `storey_heights_m.len()`: `relative_displacement[l − 1]` is level l's
+/// displacement relative to the base, `at_rest(l)` its displacement once the
+/// motion has ended (the residual drift of a row is the difference of its
+/// two levels' values).
+pub fn storey_and_segment_drifts(
+    s: &mut String,
+    axis: &str,
+    relative_displacement: &[Vec<f64>],
+    storey_heights_m: &[f64],
+    levels: &[usize],
+    at_rest: impl Fn(usize) -> f64,
+) {
+    let disp = |l: usize| (l > 0).then(|| relative_displacement[l - 1].as_slice());
+    let z = level_heights(storey_heights_m);
+    for st in 1..=storey_heights_m.len() {
+        let labels = [("storey", st.to_string()), ("axis", format!("\"{axis}\""))];
+        drift_table(
+            s,
+            "storey_drift",
+            &labels,
+            disp(st - 1),
+            &relative_displacement[st - 1],
+            storey_heights_m[st - 1],
+            at_rest(st) - at_rest(st - 1),
+        );
+    }
+    for w in levels.windows(2) {
+        let labels = [
+            ("from_level", w[0].to_string()),
+            ("to_level", w[1].to_string()),
+            ("axis", format!("\"{axis}\"")),
+        ];
+        drift_table(
+            s,
+            "segment_drift",
+            &labels,
+            disp(w[0]),
+            &relative_displacement[w[1] - 1],
+            z[w[1]] - z[w[0]],
+            at_rest(w[1]) - at_rest(w[0]),
+        );
+    }
+}
+
 /// Writes `bytes` to `dir/name` (atomically).
 pub fn write_file(dir: &std::path::Path, name: &str, bytes: &[u8]) -> Result<()> {
     crate::sinks::parquet::write_bytes_atomically(&dir.join(name), bytes)
