@@ -6,6 +6,7 @@
 //! **test design** → **sinks** (Parquet, MCAP, report).  The `vocab` module
 //! holds the types every stage speaks.
 
+pub mod assessment;
 pub mod commands;
 pub mod conditioning;
 pub mod console;

@@ -17,7 +17,7 @@ use crate::report::{ReportSettings, Verdict};
 use crate::vocab::tables::{self as t, bouc_wen, frequency_shifts as shifts, modes};
 
 /// Version of the summary's layout (bumped when a field changes meaning).
-pub const SUMMARY_VERSION: u32 = 1;
+pub const SUMMARY_VERSION: u32 = 2;
 
 /// One event run through a pipeline.
 #[derive(Debug, Clone, Serialize)]
@@ -37,9 +37,13 @@ pub struct RunSummary {
     pub modes: Vec<ModeSummary>,
     pub frequency_shifts: Vec<ShiftSummary>,
     pub bouc_wen: Vec<DirectionSummary>,
-    /// The report's rating (default thresholds); `rating: null` inside when
-    /// no criterion could be rated.
-    pub assessment: Option<Verdict>,
+    /// The assessment (`assessment.parquet`, the `assess` stage): colour,
+    /// priority, probabilities, indicators; absent when the pipeline has no
+    /// `assess` stage.
+    pub assessment: Option<crate::report::AssessmentView>,
+    /// The screening of tabled values against fixed thresholds (drift, ι;
+    /// default thresholds); `rating: null` inside when no value could be rated.
+    pub screening: Option<Verdict>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -136,9 +140,10 @@ impl RunSummary {
         let rated = outputs
             .iter()
             .any(|f| f == t::DRIFT.file || f == t::DAMAGE.file);
-        let assessment = rated
+        let screening = rated
             .then(|| crate::report::verdict(out, &ReportSettings::default()).ok())
             .flatten();
+        let assessment = crate::report::read_assessment(out);
         RunSummary {
             summary_version: SUMMARY_VERSION,
             pipeline: pipeline.to_string(),
@@ -152,6 +157,7 @@ impl RunSummary {
             frequency_shifts,
             bouc_wen,
             assessment,
+            screening,
         }
     }
 }

@@ -111,7 +111,13 @@ pub fn manifest_text(loaded: &LoadedEvent, source: &str, zip_event: bool) -> Str
         Some(t) => {
             let _ = writeln!(s, "type = {}", quoted(t));
         }
-        None => s.push_str("# type = \"C1\"  # unknown: model building type (HAZUS code)\n"),
+        None => s.push_str("# type = \"C1\"  # unknown: model building type (HAZUS code: C1, C2, S1, W1, PC1, RM1, URM…), its drift fragility\n"),
+    }
+    match &st.design_level {
+        Some(t) => {
+            let _ = writeln!(s, "design_level = {}", quoted(t));
+        }
+        None => s.push_str("# design_level = \"moderate\"  # unknown: HAZUS seismic design level (high, moderate, low, pre)\n"),
     }
     match st.x_axis_azimuth_deg {
         Some(a) => {

@@ -59,6 +59,8 @@ pub struct StructureSection {
     /// Model building type (HAZUS code: "C1", "S1", "W1", "URM", …).
     #[serde(rename = "type")]
     pub building_type: Option<String>,
+    /// HAZUS seismic design level: "high", "moderate", "low" or "pre".
+    pub design_level: Option<String>,
     /// "building", "bridge", …
     pub kind: Option<String>,
 }
@@ -77,6 +79,7 @@ impl StructureSection {
                 (!self.storey_heights_m.is_empty()).then(|| self.storey_heights_m.iter().sum())
             }),
             building_type: self.building_type.clone(),
+            design_level: self.design_level.clone(),
             kind: self.kind.clone(),
             inferred: Vec::new(),
         }

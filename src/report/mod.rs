@@ -19,6 +19,7 @@ mod html;
 pub mod plot;
 pub use plot::decimate_curve;
 mod sections;
+pub use sections::assessment::{read_assessment, AssessmentView, IndicatorView};
 pub mod table;
 pub mod tracking;
 

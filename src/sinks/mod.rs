@@ -1,6 +1,7 @@
 //! Sinks: where results leave the pipeline (Parquet tables, MCAP replays).
 //! I/O lives here, at the edge; stages hand over plain data.
 
+pub mod assessment_tables;
 pub mod atomic;
 pub mod dataset;
 pub mod design_tables;

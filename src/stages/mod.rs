@@ -6,6 +6,7 @@
 //! pipeline (`parse_pipeline`), which knows stages only through the
 //! `pipeline::Stage` trait.
 
+pub mod assess;
 pub mod condition;
 pub mod design;
 pub mod hysteresis;
@@ -31,6 +32,7 @@ pub const CATALOG: &[StageKind] = &[
     hysteresis::KIND,
     hysteresis::DAMAGE_KIND,
     update::KIND,
+    assess::KIND,
     design::KIND,
     rehearse::KIND,
     report::KIND,

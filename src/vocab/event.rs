@@ -64,6 +64,9 @@ pub struct Structure {
     /// Model building type (HAZUS code such as "C1", "S1", "URM"), when stated.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub building_type: Option<String>,
+    /// HAZUS seismic design level ("high", "moderate", "low", "pre"), when stated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub design_level: Option<String>,
     /// Kind of structure: "building", "bridge", … when stated or inferred.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kind: Option<String>,

@@ -382,6 +382,60 @@ declare!(MODAL_TRACKING, modal_tracking, "modal_tracking", "modal_tracking.parqu
     ANOMALOUS_WINDOW: "anomalous_window", Bool, required, "", "at least half of this window's modes with a band are flagged (Eq. M5; the same on every row of the window)";
 });
 
+declare!(FREQUENCY_TRACK, frequency_track, "frequency_track", "frequency_track.parquet",
+    "one row per moving window and tracked direction: the apparent fundamental frequency during the event (`assess` stage, docs/assessment.md)", {
+    DIRECTION: "direction", Utf8, required, "", "building direction tracked (`X`, `Y`)";
+    OUTPUT_CHANNEL: "output_channel", Utf8, required, "", "channel whose response is tracked (the highest level of the direction)";
+    INPUT_CHANNEL: "input_channel", Utf8, nullable, "", "the base channel of the direction (input–output identification); null for output-only";
+    METHOD: "method", Utf8, required, "", "`arx` (input–output) or `ar` (output-only), see docs/assessment.md";
+    WINDOW_S: "window_s", F64, required, "s", "length of the moving window";
+    TIME_S: "time_s", F64, required, "s", "window centre, from the start of the common window of the two records";
+    FREQUENCY_HZ: "frequency_hz", F64, nullable, "Hz", "apparent frequency of the pole nearest the expected fundamental; null when the window has none";
+    DAMPING_RATIO: "damping_ratio", F64, nullable, "1", "damping ratio of that pole";
+    OUTPUT_RMS: "output_rms", F64, required, "m/s^2", "RMS of the output record over the window";
+    PHASE: "phase", Utf8, required, "", "`pre` (window wholly before 5 % of the base's Arias intensity), `strong` (overlapping the 5–95 % span), `post` (wholly after 95 %)";
+});
+
+declare!(ASSESSMENT, assessment, "assessment", "assessment.parquet",
+    "one row per event: the overall colour and inspection priority, the damage-state probabilities and every indicator's value and verdict (`assess` stage, docs/assessment.md)", {
+    EVENT: "event", Utf8, required, "", "event name";
+    STRUCTURE: "structure", Utf8, nullable, "", "structure name";
+    STRUCTURE_KIND: "structure_kind", Utf8, required, "", "`building`, `bridge`, or `unknown`";
+    RATING: "rating", Utf8, required, "", "`GREEN`, `YELLOW`, `ORANGE`, `RED`, or `NOT RATED`";
+    PRIORITY: "priority", Utf8, nullable, "", "inspection priority: `low`, `medium`, `medium-high`, `high` (null when not rated)";
+    DAMAGE_STATE: "damage_state", Utf8, nullable, "", "the damage state behind the rating (`none` … `complete`)";
+    CONFIDENCE: "confidence", Utf8, required, "", "`agreeing`, `corroborated by N indicators`, `single indicator`, `only one indicator rated`, `not rated`";
+    PROVISIONAL: "provisional", Bool, required, "", "an indicator behind the rating rests on an assumption (listed in `assumptions`)";
+    DRIVERS: "drivers", ListUtf8, required, "", "the indicators behind the rating, as sentences";
+    NOT_RATED_REASON: "not_rated_reason", Utf8, nullable, "", "why no indicator could be rated";
+    BUILDING_TYPE: "building_type", Utf8, nullable, "", "HAZUS model building type of the drift fragility (null: none applies)";
+    DESIGN_LEVEL: "design_level", Utf8, nullable, "", "HAZUS seismic design level: `high`, `moderate`, `low`, `pre`";
+    BUILDING_TYPE_SOURCE: "building_type_source", Utf8, required, "", "`stated` (structure.type), `default` (not stated or not recognised), `not applicable`";
+    P_NONE: "p_none", F64, nullable, "1", "probability of no structural damage at the driving peak drift";
+    P_SLIGHT: "p_slight", F64, nullable, "1", "probability of slight damage";
+    P_MODERATE: "p_moderate", F64, nullable, "1", "probability of moderate damage";
+    P_EXTENSIVE: "p_extensive", F64, nullable, "1", "probability of extensive damage";
+    P_COMPLETE: "p_complete", F64, nullable, "1", "probability of complete damage";
+    EMS98_GRADE: "ems98_grade", Utf8, nullable, "", "EMS-98 grade of the most likely drift damage state (`0`, `1`, `2`, `3`, `4–5`)";
+    DRIFT_RATIO: "drift_ratio", F64, nullable, "1", "driving peak drift ratio (largest rated storey or segment drift)";
+    DRIFT_STATE: "drift_state", Utf8, nullable, "", "most likely damage state at that drift; null when not rated";
+    DRIFT_VERDICT: "drift_verdict", Utf8, required, "", "the drift indicator's verdict, or `not rated: <reason>`";
+    FREQUENCY_BEFORE_HZ: "frequency_before_hz", F64, nullable, "Hz", "apparent fundamental frequency before the strong shaking (pre-event windows or the reference event) of the driving direction";
+    FREQUENCY_MIN_DURING_HZ: "frequency_min_during_hz", F64, nullable, "Hz", "lowest apparent frequency during the strong shaking";
+    FREQUENCY_AFTER_HZ: "frequency_after_hz", F64, nullable, "Hz", "apparent frequency after the strong shaking";
+    FREQUENCY_DROP_DURING: "frequency_drop_during", F64, nullable, "1", "1 − min during / before: temporary softening, reported, never rated";
+    FREQUENCY_DROP_PERMANENT: "frequency_drop_permanent", F64, nullable, "1", "1 − after / before: the rated permanent softening";
+    FREQUENCY_STATE: "frequency_state", Utf8, nullable, "", "damage state of the permanent drop; null when not rated";
+    FREQUENCY_VERDICT: "frequency_verdict", Utf8, required, "", "the frequency indicator's verdict, or `not rated: <reason>`";
+    IOTA_FINAL: "iota_final", F64, nullable, "1", "final damage index ι of the driving direction, where significant hysteresis was identified";
+    HYSTERESIS_STATE: "hysteresis_state", Utf8, nullable, "", "damage state of ι; `none` for no significant hysteresis and no lasting softening; null when not rated";
+    HYSTERESIS_VERDICT: "hysteresis_verdict", Utf8, required, "", "the hysteresis indicator's verdict, or `not rated: <reason>`";
+    RESIDUAL_DRIFT_RATIO: "residual_drift_ratio", F64, nullable, "1", "largest resolved residual drift ratio (absolute)";
+    RESIDUAL_STATE: "residual_state", Utf8, nullable, "", "its damage state; null when not rated";
+    RESIDUAL_VERDICT: "residual_verdict", Utf8, required, "", "the residual-drift indicator's verdict, or `not rated: <reason>`";
+    ASSUMPTIONS: "assumptions", ListUtf8, required, "", "what the assessment assumed: a default building type, an assumed storey height, a roof level…";
+});
+
 /// Every table quaketwin writes, in pipeline order.
 pub const ALL_TABLES: &[&TableSchema] = &[
     &SAMPLES,
@@ -405,6 +459,8 @@ pub const ALL_TABLES: &[&TableSchema] = &[
     &HYBRID_PROTOTYPE,
     &REHEARSAL_SUMMARY,
     &REHEARSAL,
+    &FREQUENCY_TRACK,
+    &ASSESSMENT,
     &MODAL_TRACKING,
 ];
 

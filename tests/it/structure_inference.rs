@@ -635,7 +635,7 @@ fn a_segment_up_to_an_assumed_roof_level_is_shown_and_not_rated() {
     }
     assert!(roof_rows > 0, "{sources:?} {upper:?}");
     // Rated: only the basement → 4th floor segments.
-    for a in summary["assessment"]["assessments"].as_array().unwrap() {
+    for a in summary["screening"]["assessments"].as_array().unwrap() {
         let subject = a["subject"].as_str().unwrap();
         assert!(subject.contains("levels 0–3"), "rated {subject}");
     }

@@ -3,6 +3,7 @@
 //! This file holds the page and the helpers the sections share.
 
 mod appendix;
+pub(crate) mod assessment;
 mod channels;
 mod damage;
 mod design;
@@ -29,10 +30,11 @@ use super::table::{self, Table};
 use super::{Assessment, Rating, ReportSettings};
 use crate::vocab::schema::{ColumnSpec, TableSchema};
 use crate::vocab::tables;
+pub(crate) use assessment::read_assessment;
 
 /// Output files the report reads, with the stage that writes each (every
 /// table of `vocab::tables`, the run's JSON/TOML files and the page itself).
-const OUTPUTS: [(&str, &str); 25] = [
+const OUTPUTS: [(&str, &str); 27] = [
     ("event.json", "ingest"),
     (tables::SAMPLES.file, "condition"),
     (tables::CHANNELS.file, "metrics"),
@@ -52,6 +54,8 @@ const OUTPUTS: [(&str, &str); 25] = [
     (tables::TWIN_UPDATE.file, "update"),
     (tables::TWIN_MODES.file, "update"),
     ("twin_updated.toml", "update"),
+    (tables::ASSESSMENT.file, "assess"),
+    (tables::FREQUENCY_TRACK.file, "assess"),
     (tables::POD.file, "design"),
     (tables::ACTUATOR_LAYOUT.file, "design"),
     (tables::REDUCTION_VALIDATION.file, "design"),
@@ -311,7 +315,7 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
     let damage_html = damage::damage_section(&o, settings, &mut assessments);
     let twin = twin::twin_section(&o, settings);
     let design = design::design_section(dir, settings);
-    let rating = rating::rating_section(&assessments, &o, settings);
+    let rating = rating::rating_section(dir, &assessments, &o, settings);
     let summary = summary::summary_section(dir, &event, &o, settings);
     let appendix = appendix::appendix_section(dir, &event, &o, settings);
 
@@ -454,9 +458,11 @@ ul.legend{list-style:none;padding:0;margin:2px 0;display:flex;flex-wrap:wrap;gap
 .badge{display:inline-block;padding:0 6px;border-radius:3px;font-weight:700;border:1px solid #333;white-space:nowrap}
 .r-green{background:#009e73;color:#fff}
 .r-yellow{background:#f0e442;color:#000}
+.r-orange{background:#e69f00;color:#000}
 .r-red{background:#d55e00;color:#fff}
 .rating-box{border:2px solid #333;border-radius:6px;padding:8px 14px;margin:8px 0;max-width:800px}
-.rating-box.r-green,.rating-box.r-yellow,.rating-box.r-red{background:none;color:var(--fg)}
+.rating-box.r-green,.rating-box.r-yellow,.rating-box.r-orange,.rating-box.r-red{background:none;color:var(--fg)}
+.rating-box.r-orange{border-color:#e69f00}
 .rating-box.r-green{border-color:#009e73}
 .rating-box.r-yellow{border-color:#c8b800}
 .rating-box.r-red{border-color:#d55e00}
@@ -491,6 +497,6 @@ ol.history code{font-size:8.5px}
 .meta,.note,figcaption,ul.legend,dl.facts{font-size:9.5px}
 .lead{font-size:12px}
 .rating-box .big{font-size:16px}
-.badge,.r-green,.r-yellow,.r-red,.rating-box,th,.absent{-webkit-print-color-adjust:exact;print-color-adjust:exact}
+.badge,.r-green,.r-yellow,.r-orange,.r-red,.rating-box,th,.absent{-webkit-print-color-adjust:exact;print-color-adjust:exact}
 }
 "#;

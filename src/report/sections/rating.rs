@@ -85,13 +85,24 @@ fn thresholds_text(t: &Thresholds) -> String {
 }
 
 pub(super) fn rating_section(
+    dir: &std::path::Path,
     assessments: &[Assessment],
     o: &Outputs,
     settings: &ReportSettings,
 ) -> String {
     let mut body = String::new();
     let verdict = crate::report::Verdict::of(assessments.to_vec());
+    let assessed = super::read_assessment(dir);
+    if let Some(view) = &assessed {
+        let track = super::load(dir, &tables::FREQUENCY_TRACK, None);
+        body.push_str(&super::assessment::assessment_html(view, &track, settings));
+        body.push_str("<h3>Screening values by threshold</h3>");
+        body.push_str(&note(
+            "Each tabled value against fixed screening thresholds (FEMA 356 braced-frame drift limits, ι limits): context for the indicators above, not the rating.",
+        ));
+    }
     match verdict.rating {
+        _ if assessed.is_some() => {}
         None => {
             body.push_str(
                 "<div class=\"rating-box r-none\" id=\"overall-rating\"><p class=\"big\">NOT RATED</p><p>No rating criterion is available (see below).</p></div>",
@@ -212,8 +223,10 @@ pub(super) fn rating_section(
             missing.join("")
         ));
     }
-    body.push_str(&note(
-        "Overall rating = worst of the available criteria. Screening values, to be set per structure type; sources and rationale in docs/report.md.",
-    ));
+    if assessed.is_none() {
+        body.push_str(&note(
+            "Overall rating = worst of the available criteria (no assessment.parquet: the pipeline has no `assess` stage). Screening values, to be set per structure type; sources and rationale in docs/report.md.",
+        ));
+    }
     body
 }
