@@ -72,9 +72,9 @@ def row(binary, pipeline, event, out):
     try:
         summary = json.loads(proc.stdout)
     except json.JSONDecodeError:
-        return ["exit %d" % proc.returncode, "", "", "", "", short(proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else "")]
+        return ["exit %d" % proc.returncode, "", "", "", "", "", short(proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else "")]
     if not summary.get("ok"):
-        return ["error", "", "", "", "", short(summary.get("error"), 140)]
+        return ["error", "", "", "", "", "", short(summary.get("error"), 140)]
     ev = json.loads((out / "event.json").read_text())
     chans = [c for c in ev.get("channels", []) if not c.get("combines")]
     with_level = sum(1 for c in chans if c.get("level") is not None)
@@ -101,6 +101,19 @@ def row(binary, pipeline, event, out):
     a = summary.get("assessment") or {}
     rating = a.get("rating") or "NOT RATED"
     drivers = "; ".join(str(d) for d in a.get("drivers", []))
+    if rating == "NOT RATED":
+        drivers = a.get("not_rated_reason") or "no assess stage"
+    else:
+        rating = "%s (%s%s)" % (rating, a.get("confidence", ""), ", provisional" if a.get("provisional") else "")
+
+    def hz(v):
+        return "—" if v is None else "%.3f" % v
+
+    freq_text = "%s → %s → %s" % (
+        hz(a.get("frequency_before_hz")),
+        hz(a.get("frequency_min_during_hz")),
+        hz(a.get("frequency_after_hz")),
+    )
     na = [
         "%s: %s" % (s["name"], short(s.get("reason"), 60))
         for s in summary.get("stages", [])
@@ -111,7 +124,8 @@ def row(binary, pipeline, event, out):
         "%d/%d" % (with_level, len(chans)),
         mode_text or "none",
         drift_text,
-        short("%s %s" % (rating, ("(" + drivers + ")") if drivers else ""), 80),
+        freq_text,
+        short("%s: %s" % (rating, drivers) if drivers else rating, 220),
         short("; ".join(na), 160),
     ]
 
@@ -124,8 +138,8 @@ def main():
     ap.add_argument("--shared", default="../shared")
     args = ap.parse_args()
     shared = pathlib.Path(args.shared)
-    print("| record | run | channels with a level | modes (Hz, direction) | drift | rating | not applicable |")
-    print("|---|---|---|---|---|---|---|")
+    print("| record | run | channels with a level | modes (Hz, direction) | drift | apparent f before → min → after (Hz) | assessment | not applicable |")
+    print("|---|---|---|---|---|---|---|---|")
     for ev in events(shared):
         name = str(ev.relative_to(shared / "records"))
         out = pathlib.Path(args.out) / name.replace("/", "__")

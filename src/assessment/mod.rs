@@ -25,7 +25,9 @@
 //! other stages' tables and writes `assessment.parquet`.
 
 pub mod fragility;
+pub mod frequency;
 pub mod indicators;
+pub mod verdict;
 
 use serde::Serialize;
 
@@ -355,63 +357,5 @@ pub fn combine(indicators: &[Indicator]) -> Overall {
         drivers,
         provisional,
         reason: None,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn ind(kind: IndicatorKind, state: Option<DamageState>) -> Indicator {
-        Indicator {
-            kind,
-            value: Some(0.0),
-            subject: String::new(),
-            state,
-            verdict: state
-                .map(|s| s.name().to_string())
-                .unwrap_or("not rated: absent".into()),
-            provisional: false,
-        }
-    }
-
-    #[test]
-    fn agreement_gives_the_colour_and_a_lone_indicator_gives_inspect() {
-        use DamageState::*;
-        use IndicatorKind::*;
-        let all_none = combine(&[ind(Drift, Some(None)), ind(Frequency, Some(None))]);
-        assert_eq!(all_none.colour, Some(Colour::Green));
-        let corroborated = combine(&[
-            ind(Drift, Some(Extensive)),
-            ind(Frequency, Some(Complete)),
-            ind(ResidualDrift, Some(Extensive)),
-        ]);
-        assert_eq!(corroborated.colour, Some(Colour::Red));
-        assert!(corroborated.confidence.starts_with("corroborated"));
-        let lone = combine(&[ind(Drift, Some(Extensive)), ind(Frequency, Some(None))]);
-        assert_eq!(lone.colour, Some(Colour::Yellow));
-        assert_eq!(lone.confidence, "single indicator");
-        assert!(lone.drivers[0].starts_with("peak drift"));
-        let partly = combine(&[ind(Drift, Some(Extensive)), ind(Frequency, Some(Moderate))]);
-        assert_eq!(partly.colour, Some(Colour::Orange));
-        let beyond = combine(&[
-            ind(Drift, Some(Extensive)),
-            ind(Frequency, Some(Complete)),
-            ind(Hysteresis, Some(None)),
-        ]);
-        assert_eq!(beyond.colour, Some(Colour::Red));
-        assert!(
-            beyond.confidence.contains("alone reaches complete"),
-            "{}",
-            beyond.confidence
-        );
-        let only = combine(&[ind(Drift, Some(Complete)), ind(Frequency, Option::None)]);
-        assert_eq!(only.colour, Some(Colour::Yellow));
-        assert_eq!(only.confidence, "only one indicator rated");
-        let only_none = combine(&[ind(Drift, Some(None)), ind(Frequency, Option::None)]);
-        assert_eq!(only_none.colour, Some(Colour::Green));
-        let nothing = combine(&[ind(Drift, Option::None), ind(Frequency, Option::None)]);
-        assert_eq!(nothing.colour, Option::None);
-        assert!(nothing.reason.unwrap().contains("peak drift: absent"));
     }
 }

@@ -7,23 +7,11 @@
 use std::path::Path;
 
 use super::parquet::{write_parquet, TableBuilder};
+use crate::assessment::frequency::TrackRows;
 use crate::assessment::{Assessment, IndicatorKind};
 use crate::error::Result;
-use crate::modal::apparent::FrequencyTrack;
 use crate::vocab::tables::{assessment as a, frequency_track as f, ASSESSMENT, FREQUENCY_TRACK};
 use crate::vocab::Event;
-
-/// One direction's track and what it was computed from.
-#[derive(Debug, Clone)]
-pub struct TrackRows {
-    pub direction: String,
-    pub output_channel: String,
-    pub input_channel: Option<String>,
-    /// The strong shaking (the base's Arias 5–95 % span), s.
-    pub strong_start_s: f64,
-    pub strong_end_s: f64,
-    pub track: FrequencyTrack,
-}
 
 /// `frequency_track.parquet`.
 pub fn write_frequency_track(path: &Path, event: &Event, tracks: &[TrackRows]) -> Result<()> {

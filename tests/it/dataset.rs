@@ -135,6 +135,39 @@ fn events_run_in_parallel_into_a_table_first_dataset_that_pyarrow_duckdb_and_pol
     for (event, n) in &per_event {
         expected.push_str(&format!("{event}:{n} "));
     }
+    // Issue 32: every event has one assessment row, the same as its run's
+    // assessment.parquet, and its report opens with that rating.
+    let assessments = out.path().join("assessment");
+    let mut ratings: Vec<(String, String)> = Vec::new();
+    for f in files_under(&assessments) {
+        let event = f.parent().unwrap().file_name().unwrap().to_string_lossy();
+        let rating = crate::common::column_str(&assessments.join(&f), "rating");
+        assert_eq!(rating.len(), 1, "{}", f.display());
+        let report = std::fs::read_to_string(
+            out.path()
+                .join("runs")
+                .join(f.parent().unwrap())
+                .join("report.html"),
+        )
+        .unwrap();
+        let opening = &report[report.find("id=\"overall-rating\"").unwrap()..][..300];
+        assert!(
+            opening.contains(&rating[0]),
+            "{event}: {} vs {opening}",
+            rating[0]
+        );
+        ratings.push((
+            event.trim_start_matches("event=").to_string(),
+            rating[0].clone(),
+        ));
+    }
+    ratings.sort();
+    assert_eq!(ratings.len(), events.len(), "{ratings:?}");
+    let expected_ratings = ratings
+        .iter()
+        .map(|(e, r)| format!("{e}:{r}"))
+        .collect::<Vec<_>>()
+        .join(" ");
 
     let script = r#"
 import sys
@@ -151,6 +184,10 @@ rows = duckdb.sql(f"select event, count(*) from read_parquet('{root}/modes/**/*.
 print("duckdb", line(rows))
 df = pl.scan_parquet(root + "/modes/**/*.parquet", hive_partitioning=True).group_by("event").len().collect()
 print("polars", line(zip(df["event"].to_list(), df["len"].to_list())))
+a = ds.dataset(root + "/assessment", format="parquet", partitioning="hive").to_table(columns=["event", "rating"])
+print("pyarrow-assessment", line(zip(a.column("event").to_pylist(), a.column("rating").to_pylist())))
+rows = duckdb.sql(f"select event, rating from read_parquet('{root}/assessment/**/*.parquet', hive_partitioning=true)").fetchall()
+print("duckdb-assessment", line(rows))
 "#;
     let Some(stdout) = python(script, out.path()) else {
         return;
@@ -158,7 +195,9 @@ print("polars", line(zip(df["event"].to_list(), df["len"].to_list())))
     let expected = expected.trim();
     assert_eq!(
         stdout.trim(),
-        format!("pyarrow {expected}\nduckdb {expected}\npolars {expected}")
+        format!(
+            "pyarrow {expected}\nduckdb {expected}\npolars {expected}\npyarrow-assessment {expected_ratings}\nduckdb-assessment {expected_ratings}"
+        )
     );
 }
 

@@ -13,6 +13,8 @@ mod common;
 
 mod architecture;
 
+mod assessment;
+
 mod big_input;
 mod bridge_consistency;
 mod buildings;

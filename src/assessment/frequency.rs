@@ -1,0 +1,257 @@
+//! The apparent-frequency evidence: per horizontal direction, the record of
+//! the highest instrumented level (with the base's as input, on their common
+//! time window) tracked through the event by `modal::apparent`, and its
+//! before / during / after levels around the strong shaking (the base
+//! record's Arias 5–95 % span, Trifunac & Brady).  I/O free: the stage hands
+//! in the conditioned records and what earlier stages tabled.
+
+use super::indicators::FrequencyEvidence;
+use crate::conditioning::Motion;
+use crate::error::Result;
+use crate::modal::apparent::{track_apparent_frequency, ApparentSettings, FrequencyTrack};
+use crate::vocab::{Axis, Event, Record};
+
+/// One direction's track and what it was computed from.
+#[derive(Debug, Clone)]
+pub struct TrackRows {
+    pub direction: String,
+    pub output_channel: String,
+    pub input_channel: Option<String>,
+    /// The strong shaking (the base's Arias span), s from the track's origin.
+    pub strong_start_s: f64,
+    pub strong_end_s: f64,
+    pub track: FrequencyTrack,
+}
+
+/// What earlier stages say of a direction's fundamental.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct KnownFundamentals {
+    /// Lowest identified mode per direction label (`modes.parquet`).
+    pub identified: Vec<(String, f64)>,
+    /// The reference event's lowest mode per direction label
+    /// (`frequency_shifts.parquet`, with `--reference`).
+    pub reference: Vec<(String, f64)>,
+}
+
+impl KnownFundamentals {
+    fn of(list: &[(String, f64)], direction: &str) -> Option<f64> {
+        list.iter()
+            .filter(|(d, f)| d == direction && f.is_finite() && *f > 0.0)
+            .map(|(_, f)| *f)
+            .min_by(|a, b| a.total_cmp(b))
+    }
+}
+
+fn missing(direction: &str, channels: &str, why: String) -> FrequencyEvidence {
+    FrequencyEvidence {
+        direction: direction.to_string(),
+        channels: channels.to_string(),
+        before_hz: None,
+        before_source: String::new(),
+        min_during_hz: None,
+        after_hz: None,
+        scatter: 0.0,
+        why_missing: Some(why),
+    }
+}
+
+/// The tracks and the frequency evidence of every horizontal direction of
+/// `event` (module doc); `arias` bounds the strong shaking.
+pub fn frequency_evidence(
+    event: &Event,
+    motions: &[Motion],
+    known: &KnownFundamentals,
+    settings: &ApparentSettings,
+    arias: [f64; 2],
+) -> Result<(Vec<TrackRows>, Vec<FrequencyEvidence>)> {
+    let selection = crate::geometry::one_record_per_level(&event.records);
+    let mut rows = Vec::new();
+    let mut evidence = Vec::new();
+    let motion_of = |id: &str| motions.iter().find(|m| m.channel_id == id);
+    for axis in [Axis::X, Axis::Y] {
+        let direction = format!("{axis:?}");
+        let levels: Vec<(i32, &Record)> = selection
+            .records
+            .iter()
+            .filter(|((a, _), _)| *a == axis)
+            .map(|((_, l), r)| (*l, *r))
+            .collect();
+        let base = levels.iter().find(|(l, _)| *l == 0).map(|(_, r)| *r);
+        let Some(&(_, top)) = levels
+            .iter()
+            .filter(|(l, _)| *l > 0)
+            .max_by_key(|(l, _)| *l)
+        else {
+            if !levels.is_empty() {
+                evidence.push(missing(
+                    &direction,
+                    "",
+                    "no record above the base in this direction".into(),
+                ));
+            }
+            continue;
+        };
+        let Some(out_motion) = motion_of(&top.channel.id) else {
+            evidence.push(missing(
+                &direction,
+                &top.channel.id,
+                "the output channel was not conditioned".into(),
+            ));
+            continue;
+        };
+        let dt = out_motion.dt;
+        let output = out_motion.acceleration.get()?.to_vec();
+        let input_motion = base
+            .and_then(|r| motion_of(&r.channel.id).map(|m| (r, m)))
+            .filter(|(_, m)| (m.dt - dt).abs() < 1e-12);
+        // One time base: the common window of the two records.
+        let (output, input, input_id) = match input_motion {
+            Some((rec, m)) => {
+                let input = m.acceleration.get()?.to_vec();
+                match crate::metrics::drift::common_window(&[
+                    (&rec.channel, input.len()),
+                    (&top.channel, output.len()),
+                ]) {
+                    Ok(w) => (
+                        output[w.offsets[1]..w.offsets[1] + w.len].to_vec(),
+                        Some(input[w.offsets[0]..w.offsets[0] + w.len].to_vec()),
+                        Some(rec.channel.id.clone()),
+                    ),
+                    Err(why) => {
+                        evidence.push(missing(
+                            &direction,
+                            &top.channel.id,
+                            format!("base and output records share no time base: {why}"),
+                        ));
+                        continue;
+                    }
+                }
+            }
+            None => (output, None, None),
+        };
+        let channels = match &input_id {
+            Some(i) => format!("{} / {i}", top.channel.id),
+            None => top.channel.id.clone(),
+        };
+        let Some(expected) = expected_frequency(event, &direction, &output, dt, known) else {
+            evidence.push(missing(
+                &direction,
+                &channels,
+                "no expected fundamental (no mode in this direction, no spectral peak, no storey count or height)".into(),
+            ));
+            continue;
+        };
+        let track =
+            match track_apparent_frequency(input.as_deref(), &output, dt, expected, settings) {
+                Ok(t) => t,
+                Err(e) => {
+                    evidence.push(missing(&direction, &channels, format!("no track: {e}")));
+                    continue;
+                }
+            };
+        let arias_of = input.as_deref().unwrap_or(&output);
+        let (duration, start) =
+            crate::metrics::significant_duration(arias_of, dt, arias[0], arias[1])?;
+        let (strong_start, strong_end) = (start, start + duration);
+        let phases = track.phases(strong_start, strong_end);
+        let reference = KnownFundamentals::of(&known.reference, &direction);
+        let (before_hz, before_source) = match (phases.pre_hz, reference) {
+            (Some(f), _) => (Some(f), "pre-event windows".to_string()),
+            (None, Some(f)) => (Some(f), "reference event".to_string()),
+            (None, None) => (None, String::new()),
+        };
+        let why_missing = if before_hz.is_none() {
+            Some(format!(
+                "no pre-event window: the strong shaking starts {strong_start:.1} s into the record and a window is {:.1} s long; give --reference with an earlier event",
+                track.window_s
+            ))
+        } else if phases.post_hz.is_none() {
+            Some(format!(
+                "no post-event window: the record ends {:.1} s after the strong shaking and a window is {:.1} s long",
+                (output.len() as f64 * dt - strong_end).max(0.0),
+                track.window_s
+            ))
+        } else {
+            None
+        };
+        evidence.push(FrequencyEvidence {
+            direction: direction.clone(),
+            channels,
+            before_hz,
+            before_source,
+            min_during_hz: phases.min_during_hz,
+            after_hz: phases.post_hz,
+            scatter: phase_scatter(&track, strong_start, strong_end),
+            why_missing,
+        });
+        rows.push(TrackRows {
+            direction,
+            output_channel: top.channel.id.clone(),
+            input_channel: input_id,
+            strong_start_s: strong_start,
+            strong_end_s: strong_end,
+            track,
+        });
+    }
+    Ok((rows, evidence))
+}
+
+/// Relative scatter of the pre- and post-event estimates (standard
+/// deviation over mean of each, in quadrature): the noise a permanent drop
+/// must stand out of.
+pub fn phase_scatter(track: &FrequencyTrack, strong_start: f64, strong_end: f64) -> f64 {
+    let half = 0.5 * track.window_s;
+    let rel_std = |keep: &dyn Fn(f64) -> bool| -> f64 {
+        let values: Vec<f64> = track
+            .points
+            .iter()
+            .filter(|p| p.frequency_hz.is_finite() && keep(p.time_s))
+            .map(|p| p.frequency_hz)
+            .collect();
+        if values.len() < 2 {
+            return 0.0;
+        }
+        let n = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / n;
+        let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        if mean > 0.0 {
+            var.sqrt() / mean
+        } else {
+            0.0
+        }
+    };
+    let pre = rel_std(&|t| t + half <= strong_start);
+    let post = rel_std(&|t| t - half >= strong_end);
+    pre.hypot(post)
+}
+
+/// The expected fundamental of a direction: its identified mode, unless the
+/// record's lowest spectral peak lies well below it (a fundamental that
+/// softened during the event, or was not selected); else the peak; else the
+/// structure's estimate (EC8 / 0.1·N).
+fn expected_frequency(
+    event: &Event,
+    direction: &str,
+    output: &[f64],
+    dt: f64,
+    known: &KnownFundamentals,
+) -> Option<f64> {
+    let modal = KnownFundamentals::of(&known.identified, direction);
+    let estimate = event
+        .structure
+        .as_ref()
+        .and_then(crate::modal::fundamental_estimate)
+        .map(|(f, _)| f);
+    let top = modal
+        .or(estimate)
+        .map(|f| 1.5 * f)
+        .unwrap_or(crate::modal::DEFAULT_BAND_HZ[1])
+        .min(0.4 / dt);
+    let peak = crate::modal::lowest_peak_of_records(&[output], dt, top);
+    match (modal, peak) {
+        (Some(m), Some(p)) if p < 0.8 * m => Some(p),
+        (Some(m), _) => Some(m),
+        (None, Some(p)) => Some(p),
+        (None, None) => estimate,
+    }
+}
