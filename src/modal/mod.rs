@@ -28,6 +28,7 @@
 //! - `frequency_shifts.parquet` (from [`compare`]): the pre/post comparison
 //!   against a reference event (docs/formats.md).
 
+pub mod apparent;
 pub mod compare;
 pub mod direction;
 pub mod fallback;

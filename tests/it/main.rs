@@ -13,6 +13,7 @@ mod common;
 
 mod architecture;
 
+mod apparent_frequency;
 mod big_input;
 mod bridge_consistency;
 mod buildings;
