@@ -56,6 +56,26 @@ pub struct YieldingResponse {
     /// Storey 1's plastic drift at the end: its drift at rest (zero storey
     /// force), the true residual drift, m.
     pub final_storey1_plastic_drift_m: f64,
+    /// Storey 1's elastic (unloading) stiffness k_e at each record sample t_k
+    /// (after the spring's update at t_k), N/m: piecewise constant, it only
+    /// drops when the largest drift grows.
+    pub storey1_elastic_stiffness_n_per_m: Vec<f64>,
+    /// Whether storey 1 took a plastic step (return mapping with f > 0) or
+    /// lost stiffness at any integration step in (t_k, t_{k+1}]: where this is
+    /// false over a span the building is linear with constant stiffness.
+    pub storey1_plastic_step: Vec<bool>,
+}
+
+impl YieldingResponse {
+    /// Whether the building is linear with one stiffness over the record
+    /// samples `first..=last` (no plastic step in (t_first, t_last]), i.e.
+    /// where its instantaneous tangent frequency is *defined over the window*.
+    /// False for an empty or out-of-range span.
+    pub fn is_linear_over(&self, first: usize, last: usize) -> bool {
+        last >= first
+            && last < self.storey1_plastic_step.len()
+            && !self.storey1_plastic_step[first..last].iter().any(|&p| p)
+    }
 }
 
 /// State of the degrading bilinear spring.
@@ -69,6 +89,8 @@ struct Spring {
     back: f64,
     max_drift: f64,
     force: f64,
+    /// Set when a plastic step or a stiffness drop happens (read and cleared per sample).
+    stepped: bool,
 }
 
 impl Spring {
@@ -83,6 +105,7 @@ impl Spring {
                     // Keep the force continuous: F = k (d_prev − δ_p) = k_new (d_prev − δ_p').
                     self.plastic += self.force / self.k - self.force / k_new;
                     self.k = k_new;
+                    self.stepped = true;
                 }
             }
         }
@@ -93,6 +116,7 @@ impl Spring {
             let step = excess / (self.k + self.hardening) * relative.signum();
             self.plastic += step;
             self.back += self.hardening * step;
+            self.stepped = true;
             trial - self.k * step
         } else {
             trial
@@ -116,6 +140,30 @@ impl YieldingShearBuilding {
         let mut b = self.initial();
         b.storey_stiffness_n_per_m[0] = k1;
         b
+    }
+
+    /// The true instantaneous tangent first-mode frequency at each record
+    /// sample, Hz: f₁ of [`Self::with_storey1_stiffness`]`(k_e(t_k))`, the
+    /// undamped fundamental of the linear building the structure is while it
+    /// stays elastic.  Where storey 1 is on its plastic branch the tangent is
+    /// the hardening stiffness instead: use [`YieldingResponse::is_linear_over`]
+    /// to keep the spans where this value is defined.  One eigenproblem per
+    /// distinct k_e (k_e is piecewise constant).
+    pub fn tangent_first_frequency_hz(&self, response: &YieldingResponse) -> Result<Vec<f64>> {
+        let mut out = Vec::with_capacity(response.storey1_elastic_stiffness_n_per_m.len());
+        let mut cached: Option<(f64, f64)> = None;
+        for &k in &response.storey1_elastic_stiffness_n_per_m {
+            let f = match cached {
+                Some((kc, f)) if kc == k => f,
+                _ => {
+                    let f = self.with_storey1_stiffness(k).modes()?.frequencies_hz[0];
+                    cached = Some((k, f));
+                    f
+                }
+            };
+            out.push(f);
+        }
+        Ok(out)
     }
 
     /// Response to `base_acceleration` (m/s², sampled at `dt`), `substeps`
@@ -168,6 +216,7 @@ impl YieldingShearBuilding {
             back: 0.0,
             max_drift: 0.0,
             force: 0.0,
+            stepped: false,
         };
         let samples = base_acceleration.len();
         let mut out = YieldingResponse {
@@ -177,6 +226,8 @@ impl YieldingShearBuilding {
             final_storey1_stiffness_n_per_m: k1,
             storey1_max_drift_m: 0.0,
             final_storey1_plastic_drift_m: 0.0,
+            storey1_elastic_stiffness_n_per_m: Vec::with_capacity(samples),
+            storey1_plastic_step: Vec::with_capacity(samples),
         };
         let (mut prev, mut now) = (vec![0.0; n], vec![0.0; n]);
         let mut rhs = vec![0.0; n];
@@ -190,6 +241,14 @@ impl YieldingShearBuilding {
             };
             // Storey shears: storey 1 from the spring, the others linear.
             shear[0] = spring.update(now[0]);
+            if step % substeps == 0 {
+                // The flag collected over (t_{k−1}, t_k] belongs to sample k − 1.
+                if step > 0 {
+                    out.storey1_plastic_step.push(spring.stepped);
+                }
+                spring.stepped = false;
+                out.storey1_elastic_stiffness_n_per_m.push(spring.k);
+            }
             for s in 1..n {
                 shear[s] = self.storey_stiffness_n_per_m[s] * (now[s] - now[s - 1]);
             }
@@ -217,6 +276,9 @@ impl YieldingShearBuilding {
                 out.storey1_force_n.push(shear[0]);
             }
             prev = std::mem::replace(&mut now, next);
+        }
+        if samples > 0 {
+            out.storey1_plastic_step.push(spring.stepped);
         }
         out.final_storey1_stiffness_n_per_m = spring.k;
         out.storey1_max_drift_m = spring.max_drift;

@@ -13,6 +13,7 @@ mod common;
 
 mod architecture;
 
+mod apparent_frequency;
 mod assessment;
 
 mod big_input;

@@ -16,7 +16,7 @@ use super::{
 use crate::error::{Error, Result};
 use crate::synth::csmip_writer::{csmip_v2_text, CsmipChannel, CsmipOrientation};
 use crate::synth::yielding::{YieldingResponse, YieldingShearBuilding};
-use crate::synth::{synthetic_ground_motion, GroundMotionSpec};
+use crate::synth::{synthetic_ground_motion, Envelope, GroundMotionSpec};
 
 pub const FOLDER: &str = "synthetic-6storey-yielding";
 pub const ZIP_NAME: &str = "ce99906p.zip";
@@ -55,33 +55,194 @@ pub fn buildings() -> [YieldingShearBuilding; 2] {
     ]
 }
 
-pub fn write(out: &Path, seed: u64) -> Result<PathBuf> {
-    let dir = out.join(FOLDER);
-    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+/// How a degrading-frame event is generated.  [`EventOptions::sample`] is the
+/// bundled `synthetic-6storey-yielding`; [`Intensity`] gives the three
+/// intensities of the apparent-frequency validation (issue 32).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventOptions {
+    /// Peak ground acceleration of the strong motion along X (Y: 80 %, up: 50 %), m/s².
+    pub pga_x_m_s2: f64,
+    /// Zero-motion pad before the 50-s strong record, s.
+    pub pre_event_s: f64,
+    /// Zero-motion pad after it, s.
+    pub post_event_s: f64,
+    /// Peak of a stationary ambient ground motion (same Kanai–Tajimi filter,
+    /// constant envelope) added over the whole record on every axis, m/s²;
+    /// 0: none.  It makes the pre- and post-event pads identifiable, as
+    /// microtremors do in real records.
+    pub ambient_pga_m_s2: f64,
+}
+
+impl EventOptions {
+    /// The bundled sample: PGA 4.0 m/s², 5 s before, 20 s after, no ambient motion.
+    pub fn sample() -> Self {
+        EventOptions {
+            pga_x_m_s2: PGA_M_S2,
+            pre_event_s: PRE_EVENT_S,
+            post_event_s: POST_EVENT_S,
+            ambient_pga_m_s2: 0.0,
+        }
+    }
+}
+
+/// The three intensities of the apparent-frequency validation (issue 32):
+/// 15 s of pre-event and 20 s of post-event ambient motion (0.02 m/s²)
+/// round the strong record, so that whole windows of several periods fit
+/// before and after the shaking.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Intensity {
+    /// Storey 1 never yields (X or Y).
+    Elastic,
+    /// Clear yielding: the final X fundamental 5–15 % below the initial one.
+    Moderate,
+    /// Final X fundamental > 25 % below the initial one, peak storey-1 drift > 2.5 %.
+    Severe,
+}
+
+impl Intensity {
+    pub const ALL: [Intensity; 3] = [Intensity::Elastic, Intensity::Moderate, Intensity::Severe];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Intensity::Elastic => "elastic",
+            Intensity::Moderate => "moderate",
+            Intensity::Severe => "severe",
+        }
+    }
+
+    /// Peak ground acceleration along X, m/s².
+    pub fn pga_x_m_s2(self) -> f64 {
+        match self {
+            Intensity::Elastic => ELASTIC_PGA,
+            Intensity::Moderate => MODERATE_PGA,
+            Intensity::Severe => SEVERE_PGA,
+        }
+    }
+
+    pub fn options(self) -> EventOptions {
+        EventOptions {
+            pga_x_m_s2: self.pga_x_m_s2(),
+            pre_event_s: 15.0,
+            post_event_s: 20.0,
+            ambient_pga_m_s2: 0.02,
+        }
+    }
+}
+
+const ELASTIC_PGA: f64 = 0.4;
+const MODERATE_PGA: f64 = 1.2;
+const SEVERE_PGA: f64 = 6.0;
+
+/// A simulated degrading-frame event: the ground motion and each
+/// direction's response, before any processing.
+#[derive(Debug, Clone)]
+pub struct Simulation {
+    pub options: EventOptions,
+    /// Record interval, s.
+    pub dt: f64,
+    /// Frames per direction (X, Y): [`buildings`].
+    pub frames: [YieldingShearBuilding; 2],
+    /// Ground acceleration X, Y, up, m/s².
+    pub ground: [Vec<f64>; 3],
+    /// Response per direction (X, Y).
+    pub response: [YieldingResponse; 2],
+}
+
+impl Simulation {
+    /// The true instantaneous tangent f₁ per direction (X, Y) at each
+    /// sample ([`YieldingShearBuilding::tangent_first_frequency_hz`]).
+    pub fn true_first_frequency_hz(&self) -> Result<[Vec<f64>; 2]> {
+        Ok([
+            self.frames[0].tangent_first_frequency_hz(&self.response[0])?,
+            self.frames[1].tangent_first_frequency_hz(&self.response[1])?,
+        ])
+    }
+}
+
+/// Simulates the event of `options` (no I/O).
+pub fn simulate(seed: u64, options: &EventOptions) -> Result<Simulation> {
     let frames = buildings();
-    let pga = PGA_M_S2;
+    let pga = options.pga_x_m_s2;
     let dt = 1.0 / RATE_HZ;
+    let ok = |v: f64| v.is_finite() && v >= 0.0;
+    if !(ok(options.pre_event_s)
+        && ok(options.post_event_s)
+        && ok(options.ambient_pga_m_s2)
+        && pga.is_finite()
+        && pga > 0.0)
+    {
+        return Err(Error::usage(
+            "degrading event: PGA > 0, pads and ambient level ≥ 0 and finite",
+        ));
+    }
+    let pre = (options.pre_event_s * RATE_HZ).round() as usize;
+    let post = (options.post_event_s * RATE_HZ).round() as usize;
     let pad = |mut a: Vec<f64>| {
-        let mut v = vec![0.0; (PRE_EVENT_S * RATE_HZ) as usize];
+        let mut v = vec![0.0; pre];
         v.append(&mut a);
-        v.extend(std::iter::repeat_n(0.0, (POST_EVENT_S * RATE_HZ) as usize));
+        v.extend(std::iter::repeat_n(0.0, post));
         v
     };
-    let gx = pad(synthetic_ground_motion(&GroundMotionSpec::strong_50s(
+    let mut gx = pad(synthetic_ground_motion(&GroundMotionSpec::strong_50s(
         seed.wrapping_add(6001),
         RATE_HZ,
         pga,
     ))?);
-    let gy = pad(synthetic_ground_motion(&GroundMotionSpec::strong_50s(
+    let mut gy = pad(synthetic_ground_motion(&GroundMotionSpec::strong_50s(
         seed.wrapping_add(6002),
         RATE_HZ,
         0.8 * pga,
     ))?);
     let mut vertical = GroundMotionSpec::strong_50s(seed.wrapping_add(6003), RATE_HZ, 0.5 * pga);
     vertical.ground_frequency_hz = 6.0;
-    let gz = pad(synthetic_ground_motion(&vertical)?);
+    let mut gz = pad(synthetic_ground_motion(&vertical)?);
+    if options.ambient_pga_m_s2 > 0.0 {
+        let duration_s = gx.len() as f64 / RATE_HZ;
+        for (k, g) in [&mut gx, &mut gy, &mut gz].into_iter().enumerate() {
+            let mut spec = GroundMotionSpec::strong_50s(
+                seed.wrapping_add(6011 + k as u64),
+                RATE_HZ,
+                options.ambient_pga_m_s2,
+            );
+            spec.duration_s = duration_s;
+            spec.envelope = Envelope::Plateau {
+                rise_end_s: 0.5,
+                strong_end_s: duration_s,
+                decay_per_s: 0.0,
+            };
+            let ambient = synthetic_ground_motion(&spec)?;
+            g.iter_mut().zip(ambient).for_each(|(a, b)| *a += b);
+        }
+    }
     let rx = frames[0].simulate(&gx, dt, SUBSTEPS)?;
     let ry = frames[1].simulate(&gy, dt, SUBSTEPS)?;
+    Ok(Simulation {
+        options: options.clone(),
+        dt,
+        frames,
+        ground: [gx, gy, gz],
+        response: [rx, ry],
+    })
+}
+
+/// Writes the bundled sample `out/synthetic-6storey-yielding`.
+pub fn write(out: &Path, seed: u64) -> Result<PathBuf> {
+    let dir = out.join(FOLDER);
+    write_event(&dir, seed, &EventOptions::sample())?;
+    Ok(dir)
+}
+
+/// Writes the event of `options` into `dir` (the zip of [`ZIP_NAME`] and
+/// `truth.toml`, laid out as the bundled sample; any other event than the
+/// sample also gets `truth_frequency.csv`: per sample, the true tangent f₁
+/// and whether storey 1 took a plastic step, per direction) and returns the
+/// simulation.
+pub fn write_event(dir: &Path, seed: u64, options: &EventOptions) -> Result<Simulation> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let sim = simulate(seed, options)?;
+    let [gx, gy, gz] = &sim.ground;
+    let [rx, ry] = &sim.response;
+    let frames = &sim.frames;
     let start_utc = civil("2026-08-03T21:47:09.600Z", 0)?;
     let start_local = civil("2026-08-03T21:47:09.600Z", -7)?;
     let mut chans: Vec<(usize, CsmipOrientation, &[f64])> = Vec::new();
@@ -130,19 +291,47 @@ pub fn write(out: &Path, seed: u64) -> Result<PathBuf> {
         });
         members.push((format!("CHAN{:03}.V2", k + 1), text.into_bytes()));
     }
-    write_file(&dir, ZIP_NAME, &zip_bytes(&members, &start_utc)?)?;
+    write_file(dir, ZIP_NAME, &zip_bytes(&members, &start_utc)?)?;
     write_file(
-        &dir,
+        dir,
         "truth.toml",
-        truth(&frames, &[("X", &rx), ("Y", &ry)], seed)?.as_bytes(),
+        truth(frames, &[("X", rx), ("Y", ry)], seed, options)?.as_bytes(),
     )?;
-    Ok(dir)
+    if *options != EventOptions::sample() {
+        write_file(
+            dir,
+            "truth_frequency.csv",
+            truth_frequency_csv(&sim)?.as_bytes(),
+        )?;
+    }
+    Ok(sim)
+}
+
+/// Per sample: time, the true tangent f₁ per direction and whether storey 1
+/// took a plastic step in (t_k, t_{k+1}] (1) or not (0).
+fn truth_frequency_csv(sim: &Simulation) -> Result<String> {
+    let [fx, fy] = sim.true_first_frequency_hz()?;
+    let [rx, ry] = &sim.response;
+    let mut s = String::from("time_s,x_true_f1_hz,x_plastic_step,y_true_f1_hz,y_plastic_step\n");
+    for k in 0..fx.len() {
+        let _ = writeln!(
+            s,
+            "{:.2},{},{},{},{}",
+            k as f64 * sim.dt,
+            fx[k],
+            u8::from(rx.storey1_plastic_step[k]),
+            fy[k],
+            u8::from(ry.storey1_plastic_step[k])
+        );
+    }
+    Ok(s)
 }
 
 fn truth(
     frames: &[YieldingShearBuilding; 2],
     resp: &[(&str, &YieldingResponse)],
     seed: u64,
+    options: &EventOptions,
 ) -> Result<String> {
     let mut s = String::new();
     let _ = writeln!(s, "# Truth of a synthetic event generated by `quaketwin synth` (seed {seed}); not a record file.");
@@ -158,7 +347,18 @@ fn truth(
         s,
         "model = \"yielding shear building (synth::yielding)\"\nseed = {seed}\nstoreys = {STOREYS}"
     );
-    let _ = writeln!(s, "storey_heights_m = {STOREY_HEIGHTS_M:?}\nrecord_rate_hz = {RATE_HZ}\npga_x_m_s2 = {PGA_M_S2}");
+    let _ = writeln!(
+        s,
+        "storey_heights_m = {STOREY_HEIGHTS_M:?}\nrecord_rate_hz = {RATE_HZ}\npga_x_m_s2 = {}",
+        options.pga_x_m_s2
+    );
+    if *options != EventOptions::sample() {
+        let _ = writeln!(
+            s,
+            "pre_event_s = {:?}\npost_event_s = {:?}\nambient_pga_m_s2 = {:?}\ntruth_frequency = \"truth_frequency.csv\"",
+            options.pre_event_s, options.post_event_s, options.ambient_pga_m_s2
+        );
+    }
     for (b, (axis, r)) in frames.iter().zip(resp) {
         let initial = b.initial().modes()?;
         let k_final = r.final_storey1_stiffness_n_per_m;
