@@ -6,7 +6,6 @@
 //! in the conditioned records and what earlier stages tabled.
 
 use super::indicators::FrequencyEvidence;
-use crate::conditioning::Motion;
 use crate::error::Result;
 use crate::modal::apparent::{track_apparent_frequency, ApparentSettings, FrequencyTrack};
 use crate::vocab::{Axis, Event, Record};
@@ -56,10 +55,11 @@ fn missing(direction: &str, channels: &str, why: String) -> FrequencyEvidence {
 }
 
 /// The tracks and the frequency evidence of every horizontal direction of
-/// `event` (module doc); `arias` bounds the strong shaking.
+/// `event` (module doc) — its records in SI units (a condition stage's
+/// event: the records as recorded in the shipped pipelines); `arias` bounds
+/// the strong shaking.
 pub fn frequency_evidence(
     event: &Event,
-    motions: &[Motion],
     known: &KnownFundamentals,
     settings: &ApparentSettings,
     arias: [f64; 2],
@@ -67,7 +67,6 @@ pub fn frequency_evidence(
     let selection = crate::geometry::one_record_per_level(&event.records);
     let mut rows = Vec::new();
     let mut evidence = Vec::new();
-    let motion_of = |id: &str| motions.iter().find(|m| m.channel_id == id);
     for axis in [Axis::X, Axis::Y] {
         let direction = format!("{axis:?}");
         let levels: Vec<(i32, &Record)> = selection
@@ -76,38 +75,36 @@ pub fn frequency_evidence(
             .filter(|((a, _), _)| *a == axis)
             .map(|((_, l), r)| (*l, *r))
             .collect();
-        let base = levels.iter().find(|(l, _)| *l == 0).map(|(_, r)| *r);
-        let Some(&(_, top)) = levels
-            .iter()
-            .filter(|(l, _)| *l > 0)
-            .max_by_key(|(l, _)| *l)
-        else {
-            if !levels.is_empty() {
+        let (base, top) = if levels.is_empty() {
+            // No levels (a bridge, a structure described by roles only): the
+            // first input of the axis, and its most responsive output.
+            match by_role(event, axis)? {
+                Some(pair) => pair,
+                None => continue,
+            }
+        } else {
+            let base = levels.iter().find(|(l, _)| *l == 0).map(|(_, r)| *r);
+            let Some(&(_, top)) = levels
+                .iter()
+                .filter(|(l, _)| *l > 0)
+                .max_by_key(|(l, _)| *l)
+            else {
                 evidence.push(missing(
                     &direction,
                     "",
                     "no record above the base in this direction".into(),
                 ));
-            }
-            continue;
+                continue;
+            };
+            (base, top)
         };
-        let Some(out_motion) = motion_of(&top.channel.id) else {
-            evidence.push(missing(
-                &direction,
-                &top.channel.id,
-                "the output channel was not conditioned".into(),
-            ));
-            continue;
-        };
-        let dt = out_motion.dt;
-        let output = out_motion.acceleration.get()?.to_vec();
-        let input_motion = base
-            .and_then(|r| motion_of(&r.channel.id).map(|m| (r, m)))
-            .filter(|(_, m)| (m.dt - dt).abs() < 1e-12);
+        let dt = top.channel.dt();
+        let output = top.samples.get()?.to_vec();
+        let input_record = base.filter(|r| (r.channel.dt() - dt).abs() < 1e-12);
         // One time base: the common window of the two records.
-        let (output, input, input_id) = match input_motion {
-            Some((rec, m)) => {
-                let input = m.acceleration.get()?.to_vec();
+        let (output, input, input_id) = match input_record {
+            Some(rec) => {
+                let input = rec.samples.get()?.to_vec();
                 match crate::metrics::drift::common_window(&[
                     (&rec.channel, input.len()),
                     (&top.channel, output.len()),
@@ -194,6 +191,32 @@ pub fn frequency_evidence(
         });
     }
     Ok((rows, evidence))
+}
+
+/// For a structure without levels: the first input record of `axis` (by
+/// id) and the output record of `axis` with the largest RMS acceleration
+/// (the most responsive: a mid-span deck, a roof).  `None` without an output.
+fn by_role<'a>(event: &'a Event, axis: Axis) -> Result<Option<(Option<&'a Record>, &'a Record)>> {
+    use crate::vocab::Role;
+    let on_axis = |role: Role| {
+        let mut v: Vec<&Record> = event
+            .records
+            .iter()
+            .filter(|r| r.channel.role == role && r.channel.axis() == Some(axis))
+            .filter(|r| r.channel.combined_into.is_none())
+            .collect();
+        v.sort_by(|a, b| a.channel.id.cmp(&b.channel.id));
+        v
+    };
+    let mut best: Option<(f64, &Record)> = None;
+    for r in on_axis(Role::Output) {
+        let a = r.samples.get()?;
+        let rms = (a.iter().map(|v| v * v).sum::<f64>() / a.len().max(1) as f64).sqrt();
+        if rms.is_finite() && best.is_none_or(|(b, _)| rms > b) {
+            best = Some((rms, r));
+        }
+    }
+    Ok(best.map(|(_, top)| (on_axis(Role::Input).first().copied(), top)))
 }
 
 /// Relative scatter of the pre- and post-event estimates (standard

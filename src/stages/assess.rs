@@ -75,7 +75,7 @@ impl Stage for Assess {
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let out = ctx.out_dir.clone();
-        let Conditioned { event, motions } = ctx.input(ProductKind::ConditionedEvent)?;
+        let Conditioned { event, .. } = ctx.input(ProductKind::ConditionedEvent)?;
         let known = KnownFundamentals {
             identified: lowest_per_direction(
                 &read(&out, &t::MODES),
@@ -90,7 +90,6 @@ impl Stage for Assess {
         };
         let (tracks, frequency) = frequency_evidence(
             event,
-            motions,
             &known,
             &self.params.tracking,
             self.params.strong_motion_arias,

@@ -15,6 +15,7 @@ mod architecture;
 
 mod apparent_frequency;
 mod assessment;
+mod assessment_pipeline;
 
 mod big_input;
 mod bridge_consistency;
