@@ -215,6 +215,8 @@ struct Row {
     defined: usize,
     points: usize,
     drift_pct: f64,
+    strong: (f64, f64),
+    windows: (usize, usize),
 }
 
 /// The track of direction `d` (0 = X, 1 = Y): roof over ground.
@@ -249,6 +251,8 @@ fn validate(intensity: Intensity, d: usize, noise_snr_db: Option<f64>) -> Row {
         pre: phases.pre_hz,
         post: phases.post_hz,
         during: phases.min_during_hz,
+        strong: (t0, t1),
+        windows: (phases.pre_windows, phases.post_windows),
         worst,
         defined,
         points: track.points.len(),
@@ -259,19 +263,23 @@ fn validate(intensity: Intensity, d: usize, noise_snr_db: Option<f64>) -> Row {
 fn print_table(title: &str, rows: &[Row]) {
     let o = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.4}"));
     eprintln!("\n{title}");
-    eprintln!("| intensity | axis | PGA m/s² | peak storey-1 drift % | true initial f1 Hz | true final f1 Hz | identified pre Hz | identified post Hz | min during Hz | max error where defined % | defined points / all |");
-    eprintln!("|---|---|---|---|---|---|---|---|---|---|---|");
+    eprintln!("| intensity | axis | PGA m/s² | peak storey-1 drift % | true initial f1 Hz | true final f1 Hz | strong phase s | identified pre Hz (windows) | identified post Hz (windows) | min during Hz | max error where defined % | defined points / all |");
+    eprintln!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for r in rows {
         eprintln!(
-            "| {} | {} | {} | {:.2} | {:.4} | {:.4} | {} | {} | {} | {} | {} / {} |",
+            "| {} | {} | {} | {:.2} | {:.4} | {:.4} | {:.1}–{:.1} | {} ({}) | {} ({}) | {} | {} | {} / {} |",
             r.name,
             r.axis,
             format!("{:.2}", r.pga),
             r.drift_pct,
             r.initial,
             r.final_,
+            r.strong.0,
+            r.strong.1,
             o(r.pre),
+            r.windows.0,
             o(r.post),
+            r.windows.1,
             o(r.during),
             if r.worst.is_finite() {
                 format!("{:.2}", 100.0 * r.worst)
