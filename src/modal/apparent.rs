@@ -31,7 +31,18 @@
 //! Noise-free and linear over a window, the ARX fit reproduces the
 //! discrete poles of the decimated system (exact up to the model order's
 //! truncation of the higher modes); with measurement noise the equation-error
-//! estimate is biased (Ljung §8.3), less so for a higher order.  I/O free.
+//! estimate is biased (Ljung §8.3), less so for a higher order.  Measured
+//! (tests/it/apparent_frequency.rs): noise-free, the defaults (5 periods,
+//! order 8, 12 samples per period) are within 0.1 % of the true tangent f₁
+//! of the yielding frame wherever it stays linear over the window; with
+//! 30 dB noise the median error is < 1 % but single windows reach several
+//! per cent (8 periods and order 8–12 halve that), and windows where the
+//! noise dominates (quiet pads) may give a spurious pole or none.  The AR
+//! (output-only) model needs a higher order and longer windows (order 16,
+//! 40 periods: < 2.5 % on an ambient response).  I/O free.
+
+// `!(x > 0.0)` is meant: it refuses NaN as well; index loops mirror the equations.
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
 
 use crate::error::{Error, Result};
 use faer::Mat;
