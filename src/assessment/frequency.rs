@@ -57,12 +57,14 @@ fn missing(direction: &str, channels: &str, why: String) -> FrequencyEvidence {
 /// The tracks and the frequency evidence of every horizontal direction of
 /// `event` (module doc) — its records in SI units (a condition stage's
 /// event: the records as recorded in the shipped pipelines); `arias` bounds
-/// the strong shaking.
+/// the strong shaking; windows reaching into the first or last
+/// `edge_guard_periods` periods of the record are dropped ([`without_edges`]).
 pub fn frequency_evidence(
     event: &Event,
     known: &KnownFundamentals,
     settings: &ApparentSettings,
     arias: [f64; 2],
+    edge_guard_periods: f64,
 ) -> Result<(Vec<TrackRows>, Vec<FrequencyEvidence>)> {
     let selection = crate::geometry::one_record_per_level(&event.records);
     let mut rows = Vec::new();
@@ -140,7 +142,7 @@ pub fn frequency_evidence(
         };
         let track =
             match track_apparent_frequency(input.as_deref(), &output, dt, expected, settings) {
-                Ok(t) => t,
+                Ok(t) => without_edges(t, output.len() as f64 * dt, edge_guard_periods / expected),
                 Err(e) => {
                     evidence.push(missing(&direction, &channels, format!("no track: {e}")));
                     continue;
@@ -191,6 +193,19 @@ pub fn frequency_evidence(
         });
     }
     Ok((rows, evidence))
+}
+
+/// The track without the windows that use samples within `guard_s` of the
+/// record's start or end.  A processed record (V2: the agency's zero-phase
+/// band-pass with its padding, cosine tapers) is not the structure's LTI
+/// response there — both records are filtered alike only in the interior —
+/// and the ARX of such a window is biased (−3.4 % at the last window of a
+/// synthetic V2 record).
+fn without_edges(mut track: FrequencyTrack, length_s: f64, guard_s: f64) -> FrequencyTrack {
+    track
+        .points
+        .retain(|p| p.start_s >= guard_s && p.end_s <= length_s - guard_s);
+    track
 }
 
 /// For a structure without levels: the first input record of `axis` (by

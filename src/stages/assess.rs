@@ -42,6 +42,10 @@ pub struct AssessParams {
     /// shaking (Trifunac & Brady's significant duration): windows wholly
     /// before the first are pre-event, wholly after the second post-event.
     pub strong_motion_arias: [f64; 2],
+    /// Windows using samples within this many periods of the expected
+    /// fundamental of the record's start or end are dropped (processing
+    /// edges: `assessment::frequency::without_edges`).
+    pub edge_guard_periods: f64,
 }
 
 impl Default for AssessParams {
@@ -49,6 +53,7 @@ impl Default for AssessParams {
         AssessParams {
             tracking: ApparentSettings::default(),
             strong_motion_arias: [0.05, 0.95],
+            edge_guard_periods: 2.0,
         }
     }
 }
@@ -56,6 +61,9 @@ impl Default for AssessParams {
 fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
     let params: AssessParams = src.params()?;
     params.tracking.validate().map_err(|e| src.invalid(e))?;
+    if !(params.edge_guard_periods.is_finite() && params.edge_guard_periods >= 0.0) {
+        return Err(src.invalid(Error::usage("edge_guard_periods must be ≥ 0")));
+    }
     let [a, b] = params.strong_motion_arias;
     if !(0.0 <= a && a < b && b <= 1.0) {
         return Err(src.invalid(Error::usage(format!(
@@ -93,6 +101,7 @@ impl Stage for Assess {
             &known,
             &self.params.tracking,
             self.params.strong_motion_arias,
+            self.params.edge_guard_periods,
         )?;
         let drift = read(&out, &t::DRIFT)
             .map(|d| drift_evidence(&d))
