@@ -333,6 +333,17 @@ impl ScalarFit {
         hysteresis: HystereticTerms,
     ) -> Result<DofIdentification> {
         let i0 = problem.fixed_count();
+        if !(self.nested_p[problem.coupled.len() - 1] > 0.0) {
+            return Err(Error::NotIdentifiable {
+                stage: "hysteresis".into(),
+                message: format!(
+                    "DoF {}: the nested model's initial stiffness K0_dd hits its bound 0: the record does not determine \
+                     the storey stiffness",
+                    problem.dof + 1
+                ),
+                f_test: None,
+            });
+        }
         let mut p = self.nested_p.clone();
         p.resize(i0 + 2, 0.0);
         // Exponent 1: with β = γ = 0 any N gives zero hysteretic terms; 1 keeps
