@@ -77,9 +77,13 @@ pub struct ShiftSummary {
 #[derive(Debug, Clone, Serialize)]
 pub struct DirectionSummary {
     pub direction: String,
-    /// `identified`, `identified_unstable` or `not_identifiable` (the
-    /// least favourable of the direction's DoFs).
+    /// `identified`, `identified_unstable`, `no_significant_hysteresis` or
+    /// `not_identifiable` (the least favourable of the direction's DoFs).
     pub status: String,
+    /// The direction's verdict (bouc_wen.parquet `verdict`):
+    /// `nonlinear_identified`, `no_significant_hysteresis` or
+    /// `not_identifiable`; None in tables written before the column.
+    pub verdict: Option<String>,
     /// Why, when not identifiable.
     pub reason: Option<String>,
 }
@@ -206,7 +210,8 @@ fn direction_rows(t: &Table) -> Vec<DirectionSummary> {
         match status {
             "identified" => 0,
             "identified_unstable" => 1,
-            _ => 2,
+            "no_significant_hysteresis" => 2,
+            _ => 3,
         }
     }
     let mut out: Vec<DirectionSummary> = Vec::new();
@@ -218,6 +223,7 @@ fn direction_rows(t: &Table) -> Vec<DirectionSummary> {
             continue;
         };
         let reason = text(t, bouc_wen::REASON.name, r).filter(|s| !s.is_empty());
+        let verdict = text(t, bouc_wen::VERDICT.name, r);
         match out.iter_mut().find(|d| d.direction == direction) {
             Some(d) if rank(&status) > rank(&d.status) => {
                 d.status = status;
@@ -228,6 +234,7 @@ fn direction_rows(t: &Table) -> Vec<DirectionSummary> {
                 direction,
                 status,
                 reason,
+                verdict,
             }),
         }
     }

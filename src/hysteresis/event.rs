@@ -7,12 +7,10 @@ use std::path::Path;
 
 use serde::Deserialize;
 
+use super::identify::{identify_kinematics_outcome, KinematicsOutcome};
 use super::mass_resolution::{resolve_masses, MassLumping, MassResolution};
 use super::window::{identification_window, WindowSettings};
-use super::{
-    identify_kinematics, DirectionIdentification, DirectionKinematics, DirectionRecords,
-    IdentifySettings,
-};
+use super::{DirectionIdentification, DirectionKinematics, DirectionRecords, IdentifySettings};
 use crate::error::{Error, Result};
 use crate::vocab::{Axis, Event, Record, Role};
 
@@ -30,6 +28,31 @@ pub struct DirectionSpec {
     pub masses_kg: Option<Vec<f64>>,
 }
 
+/// The direction-level verdict a later stage reads (bouc_wen.parquet `verdict`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    /// (a) Hysteretic terms significant at one DoF at least: nonlinear
+    /// response identified.
+    NonlinearIdentified,
+    /// (b) Every DoF tested, none with significant hysteretic terms: the
+    /// test saw no hysteresis beyond the nested model. Not "linear": see
+    /// `crate::hysteresis::identify::F_TEST_BLIND_SPOTS`.
+    NoSignificantHysteresis,
+    /// (c) Not identifiable: masses or channels missing, too few windows, K0
+    /// at its bound, unstable estimates…; nothing is known about hysteresis.
+    NotIdentifiable,
+}
+
+impl Verdict {
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::NonlinearIdentified => "nonlinear_identified",
+            Verdict::NoSignificantHysteresis => "no_significant_hysteresis",
+            Verdict::NotIdentifiable => "not_identifiable",
+        }
+    }
+}
+
 /// Outcome of one direction: identified, or why not.
 pub enum DirectionOutcome {
     Identified(Box<DirectionIdentification>),
@@ -41,6 +64,8 @@ pub enum DirectionOutcome {
         measured: Option<Box<MeasuredResponse>>,
         /// The F-test of the hysteretic terms (F, p) when it is what failed.
         f_test: Option<(f64, f64)>,
+        /// `NoSignificantHysteresis` or `NotIdentifiable`.
+        verdict: Verdict,
     },
 }
 
@@ -61,6 +86,23 @@ pub struct MeasuredResponse {
 }
 
 impl MeasuredResponse {
+    /// E_rec = ∫ V_d dΔu_d per DoF (segment), J: the work of the recorded
+    /// storey shear along the segment drift (`super::energy`).
+    pub fn segment_work(&self) -> Vec<f64> {
+        let mut shear = self.restoring_force.clone();
+        for d in (0..shear.len().saturating_sub(1)).rev() {
+            let (lower, upper) = shear.split_at_mut(d + 1);
+            for (v, above) in lower[d].iter_mut().zip(&upper[0]) {
+                *v += above;
+            }
+        }
+        shear
+            .iter()
+            .zip(&self.storey_drift)
+            .map(|(v, u)| super::energy::work(v, u))
+            .collect()
+    }
+
     pub fn from_kinematics(kin: &DirectionKinematics, segments: Vec<String>) -> Self {
         let storey_drift = (0..kin.dofs()).map(|d| kin.storey_drift(d)).collect();
         MeasuredResponse {
@@ -78,6 +120,12 @@ impl DirectionOutcome {
         match self {
             DirectionOutcome::Identified(d) => &d.direction,
             DirectionOutcome::NotIdentifiable { direction, .. } => direction,
+        }
+    }
+    pub fn verdict(&self) -> Verdict {
+        match self {
+            DirectionOutcome::Identified(_) => Verdict::NonlinearIdentified,
+            DirectionOutcome::NotIdentifiable { verdict, .. } => *verdict,
         }
     }
 }
@@ -122,6 +170,7 @@ pub fn auto_directions(event: &Event) -> (Vec<DirectionSpec>, Vec<DirectionOutco
                 reason: not_combined_reason(event, *level, ids),
                 measured: None,
                 f_test: None,
+                verdict: Verdict::NotIdentifiable,
             });
             continue;
         }
@@ -141,6 +190,7 @@ pub fn auto_directions(event: &Event) -> (Vec<DirectionSpec>, Vec<DirectionOutco
                 reason: "no base (level 0, role input) channel in this direction".into(),
                 measured: None,
                 f_test: None,
+                verdict: Verdict::NotIdentifiable,
             });
             continue;
         };
@@ -150,6 +200,7 @@ pub fn auto_directions(event: &Event) -> (Vec<DirectionSpec>, Vec<DirectionOutco
                 reason: "no floor channel (level > 0) in this direction".into(),
                 measured: None,
                 f_test: None,
+                verdict: Verdict::NotIdentifiable,
             });
             continue;
         }
@@ -183,11 +234,7 @@ pub fn identify_event(
         p.reduced_mass_step,
         p.mass_lumping,
     );
-    let results: Vec<(
-        String,
-        Result<DirectionIdentification>,
-        Option<MeasuredResponse>,
-    )> = {
+    let results: Vec<(String, Result<KinematicsOutcome>, Option<MeasuredResponse>)> = {
         use rayon::prelude::*;
         specs
             .par_iter()
@@ -203,7 +250,16 @@ pub fn identify_event(
     };
     for (direction, r, measured) in results {
         match r {
-            Ok(d) => outcomes.push(DirectionOutcome::Identified(Box::new(d))),
+            Ok(KinematicsOutcome::Identified(d)) => outcomes.push(DirectionOutcome::Identified(d)),
+            Ok(KinematicsOutcome::NoSignificantHysteresis { reason, f_test, .. }) => {
+                outcomes.push(DirectionOutcome::NotIdentifiable {
+                    direction,
+                    reason: format!("hysteresis: {reason}"),
+                    measured: measured.map(Box::new),
+                    f_test,
+                    verdict: Verdict::NoSignificantHysteresis,
+                })
+            }
             Err(e) if !p.fail_on_error => outcomes.push(DirectionOutcome::NotIdentifiable {
                 direction,
                 f_test: match &e {
@@ -212,6 +268,7 @@ pub fn identify_event(
                 },
                 reason: e.to_string(),
                 measured: measured.map(Box::new),
+                verdict: Verdict::NotIdentifiable,
             }),
             Err(e) => return Err(e),
         }
@@ -251,7 +308,7 @@ fn identify_spec(
     mass: &MassResolution,
     settings: &IdentifySettings,
     window: &WindowSettings,
-) -> (Result<DirectionIdentification>, Option<MeasuredResponse>) {
+) -> (Result<KinematicsOutcome>, Option<MeasuredResponse>) {
     let floors: Vec<&str> = spec.floors.iter().map(|s| s.as_str()).collect();
     let channels: Vec<&Record> = std::iter::once(spec.base.as_str())
         .chain(floors.iter().copied())
@@ -310,11 +367,15 @@ fn identify_spec(
             .map(|l| format!("L{}–L{l}", l - 1))
             .collect()
     };
-    match identify_kinematics(&kin, &spec.direction, settings) {
-        Ok(mut d) => {
+    match identify_kinematics_outcome(&kin, &spec.direction, settings) {
+        Ok(KinematicsOutcome::Identified(mut d)) => {
             d.segments = segments;
-            (Ok(d), None)
+            (Ok(KinematicsOutcome::Identified(d)), None)
         }
+        Ok(other) => (
+            Ok(other),
+            Some(MeasuredResponse::from_kinematics(&kin, segments)),
+        ),
         Err(e) => (
             Err(e),
             Some(MeasuredResponse::from_kinematics(&kin, segments)),

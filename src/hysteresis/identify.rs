@@ -83,12 +83,61 @@ pub fn identify_directions(
         .collect()
 }
 
-/// Identification from already-derived kinematics.
+/// What the identification of one direction's kinematics found.
+#[derive(Debug, Clone, PartialEq)]
+pub enum KinematicsOutcome {
+    /// At least one DoF has significant hysteretic terms (the others, if any,
+    /// carry the nested model: `DofIdentification::hysteresis`).
+    Identified(Box<DirectionIdentification>),
+    /// Every DoF was tested and none has significant hysteretic terms: the
+    /// test saw no hysteresis beyond the nested model. Not a finding of a
+    /// linear, undamaged response (`reason` says what the test cannot see).
+    NoSignificantHysteresis {
+        reason: String,
+        /// (F, p) of the DoF with the smallest p-value.
+        f_test: Option<(f64, f64)>,
+        /// Every DoF, carried by its nested model (DoF 1 first).
+        dofs: Vec<DofIdentification>,
+    },
+}
+
+/// What the F-test cannot see, appended to a "no significant hysteresis"
+/// outcome (docs/hysteresis.md, "What the F-test can and cannot see").
+pub const F_TEST_BLIND_SPOTS: &str = "this is not a finding of a linear, undamaged response: the test \
+     weighs β, γ, N against a nested model that keeps the energy-driven stiffness degradation K0·δ, so a storey \
+     that softened without wide loops is absorbed by K0·δ; one yielding storey inside a segment of several \
+     (uninstrumented levels lumped) is diluted by its elastic storeys; and n_eff counts non-overlapping STFT \
+     windows only (compare the frequency drop of the modal stage and the measured loops)";
+
+/// Identification from already-derived kinematics; a direction without
+/// significant hysteresis at any DoF is `Error::NotIdentifiable` (see
+/// [`identify_kinematics_outcome`] to tell it from the other reasons).
 pub fn identify_kinematics(
     kin: &DirectionKinematics,
     direction: &str,
     settings: &IdentifySettings,
 ) -> Result<DirectionIdentification> {
+    match identify_kinematics_outcome(kin, direction, settings)? {
+        KinematicsOutcome::Identified(d) => Ok(*d),
+        KinematicsOutcome::NoSignificantHysteresis { reason, f_test, .. } => {
+            Err(Error::NotIdentifiable {
+                stage: "hysteresis".into(),
+                message: reason,
+                f_test,
+            })
+        }
+    }
+}
+
+/// Identification from already-derived kinematics (Table 15): DoF by DoF
+/// from the top; a DoF whose hysteretic terms are not significant carries
+/// its nested model and the DoFs below are still identified, so a linear
+/// upper segment does not hide a yielding lower one.
+pub fn identify_kinematics_outcome(
+    kin: &DirectionKinematics,
+    direction: &str,
+    settings: &IdentifySettings,
+) -> Result<KinematicsOutcome> {
     validate_settings(settings)?;
     let fs = kin.sampling_rate_hz;
     let n = kin.samples();
@@ -117,6 +166,29 @@ pub fn identify_kinematics(
         identified.push(result);
     }
     identified.reverse();
+    if !identified.iter().any(|d| d.hysteresis.significant()) {
+        let reasons: Vec<String> = identified
+            .iter()
+            .rev()
+            .filter_map(|d| match &d.hysteresis {
+                super::dof::HystereticTerms::NotSignificant { reason } => Some(reason.clone()),
+                super::dof::HystereticTerms::Significant => None,
+            })
+            .collect();
+        let f_test = identified
+            .iter()
+            .filter(|d| d.significance.denominator_dof > 0)
+            .min_by(|a, b| a.significance.p_value.total_cmp(&b.significance.p_value))
+            .map(|d| (d.significance.f_statistic, d.significance.p_value));
+        return Ok(KinematicsOutcome::NoSignificantHysteresis {
+            reason: format!(
+                "direction {direction}: no significant hysteresis at any DoF, so β, γ, N are not identifiable from this record ({}); {F_TEST_BLIND_SPOTS}",
+                reasons.join("; ")
+            ),
+            f_test,
+            dofs: identified,
+        });
+    }
     // Frame times count from the window's start: from the record's start.
     for dof in identified.iter_mut() {
         for e in dof.instantaneous.iter_mut() {
@@ -128,16 +200,18 @@ pub fn identify_kinematics(
     }
     // Model adequacy: estimates unstable over time at every DoF. Seen on a
     // linear building with 40 dB noise (every DoF unstable, N at its bound).
-    if !identified.is_empty()
-        && identified
-            .iter()
-            .all(|f| f.stability.as_ref().map(|st| !st.stable).unwrap_or(false))
+    // Over the DoFs with significant hysteretic terms (the others have no
+    // instantaneous estimates).
+    if identified
+        .iter()
+        .filter(|f| f.hysteresis.significant())
+        .all(|f| f.stability.as_ref().map(|st| !st.stable).unwrap_or(false))
     {
         return Err(Error::NotIdentifiable {
             stage: "hysteresis".into(),
             message: format!(
-                "direction {direction}: the parameter estimates are unstable over time at every DoF (model-adequacy check): \
-                 not identifiable from this record"
+                "direction {direction}: the parameter estimates are unstable over time at every DoF with significant \
+                 hysteretic terms (model-adequacy check): not identifiable from this record"
             ),
             f_test: None,
         });
@@ -154,24 +228,26 @@ pub fn identify_kinematics(
     )?;
     damage.time_s.iter_mut().for_each(|t| *t += kin.start_s);
     let processing = processing(kin, settings, &layout, fs);
-    Ok(DirectionIdentification {
-        direction: direction.to_string(),
-        sampling_rate_hz: fs,
-        start_s: kin.start_s,
-        form: settings.form,
-        window_len: layout.window_len,
-        hop: layout.hop,
-        frames: layout.frames(),
-        dofs: identified,
-        k0_matrix: k0,
-        k0_delta_matrix: k0_delta,
-        masses: kin.masses.clone(),
-        segments: (0..dofs)
-            .map(|d| super::lumping::segment_label(&[d as i32, d as i32 + 1], 1))
-            .collect(),
-        damage,
-        processing,
-    })
+    Ok(KinematicsOutcome::Identified(Box::new(
+        DirectionIdentification {
+            direction: direction.to_string(),
+            sampling_rate_hz: fs,
+            start_s: kin.start_s,
+            form: settings.form,
+            window_len: layout.window_len,
+            hop: layout.hop,
+            frames: layout.frames(),
+            dofs: identified,
+            k0_matrix: k0,
+            k0_delta_matrix: k0_delta,
+            masses: kin.masses.clone(),
+            segments: (0..dofs)
+                .map(|d| super::lumping::segment_label(&[d as i32, d as i32 + 1], 1))
+                .collect(),
+            damage,
+            processing,
+        },
+    )))
 }
 
 /// K0 and K0∘δ of the direction (lower triangle identified, mirrored by Eq. 23 symmetry;
@@ -195,7 +271,8 @@ fn stiffness_matrices(identified: &[DofIdentification]) -> (Vec<Vec<f64>>, Vec<V
 
 /// Fills each DoF's `fit` with the record's restoring force, the model's along the
 /// recorded kinematics (integral of Eq. 25 with every identified parameter) and the
-/// inter-storey drift.
+/// inter-storey drift; and its loop energies E_rec = ∫ V_d dΔu_d (records) and
+/// E_h = ∫ h_d dΔu_d (the identified hysteretic storey force h_d = ∫ BW_d dτ).
 fn fit_restoring_forces(
     kin: &DirectionKinematics,
     identified: &mut [DofIdentification],
@@ -228,9 +305,16 @@ fn fit_restoring_forces(
                     0.0
                 };
         }
+        let drift = kin.storey_drift(d);
+        identified[d].energy_record_j = super::energy::work(&kin.storey_shear[d], &drift);
+        identified[d].energy_hysteretic_j = if identified[d].hysteresis.significant() {
+            super::energy::work(&hysteretic[d], &drift)
+        } else {
+            0.0
+        };
         identified[d].fit.force_model = force;
         identified[d].fit.force_record = kin.restoring_force[d].clone();
-        identified[d].fit.storey_drift = kin.storey_drift(d);
+        identified[d].fit.storey_drift = drift;
     }
 }
 

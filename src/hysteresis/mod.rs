@@ -11,6 +11,7 @@
 //!   [`settings`], [`dof`] (one DoF: scalar estimate, non-identifiability
 //!   checks), the N search (`exponent_search`), [`instantaneous`] estimates
 //!   and their stability, and the F-test of [`significance`].
+//! - [`energy`]: work of a storey force along its drift (loop energy).
 //! - [`damage`]: ι(t), ω_s(t), c_s(t) (Eq. 32–34).
 //! - [`reduced_mass`]: reduced lumped masses (Eq. 35–36).
 //! - [`lumping`]: Eq. 35–36 generalised to any instrumented levels
@@ -35,6 +36,7 @@
 pub mod basis;
 pub mod damage;
 pub mod dof;
+pub mod energy;
 pub mod event;
 mod exponent_search;
 pub mod forward;
@@ -55,14 +57,15 @@ pub use basis::{
     StiffnessPattern, VelocityDrift,
 };
 pub use damage::{damage_index, damage_index_of_chain, DamageSeries};
-pub use dof::{DofIdentification, FitSeries};
+pub use dof::{DofIdentification, FitSeries, HystereticTerms};
 pub use event::{
     auto_directions, identify_event, DirectionOutcome, DirectionSpec, EventSettings,
-    MeasuredResponse,
+    MeasuredResponse, Verdict,
 };
 pub use forward::{BoucWenChain, ChainResponse};
 pub use identify::{
-    identify_direction, identify_directions, identify_kinematics, DirectionIdentification,
+    identify_direction, identify_directions, identify_kinematics, identify_kinematics_outcome,
+    DirectionIdentification, KinematicsOutcome, F_TEST_BLIND_SPOTS,
 };
 pub use instantaneous::{InstantaneousEstimate, ParameterStability};
 pub use lumping::{segment_label, tributary_masses, LumpedMasses};

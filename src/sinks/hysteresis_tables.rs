@@ -9,6 +9,7 @@ use super::parquet::{write_parquet, TableBuilder};
 use super::provenance::Provenance;
 use crate::error::Result;
 pub use crate::hysteresis::DirectionOutcome;
+use crate::hysteresis::HystereticTerms;
 use crate::vocab::tables::{
     bouc_wen, bouc_wen_instantaneous, damage, hysteresis_fit, BOUC_WEN, BOUC_WEN_INSTANTANEOUS,
     DAMAGE, HYSTERESIS_FIT,
@@ -51,8 +52,13 @@ pub fn write_bouc_wen(
                 direction,
                 reason,
                 f_test,
+                measured,
                 ..
             } => {
+                let verdict = o.verdict().name();
+                let energy = measured
+                    .as_ref()
+                    .map(|m| m.segment_work().iter().sum::<f64>());
                 c.push_row(
                     direction,
                     -1,
@@ -68,17 +74,20 @@ pub fn write_bouc_wen(
                     "not_identifiable",
                     reason,
                 );
-                c.fill_dof(*f_test, None);
+                c.fill_dof(*f_test, None, verdict, (energy, None));
             }
             DirectionOutcome::Identified(d) => {
+                let verdict = o.verdict().name();
                 for dof in &d.dofs {
                     let st = dof.stability.as_ref();
                     let stable = st.map(|s| s.stable).unwrap_or(false);
                     let level = dof.dof as i32; // 1-based already
-                    let status = if stable {
-                        "identified"
-                    } else {
-                        "identified_unstable"
+                    let (status, reason) = match &dof.hysteresis {
+                        HystereticTerms::NotSignificant { reason } => {
+                            ("no_significant_hysteresis", reason.as_str())
+                        }
+                        HystereticTerms::Significant if stable => ("identified", ""),
+                        HystereticTerms::Significant => ("identified_unstable", ""),
                     };
                     for (i, r) in dof.coupled.iter().enumerate() {
                         let rs = st.and_then(|s| s.k0_rel_std.get(i).copied());
@@ -97,7 +106,7 @@ pub fn write_bouc_wen(
                             dof.cost_relative,
                             dof.hysteretic_share,
                             status,
-                            "",
+                            reason,
                         );
                         c.push_row(
                             &d.direction,
@@ -112,7 +121,7 @@ pub fn write_bouc_wen(
                             dof.cost_relative,
                             dof.hysteretic_share,
                             status,
-                            "",
+                            reason,
                         );
                         c.push_row(
                             &d.direction,
@@ -127,7 +136,7 @@ pub fn write_bouc_wen(
                             dof.cost_relative,
                             dof.hysteretic_share,
                             status,
-                            "",
+                            reason,
                         );
                     }
                     c.push_row(
@@ -143,7 +152,7 @@ pub fn write_bouc_wen(
                         dof.cost_relative,
                         dof.hysteretic_share,
                         status,
-                        "",
+                        reason,
                     );
                     c.push_row(
                         &d.direction,
@@ -158,7 +167,7 @@ pub fn write_bouc_wen(
                         dof.cost_relative,
                         dof.hysteretic_share,
                         status,
-                        "",
+                        reason,
                     );
                     c.push_row(
                         &d.direction,
@@ -173,11 +182,13 @@ pub fn write_bouc_wen(
                         dof.cost_relative,
                         dof.hysteretic_share,
                         status,
-                        "",
+                        reason,
                     );
                     c.fill_dof(
                         Some((dof.significance.f_statistic, dof.significance.p_value)),
                         d.segments.get(dof.dof - 1).cloned(),
+                        verdict,
+                        (Some(dof.energy_record_j), Some(dof.energy_hysteretic_j)),
                     );
                 }
             }
@@ -198,8 +209,11 @@ pub fn write_bouc_wen(
         .f64(bouc_wen::HYSTERETIC_SHARE, c.share)
         .str(bouc_wen::STATUS, &c.status)
         .str(bouc_wen::REASON, &c.reason)
+        .str(bouc_wen::VERDICT, &c.verdict)
         .opt_f64(bouc_wen::F_STATISTIC, c.f_statistic)
         .opt_f64(bouc_wen::P_VALUE, c.p_value)
+        .opt_f64(bouc_wen::ENERGY_RECORD_J, c.energy_record)
+        .opt_f64(bouc_wen::ENERGY_HYSTERETIC_J, c.energy_hysteretic)
         .build()?;
     write_parquet(path, &[batch], extra_meta)
 }
@@ -222,16 +236,29 @@ struct Cols {
     f_statistic: Vec<Option<f64>>,
     p_value: Vec<Option<f64>>,
     segment: Vec<Option<String>>,
+    verdict: Vec<String>,
+    energy_record: Vec<Option<f64>>,
+    energy_hysteretic: Vec<Option<f64>>,
 }
 
 impl Cols {
-    /// The F-test of the hysteretic terms and the segment of the DoF, for
-    /// the rows pushed since the last call.
-    fn fill_dof(&mut self, test: Option<(f64, f64)>, segment: Option<String>) {
+    /// The F-test of the hysteretic terms, the segment of the DoF, the
+    /// direction's verdict and the DoF's (E_rec, E_h), for the rows pushed
+    /// since the last call.
+    fn fill_dof(
+        &mut self,
+        test: Option<(f64, f64)>,
+        segment: Option<String>,
+        verdict: &str,
+        energy: (Option<f64>, Option<f64>),
+    ) {
         while self.f_statistic.len() < self.direction.len() {
             self.f_statistic.push(test.map(|t| t.0));
             self.p_value.push(test.map(|t| t.1));
             self.segment.push(segment.clone());
+            self.verdict.push(verdict.to_string());
+            self.energy_record.push(energy.0);
+            self.energy_hysteretic.push(energy.1);
         }
     }
 
@@ -341,8 +368,16 @@ pub fn write_fit(
     metadata: &[(String, String)],
 ) -> Result<()> {
     let step = decimate.max(1);
-    let (mut dir, mut dof, mut seg, mut t, mut drift, mut fr, mut fm) =
-        (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut dir, mut dof, mut seg, mut t, mut drift, mut fr, mut fm, mut energy) = (
+        vec![],
+        vec![],
+        vec![],
+        vec![],
+        vec![],
+        vec![],
+        vec![],
+        vec![],
+    );
     for o in outcomes {
         // (direction, rate, start, segments, drifts, record forces, model forces)
         let (direction, fs, start_s, segments, drifts, record, model): (
@@ -402,6 +437,9 @@ pub fn write_fit(
             if let Some(m) = &model {
                 len = len.min(m[d].len());
             }
+            // E_rec(t) on every sample, decimated with the rows.
+            let work =
+                crate::hysteresis::energy::cumulative_work(&record[d][..len], &storey_drift[..len]);
             for i in (0..len).step_by(step) {
                 dir.push(direction.clone());
                 dof.push(d as i32 + 1);
@@ -415,6 +453,7 @@ pub fn write_fit(
                 drift.push(storey_drift[i]);
                 fr.push(record[d][i]);
                 fm.push(model.as_ref().map(|m| m[d][i]));
+                energy.push(work[i]);
             }
         }
     }
@@ -426,6 +465,7 @@ pub fn write_fit(
         .f64(hysteresis_fit::DRIFT_M, drift)
         .f64(hysteresis_fit::FORCE_RECORD_N, fr)
         .opt_f64(hysteresis_fit::FORCE_MODEL_N, fm)
+        .f64(hysteresis_fit::ENERGY_RECORD_J, energy)
         .build()?;
     write_parquet(path, &[batch], metadata)
 }

@@ -202,10 +202,13 @@ declare!(BOUC_WEN, bouc_wen, "bouc_wen", "bouc_wen.parquet",
     COST_J: "cost_j", F64, required, "", "J(N) at the optimum (Eq. 31; a weighted STFT residual)";
     COST_RELATIVE: "cost_relative", F64, required, "1", "J(N) relative to the target";
     HYSTERETIC_SHARE: "hysteretic_share", F64, required, "1", "share of the record explained by the hysteretic terms";
-    STATUS: "status", Utf8, required, "", "`identified`, `identified_unstable` (estimates unstable over time at this DoF), `not_identifiable` (one row per direction: `dof` −1, `parameter` `none`, `value` NaN)";
-    REASON: "reason", Utf8, required, "", "empty unless `not_identifiable`: why (no base or floor channel, a level whose channels could not be combined, masses missing, the response stays (nearly) linear …), naming level, channel or file";
-    F_STATISTIC: "f_statistic", F64, nullable, "1", "F-test of the hysteretic terms (β, γ, N) against the nested linear model at this DoF: [(J_lin − J)/3] / [J/(n_eff − p)], n_eff = non-overlapping STFT windows; on a not-identifiable row: the test of the DoF that failed it (null when another check failed)";
+    STATUS: "status", Utf8, required, "", "`identified` (hysteretic terms significant at this DoF), `identified_unstable` (significant, estimates unstable over time), `no_significant_hysteresis` (this DoF's hysteretic terms failed the share, F-test, N-range or J(N)-contrast check: its rows are the nested model's K0, K0_delta, delta, with beta = gamma = 0 and N NaN; the DoFs below were still identified), `not_identifiable` (one row per direction: `dof` −1, `parameter` `none`, `value` NaN)";
+    REASON: "reason", Utf8, required, "", "empty on `identified` rows: why not (no base or floor channel, a level whose channels could not be combined, masses missing, too few windows, the F-test and its numbers …), naming level, channel or file; a `no_significant_hysteresis` reason also says what the test cannot see (docs/hysteresis.md)";
+    VERDICT: "verdict", Utf8, required, "", "the direction's outcome, on every row of the direction: `nonlinear_identified` (hysteretic terms significant at one DoF at least), `no_significant_hysteresis` (every DoF tested, none significant: status `not_identifiable` with the reason — not a finding of a linear, undamaged response), `not_identifiable` (nothing could be tested: masses or channels missing, too few windows, …)";
+    F_STATISTIC: "f_statistic", F64, nullable, "1", "F-test of the hysteretic terms (β, γ, N) against the nested model (the same K0, K0·δ columns) at this DoF: [(J_lin − J)/3] / [J/(n_eff − p)], n_eff = non-overlapping STFT windows; on a not-identifiable row with verdict `no_significant_hysteresis`: the test of the DoF with the smallest p-value (null when another check decided)";
     P_VALUE: "p_value", F64, nullable, "1", "its p-value; a DoF is identifiable when p < `significance_level` (default 1e-3)";
+    ENERGY_RECORD_J: "energy_record_j", F64, nullable, "J", "E_rec = ∫ V_d dΔu_d: work of the recorded storey (segment) shear along its drift over the identified window — the energy the measured loops enclose (hysteretic and viscous dissipation plus the elastic energy stored at the end); on a not-identifiable row the sum over the direction's segments (null when the kinematics could not be formed)";
+    ENERGY_HYSTERETIC_J: "energy_hysteretic_j", F64, nullable, "J", "E_h = ∫ h_d dΔu_d, h_d = ∫ BW_d dτ (Eq. 23c): work of the identified Bouc-Wen hysteretic storey force along the recorded drift, the hysteretic energy dissipated; 0 on `no_significant_hysteresis` rows, null on not-identifiable rows";
 });
 
 declare!(BOUC_WEN_INSTANTANEOUS, bouc_wen_instantaneous, "bouc_wen_instantaneous",
@@ -231,6 +234,7 @@ declare!(series HYSTERESIS_FIT, hysteresis_fit, "hysteresis_fit", "hysteresis_fi
     DRIFT_M: "drift_m", F64, required, "m", "storey (segment) drift u_d − u_{d−1}, from the stage's own integration of the as-recorded accelerations (no band-pass: permanent drift kept)";
     FORCE_RECORD_N: "force_record_n", F64, required, "N", "storey shear from the records, V_d = Σ_{r ≥ d} f_r, f_r = −m_r (a + ü_r) (Eq. 46)";
     FORCE_MODEL_N: "force_model_n", F64, nullable, "N", "storey shear of the identified model along the recorded kinematics; null where the direction is not identified (measured loop only)";
+    ENERGY_RECORD_J: "energy_record_j", F64, required, "J", "cumulative work of the recorded storey shear along the drift, E_rec(t) = ∫₀ᵗ V_d dΔu_d (trapezoid on the drift increments of every sample, also where rows are decimated)";
 });
 
 declare!(series DAMAGE, damage, "damage", "damage.parquet",

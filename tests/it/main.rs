@@ -35,6 +35,7 @@ mod hysteresis;
 mod hysteresis_masses;
 mod hysteresis_partial;
 mod hysteresis_real;
+mod hysteresis_verdict;
 mod hysteresis_window;
 mod metrics;
 mod modal;

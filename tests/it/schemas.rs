@@ -34,6 +34,7 @@ fn declarations_are_well_formed() {
         "N/m",
         "rad/s",
         "N^(1-N)/m",
+        "J",
         "%",
     ];
     let mut names = BTreeSet::new();
