@@ -332,8 +332,16 @@ pub fn hysteresis_indicator(evidence: &[HysteresisEvidence], frequency: &Indicat
             .map(|e| e.direction.as_str())
             .collect::<Vec<_>>()
             .join(", ");
-        if frequency.state.is_some_and(|s| s > DamageState::None) {
-            return Indicator::not_rated(
+        return match frequency.state {
+            Some(DamageState::None) => Indicator {
+                kind,
+                value: None,
+                subject: directions,
+                state: Some(DamageState::None),
+                verdict: "none — no significant hysteresis (F-test), and the apparent frequency came back".into(),
+                provisional: false,
+            },
+            Some(_) => Indicator::not_rated(
                 kind,
                 None,
                 directions,
@@ -342,15 +350,15 @@ pub fn hysteresis_indicator(evidence: &[HysteresisEvidence], frequency: &Indicat
                      a softening outside what the Bouc-Wen test can see (docs/hysteresis.md), so no verdict of \"linear\"",
                     frequency.verdict
                 ),
-            );
-        }
-        return Indicator {
-            kind,
-            value: None,
-            subject: directions,
-            state: Some(DamageState::None),
-            verdict: "none — no significant hysteresis (F-test), and no lasting softening".into(),
-            provisional: false,
+            ),
+            None => Indicator::not_rated(
+                kind,
+                None,
+                directions,
+                "the F-test finds no significant hysteresis, which is not a finding of a linear response (docs/hysteresis.md), \
+                 and no before/after apparent frequency confirms one"
+                    .into(),
+            ),
         };
     }
     let why = if evidence.is_empty() {

@@ -166,41 +166,61 @@ fn drift_evidence(d: &Table) -> Vec<DriftEvidence> {
         .collect()
 }
 
-/// Per direction: the Bouc-Wen outcome (bouc_wen.parquet's status and
-/// reason) and, where identified, ι from damage.parquet.
+/// Per direction: the Bouc-Wen verdict (bouc_wen.parquet's `verdict`,
+/// else its statuses), the energies of its DoFs and, where identified, ι
+/// from damage.parquet.
 fn hysteresis_evidence(dir: &Path) -> Vec<HysteresisEvidence> {
+    use t::bouc_wen as c;
     let Some(b) = read(dir, &t::BOUC_WEN) else {
         return Vec::new();
     };
     let damage = read(dir, &t::DAMAGE);
     let mut out = Vec::new();
-    for (keys, rows) in b.groups(&[t::bouc_wen::DIRECTION.name]) {
+    for (keys, rows) in b.groups(&[c::DIRECTION.name]) {
         let direction = keys.first().cloned().unwrap_or_default();
-        let status = |r: usize| b.key(t::bouc_wen::STATUS.name, r).unwrap_or_default();
+        let key = |col: &str, r: usize| b.key(col, r).unwrap_or_default();
         let reason = rows
             .iter()
-            .filter_map(|&r| b.key(t::bouc_wen::REASON.name, r))
+            .map(|&r| key(c::REASON.name, r))
             .find(|s| !s.is_empty())
             .unwrap_or_default();
-        let outcome = if rows.iter().any(|&r| status(r).starts_with("identified")) {
-            let (final_iota, peak_iota) = damage
-                .as_ref()
-                .map(|d| iota_of(d, &direction))
-                .unwrap_or((None, None));
-            HysteresisOutcome::Nonlinear {
-                final_iota,
-                peak_iota,
-                energy_j: None,
-            }
-        } else if rows
+        let verdict = rows
             .iter()
-            .any(|&r| status(r) == "no_significant_hysteresis")
-            || reason.contains("do not improve the linear fit significantly")
-            || reason.contains("stays (nearly) linear")
-        {
-            HysteresisOutcome::NoSignificantHysteresis { reason }
-        } else {
-            HysteresisOutcome::NotIdentifiable { reason }
+            .map(|&r| key(c::VERDICT.name, r))
+            .find(|s| !s.is_empty())
+            .unwrap_or_else(|| {
+                // Tables written before the verdict column: from the statuses.
+                if rows
+                    .iter()
+                    .any(|&r| key(c::STATUS.name, r).starts_with("identified"))
+                {
+                    "nonlinear_identified".into()
+                } else {
+                    "not_identifiable".into()
+                }
+            });
+        // One energy per DoF (repeated on its parameter rows).
+        let mut seen = std::collections::BTreeSet::new();
+        let energies: Vec<f64> = rows
+            .iter()
+            .filter(|&&r| seen.insert(key(c::DOF.name, r)))
+            .filter_map(|&r| number(&b, c::ENERGY_HYSTERETIC_J.name, r))
+            .collect();
+        let energy_j = (!energies.is_empty()).then(|| energies.iter().sum());
+        let outcome = match verdict.as_str() {
+            "nonlinear_identified" => {
+                let (final_iota, peak_iota) = damage
+                    .as_ref()
+                    .map(|d| iota_of(d, &direction))
+                    .unwrap_or((None, None));
+                HysteresisOutcome::Nonlinear {
+                    final_iota,
+                    peak_iota,
+                    energy_j,
+                }
+            }
+            "no_significant_hysteresis" => HysteresisOutcome::NoSignificantHysteresis { reason },
+            _ => HysteresisOutcome::NotIdentifiable { reason },
         };
         out.push(HysteresisEvidence { direction, outcome });
     }

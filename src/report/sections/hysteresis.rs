@@ -169,8 +169,15 @@ fn long_parameters(t: &Table, settings: &ReportSettings) -> String {
     let reasons: Vec<String> = (0..t.rows)
         .filter(|&r| not_identifiable(r))
         .map(|r| {
+            // The F-test finding nothing is not a finding of a linear response.
+            let what = match t.key(bouc_wen::VERDICT.name, r).as_deref() {
+                Some("no_significant_hysteresis") => {
+                    "no significant hysteresis seen by the F-test (not a finding of a linear, undamaged response: docs/hysteresis.md)"
+                }
+                _ => "not identifiable",
+            };
             format!(
-                "<li><b>Direction {}</b>: not identifiable — {}</li>",
+                "<li><b>Direction {}</b>: {what} — {}</li>",
                 escape(&t.key(bouc_wen::DIRECTION.name, r).unwrap_or_default()),
                 escape(&t.key(bouc_wen::REASON.name, r).unwrap_or_default())
             )
