@@ -20,6 +20,8 @@ pub struct TrackRows {
     pub strong_start_s: f64,
     pub strong_end_s: f64,
     pub track: FrequencyTrack,
+    /// A synthetic event's true f₁ per point (empty for a real record).
+    pub truth_hz: Vec<Option<f64>>,
 }
 
 /// What earlier stages say of a direction's fundamental.
@@ -190,6 +192,7 @@ pub fn frequency_evidence(
             strong_start_s: strong_start,
             strong_end_s: strong_end,
             track,
+            truth_hz: Vec::new(),
         });
     }
     Ok((rows, evidence))

@@ -25,9 +25,11 @@ pub fn write_frequency_track(path: &Path, event: &Event, tracks: &[TrackRows]) -
     let mut damping = Vec::new();
     let mut rms = Vec::new();
     let mut phase = Vec::new();
+    let mut truth: Vec<Option<f64>> = Vec::new();
     for t in tracks {
         let half = 0.5 * t.track.window_s;
-        for p in &t.track.points {
+        for (i, p) in t.track.points.iter().enumerate() {
+            truth.push(t.truth_hz.get(i).copied().flatten());
             direction.push(t.direction.clone());
             output.push(t.output_channel.clone());
             input.push(t.input_channel.clone());
@@ -57,6 +59,7 @@ pub fn write_frequency_track(path: &Path, event: &Event, tracks: &[TrackRows]) -
         .opt_f64(f::DAMPING_RATIO, damping)
         .f64(f::OUTPUT_RMS, rms)
         .str(f::PHASE, &phase)
+        .opt_f64(f::TRUE_FREQUENCY_HZ, truth)
         .build()?;
     write_parquet(
         path,

@@ -22,6 +22,7 @@ use crate::modal::apparent::ApparentSettings;
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
 use crate::report::table::{self, Table};
 use crate::sinks::assessment_tables::{write_assessment, write_frequency_track};
+use crate::synth::realistic::degrading::{TruthFrequency, TRUTH_FREQUENCY_FILE};
 use crate::vocab::tables as t;
 
 pub const KIND: StageKind = StageKind {
@@ -83,6 +84,7 @@ impl Stage for Assess {
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let out = ctx.out_dir.clone();
+        let truth_file = ctx.event_path.join(TRUTH_FREQUENCY_FILE);
         let Conditioned { event, .. } = ctx.input(ProductKind::ConditionedEvent)?;
         let known = KnownFundamentals {
             identified: lowest_per_direction(
@@ -96,13 +98,25 @@ impl Stage for Assess {
                 t::frequency_shifts::FREQUENCY_REFERENCE_HZ.name,
             ),
         };
-        let (tracks, frequency) = frequency_evidence(
+        let (mut tracks, frequency) = frequency_evidence(
             event,
             &known,
             &self.params.tracking,
             self.params.strong_motion_arias,
             self.params.edge_guard_periods,
         )?;
+        // A synthetic event's truth, tabled beside the track (validation).
+        if truth_file.is_file() {
+            let truth = TruthFrequency::read(&truth_file)?;
+            for r in tracks.iter_mut() {
+                r.truth_hz = r
+                    .track
+                    .points
+                    .iter()
+                    .map(|p| truth.defined_over(&r.direction, p.start_s, p.end_s))
+                    .collect();
+            }
+        }
         let drift = read(&out, &t::DRIFT)
             .map(|d| drift_evidence(&d))
             .unwrap_or_default();

@@ -398,6 +398,7 @@ declare!(FREQUENCY_TRACK, frequency_track, "frequency_track", "frequency_track.p
     DAMPING_RATIO: "damping_ratio", F64, nullable, "1", "damping ratio of that pole";
     OUTPUT_RMS: "output_rms", F64, required, "m/s^2", "RMS of the output record over the window";
     PHASE: "phase", Utf8, required, "", "`pre` (window wholly before 5 % of the base's Arias intensity), `strong` (overlapping the 5–95 % span), `post` (wholly after 95 %)";
+    TRUE_FREQUENCY_HZ: "true_frequency_hz", F64, nullable, "Hz", "a synthetic event's true tangent f₁ over the window (its `truth_frequency.csv`, written by `quaketwin synth`) where the frame stays linear across the window; null for real records";
 });
 
 declare!(ASSESSMENT, assessment, "assessment", "assessment.parquet",

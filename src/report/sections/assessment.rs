@@ -301,6 +301,7 @@ fn track_figure(track: &Loaded, v: &AssessmentView, settings: &ReportSettings) -
         return note("frequency_track.parquet lacks time_s or frequency_hz.");
     };
     let mut chart = Chart::new(640, 280, "t (s)", "apparent frequency (Hz)");
+    let truth = t.number(ft::TRUE_FREQUENCY_HZ.name);
     for (i, (keys, rows)) in t.groups(&[ft::DIRECTION.name]).into_iter().enumerate() {
         let pts: Vec<(f64, f64)> = rows
             .iter()
@@ -315,6 +316,22 @@ fn track_figure(track: &Loaded, v: &AssessmentView, settings: &ReportSettings) -
             i % 7,
             Mark::LinePoints,
         ));
+        // A synthetic event's truth (where the frame is linear over the window).
+        let true_pts: Vec<(f64, f64)> = truth
+            .map(|tr| {
+                rows.iter()
+                    .filter_map(|&r| Some((time[r]?, tr[r]?)))
+                    .collect()
+            })
+            .unwrap_or_default();
+        if !true_pts.is_empty() {
+            chart.series.push(Series::new(
+                format!("direction {}: true tangent f₁ (synthetic)", keys.join(" ")),
+                true_pts,
+                i % 7,
+                Mark::HollowCircle,
+            ));
+        }
     }
     if chart.series.is_empty() {
         return note("The apparent-frequency track holds no estimate.");

@@ -297,14 +297,81 @@ pub fn write_event(dir: &Path, seed: u64, options: &EventOptions) -> Result<Simu
         "truth.toml",
         truth(frames, &[("X", rx), ("Y", ry)], seed, options)?.as_bytes(),
     )?;
-    if *options != EventOptions::sample() {
-        write_file(
-            dir,
-            "truth_frequency.csv",
-            truth_frequency_csv(&sim)?.as_bytes(),
-        )?;
-    }
+    write_file(
+        dir,
+        TRUTH_FREQUENCY_FILE,
+        truth_frequency_csv(&sim)?.as_bytes(),
+    )?;
     Ok(sim)
+}
+
+/// The per-sample truth of the apparent frequency beside the event
+/// ([`truth_frequency_csv`]); the `assess` stage tables it beside its track.
+pub const TRUTH_FREQUENCY_FILE: &str = "truth_frequency.csv";
+
+/// The true tangent f₁ per sample and direction, read back from
+/// [`TRUTH_FREQUENCY_FILE`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct TruthFrequency {
+    pub dt: f64,
+    /// Per direction (X, Y): f₁ at each sample, and whether storey 1 took a
+    /// plastic step in the sample interval.
+    pub f1_hz: [Vec<f64>; 2],
+    pub plastic: [Vec<bool>; 2],
+}
+
+impl TruthFrequency {
+    /// The true f₁ of `direction` ("X" or "Y") over [t0, t1] when the frame
+    /// is linear with one stiffness there (no plastic step), else `None`.
+    pub fn defined_over(&self, direction: &str, t0: f64, t1: f64) -> Option<f64> {
+        let d = match direction {
+            "X" => 0,
+            "Y" => 1,
+            _ => return None,
+        };
+        let first = (t0 / self.dt).floor().max(0.0) as usize;
+        let last = (t1 / self.dt).ceil() as usize;
+        if last >= self.f1_hz[d].len() || first > last {
+            return None;
+        }
+        (!self.plastic[d][first..last].iter().any(|&p| p)).then(|| self.f1_hz[d][first])
+    }
+
+    /// Reads the file; an error names the file and line.
+    pub fn read(path: &Path) -> Result<TruthFrequency> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let bad = |line: usize, why: &str| {
+            Error::usage(format!("{}: line {line}: {why}", path.display()))
+        };
+        let mut time = Vec::new();
+        let (mut fx, mut fy, mut px, mut py) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for (i, line) in text.lines().enumerate().skip(1) {
+            let cells: Vec<&str> = line.split(',').collect();
+            if cells.len() != 5 {
+                return Err(bad(i + 1, "expected 5 comma-separated cells"));
+            }
+            let num = |k: usize| {
+                cells[k]
+                    .trim()
+                    .parse::<f64>()
+                    .map_err(|_| bad(i + 1, "not a number"))
+            };
+            time.push(num(0)?);
+            fx.push(num(1)?);
+            px.push(num(2)? != 0.0);
+            fy.push(num(3)?);
+            py.push(num(4)? != 0.0);
+        }
+        let dt = match time.as_slice() {
+            [a, b, ..] if b > a => b - a,
+            _ => return Err(bad(1, "fewer than two samples")),
+        };
+        Ok(TruthFrequency {
+            dt,
+            f1_hz: [fx, fy],
+            plastic: [px, py],
+        })
+    }
 }
 
 /// Per sample: time, the true tangent f₁ per direction and whether storey 1
