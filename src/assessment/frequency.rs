@@ -211,9 +211,10 @@ fn without_edges(mut track: FrequencyTrack, length_s: f64, guard_s: f64) -> Freq
     track
 }
 
-/// For a structure without levels: the first input record of `axis` (by
-/// id) and the output record of `axis` with the largest RMS acceleration
-/// (the most responsive: a mid-span deck, a roof).  `None` without an output.
+/// For a structure without levels: the output record of `axis` with the
+/// largest RMS acceleration (the most responsive: a mid-span deck) that has
+/// an input of the axis on its time base, with that input; else the most
+/// responsive output alone.  `None` without an output.
 fn by_role<'a>(event: &'a Event, axis: Axis) -> Result<Option<(Option<&'a Record>, &'a Record)>> {
     use crate::vocab::Role;
     let on_axis = |role: Role| {
@@ -226,15 +227,29 @@ fn by_role<'a>(event: &'a Event, axis: Axis) -> Result<Option<(Option<&'a Record
         v.sort_by(|a, b| a.channel.id.cmp(&b.channel.id));
         v
     };
-    let mut best: Option<(f64, &Record)> = None;
+    let mut outputs: Vec<(f64, &Record)> = Vec::new();
     for r in on_axis(Role::Output) {
         let a = r.samples.get()?;
         let rms = (a.iter().map(|v| v * v).sum::<f64>() / a.len().max(1) as f64).sqrt();
-        if rms.is_finite() && best.is_none_or(|(b, _)| rms > b) {
-            best = Some((rms, r));
+        if rms.is_finite() {
+            outputs.push((rms, r));
         }
     }
-    Ok(best.map(|(_, top)| (on_axis(Role::Input).first().copied(), top)))
+    outputs.sort_by(|a, b| b.0.total_cmp(&a.0));
+    // The most responsive output with an input on its time base (same start
+    // and rate: a bridge's stations may be separate recorders that
+    // triggered apart); else the most responsive output alone (AR).
+    let inputs = on_axis(Role::Input);
+    let same_base = |top: &Record| {
+        inputs.iter().copied().find(|r| {
+            r.channel.start_ns == top.channel.start_ns
+                && (r.channel.dt() - top.channel.dt()).abs() < 1e-12
+        })
+    };
+    let paired = outputs
+        .iter()
+        .find_map(|(_, top)| same_base(top).map(|input| (Some(input), *top)));
+    Ok(paired.or_else(|| outputs.first().map(|(_, top)| (None, *top))))
 }
 
 /// Relative scatter of the pre- and post-event estimates (standard
@@ -288,6 +303,11 @@ fn expected_frequency(
         .map(|f| 1.5 * f)
         .unwrap_or(crate::modal::DEFAULT_BAND_HZ[1])
         .min(0.4 / dt);
+    // A bridge's lowest spectral peaks are the ground motion's
+    // (`modal::is_bridge`): its identified mode stands.
+    if crate::modal::is_bridge(event.structure.as_ref()) && modal.is_some() {
+        return modal;
+    }
     let peak = crate::modal::lowest_peak_of_records(&[output], dt, top);
     match (modal, peak) {
         (Some(m), Some(p)) if p < 0.8 * m => Some(p),

@@ -211,7 +211,28 @@ pub fn frequency_indicator(evidence: &[FrequencyEvidence]) -> Indicator {
         };
         return Indicator::not_rated(kind, None, String::new(), why);
     };
-    let significant = drop > 2.0 * e.scatter;
+    // The drop must stand out of the track's scatter to count; a drop
+    // within it is "none" only when the scatter itself lies below the
+    // slight threshold (it could have seen a slight softening), else the
+    // comparison is unresolved and not rated.
+    let resolution = 2.0 * e.scatter;
+    let significant = drop > resolution;
+    if !significant && resolution >= FREQUENCY_DROP_THRESHOLDS[0] {
+        return Indicator::not_rated(
+            kind,
+            Some(drop),
+            format!("{} ({})", e.direction, e.channels),
+            format!(
+                "unresolved: the permanent drop {:.1} % ({:.3} → {:.3} Hz) lies within twice the track's scatter ({:.1} %), \
+                 wider than the {:.0} % of slight damage",
+                100.0 * drop,
+                e.before_hz.unwrap_or(f64::NAN),
+                e.after_hz.unwrap_or(f64::NAN),
+                100.0 * e.scatter,
+                100.0 * FREQUENCY_DROP_THRESHOLDS[0]
+            ),
+        );
+    }
     let state = if significant {
         DamageState::reached(drop, FREQUENCY_DROP_THRESHOLDS)
     } else {

@@ -68,7 +68,7 @@ fn the_colour_follows_the_damage_at_three_intensities() {
     let keep = std::env::var_os("QUAKETWIN_KEEP").map(PathBuf::from);
     let base = keep.clone().unwrap_or_else(|| tmp.path().to_path_buf());
     let mut table = vec![
-        "| intensity | PGA X (m/s²) | true f₁ X initial → final (Hz) | apparent f X before → min during → after (Hz) | peak drift (rated) | P(none/slight/moderate/extensive/complete) | frequency | hysteresis | residual drift | rating (confidence) |".to_string(),
+        "| intensity | PGA X (m/s²) | true f₁ X initial → final (Hz) | apparent f before → min during → after (Hz), driving direction | peak drift (rated) | P(none/slight/moderate/extensive/complete) | frequency | hysteresis | residual drift | rating (confidence) |".to_string(),
         "|---|---|---|---|---|---|---|---|---|---|".to_string(),
     ];
     let mut track_rows = vec![
@@ -257,4 +257,46 @@ fn a_tall_linear_building_with_large_drift_is_inspected() {
     assert!(text(&out, a::FREQUENCY_VERDICT.name).contains("no pre-event window"));
     // Its apparent frequency after the shaking is the model's 0.200 Hz.
     assert!((number(&out, a::FREQUENCY_AFTER_HZ.name) / 0.2 - 1.0).abs() < 0.03);
+}
+
+/// Real records with the shipped pipeline: every run writes an assessment
+/// that is a colour or NOT RATED with its reason, and no colour rests on an
+/// unresolved quantity (an interpolated estimate, a drift to an assumed
+/// roof, an unresolved residual, a frequency without a before).
+#[test]
+fn shared_real_records_are_rated_or_say_why() {
+    let tmp = tempfile::tempdir().unwrap();
+    for rel in [
+        "csmip-ce89324-painterst-overpass/petrolia_25apr1992_ce89324p.zip",
+        "csmip-ce01336-meloland-overpass/imperialvalley79_ce01336p.zip",
+        "cesmd-bridges-corpus/ridgecrest-ce33742/ci38443183_ce33742p.zip",
+        "usgs-gmprocess-format-samples/cosmos",
+    ] {
+        let out = tmp.path().join(rel.replace('/', "_"));
+        run(&crate::common::shared_record(rel), &out);
+        let rating = text(&out, a::RATING.name);
+        let reason = text(&out, a::NOT_RATED_REASON.name);
+        let drivers = drivers(&out);
+        eprintln!("{rel}: {rating} {reason} {drivers:?}");
+        assert!(
+            ["GREEN", "YELLOW", "ORANGE", "RED", "NOT RATED"].contains(&rating.as_str()),
+            "{rel}: {rating}"
+        );
+        if rating == "NOT RATED" {
+            assert!(reason.len() > 20, "{rel}: NOT RATED without a reason");
+        }
+        for d in &drivers {
+            assert!(
+                !d.contains("not rated") && !d.contains("unresolved") && !d.contains("estimate"),
+                "{rel}: driven by {d}"
+            );
+        }
+        // The bridges: no drift fragility; said so.
+        if rel.contains("overpass") || rel.contains("bridges") {
+            assert!(
+                text(&out, a::DRIFT_VERDICT.name).contains("a bridge"),
+                "{rel}"
+            );
+        }
+    }
 }
