@@ -304,8 +304,9 @@ fn expected_frequency(
         .unwrap_or(crate::modal::DEFAULT_BAND_HZ[1])
         .min(0.4 / dt);
     // A bridge's lowest spectral peaks are the ground motion's
-    // (`modal::is_bridge`): its identified mode stands.
-    if crate::modal::is_bridge(event.structure.as_ref()) && modal.is_some() {
+    // (`modal::is_bridge`): only its identified mode is expected (none: the
+    // direction is not tracked).
+    if crate::modal::is_bridge(event.structure.as_ref()) {
         return modal;
     }
     let peak = crate::modal::lowest_peak_of_records(&[output], dt, top);
