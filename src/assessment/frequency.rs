@@ -138,7 +138,11 @@ pub fn frequency_evidence(
             evidence.push(missing(
                 &direction,
                 &channels,
-                "no expected fundamental (no mode in this direction, no spectral peak, no storey count or height)".into(),
+                if crate::modal::is_bridge(event.structure.as_ref()) {
+                    "no mode identified in this direction (a bridge's spectral peaks are the ground motion's)".into()
+                } else {
+                    "no expected fundamental (no mode in this direction, no spectral peak, no storey count or height)".into()
+                },
             ));
             continue;
         };

@@ -47,6 +47,11 @@ pub fn assess(
         .filter_map(|e| e.permanent_drop().map(|d| (e, d)))
         .max_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(e, _)| e)
+        .or_else(|| {
+            frequency
+                .iter()
+                .find(|e| e.after_hz.is_some() || e.min_during_hz.is_some())
+        })
         .or_else(|| frequency.first())
         .cloned();
     Assessment {
