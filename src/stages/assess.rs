@@ -9,7 +9,7 @@
 //! manifest lists), the frequency is tracked on the conditioned records,
 //! and `crate::assessment` gives the verdicts.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
@@ -47,6 +47,11 @@ pub struct AssessParams {
     /// fundamental of the record's start or end are dropped (processing
     /// edges: `assessment::frequency::without_edges`).
     pub edge_guard_periods: f64,
+    /// An earlier run of the structure (its output directory or its
+    /// `modes.parquet`; `quaketwin run … --reference` sets it): its lowest
+    /// mode per direction is the frequency before the event where the
+    /// record has no pre-event window.
+    pub reference_modes: Option<PathBuf>,
 }
 
 impl Default for AssessParams {
@@ -55,6 +60,7 @@ impl Default for AssessParams {
             tracking: ApparentSettings::default(),
             strong_motion_arias: [0.05, 0.95],
             edge_guard_periods: 2.0,
+            reference_modes: None,
         }
     }
 }
@@ -82,6 +88,12 @@ impl Stage for Assess {
     fn outputs(&self) -> Vec<String> {
         vec![t::ASSESSMENT.file.into(), t::FREQUENCY_TRACK.file.into()]
     }
+    fn extra_fingerprint(&self, _ctx: &mut RunContext) -> Result<String> {
+        match &self.params.reference_modes {
+            Some(p) => crate::pipeline::fingerprint::path_fingerprint(&reference_file(p)?),
+            None => Ok(String::new()),
+        }
+    }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let out = ctx.out_dir.clone();
         let truth_file = ctx.event_path.join(TRUTH_FREQUENCY_FILE);
@@ -92,11 +104,21 @@ impl Stage for Assess {
                 t::modes::DIRECTION.name,
                 t::modes::FREQUENCY_HZ.name,
             ),
-            reference: lowest_per_direction(
-                &read(&out, &t::FREQUENCY_SHIFTS),
-                t::frequency_shifts::DIRECTION_REFERENCE.name,
-                t::frequency_shifts::FREQUENCY_REFERENCE_HZ.name,
-            ),
+            reference: match &self.params.reference_modes {
+                Some(p) => {
+                    let (modes, _) = crate::sinks::modal_tables::read_modes(&reference_file(p)?)?;
+                    modes
+                        .iter()
+                        .map(|m| (m.direction.clone(), m.frequency_hz))
+                        .collect()
+                }
+                // Without one: the reference of frequency_shifts.parquet, if any.
+                None => lowest_per_direction(
+                    &read(&out, &t::FREQUENCY_SHIFTS),
+                    t::frequency_shifts::DIRECTION_REFERENCE.name,
+                    t::frequency_shifts::FREQUENCY_REFERENCE_HZ.name,
+                ),
+            },
         };
         let (mut tracks, frequency) = frequency_evidence(
             event,
@@ -138,6 +160,12 @@ impl Stage for Assess {
         }
         Ok(None)
     }
+}
+
+/// The reference run's `modes.parquet` (an output directory or the file).
+fn reference_file(p: &Path) -> Result<PathBuf> {
+    crate::sinks::modal_tables::locate_modes(p)
+        .map_err(|e| Error::usage(format!("assess: reference_modes: {e}")))
 }
 
 /// A table of the run, when the run manifest lists it and it reads.

@@ -172,8 +172,8 @@ pub fn compare_and_write(
     Ok(c)
 }
 
-/// Sets `reference_modes = reference` in every `modal` stage of a pipeline
-/// document; returns how many stages it set.
+/// Sets `reference_modes = reference` in every `modal` and `assess` stage
+/// of a pipeline document; returns how many stages it set.
 pub fn set_reference(doc: &mut toml::Table, reference: &str) -> usize {
     let Some(toml::Value::Array(stages)) = doc.get_mut("stage") else {
         return 0;
@@ -181,7 +181,8 @@ pub fn set_reference(doc: &mut toml::Table, reference: &str) -> usize {
     let mut n = 0;
     for s in stages.iter_mut() {
         let Some(t) = s.as_table_mut() else { continue };
-        if t.get("kind").and_then(|k| k.as_str()) != Some(super::modal::KIND.kind) {
+        let kind = t.get("kind").and_then(|k| k.as_str());
+        if kind != Some(super::modal::KIND.kind) && kind != Some(super::assess::KIND.kind) {
             continue;
         }
         let params = t

@@ -300,3 +300,38 @@ fn shared_real_records_are_rated_or_say_why() {
         }
     }
 }
+
+/// `--reference`: the bundled yielding sample starts with 5 s of exact
+/// zeros (no pre-event window in X); an earlier run of the same frame (the
+/// elastic intensity) gives the frequency before, and the X softening that
+/// did not come back (1.127 → 0.810 Hz in truth) is rated.
+#[test]
+fn a_reference_run_gives_the_frequency_before_when_the_record_has_none() {
+    let tmp = tempfile::tempdir().unwrap();
+    let reference_event = tmp.path().join("reference");
+    write_event(&reference_event, 32, &Intensity::Elastic.options()).unwrap();
+    let reference = tmp.path().join("reference-out");
+    run(&reference_event, &reference);
+    let out = tmp.path().join("out");
+    quaketwin::commands::run_pipeline_with(
+        &root().join("pipelines/post-earthquake.toml"),
+        &root().join("sample-records/synthetic-6storey-yielding"),
+        &out,
+        Some(&reference),
+        true,
+    )
+    .unwrap();
+    let verdict = text(&out, a::FREQUENCY_VERDICT.name);
+    eprintln!("{verdict}");
+    assert!(
+        verdict.contains("before from the reference event"),
+        "{verdict}"
+    );
+    let (before, after) = (
+        number(&out, a::FREQUENCY_BEFORE_HZ.name),
+        number(&out, a::FREQUENCY_AFTER_HZ.name),
+    );
+    assert!((before / 1.1267 - 1.0).abs() <= 0.03, "before {before}");
+    assert!((after / 0.8095 - 1.0).abs() <= 0.03, "after {after}");
+    assert_eq!(text(&out, a::FREQUENCY_STATE.name), "extensive");
+}
