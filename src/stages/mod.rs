@@ -60,8 +60,9 @@ pub fn load_pipeline_with_reference(path: &Path, reference: &str) -> Result<Pipe
         .map_err(|e| Error::usage(format!("{file}: invalid pipeline file: {e}")))?;
     if prepost::set_reference(&mut doc, reference) == 0 {
         return Err(Error::usage(format!(
-            "--reference {reference}: pipeline {file} has no `{}` stage to compare modes",
-            modal::KIND.kind
+            "--reference {reference}: pipeline {file} has no `{}` stage to compare modes (nor an `{}` stage)",
+            modal::KIND.kind,
+            assess::KIND.kind
         )));
     }
     let text = toml::to_string(&doc)
