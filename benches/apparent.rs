@@ -6,30 +6,21 @@
 //! channel as input) and X and Y at the base, 20 dB noise.
 //! Data generation is outside the timed loop.
 
+mod shared;
+
 use criterion::{criterion_group, criterion_main, Criterion};
 use quaketwin::modal::apparent::{track_many, ApparentSettings, TrackRequest};
 use quaketwin::rng::Rng;
 use quaketwin::synth::{
-    add_measurement_noise, synthetic_ground_motion, GroundMotionSpec, PlanBuilding, Sampling,
-    Sensor,
+    add_measurement_noise, synthetic_ground_motion, GroundMotionSpec, Sampling, Sensor,
 };
 use quaketwin::vocab::Axis;
 use std::hint::black_box;
 
 /// (base X, base Y, outputs with their axis), 60 s at 200 Hz.
 fn fourteen_channels() -> (Vec<f64>, Vec<f64>, Vec<(Axis, Vec<f64>)>, [f64; 2]) {
-    let n = 7;
-    let m = 5.0e5;
-    let inertia = m * (30.0f64.powi(2) + 20.0f64.powi(2)) / 12.0;
-    let building = PlanBuilding {
-        masses_kg: vec![m; n],
-        rotational_inertia_kg_m2: vec![inertia; n],
-        mass_eccentricity_m: [1.5, 1.0],
-        storey_stiffness_x_n_per_m: vec![4.98e8; n],
-        storey_stiffness_y_n_per_m: vec![7.29e8; n],
-        storey_torsional_stiffness_n_m_per_rad: vec![2314.0 * inertia; n],
-        damping_ratios: vec![0.02],
-    };
+    let building = shared::seven_storey_plan_building();
+    let n = building.masses_kg.len();
     let spec = |seed| GroundMotionSpec {
         seed,
         duration_s: 60.0,

@@ -10,6 +10,8 @@
 //! and PSD overlay written).
 //! Data generation is outside the timed loop.
 
+mod shared;
+
 use criterion::{criterion_group, criterion_main, Criterion};
 use quaketwin::modal::{
     identify, identify_event, ChannelChoice, Method, ModalInput, ModalSettings,
@@ -17,8 +19,8 @@ use quaketwin::modal::{
 use quaketwin::rng::Rng;
 use quaketwin::stages::modal::{identify_and_write, ModalParams};
 use quaketwin::synth::{
-    add_measurement_noise, synthetic_ground_motion, GroundMotionSpec, PlanBuilding, Sampling,
-    Sensor, ShearBuilding,
+    add_measurement_noise, synthetic_ground_motion, GroundMotionSpec, Sampling, Sensor,
+    ShearBuilding,
 };
 use quaketwin::vocab::{Axis, Event, Structure};
 use std::hint::black_box;
@@ -112,18 +114,8 @@ fn bench_modal(c: &mut Criterion) {
 /// the 7-storey building — centre of mass 5 % off; 41 s at 200 Hz
 /// of independent X and Y base motions, 20 dB noise; 14 channels.
 fn fourteen_channel_event(storey_heights: bool) -> Event {
-    let n = 7;
-    let m = 5.0e5;
-    let inertia = m * (30.0f64.powi(2) + 20.0f64.powi(2)) / 12.0;
-    let building = PlanBuilding {
-        masses_kg: vec![m; n],
-        rotational_inertia_kg_m2: vec![inertia; n],
-        mass_eccentricity_m: [1.5, 1.0],
-        storey_stiffness_x_n_per_m: vec![4.98e8; n],
-        storey_stiffness_y_n_per_m: vec![7.29e8; n],
-        storey_torsional_stiffness_n_m_per_rad: vec![2314.0 * inertia; n],
-        damping_ratios: vec![0.02],
-    };
+    let building = shared::seven_storey_plan_building();
+    let n = building.masses_kg.len();
     let spec = |seed| GroundMotionSpec {
         seed,
         duration_s: 41.0,

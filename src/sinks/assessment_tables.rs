@@ -77,15 +77,11 @@ pub fn write_assessment(path: &Path, event: &Event, row: &Assessment) -> Result<
     let verdict = |k: IndicatorKind| vec![ind(k).map(|i| i.verdict.clone()).unwrap_or_default()];
     let p = |i: usize| vec![row.probabilities.map(|p| p[i])];
     let freq = row.frequency.as_ref();
-    let most_likely = row.probabilities.map(|p| {
-        let mut best = 0;
-        for (i, v) in p.iter().enumerate() {
-            if *v >= p[best] {
-                best = i;
-            }
-        }
-        crate::assessment::DamageState::ALL[best].ems98_grade()
-    });
+    // The drift indicator's state is the fragility's most likely one.
+    let most_likely = ind(IndicatorKind::Drift)
+        .and_then(|i| i.state)
+        .filter(|_| row.probabilities.is_some())
+        .map(|s| s.ems98_grade());
     let batch = TableBuilder::new(&ASSESSMENT)
         .str(a::EVENT, &[row.event.as_str()])
         .opt_str(a::STRUCTURE, &[row.structure.as_deref()])

@@ -99,7 +99,7 @@ impl Stage for Assess {
         let truth_file = ctx.event_path.join(TRUTH_FREQUENCY_FILE);
         let Conditioned { event, .. } = ctx.input(ProductKind::ConditionedEvent)?;
         let known = KnownFundamentals {
-            identified: lowest_per_direction(
+            identified: modes_per_direction(
                 &read(&out, &t::MODES),
                 t::modes::DIRECTION.name,
                 t::modes::FREQUENCY_HZ.name,
@@ -113,7 +113,7 @@ impl Stage for Assess {
                         .collect()
                 }
                 // Without one: the reference of frequency_shifts.parquet, if any.
-                None => lowest_per_direction(
+                None => modes_per_direction(
                     &read(&out, &t::FREQUENCY_SHIFTS),
                     t::frequency_shifts::DIRECTION_REFERENCE.name,
                     t::frequency_shifts::FREQUENCY_REFERENCE_HZ.name,
@@ -182,8 +182,9 @@ fn number(t: &Table, column: &str, row: usize) -> Option<f64> {
     t.number(column)?.get(row).copied().flatten()
 }
 
-/// (direction label, frequency) of every row of a modes-like table.
-fn lowest_per_direction(t: &Option<Table>, direction: &str, frequency: &str) -> Vec<(String, f64)> {
+/// (direction label, frequency) of every row of a modes-like table (the
+/// lowest per direction is taken where it is used).
+fn modes_per_direction(t: &Option<Table>, direction: &str, frequency: &str) -> Vec<(String, f64)> {
     let Some(t) = t else {
         return Vec::new();
     };
