@@ -31,6 +31,7 @@ use std::cell::Cell;
 use std::io::{Cursor, Write};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicI64, Ordering};
 use std::time::{Duration, Instant};
 
 use quaketwin::design::file::{load_design, MotionSource};
@@ -64,7 +65,20 @@ const HUGE_REQUEST: usize = 1 << 30;
 /// Slowest case accepted (debug build, two busy cores).
 const SLOW_CASE: Duration = Duration::from_secs(10);
 
+/// Process-wide live bytes and their peak, counted only while
+/// [`GLOBAL_COUNTING`] is on (the in-process long run of
+/// `fuzz_structured.rs`, where readers parse on rayon's threads and a
+/// per-thread count would miss their memory; off elsewhere, so parallel
+/// tests share no atomic).
+pub static GLOBAL_COUNTING: AtomicBool = AtomicBool::new(false);
+pub static GLOBAL_LIVE: AtomicI64 = AtomicI64::new(0);
+pub static GLOBAL_PEAK: AtomicI64 = AtomicI64::new(0);
+
 fn grew(size: usize) {
+    if GLOBAL_COUNTING.load(Ordering::Relaxed) {
+        let v = GLOBAL_LIVE.fetch_add(size as i64, Ordering::Relaxed) + size as i64;
+        GLOBAL_PEAK.fetch_max(v, Ordering::Relaxed);
+    }
     let _ = LIVE.try_with(|live| {
         let v = live.get() + size as i64;
         live.set(v);
@@ -86,6 +100,9 @@ fn grew(size: usize) {
 }
 
 fn shrank(size: usize) {
+    if GLOBAL_COUNTING.load(Ordering::Relaxed) {
+        GLOBAL_LIVE.fetch_sub(size as i64, Ordering::Relaxed);
+    }
     let _ = LIVE.try_with(|live| live.set(live.get() - size as i64));
 }
 

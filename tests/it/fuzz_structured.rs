@@ -135,6 +135,8 @@ fn run_target(name: &str, target: u64, cases: u64, mut make: impl FnMut(&mut Rng
 /// What a case runs and what it must leave behind.
 struct Case {
     what: String,
+    /// The generated input the case is about (for the in-process long run).
+    input: PathBuf,
     args: Vec<OsString>,
     check: Option<Box<dyn Fn(&Path, &Outcome) -> Result<(), String>>>,
 }
@@ -696,15 +698,16 @@ fn manifest_case(rng: &mut Rng, dir: &Path) -> Case {
         vec![
             "run".into(),
             root().join("pipelines/ingest.toml").into(),
-            event_arg.into(),
+            event_arg.clone().into(),
             "--out".into(),
             dir.join("out").into(),
         ]
     } else {
-        vec!["inspect".into(), event_arg.into()]
+        vec!["inspect".into(), event_arg.clone().into()]
     };
     Case {
         what,
+        input: event_arg.clone(),
         args,
         check: Some(Box::new(no_temp_files_in_out)),
     }
@@ -853,18 +856,19 @@ fn zip_case(rng: &mut Rng, dir: &Path) -> Case {
     }
     std::fs::remove_dir_all(&ev).unwrap();
     let args: Vec<OsString> = if rng.below(2) == 0 {
-        vec!["inspect".into(), zpath.into()]
+        vec!["inspect".into(), zpath.clone().into()]
     } else {
         vec![
             "run".into(),
             root().join("pipelines/ingest.toml").into(),
-            zpath.into(),
+            zpath.clone().into(),
             "--out".into(),
             dir.join("out").into(),
         ]
     };
     Case {
         what,
+        input: zpath.clone(),
         args,
         check: Some(Box::new(no_temp_files_in_out)),
     }
@@ -1003,6 +1007,7 @@ fn pipeline_case(rng: &mut Rng, dir: &Path) -> Case {
     std::fs::write(&pfile, toml::to_string(&doc).unwrap()).unwrap();
     Case {
         what,
+        input: pfile.clone(),
         args: vec![
             "run".into(),
             pfile.into(),
@@ -1224,6 +1229,7 @@ fn cli_case(rng: &mut Rng, dir: &Path) -> Case {
     }
     Case {
         what: format!("command {command}"),
+        input: dir.to_path_buf(),
         args: a,
         check: Some(Box::new(no_temp_files_in_out)),
     }
@@ -1240,15 +1246,25 @@ fn fuzz_structured_cli_flags() {
 /// The ingest outputs of the bundled 4-storey quake: "another event's files".
 fn other_event_outputs() -> &'static Path {
     static DIR: OnceLock<tempfile::TempDir> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let d = tempfile::tempdir().unwrap();
-        let args: Vec<OsString> = vec![
+    made_once(&DIR, |d| {
+        vec![
             "run".into(),
             root().join("pipelines/ingest.toml").into(),
             root().join("sample-records/synthetic-4storey-quake").into(),
             "--out".into(),
-            d.path().join("out").into(),
-        ];
+            d.join("out").into(),
+        ]
+    })
+}
+
+/// A folder made once per test run by a quaketwin command that must succeed.
+fn made_once(
+    cell: &'static OnceLock<tempfile::TempDir>,
+    args: impl Fn(&Path) -> Vec<OsString>,
+) -> &'static Path {
+    cell.get_or_init(|| {
+        let d = tempfile::tempdir().unwrap();
+        let args = args(d.path());
         let a: Vec<&OsStr> = args.iter().map(|s| s.as_os_str()).collect();
         let o = run_quaketwin(&a, d.path(), HANG_LIMIT);
         assert_eq!(o.code, Some(0), "{}", o.describe());
@@ -1318,6 +1334,7 @@ fn outdir_case(rng: &mut Rng, dir: &Path) -> Case {
     let outside_check = outside.clone();
     Case {
         what,
+        input: out.clone(),
         args: vec![
             "run".into(),
             root().join("pipelines").join(pipeline).into(),
@@ -1382,27 +1399,30 @@ fn fuzz_structured_output_dirs() {
 /// A two-hour, two-channel synthetic archive (made once per test run).
 fn small_archive() -> &'static Path {
     static DIR: OnceLock<tempfile::TempDir> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let d = tempfile::tempdir().unwrap();
-        let args: Vec<OsString> = vec![
-            "synth-archive".into(),
-            "--out".into(),
-            d.path().join("a").into(),
-            "--days".into(),
-            "2".into(),
-            "--channels".into(),
-            "2".into(),
-            "--rate".into(),
-            "50".into(),
-            "--day-length".into(),
-            "1h".into(),
-        ];
-        let a: Vec<&OsStr> = args.iter().map(|s| s.as_os_str()).collect();
-        let o = run_quaketwin(&a, d.path(), HANG_LIMIT);
-        assert_eq!(o.code, Some(0), "{}", o.describe());
-        d
+    made_once(&DIR, |d| {
+        [
+            "synth-archive",
+            "--out",
+            "",
+            "--days",
+            "2",
+            "--channels",
+            "2",
+            "--rate",
+            "50",
+            "--day-length",
+            "1h",
+        ]
+        .iter()
+        .map(|a| {
+            if a.is_empty() {
+                d.join("a").into()
+            } else {
+                OsString::from(a)
+            }
+        })
+        .collect()
     })
-    .path()
 }
 
 fn day_files(dir: &Path, found: &mut Vec<PathBuf>) {
@@ -1498,6 +1518,7 @@ fn track_case(rng: &mut Rng, dir: &Path) -> Case {
     }
     Case {
         what,
+        input: archive.clone(),
         args,
         check: Some(Box::new(no_temp_files_in_out)),
     }
@@ -1506,4 +1527,94 @@ fn track_case(rng: &mut Rng, dir: &Path) -> Case {
 #[test]
 fn fuzz_structured_track_archives() {
     run_target("track", 6, budget(6), track_case);
+}
+
+// ---------------------------------------------------------------------------
+// The in-process long run: the manifest and pipeline generators above,
+// called through the library (no process start per case), so that a long
+// run reaches 10⁶ cases in hours, not days.  The whole-command targets run
+// in the same long run with `QUAKETWIN_FUZZ_STRUCTURED=N`.
+
+/// `QUAKETWIN_FUZZ_CASES` cases (default 10⁶), alternating the event-folder
+/// loader on generated manifests (folders and zips) and the pipeline
+/// builder on generated pipeline files.  Run alone (`--test-threads=1`):
+/// memory is counted process-wide.
+#[test]
+#[ignore]
+fn fuzz_structured_in_process_long_run() {
+    use std::panic::{catch_unwind, AssertUnwindSafe};
+    use std::sync::atomic::Ordering;
+
+    use crate::fuzz::{GLOBAL_COUNTING, GLOBAL_LIVE, GLOBAL_PEAK};
+
+    let total: u64 = std::env::var("QUAKETWIN_FUZZ_CASES")
+        .ok()
+        .and_then(|s| s.replace('_', "").parse().ok())
+        .unwrap_or(1_000_000);
+    let started = std::time::Instant::now();
+    let (mut ok, mut errors, mut max_peak, mut slowest) = (0u64, 0u64, 0i64, Duration::ZERO);
+    let mut failures = Vec::new();
+    GLOBAL_COUNTING.store(true, Ordering::Relaxed);
+    for i in 0..total {
+        let dir = tempfile::tempdir().unwrap();
+        let mut rng = case_rng(7, i);
+        let pipeline = i % 2 == 1;
+        let case = if pipeline {
+            pipeline_case(&mut rng, dir.path())
+        } else {
+            manifest_case(&mut rng, dir.path())
+        };
+        let path = case.input.clone();
+        let base = GLOBAL_LIVE.load(Ordering::Relaxed);
+        GLOBAL_PEAK.store(base, Ordering::Relaxed);
+        let t0 = std::time::Instant::now();
+        let result = catch_unwind(AssertUnwindSafe(|| {
+            if pipeline {
+                quaketwin::pipeline::Pipeline::load(&path, quaketwin::stages::CATALOG).map(|_| ())
+            } else {
+                quaketwin::event_folder::load(&path).map(|_| ())
+            }
+        }));
+        let took = t0.elapsed();
+        let peak = GLOBAL_PEAK.load(Ordering::Relaxed) - base;
+        max_peak = max_peak.max(peak);
+        slowest = slowest.max(took);
+        let mut problems = Vec::new();
+        match &result {
+            Err(_) => problems.push("panicked".to_string()),
+            Ok(Ok(())) => ok += 1,
+            Ok(Err(e)) => {
+                errors += 1;
+                let name = path.file_name().unwrap().to_string_lossy().into_owned();
+                if !e.to_string().contains(&name) {
+                    problems.push(format!("error names no file: {e}"));
+                }
+            }
+        }
+        if peak > PEAK_LIMIT as i64 {
+            problems.push(format!("peak {} MB", peak >> 20));
+        }
+        if took > HANG_LIMIT {
+            problems.push(format!("took {took:.1?}"));
+        }
+        if !problems.is_empty() {
+            failures.push(format!("case {i} ({}): {}", case.what, problems.join("; ")));
+        }
+        if i % 10_000 == 9_999 {
+            eprintln!(
+                "fuzz in-process: {} cases in {:.0?}, {} failures",
+                i + 1,
+                started.elapsed(),
+                failures.len()
+            );
+        }
+    }
+    GLOBAL_COUNTING.store(false, Ordering::Relaxed);
+    eprintln!(
+        "fuzz in-process long run: {total} cases ({ok} ok, {errors} errors) in {:.0?}; largest peak {} MB; slowest {slowest:.2?}; failures {}",
+        started.elapsed(),
+        max_peak >> 20,
+        failures.len()
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
