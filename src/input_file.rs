@@ -192,10 +192,13 @@ pub fn follow_links_inside(root: &Path, path: &Path) -> Result<Metadata> {
         Err(e) => return Err(Error::io(path, e)),
     };
     let meta = std::fs::metadata(&resolved).map_err(|e| Error::io(&resolved, e))?;
+    if !meta.is_file() && link.is_none() {
+        return Err(not_regular(path, &meta));
+    }
     if !meta.is_file() {
         return Err(refuse(
             format!("leads to {}, not a regular file", kind_of(&meta)),
-            link.is_some(),
+            true,
         ));
     }
     let root = std::fs::canonicalize(root).map_err(|e| Error::io(root, e))?;
