@@ -361,13 +361,15 @@ pub fn report(dir: &Path, settings: Option<&Path>) -> Result<std::path::PathBuf>
     let settings: crate::report::ReportSettings = match settings {
         None => Default::default(),
         Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(|e| crate::error::Error::io(p, e))?;
+            let text = crate::input_file::read_to_string(p, crate::input_file::MAX_INPUT_BYTES)?;
             toml::from_str(&text).map_err(|e: toml::de::Error| {
                 crate::error::Error::usage(format!("{}: {}", p.display(), e.message()))
             })?
         }
     };
     pipeline::write_extra_output(dir, "report.html", "report (quaketwin report)", || {
+        // Under the directory's lock: the files checked are the files shown.
+        crate::report::verify_against_manifest(dir)?;
         crate::report::write_report(dir, &settings)
     })
 }
@@ -511,7 +513,7 @@ pub fn update(
     let params: crate::stages::update::UpdateParams = match settings {
         None => Default::default(),
         Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(|e| crate::error::Error::io(p, e))?;
+            let text = crate::input_file::read_to_string(p, crate::input_file::MAX_INPUT_BYTES)?;
             crate::stages::update::UpdateParams::from_toml(&text, &p.display().to_string())?
         }
     };
@@ -675,7 +677,7 @@ pub fn rehearse(
     let mut s: crate::rehearse::RehearseSettings = match settings {
         None => Default::default(),
         Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
+            let text = crate::input_file::read_to_string(p, crate::input_file::MAX_INPUT_BYTES)?;
             toml::from_str(&text).map_err(|e| {
                 Error::usage(format!("{}: bad rehearsal settings: {e}", p.display()))
             })?
@@ -765,11 +767,12 @@ fn holds_records(dir: &Path) -> bool {
                 return true;
             }
             let mut head = Vec::new();
-            let read = std::fs::File::open(&p).and_then(|f| {
+            let read = crate::input_file::open(&p).is_ok_and(|f| {
                 f.take(crate::readers::SNIFF_BYTES as u64)
                     .read_to_end(&mut head)
+                    .is_ok()
             });
-            read.is_ok() && crate::readers::sniff(&name, &head).is_some()
+            read && crate::readers::sniff(&name, &head).is_some()
         })
 }
 

@@ -17,6 +17,7 @@ pub mod geometry;
 pub mod hash;
 pub mod hysteresis;
 pub mod in_memory;
+pub mod input_file;
 pub mod metrics;
 pub mod modal;
 pub mod monitor;

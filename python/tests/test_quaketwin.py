@@ -93,6 +93,20 @@ class Bindings(unittest.TestCase):
             quaketwin.modal(table, {"band_hz": [5.0, 1.0]})
         self.assertIn("band_hz", str(caught.exception))
 
+    def test_a_fifo_as_reference_raises_at_once(self):
+        # Issue 33: a FIFO named as an input is refused before it is opened
+        # (it blocked forever); the message names it.
+        with tempfile.TemporaryDirectory() as work:
+            fifo = pathlib.Path(work) / "modes.fifo"
+            os.mkfifo(fifo)
+            start = time.monotonic()
+            with self.assertRaises(quaketwin.UsageError) as caught:
+                quaketwin.run(PIPELINE, SAMPLES / "synthetic-4storey-quake",
+                              pathlib.Path(work) / "out", reference=fifo)
+            self.assertLess(time.monotonic() - start, 10.0)
+            self.assertIn(str(fifo), str(caught.exception))
+            self.assertIn("FIFO", str(caught.exception))
+
     def test_run_returns_the_command_line_summary(self):
         with tempfile.TemporaryDirectory() as out:
             summary = quaketwin.run(PIPELINE, SAMPLES / "synthetic-2storey-yielding", out)
@@ -223,6 +237,18 @@ class TrackTest(unittest.TestCase):
         self.assertEqual(s["identified_windows"], 6)
         self._same_table(out)
         self.assertTrue((out / "tracking.html").is_file())
+
+    def test_a_fifo_as_stationxml_raises_at_once(self):
+        # Issue 33: refused before it is opened (it blocked forever).
+        fifo = pathlib.Path(self.work.name) / "station.fifo"
+        os.mkfifo(fifo)
+        start = time.monotonic()
+        with self.assertRaises(quaketwin.QuaketwinError) as caught:
+            quaketwin.track(self.arch / "sds", pathlib.Path(self.work.name) / "fifo-out",
+                            **dict(self.flags, stationxml=fifo))
+        self.assertLess(time.monotonic() - start, 10.0)
+        self.assertIn(str(fifo), str(caught.exception))
+        self.assertIn("FIFO", str(caught.exception))
 
     def test_bad_options_raise_usage_errors(self):
         with self.assertRaises(quaketwin.UsageError):

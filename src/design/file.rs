@@ -294,7 +294,7 @@ pub fn parse_design(text: &str, source: &str) -> Result<DesignDoc> {
 /// Read the design file at `path`, load its twin and resolve it (see
 /// [`super::resolve::resolve_design`]).
 pub fn load_design(path: &Path) -> Result<LoadedDesign> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::input_file::read_to_string(path, crate::input_file::MAX_INPUT_BYTES)?;
     let source = path.display().to_string();
     let doc = parse_design(&text, &source)?;
     let base = path

@@ -261,8 +261,8 @@ pub fn base_motion_from_file(
     };
     let loc = || Location::file(design_source.to_string()).at_line(spec.line);
     let name = path.display().to_string();
-    let bytes = std::fs::read(path)
-        .map_err(|e| Error::input(loc(), format!("[motion] file {name}: {e}")))?;
+    let bytes = crate::input_file::read(path, crate::input_file::MAX_INPUT_BYTES)
+        .map_err(|e| Error::input(loc(), format!("[motion] file {e}")))?;
     let fmt = match format {
         Some(f) => Format::from_name(f).ok_or_else(|| {
             Error::input(

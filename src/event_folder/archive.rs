@@ -8,6 +8,7 @@ use std::io::{Cursor, Read};
 use std::path::{Component, Path};
 
 use crate::error::{Error, Location, Result};
+use crate::input_file::FolderEntry;
 
 /// Safety limits for archives.
 #[derive(Debug, Clone)]
@@ -58,9 +59,8 @@ impl EventFile {
     pub fn content(&self) -> Result<std::borrow::Cow<'_, [u8]>> {
         match &self.on_disk {
             None => Ok(std::borrow::Cow::Borrowed(&self.head)),
-            Some(path) => std::fs::read(path)
-                .map(std::borrow::Cow::Owned)
-                .map_err(|e| Error::io(path, e)),
+            // Its size was checked when the folder was listed.
+            Some(path) => crate::input_file::read(path, u64::MAX).map(std::borrow::Cow::Owned),
         }
     }
 
@@ -149,13 +149,12 @@ pub fn collect(root: &Path, limits: &ArchiveLimits) -> Result<Vec<EventFile>> {
 fn read_head_bounded(path: &Path, limits: &ArchiveLimits) -> Result<(Vec<u8>, bool)> {
     let size = checked_size(path, limits)?;
     if size <= READ_LATER_ABOVE {
-        return std::fs::read(path)
-            .map(|b| (b, true))
-            .map_err(|e| Error::io(path, e));
+        return crate::input_file::read(path, limits.max_member_bytes).map(|b| (b, true));
     }
     let mut head = Vec::with_capacity(HEAD_BYTES);
-    std::fs::File::open(path)
-        .and_then(|f| f.take(HEAD_BYTES as u64).read_to_end(&mut head))
+    crate::input_file::open(path)?
+        .take(HEAD_BYTES as u64)
+        .read_to_end(&mut head)
         .map_err(|e| Error::io(path, e))?;
     Ok((head, false))
 }
@@ -163,18 +162,12 @@ fn read_head_bounded(path: &Path, limits: &ArchiveLimits) -> Result<(Vec<u8>, bo
 /// Reads a regular file whose size is checked first against the member limit.
 fn read_bounded(path: &Path, limits: &ArchiveLimits) -> Result<Vec<u8>> {
     checked_size(path, limits)?;
-    std::fs::read(path).map_err(|e| Error::io(path, e))
+    crate::input_file::read(path, limits.max_member_bytes)
 }
 
 /// The size of a regular file, refused above the member limit.
 fn checked_size(path: &Path, limits: &ArchiveLimits) -> Result<u64> {
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    if !meta.is_file() {
-        return Err(Error::input(
-            Location::file(path.display().to_string()),
-            "not a regular file (a FIFO, socket or device is refused)",
-        ));
-    }
+    let meta = crate::input_file::check_regular(path)?;
     if meta.len() > limits.max_member_bytes {
         return Err(Error::input(
             Location::file(path.display().to_string()),
@@ -197,14 +190,18 @@ fn walk(root: &Path, dir: &Path, out: &mut Vec<std::path::PathBuf>) -> Result<()
         if name.to_string_lossy().starts_with('.') {
             continue; // hidden files (.DS_Store, editor swap files)
         }
-        let ft = entry.file_type().map_err(|e| Error::io(&path, e))?;
-        if ft.is_dir() {
-            if super::is_run_directory(&path) {
-                continue; // quaketwin's own outputs (`--out` inside the event folder)
+        // The one policy of folders (src/input_file.rs): links followed
+        // only to regular files inside the event; a FIFO or device refused.
+        match crate::input_file::folder_entry(root, &path)? {
+            FolderEntry::Dir => {
+                if super::is_run_directory(&path) {
+                    continue; // quaketwin's own outputs (`--out` inside the event folder)
+                }
+                walk(root, &path, out)?;
             }
-            walk(root, &path, out)?;
-        } else if ft.is_file() {
-            out.push(path.strip_prefix(root).unwrap_or(&path).to_path_buf());
+            FolderEntry::File(_) => {
+                out.push(path.strip_prefix(root).unwrap_or(&path).to_path_buf());
+            }
         }
     }
     Ok(())

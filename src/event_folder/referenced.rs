@@ -2,7 +2,8 @@
 //! `structure.twin`, a design file, the Matrix Market files they name — as
 //! paths a loader can open, whether the event is a directory or a zip.
 //!
-//! For a directory the path is checked to stay inside the event and to be a
+//! For a directory the path is checked to stay inside the event (symbolic
+//! links followed only inside it, as when the folder is listed) and to be a
 //! regular file of bounded size (a FIFO would hang a run, `/dev/zero` would
 //! grow without bound). For a zip the top-level members are extracted once
 //! into a private temporary directory (removed when the resolver is dropped),
@@ -17,7 +18,7 @@ use super::archive::{collect, ArchiveLimits};
 use crate::error::{Error, Location, Result};
 
 /// Largest referenced file accepted (twin, design, matrices), bytes.
-pub const MAX_REFERENCED_BYTES: u64 = 1 << 30;
+pub const MAX_REFERENCED_BYTES: u64 = crate::input_file::MAX_INPUT_BYTES;
 
 /// Resolves paths relative to an event (see module doc).
 #[derive(Debug)]
@@ -62,14 +63,12 @@ impl ReferencedFiles {
         }
         let base = self.base()?;
         let path = base.join(rel);
-        let meta = std::fs::symlink_metadata(&path)
+        std::fs::symlink_metadata(&path)
             .map_err(|_| Error::input(here(), format!("{what} {rel:?} is not in the event")))?;
-        if !meta.file_type().is_file() {
-            return Err(Error::input(
-                here(),
-                format!("{what} {rel:?} is not a regular file (a link, directory, FIFO or device is refused)"),
-            ));
-        }
+        // The one link policy of the event folder (src/input_file.rs): links
+        // followed only to a regular file inside the event.
+        let meta = crate::input_file::follow_links_inside(&base, &path)
+            .map_err(|e| Error::input(here(), format!("{what} {rel:?}: {e}")))?;
         if meta.len() > MAX_REFERENCED_BYTES {
             return Err(Error::input(
                 here(),

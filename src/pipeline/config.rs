@@ -190,7 +190,7 @@ impl Pipeline {
 
     /// Reads and builds the pipeline file at `path`.
     pub fn load(path: &std::path::Path, catalog: &'static [StageKind]) -> Result<Pipeline> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::input_file::read_to_string(path, crate::input_file::MAX_INPUT_BYTES)?;
         Self::parse(&text, &path.display().to_string(), catalog)
     }
 }

@@ -119,7 +119,8 @@ pub fn read(dir: &Path) -> std::result::Result<Option<RunManifest>, String> {
         Ok(m) if !m.file_type().is_file() => return Err("not a regular file".into()),
         Ok(_) => {}
     }
-    let bytes = std::fs::read(&path).map_err(|e| e.to_string())?;
+    let bytes = crate::input_file::read(&path, crate::input_file::MAX_INPUT_BYTES)
+        .map_err(|e| e.to_string())?;
     // The layout version first: a manifest of another format is reported
     // as such, not by the first field this build does not know.
     #[derive(Deserialize)]
@@ -155,7 +156,7 @@ pub fn hash_file(path: &Path) -> Result<Option<(u64, String)>> {
         Ok(m) if !m.file_type().is_file() => return Ok(None),
         Ok(_) => {}
     }
-    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut f = crate::input_file::open(path)?;
     let mut h = Hash64::default();
     let mut buf = vec![0u8; 1 << 20];
     let mut n_total = 0u64;

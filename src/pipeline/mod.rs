@@ -156,9 +156,10 @@ fn take_legacy_stamps(out: &Path) -> Result<Vec<String>> {
             continue;
         }
         if name.ends_with(".stamp.json") {
-            if let Ok(v) =
-                serde_json::from_slice::<serde_json::Value>(&std::fs::read(&p).unwrap_or_default())
-            {
+            if let Ok(v) = serde_json::from_slice::<serde_json::Value>(
+                &crate::input_file::read(&p, crate::input_file::MAX_INPUT_BYTES)
+                    .unwrap_or_default(),
+            ) {
                 if let Some(list) = v.get("outputs").and_then(|o| o.as_array()) {
                     files.extend(list.iter().filter_map(|s| s.as_str().map(String::from)));
                 }

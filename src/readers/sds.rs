@@ -278,7 +278,9 @@ impl SdsArchive {
             return Ok(ix.clone());
         }
         let path = day_file(&self.root, &self.streams[k], day_ns);
-        let spans = match std::fs::read(&path) {
+        // Regular files only (a FIFO day file would block); the size is
+        // bounded by the SDS reader's own budget, not here.
+        let spans = match crate::input_file::read(&path, u64::MAX) {
             Ok(bytes) => {
                 let spans = mseed::index(&bytes, &source_of(&path))?;
                 let want = self.streams[k].id();
@@ -290,8 +292,10 @@ impl SdsArchive {
                 }
                 spans
             }
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
-            Err(e) => return Err(Error::io(&path, e)),
+            Err(Error::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
+                Vec::new()
+            }
+            Err(e) => return Err(e),
         };
         let ix = Arc::new(spans);
         self.lock().insert((k, day_ns), ix.clone());
@@ -324,7 +328,7 @@ impl SdsArchive {
             if !wanted.is_empty() {
                 let path = day_file(&self.root, &self.streams[k], day);
                 let src = source_of(&path);
-                let mut file = std::fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
+                let mut file = crate::input_file::open(&path)?;
                 let mut buf = Vec::new();
                 for span in wanted {
                     buf.resize(span.len, 0);

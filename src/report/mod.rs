@@ -268,6 +268,55 @@ pub fn verdict(dir: &Path, settings: &ReportSettings) -> Result<Verdict> {
     Ok(Verdict::of(sections::assessments(dir, settings)))
 }
 
+/// Checks every file the report reads in `dir` against the run manifest
+/// `dir/run.json` (docs/report.md, "Checked against run.json"): a listed
+/// result whose size or XXH64 hash is not the recorded one — another
+/// event's table copied in, or a file changed since the run — is an input
+/// error naming the file (exit 1), so the page never shows it under this
+/// event's title.  A directory without a run manifest has nothing to check
+/// against (read as it is); files the manifest does not list are never read.
+/// `quaketwin report DIR` calls it; the pipeline's `report` stage does not
+/// need to (the run has just written or verified every output it lists).
+pub fn verify_against_manifest(dir: &Path) -> Result<()> {
+    use crate::pipeline::manifest;
+    let m = match manifest::read(dir) {
+        Ok(Some(m)) => m,
+        Ok(None) => return Ok(()),
+        // Nothing listed is shown (`sections::listed`); the write of the
+        // page's record in the manifest reports the manifest itself.
+        Err(_) => return Ok(()),
+    };
+    let read = sections::files_read();
+    for stage in m
+        .stages
+        .iter()
+        .filter(|s| s.state == manifest::StageState::Done)
+    {
+        for o in stage
+            .outputs
+            .iter()
+            .filter(|o| read.contains(&o.file.as_str()))
+        {
+            let path = dir.join(&o.file);
+            if std::fs::symlink_metadata(&path).is_err() {
+                continue; // absent: the section says so
+            }
+            if let Err(why) = manifest::verify_output(dir, o)? {
+                return Err(Error::input(
+                    crate::error::Location::file(path.display().to_string()),
+                    format!(
+                        "not the file the run recorded in {} ({why}): another run's output copied in, \
+                         or changed since the run; re-run the pipeline (`quaketwin run`) to rebuild it, \
+                         or remove it",
+                        manifest::MANIFEST_FILE
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Renders `dir/report.html`'s content.  Errors only for bad settings or a
 /// missing/unreadable directory; unreadable or absent outputs are reported
 /// on the page.

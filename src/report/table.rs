@@ -8,7 +8,6 @@
 //! never fail because a column was renamed.
 
 use std::collections::BTreeMap;
-use std::fs::File;
 use std::path::{Path, PathBuf};
 
 use arrow_array::cast::AsArray;
@@ -131,7 +130,7 @@ impl Iterator for Batches {
 
 /// An empty table (metadata and schema of `path`) and a reader of its rows.
 fn open(path: &Path, only: Option<&[&str]>, batch_rows: Option<usize>) -> Result<(Table, Batches)> {
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = crate::input_file::open(path)?;
     let builder = ParquetRecordBatchReaderBuilder::try_new(file)
         .map_err(|e| Error::input(location(path), format!("not a readable Parquet file: {e}")))?;
     let metadata: BTreeMap<String, String> = builder

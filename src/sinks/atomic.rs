@@ -26,6 +26,7 @@ use std::sync::Mutex;
 
 use crate::error::{Error, Result};
 use crate::hash::Hash64;
+use crate::input_file::kind_of;
 
 /// Marker in every temporary file name (see the module doc).
 pub const TEMP_MARKER: &str = ".quaketwin-";
@@ -68,31 +69,6 @@ pub fn is_temp_name(name: &str) -> bool {
         return digits(pid);
     }
     false
-}
-
-/// What kind of non-regular file sits at a path, in words.
-fn kind_of(meta: &std::fs::Metadata) -> &'static str {
-    let ft = meta.file_type();
-    if ft.is_symlink() {
-        return "a symbolic link";
-    }
-    if ft.is_dir() {
-        return "a directory";
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if ft.is_fifo() {
-            return "a FIFO (named pipe)";
-        }
-        if ft.is_char_device() || ft.is_block_device() {
-            return "a device";
-        }
-        if ft.is_socket() {
-            return "a socket";
-        }
-    }
-    "not a regular file"
 }
 
 /// Checks that `path` is absent or a regular file (never following a
@@ -209,6 +185,22 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut HashingWriter<&mut File>) -> Result<()>,
 ) -> Result<()> {
+    let (tmp, mut file) = begin(path)?;
+    let mut out = HashingWriter::new(&mut file);
+    let result = write(&mut out);
+    let digest = out.digest();
+    match result {
+        Ok(()) => commit(path, &tmp, file, digest),
+        Err(e) => {
+            drop(file);
+            let _ = std::fs::remove_file(&tmp); // best effort; swept by the next run otherwise
+            Err(e)
+        }
+    }
+}
+
+/// The temporary file of a write to `path`, created new (see [`write_atomically`]).
+fn begin(path: &Path) -> Result<(PathBuf, File)> {
     check_replaceable(path)?;
     if let Some(dir) = path.parent() {
         if !dir.as_os_str().is_empty() {
@@ -217,23 +209,27 @@ pub fn write_atomically(
     }
     let tmp = temp_path(path);
     // create_new: never open (or follow a link at) an existing path.
-    let mut file = std::fs::OpenOptions::new()
+    let file = std::fs::OpenOptions::new()
         .write(true)
         .create_new(true)
         .open(&tmp)
         .map_err(|e| Error::io(&tmp, e))?;
-    let mut out = HashingWriter::new(&mut file);
-    let result = write(&mut out);
-    let digest = out.digest();
-    let result = result
-        .and_then(|_| file.sync_all().map_err(|e| Error::io(&tmp, e)))
-        .and_then(|_| file.metadata().map_err(|e| Error::io(&tmp, e)))
+    Ok((tmp, file))
+}
+
+/// Flushes `file` (written at `tmp`) to disk and renames it over `path`,
+/// recording `digest` ([`written_digest`]); on any error `tmp` is removed.
+fn commit(path: &Path, tmp: &Path, file: File, digest: Option<(u64, String)>) -> Result<()> {
+    let result = file
+        .sync_all()
+        .map_err(|e| Error::io(tmp, e))
+        .and_then(|_| file.metadata().map_err(|e| Error::io(tmp, e)))
         .and_then(|meta| {
             drop(file);
             // Checked again just before the rename: the target may have
             // changed while the file was written.
             check_replaceable(path)?;
-            std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))?;
+            std::fs::rename(tmp, path).map_err(|e| Error::io(path, e))?;
             Ok(meta)
         });
     match result {
@@ -247,8 +243,74 @@ pub fn write_atomically(
             Ok(())
         }
         Err(e) => {
-            let _ = std::fs::remove_file(&tmp); // best effort; swept by the next run otherwise
+            let _ = std::fs::remove_file(tmp); // best effort; swept by the next run otherwise
             Err(e)
+        }
+    }
+}
+
+/// [`write_atomically`] for a writer that must stay open while others are
+/// written (one day file per stream, written as the records come): the
+/// bytes go to a temporary file beside `path`, [`AtomicFile::commit`]
+/// renames it over `path`; dropped without a commit (an error on the way),
+/// the temporary file is removed and `path` is untouched.
+pub struct AtomicFile {
+    path: PathBuf,
+    tmp: PathBuf,
+    out: Option<HashingWriter<std::io::BufWriter<File>>>,
+}
+
+impl AtomicFile {
+    /// Starts the write of `path` (refused as [`write_atomically`] refuses).
+    pub fn create(path: &Path) -> Result<AtomicFile> {
+        let (tmp, file) = begin(path)?;
+        Ok(AtomicFile {
+            path: path.to_path_buf(),
+            tmp,
+            out: Some(HashingWriter::new(std::io::BufWriter::with_capacity(
+                1 << 20,
+                file,
+            ))),
+        })
+    }
+
+    /// The target path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Flushes and renames the file over its target.
+    pub fn commit(mut self) -> Result<()> {
+        let out = self.out.take().expect("taken only here and on drop"); // ok: commit consumes self
+        let digest = out.digest();
+        let file = out.inner.into_inner().map_err(|e| {
+            let _ = std::fs::remove_file(&self.tmp);
+            Error::io(&self.tmp, e.into_error())
+        })?;
+        commit(&self.path, &self.tmp, file, digest)
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self.out.as_mut() {
+            Some(out) => out.write(buf),
+            None => Err(std::io::Error::other("atomic file already committed")),
+        }
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self.out.as_mut() {
+            Some(out) => out.flush(),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if let Some(out) = self.out.take() {
+            drop(out);
+            let _ = std::fs::remove_file(&self.tmp);
         }
     }
 }

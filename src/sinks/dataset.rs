@@ -163,12 +163,40 @@ fn link_or_copy_atomically(from: &Path, to: &Path) -> Result<()> {
             }
         }
     }
+    // Already published (a re-run whose stage was up to date kept the file):
+    // nothing to do.  Linking anew would be worse than useless: rename(a, b)
+    // of two links to one inode is a no-op that leaves `a`, so every re-run
+    // left a temporary file behind.
+    if same_file(from, to) {
+        return Ok(());
+    }
     let tmp = to.with_file_name(format!("{prefix}{}.tmp", std::process::id()));
     if std::fs::hard_link(from, &tmp).is_err() {
         std::fs::copy(from, &tmp).map_err(|e| Error::io(&tmp, e))?;
     }
-    std::fs::rename(&tmp, to).map_err(|e| {
+    let renamed = std::fs::rename(&tmp, to).map_err(|e| Error::io(to, e));
+    // Gone after a rename, unless `to` became a link to the same inode in
+    // between (the no-op above); gone after a failure too.
+    if std::fs::symlink_metadata(&tmp).is_ok() {
         let _ = std::fs::remove_file(&tmp);
-        Error::io(to, e)
-    })
+    }
+    renamed
+}
+
+/// Whether `a` and `b` are the same file (device and inode; never
+/// following a link at `b`).
+fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (std::fs::metadata(a), std::fs::symlink_metadata(b)) {
+            (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (a, b);
+        false
+    }
 }

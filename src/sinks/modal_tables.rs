@@ -371,7 +371,8 @@ pub fn locate_modes(path: &Path) -> Result<std::path::PathBuf> {
         }
         Ok(m) if m.is_dir() => {
             let f = path.join(MODES.file);
-            if !f.is_file() {
+            // Absent only: a FIFO or device there is refused below, by name.
+            if std::fs::metadata(&f).is_err() {
                 return Err(Error::usage(format!(
                     "{shown}: holds no {}: not the output directory of a run with a modal stage",
                     MODES.file
@@ -381,6 +382,8 @@ pub fn locate_modes(path: &Path) -> Result<std::path::PathBuf> {
         }
         Ok(_) => path.to_path_buf(),
     };
+    // A FIFO would block the read: refused first, saying what it is.
+    crate::input_file::check_regular(&file).map_err(|e| Error::usage(e.to_string()))?;
     read_modes(&file).map_err(|e| {
         Error::usage(format!(
             "{}: not a quaketwin modes table: {e}",

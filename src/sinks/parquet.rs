@@ -13,7 +13,6 @@
 //! docs/formats.md, checked against the declarations.
 
 use std::collections::BTreeMap;
-use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -586,7 +585,7 @@ impl ReadTable {
     )> {
         use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
         let loc = || crate::error::Location::file(path.display().to_string());
-        let file = File::open(path).map_err(|e| Error::io(path, e))?;
+        let file = crate::input_file::open(path)?;
         let builder = ParquetRecordBatchReaderBuilder::try_new(file)
             .map_err(|e| Error::input(loc(), e.to_string()))?;
         let metadata = builder

@@ -27,7 +27,7 @@ pub fn write_rehearsal_model(path: &Path, model: &RehearsalModel) -> Result<()> 
 
 /// Reads and checks `rehearsal_model.json`; errors name the file.
 pub fn read_rehearsal_model(path: &Path) -> Result<RehearsalModel> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::input_file::read_to_string(path, crate::input_file::MAX_INPUT_BYTES)?;
     let model: RehearsalModel = serde_json::from_str(&text).map_err(|e| {
         Error::input(
             Location::file(path.display().to_string()),

@@ -4,7 +4,6 @@
 //! Schemas are documented in docs/formats.md.
 
 use std::collections::BTreeSet;
-use std::fs::File;
 use std::path::Path;
 
 use arrow_array::cast::AsArray;
@@ -46,7 +45,7 @@ pub struct ModesFile {
 pub fn read_measured_modes(path: &Path) -> Result<ModesFile> {
     let source = path.display().to_string();
     let loc = || Location::file(source.clone());
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = crate::input_file::open(path)?;
     let builder = ParquetRecordBatchReaderBuilder::try_new(file)
         .map_err(|e| Error::input(loc(), format!("not a readable Parquet file: {e}")))?;
     let kv = builder

@@ -47,6 +47,7 @@ use crate::error::{Error, Result};
 use crate::readers::mseed::StreamCodes;
 use crate::readers::sds::day_file;
 use crate::rng::Rng;
+use crate::sinks::atomic::AtomicFile;
 use crate::sinks::mseed_writer::{RecordEncoder, SampleEncoding};
 use crate::vocab::format_epoch_ns;
 
@@ -407,31 +408,28 @@ pub fn write_archive(out: &Path, settings: &ArchiveSettings) -> Result<ArchiveWr
             )
         })
         .collect();
-    // Open day file per stream (records go to the file of their start day).
-    let mut open: Vec<Option<(PathBuf, std::io::BufWriter<std::fs::File>)>> =
-        (0..streams.len()).map(|_| None).collect();
+    // Open day file per stream (records go to the file of their start day),
+    // written through the atomic writer: a link or FIFO at a day file's path
+    // is refused, never followed or opened; an error leaves no temporary file.
+    let mut open: Vec<Option<AtomicFile>> = (0..streams.len()).map(|_| None).collect();
     let mut day_files = 0usize;
     let mut bytes = 0u64;
     let gain = settings.gain_counts_per_m_s2;
     let mut emit_into = |k: usize,
-                         open: &mut Vec<Option<(PathBuf, std::io::BufWriter<std::fs::File>)>>,
+                         open: &mut Vec<Option<AtomicFile>>,
                          start_ns: i64,
                          record: &[u8]|
      -> Result<()> {
         let path = day_file(&root, &streams[k].0, start_ns);
-        if open[k].as_ref().map(|(p, _)| p != &path).unwrap_or(true) {
-            if let Some((p, mut w)) = open[k].take() {
-                w.flush().map_err(|e| Error::io(&p, e))?;
+        if open[k].as_ref().map(|f| f.path() != path).unwrap_or(true) {
+            if let Some(f) = open[k].take() {
+                f.commit()?;
             }
-            if let Some(dir) = path.parent() {
-                std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-            }
-            let f = std::fs::File::create(&path).map_err(|e| Error::io(&path, e))?;
-            open[k] = Some((path.clone(), std::io::BufWriter::with_capacity(1 << 20, f)));
+            open[k] = Some(AtomicFile::create(&path)?);
             day_files += 1;
         }
-        if let Some((p, w)) = open[k].as_mut() {
-            w.write_all(record).map_err(|e| Error::io(&*p, e))?;
+        if let Some(f) = open[k].as_mut() {
+            f.write_all(record).map_err(|e| Error::io(&path, e))?;
         }
         bytes += record.len() as u64;
         Ok(())
@@ -446,8 +444,8 @@ pub fn write_archive(out: &Path, settings: &ArchiveSettings) -> Result<ArchiveWr
     for (k, enc) in encoders.iter_mut().enumerate() {
         enc.finish(&mut |t, r| emit_into(k, &mut open, t, r))?;
     }
-    for (p, mut w) in open.into_iter().flatten() {
-        w.flush().map_err(|e| Error::io(&p, e))?;
+    for f in open.into_iter().flatten() {
+        f.commit()?;
     }
     let end_ns = settings.start_ns + (settings.duration_s() * 1e9).round() as i64;
     let stationxml = out.join("station.xml");

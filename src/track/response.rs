@@ -53,7 +53,7 @@ impl Responses {
     /// sensitivity in at least one of its epochs (else an input error naming
     /// the file and the streams: leave `--stationxml` out to work in counts).
     pub fn load(path: &Path, streams: &[StreamCodes]) -> Result<Responses> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::input_file::read(path, crate::input_file::MAX_INPUT_BYTES)?;
         let source = SourceRef {
             file: path.display().to_string(),
             member: None,

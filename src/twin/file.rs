@@ -209,7 +209,7 @@ fn line_of(text: &str, offset: usize) -> usize {
 
 /// Read and validate a twin file from disk.
 pub fn load_twin(path: &Path) -> Result<Twin> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::input_file::read_to_string(path, crate::input_file::MAX_INPUT_BYTES)?;
     let base = path
         .parent()
         .map(Path::to_path_buf)

@@ -121,7 +121,7 @@ pub fn parse_matrix_market(text: &str, source: &str) -> Result<CscMatrix> {
 }
 
 pub fn read_matrix_market(path: &Path) -> Result<CscMatrix> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::input_file::read_to_string(path, crate::input_file::MAX_INPUT_BYTES)?;
     parse_matrix_market(&text, &path.display().to_string())
 }
 

@@ -81,6 +81,24 @@ fn events_run_in_parallel_into_a_table_first_dataset_that_pyarrow_duckdb_and_pol
             run.result.as_ref().err()
         );
     }
+    // Issue 33: neither the run nor a re-run (whose tables are already
+    // published as links to the runs' files) leaves a temporary file.
+    let temps = |dir: &Path| -> Vec<PathBuf> {
+        files_under(dir)
+            .into_iter()
+            .filter(|f| f.to_string_lossy().ends_with(".tmp"))
+            .collect()
+    };
+    assert_eq!(temps(out.path()), Vec::<PathBuf>::new());
+    let rerun = quaketwin::commands::run_many(
+        &root.join("pipelines/post-earthquake.toml"),
+        &events,
+        out.path(),
+        true,
+    )
+    .unwrap();
+    assert!(rerun.iter().all(|r| r.result.is_ok()));
+    assert_eq!(temps(out.path()), Vec::<PathBuf>::new());
     let quake = Path::new("structure=Sample_4-storey_frame/event=synthetic-4storey-quake");
     let run = out.path().join("runs").join(quake);
     for f in ["event.json", "run.json", "report.html", "modes.parquet"] {

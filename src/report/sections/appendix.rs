@@ -69,12 +69,22 @@ pub(super) fn appendix_section(
                     .then(|| std::fs::metadata(dir.join(f)).ok().map(|m| m.len()))
                     .flatten()
             };
+            // A file the run manifest does not list is not this run's
+            // (another event's, a stage's that no longer applies).
+            let stray = fixed.is_none()
+                && size.is_none()
+                && crate::pipeline::listed_results(dir).is_some()
+                && std::fs::symlink_metadata(dir.join(f)).is_ok();
             vec![
                 Cell::raw(format!("<code>{}</code>", escape(f))),
                 Cell::text(stage),
                 match (fixed, size) {
                     (Some(text), _) => Cell::text(text),
                     (None, Some(n)) => Cell::text(&format!("present, {n} bytes")),
+                    (None, None) if stray => Cell::raw(
+                        "<span class=\"absent-inline\">not from this run (not listed in run.json): not shown</span>"
+                            .into(),
+                    ),
                     (None, None) => Cell::raw("<span class=\"absent-inline\">absent</span>".into()),
                 },
             ]

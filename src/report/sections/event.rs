@@ -14,7 +14,8 @@ pub(super) fn read_event(dir: &Path) -> Result<Value, String> {
     if !listed(dir, "event.json") {
         return Err(String::new());
     }
-    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let text = crate::input_file::read_to_string(&path, crate::input_file::MAX_INPUT_BYTES)
+        .map_err(|e| e.to_string())?;
     serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
 }
 

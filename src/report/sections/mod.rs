@@ -67,6 +67,15 @@ const OUTPUTS: [(&str, &str); 27] = [
     ("report.html", "report"),
 ];
 
+/// The files the report reads (all of [`OUTPUTS`] but the page itself).
+pub(super) fn files_read() -> Vec<&'static str> {
+    OUTPUTS
+        .iter()
+        .map(|(f, _)| *f)
+        .filter(|f| *f != "report.html")
+        .collect()
+}
+
 /// The stage that writes `file` (a table not listed above is named by its
 /// declaration's table name, never "?").
 fn stage_of(file: &str) -> &'static str {

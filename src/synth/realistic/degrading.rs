@@ -339,7 +339,7 @@ impl TruthFrequency {
 
     /// Reads the file; an error names the file and line.
     pub fn read(path: &Path) -> Result<TruthFrequency> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::input_file::read_to_string(path, crate::input_file::MAX_INPUT_BYTES)?;
         let bad = |line: usize, why: &str| {
             Error::usage(format!("{}: line {line}: {why}", path.display()))
         };
