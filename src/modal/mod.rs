@@ -34,6 +34,7 @@ pub mod direction;
 pub mod fallback;
 pub mod global;
 pub mod hankel;
+pub mod params;
 pub mod poles;
 pub mod preprocess;
 pub mod selection;
@@ -125,6 +126,11 @@ pub const MAX_AUTO_ORDER: usize = 42;
 pub const AUTO_ORDERS_PER_OUTPUT: usize = 8;
 /// … and never above this.
 pub const MAX_AUTO_ORDER_CAP: usize = 120;
+/// Most rows of an explicit block rows' Hankel matrices (block rows × the
+/// rows of one block: outputs for `ssi-cov`, references + outputs for
+/// `ssi-data`, 2 × (inputs + outputs) for `io`): their Gram matrix, rows²
+/// values, stays ≤ 128 MiB and its cost (rows² × samples) bounded.
+pub const MAX_HANKEL_ROWS: usize = 4096;
 
 /// All settings of the modal stage (serialisable into the output metadata).
 /// `None` fields are resolved from the record by [`plan`] (issue 13).
@@ -775,6 +781,12 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
     let block_rows = match settings.block_rows {
         Some(p) if p < 2 => return Err(Error::usage("modal: block rows must be at least 2")),
         Some(p) => {
+            let rows = needed(p).0.saturating_mul(p);
+            if rows > MAX_HANKEL_ROWS {
+                return Err(Error::usage(format!(
+                    "modal: block_rows = {p} with {l} outputs builds Hankel matrices of {rows} rows, at most {MAX_HANKEL_ROWS}: give fewer block rows or leave them automatic"
+                )));
+            }
             let need = needed(p).1;
             if n < need {
                 return Err(Error::input(

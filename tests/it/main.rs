@@ -42,6 +42,7 @@ mod modal;
 mod modal_buildings;
 mod modal_synthetic;
 mod outdir;
+mod param_bounds;
 mod pipeline;
 mod plackett_luce;
 mod prepost;
