@@ -5,7 +5,6 @@
 
 use std::path::{Path, PathBuf};
 
-
 use super::condition::Conditioned;
 use super::prepost::{self, ReferenceParams, ReferenceRun};
 use crate::error::Result;
