@@ -232,6 +232,15 @@ fn track_finish_json(py: Python<'_>, options_json: &str, parts: Vec<String>) -> 
     })
 }
 
+/// A deliberate panic inside [`guarded`]: the test that a panic reaches
+/// Python as `QuaketwinError` (python/tests), not `PanicException`.
+#[pyfunction]
+fn _panic_probe(py: Python<'_>) -> PyResult<()> {
+    guarded(py, "_panic_probe", || -> quaketwin::error::Result<()> {
+        panic!("deliberate panic of the probe")
+    })
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // Results independent of the thread count, as from the command line.
@@ -252,5 +261,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(track_starts, m)?)?;
     m.add_function(wrap_pyfunction!(track_windows_json, m)?)?;
     m.add_function(wrap_pyfunction!(track_finish_json, m)?)?;
+    m.add_function(wrap_pyfunction!(_panic_probe, m)?)?;
     Ok(())
 }

@@ -184,7 +184,11 @@ fn explicit_block_rows_beyond_the_hankel_bound_are_refused_at_run_time() {
     // 480 block rows × (8 references + 8 outputs) = 7 680 Hankel rows:
     // a Gram matrix of 470 MB, refused naming the key and the bound.
     let dir = tempfile::tempdir().unwrap();
-    let p = pipeline(dir.path(), "modal", "method = \"ssi-data\"\nblock_rows = 480");
+    let p = pipeline(
+        dir.path(),
+        "modal",
+        "method = \"ssi-data\"\nblock_rows = 480",
+    );
     let out = dir.path().join("out");
     let ev = sample("synthetic-4storey-ambient").display().to_string();
     refused(
