@@ -103,7 +103,7 @@ pub const MAX_EXPONENT_GRID_POINTS: f64 = 100_000.0;
 pub fn validate_settings(s: &IdentifySettings) -> Result<()> {
     let bad = |m: String| Err(Error::usage(format!("hysteresis settings: {m}")));
     let (lo, hi, res) = (s.exponent_min, s.exponent_max, s.exponent_resolution);
-    if !(lo.is_finite() && lo >= 1.0 && lo < MAX_EXPONENT) {
+    if !(1.0..MAX_EXPONENT).contains(&lo) {
         return bad(format!(
             "exponent_min = {lo}: must lie in [1, {MAX_EXPONENT}) (Bouc-Wen exponents of structures are 1 to a few tens)"
         ));

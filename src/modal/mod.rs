@@ -781,7 +781,12 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
     let block_rows = match settings.block_rows {
         Some(p) if p < 2 => return Err(Error::usage("modal: block rows must be at least 2")),
         Some(p) => {
-            let rows = needed(p).0.saturating_mul(p);
+            // p alone first: `needed` multiplies it.
+            let rows = if p > MAX_HANKEL_ROWS {
+                p
+            } else {
+                needed(p).0 * p
+            };
             if rows > MAX_HANKEL_ROWS {
                 return Err(Error::usage(format!(
                     "modal: block_rows = {p} with {l} outputs builds Hankel matrices of {rows} rows, at most {MAX_HANKEL_ROWS}: give fewer block rows or leave them automatic"
@@ -806,7 +811,7 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
                 .as_ref()
                 .and_then(|o| o.last().copied())
                 .unwrap_or(0);
-            let p_order = want_order.div_ceil(columns_per_block) + 2;
+            let p_order = want_order.div_ceil(columns_per_block).saturating_add(2);
             // … bounded by the cost, but at least HORIZON_PERIODS periods of
             // the lowest frequency of interest (up to a larger bound, which
             // the automatic decimation keeps it within) …
