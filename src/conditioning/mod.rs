@@ -278,7 +278,7 @@ impl ConditioningSettings {
             match step {
                 Step::Resample { rate_hz } if !(*rate_hz > 0.0 && *rate_hz <= MAX_RATE_HZ) => {
                     return Err(at(format!(
-                        "rate_hz = {rate_hz}: must be a positive rate, at most {MAX_RATE_HZ} Hz"
+                        "rate_hz = {rate_hz:?}: must be a positive rate, at most {MAX_RATE_HZ} Hz"
                     )))
                 }
                 Step::Taper { fraction } if !(0.0..=0.5).contains(fraction) => {

@@ -105,17 +105,17 @@ pub fn validate_settings(s: &IdentifySettings) -> Result<()> {
     let (lo, hi, res) = (s.exponent_min, s.exponent_max, s.exponent_resolution);
     if !(1.0..MAX_EXPONENT).contains(&lo) {
         return bad(format!(
-            "exponent_min = {lo}: must lie in [1, {MAX_EXPONENT}) (Bouc-Wen exponents of structures are 1 to a few tens)"
+            "exponent_min = {lo:?}: must lie in [1, {MAX_EXPONENT}) (Bouc-Wen exponents of structures are 1 to a few tens)"
         ));
     }
     if !(hi.is_finite() && hi > lo && hi <= MAX_EXPONENT) {
         return bad(format!(
-            "exponent_max = {hi}: must lie in (exponent_min = {lo}, {MAX_EXPONENT}] (Bouc-Wen exponents of structures are 1 to a few tens)"
+            "exponent_max = {hi:?}: must lie in (exponent_min = {lo:?}, {MAX_EXPONENT}] (Bouc-Wen exponents of structures are 1 to a few tens)"
         ));
     }
     if !(res.is_finite() && res > 0.0 && (hi - lo) / res <= MAX_EXPONENT_GRID_POINTS) {
         return bad(format!(
-            "exponent_resolution = {res}: must be positive with (exponent_max − exponent_min) / exponent_resolution ≤ {MAX_EXPONENT_GRID_POINTS} grid points, got {}",
+            "exponent_resolution = {res:?}: must be positive with (exponent_max − exponent_min) / exponent_resolution ≤ {MAX_EXPONENT_GRID_POINTS} grid points, got {}",
             (hi - lo) / res
         ));
     }

@@ -215,7 +215,7 @@ impl MetricsSettings {
             .find(|t| !(t.is_finite() && **t > 0.0 && **t <= MAX_SPECTRUM_PERIOD_S))
         {
             return Err(crate::error::Error::usage(format!(
-                "periods_s contains {t}: periods must be positive seconds, at most {MAX_SPECTRUM_PERIOD_S}"
+                "periods_s contains {t:?}: periods must be positive seconds, at most {MAX_SPECTRUM_PERIOD_S}"
             )));
         }
         Ok(())
