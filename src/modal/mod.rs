@@ -1017,6 +1017,15 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
         previous_range = Some((start, poles.len()));
         realised.push(n);
     }
+    if realised.is_empty() && settings.orders.is_some() {
+        // Every explicit order lies above what the record supports: say so
+        // (usage) rather than report an empty stabilisation diagram.
+        return Err(Error::usage(format!(
+            "modal: orders {:?} all exceed the subspace dimension {} this record supports with {block_rows} block rows ((block rows − 1) × outputs at most): give lower orders",
+            plan.orders,
+            subspace.max_order()
+        )));
+    }
     if !skipped.is_empty() {
         notes.push(format!(
             "orders {skipped:?} skipped: above the subspace dimension {}",

@@ -199,6 +199,21 @@ fn explicit_block_rows_beyond_the_hankel_bound_are_refused_at_run_time() {
 }
 
 #[test]
+fn explicit_orders_beyond_what_the_record_supports_are_refused_at_run_time() {
+    // 10 block rows × 8 outputs support orders up to 72: 400–480 none.
+    let dir = tempfile::tempdir().unwrap();
+    let params = "method = \"ssi-cov\"\nblock_rows = 10\norders = [400, 480, 40]";
+    let p = pipeline(dir.path(), "modal", params);
+    let out = dir.path().join("out");
+    let ev = sample("synthetic-4storey-ambient").display().to_string();
+    refused(
+        &["run", &p, &ev, "--out", out.to_str().unwrap()],
+        &["orders [400, 440, 480]", "exceed the subspace dimension"],
+    );
+    assert!(!out.join("modes.parquet").exists());
+}
+
+#[test]
 fn spectrum_periods_are_bounded() {
     let many = vec!["0.5"; 1001].join(", ");
     run_refused(
