@@ -583,6 +583,12 @@ pub struct TwinModes {
 /// `quaketwin twin modes TWIN [--count N]`: the N lowest modes of the twin
 /// at its start parameters, and the time the solve took.
 pub fn twin_modes(twin: &Path, count: usize) -> Result<TwinModes> {
+    let most = crate::twin::eigen::MAX_MODES;
+    if !(1..=most).contains(&count) {
+        return Err(crate::error::Error::usage(format!(
+            "--count {count}: must be 1..={most}"
+        )));
+    }
     crate::fixed_order_reductions();
     let twin = crate::twin::file::load_twin(twin)?;
     let sys = &twin.system;

@@ -726,6 +726,13 @@ pub fn options_from_json(text: &str) -> Result<TrackOptions> {
 /// [`Prepared::starts`]) and returns them as JSON
 /// ([`crate::monitor::windows_to_json`]): one task of a cluster.
 pub fn identify_windows_json(opts: &TrackOptions, starts: &[i64]) -> Result<String> {
+    let most = crate::monitor::window::MAX_WINDOWS;
+    if starts.len() as i64 > most {
+        return Err(Error::usage(format!(
+            "track: {} window starts given, at most {most}",
+            starts.len()
+        )));
+    }
     let prepared = prepare(opts)?;
     crate::monitor::windows_to_json(&prepared.identify(starts, false))
 }

@@ -38,6 +38,30 @@ fn raise(e: quaketwin::error::Error) -> PyErr {
     }
 }
 
+/// Runs `f` (the library call of the exported function `name`) without the
+/// GIL; a panic inside becomes `QuaketwinError` naming the function — never
+/// `pyo3_runtime.PanicException`, which `except Exception` misses.  The
+/// parameters are bounded where they are parsed, so a panic is a bug.
+fn guarded<T: Send>(
+    py: Python<'_>,
+    name: &str,
+    f: impl FnOnce() -> quaketwin::error::Result<T> + Send,
+) -> PyResult<T> {
+    py.detach(|| std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)))
+        .map_err(|panic| {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "no message".into());
+            QuaketwinError::new_err(format!(
+                "internal error in quaketwin.{name} (a bug, please report it): {}",
+                quaketwin::error::printable(&what, quaketwin::error::MAX_PRINTED_ERROR_CHARS)
+            ))
+        })?
+        .map_err(raise)
+}
+
 fn to_pyarrow<'py>(py: Python<'py>, t: Table) -> PyResult<Bound<'py, PyAny>> {
     let table = PyArrowTable::try_new(t.batches, t.schema)
         .map_err(|e| QuaketwinError::new_err(e.to_string()))?;
@@ -53,8 +77,9 @@ fn from_pyarrow(table: &Bound<'_, PyAny>) -> PyResult<Table> {
 /// The inventory of an event folder or zip (the `event.json` document), as JSON text.
 #[pyfunction]
 fn inspect_json(py: Python<'_>, event: PathBuf) -> PyResult<String> {
-    py.detach(|| quaketwin::commands::inspect_json(&event))
-        .map_err(raise)
+    guarded(py, "inspect_json", || {
+        quaketwin::commands::inspect_json(&event)
+    })
 }
 
 /// A run's summary as JSON text, or its error.
@@ -79,7 +104,7 @@ fn run_json(
     out: PathBuf,
     reference: Option<PathBuf>,
 ) -> PyResult<String> {
-    py.detach(|| {
+    guarded(py, "run_json", || {
         let result = quaketwin::commands::run_pipeline_with(
             &pipeline,
             &event,
@@ -89,17 +114,15 @@ fn run_json(
         );
         summary_json(&pipeline.display().to_string(), &event, &out, result)
     })
-    .map_err(raise)
 }
 
 /// The built-in hysteresis command (Bouc-Wen + damage) into `out`; the run summary as JSON.
 #[pyfunction]
 fn hysteresis_json(py: Python<'_>, event: PathBuf, out: PathBuf) -> PyResult<String> {
-    py.detach(|| {
+    guarded(py, "hysteresis_json", || {
         let result = quaketwin::commands::hysteresis(&event, &out, true);
         summary_json("hysteresis (built-in)", &event, &out, result)
     })
-    .map_err(raise)
 }
 
 /// Ensemble update of a twin against a modes.parquet (or a run directory
@@ -113,17 +136,16 @@ fn update_json(
     out: PathBuf,
     settings: Option<PathBuf>,
 ) -> PyResult<String> {
-    py.detach(|| {
+    guarded(py, "update_json", || {
         let s = quaketwin::commands::update(&twin, &modes, &out, settings.as_deref())?;
         quaketwin::summary::to_json(&s)
     })
-    .map_err(raise)
 }
 
 /// The records of an event as the `samples` table (pyarrow), without files.
 #[pyfunction]
 fn read_event<'py>(py: Python<'py>, event: PathBuf) -> PyResult<Bound<'py, PyAny>> {
-    let table = py.detach(|| in_memory::read_event(&event)).map_err(raise)?;
+    let table = guarded(py, "read_event", || in_memory::read_event(&event))?;
     to_pyarrow(py, table)
 }
 
@@ -136,9 +158,7 @@ fn modal<'py>(
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Vec<String>)> {
     let samples = from_pyarrow(samples)?;
     let settings = settings_json.to_string();
-    let r = py
-        .detach(|| in_memory::modal(&samples, &settings))
-        .map_err(raise)?;
+    let r = guarded(py, "modal", || in_memory::modal(&samples, &settings))?;
     Ok((
         to_pyarrow(py, r.modes)?,
         to_pyarrow(py, r.stabilization)?,
@@ -149,68 +169,76 @@ fn modal<'py>(
 /// The Hive partition `structure=…/event=…` of an event (the many-event layout).
 #[pyfunction]
 fn event_partition(py: Python<'_>, event: PathBuf) -> PyResult<String> {
-    py.detach(|| quaketwin::commands::event_partition(&event))
-        .map(|p| p.to_string_lossy().replace('\\', "/"))
-        .map_err(raise)
+    guarded(py, "event_partition", || {
+        quaketwin::commands::event_partition(&event)
+    })
+    .map(|p| p.to_string_lossy().replace('\\', "/"))
 }
 
 /// The table files of a finished run directory (`run.json`'s list), with
 /// the dataset table each belongs to: [(file, table)].
 #[pyfunction]
 fn run_tables(py: Python<'_>, run_dir: PathBuf) -> PyResult<Vec<(String, String)>> {
-    py.detach(|| quaketwin::sinks::dataset::run_tables(&run_dir))
-        .map_err(raise)
+    guarded(py, "run_tables", || {
+        quaketwin::sinks::dataset::run_tables(&run_dir)
+    })
 }
 
 /// The fingerprint of an event folder or zip (names, sizes, modification
 /// times): what a run manifest records to tell a changed event.
 #[pyfunction]
 fn event_fingerprint(py: Python<'_>, event: PathBuf) -> PyResult<String> {
-    py.detach(|| quaketwin::pipeline::fingerprint::path_fingerprint(&event))
-        .map_err(raise)
+    guarded(py, "event_fingerprint", || {
+        quaketwin::pipeline::fingerprint::path_fingerprint(&event)
+    })
 }
 
 /// `quaketwin track` in this process (options as JSON, the fields of the
 /// library's `TrackOptions`); the summary as JSON.
 #[pyfunction]
 fn track_json(py: Python<'_>, options_json: &str) -> PyResult<String> {
-    py.detach(|| {
+    guarded(py, "track_json", || {
         let opts = quaketwin::track::options_from_json(options_json)?;
         let (summary, _) = quaketwin::track::run(&opts)?;
         quaketwin::summary::to_json(&summary)
     })
-    .map_err(raise)
 }
 
 /// The start times (ns since the epoch) of every window of a track run.
 #[pyfunction]
 fn track_starts(py: Python<'_>, options_json: &str) -> PyResult<Vec<i64>> {
-    py.detach(|| {
+    guarded(py, "track_starts", || {
         let opts = quaketwin::track::options_from_json(options_json)?;
         Ok(quaketwin::track::prepare(&opts)?.starts())
     })
-    .map_err(raise)
 }
 
 /// Identifies the windows starting at `starts` (ns); JSON to hand to `track_finish_json`.
 #[pyfunction]
 fn track_windows_json(py: Python<'_>, options_json: &str, starts: Vec<i64>) -> PyResult<String> {
-    py.detach(|| {
+    guarded(py, "track_windows_json", || {
         let opts = quaketwin::track::options_from_json(options_json)?;
         quaketwin::track::identify_windows_json(&opts, &starts)
     })
-    .map_err(raise)
 }
 
 /// Tracks, fits the bands and writes the outputs from every window's JSON; the summary as JSON.
 #[pyfunction]
 fn track_finish_json(py: Python<'_>, options_json: &str, parts: Vec<String>) -> PyResult<String> {
-    py.detach(|| {
+    guarded(py, "track_finish_json", || {
         let opts = quaketwin::track::options_from_json(options_json)?;
         let summary = quaketwin::track::finish_from_json(&opts, &parts)?;
         quaketwin::summary::to_json(&summary)
     })
-    .map_err(raise)
+}
+
+/// A deliberate panic inside [`guarded`]: the test that a panic reaches
+/// Python as `QuaketwinError` (python/tests), not `PanicException`.
+#[pyfunction]
+fn _panic_probe(py: Python<'_>) -> PyResult<()> {
+    guarded(py, "_panic_probe", || -> quaketwin::error::Result<()> {
+        panic!("deliberate panic of the probe")
+    })
 }
 
 #[pymodule]
@@ -233,5 +261,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(track_starts, m)?)?;
     m.add_function(wrap_pyfunction!(track_windows_json, m)?)?;
     m.add_function(wrap_pyfunction!(track_finish_json, m)?)?;
+    m.add_function(wrap_pyfunction!(_panic_probe, m)?)?;
     Ok(())
 }

@@ -255,5 +255,82 @@ class TrackTest(unittest.TestCase):
             quaketwin.track(self.arch / "sds", pathlib.Path(self.work.name) / "bad", window="0h")
 
 
+class ParameterBounds(unittest.TestCase):
+    """The values that once killed the interpreter (SIGABRT) or raised
+    ``pyo3_runtime.PanicException`` raise ``UsageError`` (a
+    ``QuaketwinError``) naming the key, quickly (issue 33)."""
+
+    def assertRefused(self, call, *names):
+        t0 = time.monotonic()
+        with self.assertRaises(quaketwin.UsageError) as caught:
+            call()
+        self.assertIsInstance(caught.exception, quaketwin.QuaketwinError)
+        for name in names:
+            self.assertIn(name, str(caught.exception))
+        self.assertLess(time.monotonic() - t0, 30.0)
+
+    def test_a_panic_is_a_quaketwin_error_naming_the_function(self):
+        from quaketwin import _native
+
+        with self.assertRaises(quaketwin.QuaketwinError) as caught:
+            _native._panic_probe()
+        self.assertNotIsInstance(caught.exception, quaketwin.UsageError)
+        self.assertIn("internal error in quaketwin._panic_probe", str(caught.exception))
+        self.assertIn("deliberate panic", str(caught.exception))
+        # ... and `except Exception` catches it (PanicException derives from BaseException).
+        try:
+            _native._panic_probe()
+        except Exception:
+            pass
+
+    def test_modal_orders_and_lists_are_bounded(self):
+        table = quaketwin.read_event(SAMPLES / "synthetic-4storey-ambient")
+        for settings, key in [
+            ({"orders": [2, 2**63 - 1, 2]}, "orders"),
+            ({"orders": [2, 2**64, 2]}, "modal settings"),
+            ({"block_rows": 10**12}, "block_rows"),
+            ({"psd_segment": 10**12}, "psd_segment"),
+            ({"manual_frequencies_hz": [1.0] * 257}, "manual_frequencies_hz"),
+        ]:
+            self.assertRefused(lambda: quaketwin.modal(table, settings), key)
+
+    def _pipeline(self, work, kind, params):
+        text = (
+            '[pipeline]\nname = "bounds"\n[[stage]]\nname = "ingest"\nkind = "ingest"\n'
+            '[[stage]]\nname = "condition"\nkind = "condition"\ninputs = ["ingest"]\n'
+            f'[[stage]]\nname = "{kind}"\nkind = "{kind}"\ninputs = ["condition"]\n'
+            f"[stage.params]\n{params}\n"
+        )
+        path = pathlib.Path(work) / f"{kind}.toml"
+        path.write_text(text)
+        return path
+
+    def test_pipeline_params_are_bounded(self):
+        event = SAMPLES / "synthetic-2storey-yielding"
+        periods = ", ".join(["0.5"] * 1001)
+        with tempfile.TemporaryDirectory() as work:
+            for kind, params, key in [
+                ("hysteresis", "exponent_max = 1e300", "exponent_max"),
+                ("hysteresis", "exponent_max = 1e5", "exponent_max"),
+                ("modal", "orders = [2, 9223372036854775807, 2]", "orders"),
+                ("metrics", f"periods_s = [{periods}]", "periods_s"),
+            ]:
+                pipeline = self._pipeline(work, kind, params)
+                out = pathlib.Path(work) / "out"
+                self.assertRefused(lambda: quaketwin.run(pipeline, event, out), key)
+
+    def test_track_window_counts_are_bounded(self):
+        with tempfile.TemporaryDirectory() as work:
+            archive = pathlib.Path(work) / "sds"
+            archive.mkdir()
+            span = {"start": "2026-01-01T00:00:00Z", "end": "2027-01-01T00:00:00Z"}
+            out = pathlib.Path(work) / "out"
+            self.assertRefused(
+                lambda: quaketwin.track(archive, out, window="60s", step="0.001s", **span),
+                "--step",
+            )
+            self.assertRefused(lambda: quaketwin.track(archive, out, window="100d", **span), "--window")
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -147,6 +147,13 @@ impl Step {
     }
 }
 
+/// Most conditioning steps of a `condition` stage (the default has four).
+pub const MAX_STEPS: usize = 32;
+/// Highest resampling rate, Hz: strong-motion and structural sensors
+/// record at most a few kHz.  Resampling never grows a record more than
+/// `resample::MAX_UPSAMPLING` times.
+pub const MAX_RATE_HZ: f64 = 20_000.0;
+
 /// The conditioning of a `condition` stage: QA thresholds and the ordered
 /// steps.  Defaults are METHODS §1: mean removal, 5 % cosine taper at each
 /// end, 4th-order Butterworth band-pass 0.5–20 Hz zero-phase, integration
@@ -252,6 +259,13 @@ impl ConditioningSettings {
     /// against a record's Nyquist frequency is checked per record): usage
     /// errors, so bad settings never pass for bad data.
     pub fn validate(&self) -> Result<()> {
+        self.qa.validate()?;
+        if self.steps.len() > MAX_STEPS {
+            return Err(Error::usage(format!(
+                "steps lists {} conditioning steps: at most {MAX_STEPS} (each is a pass over every record)",
+                self.steps.len()
+            )));
+        }
         let last = self.steps.len().saturating_sub(1);
         for (i, step) in self.steps.iter().enumerate() {
             let at = |m: String| {
@@ -262,8 +276,10 @@ impl ConditioningSettings {
                 ))
             };
             match step {
-                Step::Resample { rate_hz } if !(rate_hz.is_finite() && *rate_hz > 0.0) => {
-                    return Err(at(format!("rate_hz = {rate_hz}: must be a positive rate")))
+                Step::Resample { rate_hz } if !(*rate_hz > 0.0 && *rate_hz <= MAX_RATE_HZ) => {
+                    return Err(at(format!(
+                        "rate_hz = {rate_hz:?}: must be a positive rate, at most {MAX_RATE_HZ} Hz"
+                    )))
                 }
                 Step::Taper { fraction } if !(0.0..=0.5).contains(fraction) => {
                     return Err(at(format!(

@@ -39,6 +39,40 @@ impl Default for QaSettings {
     }
 }
 
+impl QaSettings {
+    /// Thresholds the checks can use, else a usage error naming the key
+    /// (`qa.…`): counts and durations positive and finite, tolerances
+    /// fractions, the spike threshold a number of standard deviations.
+    pub fn validate(&self) -> crate::error::Result<()> {
+        let bad = |m: String| Err(crate::error::Error::usage(format!("qa.{m}")));
+        if self.clip_min_run < 2 {
+            return bad(format!(
+                "clip_min_run = {}: must be at least 2 samples",
+                self.clip_min_run
+            ));
+        }
+        if !(self.clip_relative_tolerance >= 0.0 && self.clip_relative_tolerance < 1.0) {
+            return bad(format!(
+                "clip_relative_tolerance = {}: must lie in [0, 1)",
+                self.clip_relative_tolerance
+            ));
+        }
+        for (key, v) in [
+            ("flat_min_duration_s", self.flat_min_duration_s),
+            ("snr_noise_window_s", self.snr_noise_window_s),
+            ("spike_threshold", self.spike_threshold),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(format!("{key} = {v}: must be positive and finite"));
+            }
+        }
+        if !self.snr_min_db.is_finite() {
+            return bad(format!("snr_min_db = {}: must be finite", self.snr_min_db));
+        }
+        Ok(())
+    }
+}
+
 /// Number of non-finite samples and index of the first one.
 pub fn count_non_finite(data: &[f64]) -> (usize, Option<usize>) {
     let count = data.iter().filter(|v| !v.is_finite()).count();

@@ -24,6 +24,10 @@ fn gcd(a: usize, b: usize) -> usize {
     }
 }
 
+/// Most a resampling step may multiply a record's samples by (and its
+/// memory): upsampling further adds no information.
+pub const MAX_UPSAMPLING: usize = 64;
+
 /// (up, down) with up/down = to_hz/from_hz, reduced, denominators ≤ 1000
 /// (best rational approximation by continued fractions, accepted when it
 /// matches to 1e-9 relative).
@@ -141,6 +145,11 @@ pub fn resample_rational(data: &[f64], up: usize, down: usize) -> Result<Vec<f64
 /// Resamples from `from_hz` to `to_hz` (see `rational_ratio`, `resample_rational`).
 pub fn resample_to_rate(data: &[f64], from_hz: f64, to_hz: f64) -> Result<Vec<f64>> {
     let (up, down) = rational_ratio(from_hz, to_hz)?;
+    if up > MAX_UPSAMPLING * down {
+        return Err(Error::usage(format!(
+            "resampling {from_hz} Hz to {to_hz} Hz multiplies the samples by more than {MAX_UPSAMPLING}: choose a rate_hz closer to the record's"
+        )));
+    }
     resample_rational(data, up, down)
 }
 

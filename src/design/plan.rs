@@ -486,6 +486,10 @@ pub fn design_hybrid_test_with(
     })
 }
 
+/// Most time scales λ a design or a rehearsal sweeps (each is a simulation
+/// of the whole base motion).
+pub const MAX_TIME_SCALES: usize = 100;
+
 fn check_settings(settings: &DesignSettings, motion: &BaseMotion, source: &str) -> Result<()> {
     let bad = |what: String| Err(Error::input(Location::file(source.to_string()), what));
     if !(settings.energy_target > 0.0 && settings.energy_target <= 1.0) {
@@ -506,8 +510,27 @@ fn check_settings(settings: &DesignSettings, motion: &BaseMotion, source: &str) 
             settings.damping_ratio
         ));
     }
+    // Counts beyond these are typos: each is a mode, node or simulation of
+    // the twin (`twin::eigen::MAX_MODES` modes at most are solved for).
+    let most = crate::twin::eigen::MAX_MODES;
+    for (key, v) in [
+        ("max_poms", settings.max_poms),
+        ("refinement_candidates", settings.refinement_candidates),
+        ("hybrid.max_ns_modes", settings.hybrid.max_ns_modes),
+    ] {
+        if v > most {
+            return bad(format!("{key} = {v}: at most {most}"));
+        }
+    }
     if settings.max_poms == 0 {
         return bad("max_poms must be at least 1".into());
+    }
+    let scales = &settings.hybrid.time_scales;
+    if scales.len() > MAX_TIME_SCALES || scales.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
+        return bad(format!(
+            "hybrid.time_scales: at most {MAX_TIME_SCALES} positive finite time scales (got {})",
+            scales.len()
+        ));
     }
     if motion.components.is_empty() || !(motion.dt > 0.0) {
         return bad(format!(

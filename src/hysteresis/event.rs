@@ -146,6 +146,53 @@ pub struct EventSettings {
     pub fail_on_error: bool,
 }
 
+/// Most explicit `directions` of the hysteresis stage: a building has two
+/// horizontal axes (and torsion); listing more is a typo.
+pub const MAX_DIRECTIONS: usize = 8;
+/// Most floors (DoFs) of one direction: each adds columns to every frame's
+/// least-squares problem; instrumented buildings have far fewer floors.
+pub const MAX_FLOORS_PER_DIRECTION: usize = 100;
+
+impl EventSettings {
+    /// Settings an identification can run with, else `Error::Usage` naming
+    /// the key (pipeline `hysteresis` params and library callers alike).
+    pub fn validate(&self) -> Result<()> {
+        super::settings::validate_settings(&self.identify)?;
+        if !(self.reduced_mass_step > 0.0 && self.reduced_mass_step <= 0.001) {
+            return Err(Error::usage(format!(
+                "reduced_mass_step = {}: must be in (0, 0.001] (Eq. 35–36 search resolution)",
+                self.reduced_mass_step
+            )));
+        }
+        if let Some(d) = &self.directions {
+            if d.is_empty() || d.len() > MAX_DIRECTIONS {
+                return Err(Error::usage(format!(
+                    "directions: {} listed, must be 1..={MAX_DIRECTIONS}",
+                    d.len()
+                )));
+            }
+            for spec in d {
+                let floors = spec.floors.len();
+                if floors == 0 || floors > MAX_FLOORS_PER_DIRECTION {
+                    return Err(Error::usage(format!(
+                        "directions: direction {:?} lists {floors} floors, must be 1..={MAX_FLOORS_PER_DIRECTION}",
+                        spec.direction
+                    )));
+                }
+                if let Some(m) = &spec.masses_kg {
+                    if m.len() != floors || m.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+                        return Err(Error::usage(format!(
+                            "directions: direction {:?}: masses_kg must give one positive finite mass per floor ({floors})",
+                            spec.direction
+                        )));
+                    }
+                }
+            }
+        }
+        self.window.validate()
+    }
+}
+
 /// Directions found automatically: a level-0 input channel and floor channels
 /// (levels > 0) of the same horizontal direction, one record per level (the
 /// rigid-floor combination where a level has several channels). Levels may
@@ -222,6 +269,7 @@ pub fn identify_event(
     event_dir: Option<&Path>,
     p: &EventSettings,
 ) -> Result<(Vec<DirectionOutcome>, Vec<MassResolution>)> {
+    p.validate()?;
     let settings = &p.identify;
     let (specs, mut outcomes) = match &p.directions {
         Some(d) => (d.clone(), Vec::new()),

@@ -167,6 +167,13 @@ pub fn interstorey_drifts(levels: &[&[f64]], storey_heights_m: &[f64]) -> Result
         .collect()
 }
 
+/// Most oscillator periods of a response spectrum (the default has 100;
+/// each costs a pass over every sample of every channel).
+pub const MAX_SPECTRUM_PERIODS: usize = 1000;
+/// Longest oscillator period, s: longer than any usable strong-motion
+/// record's band (the default spectrum stops at 10 s).
+pub const MAX_SPECTRUM_PERIOD_S: f64 = 1000.0;
+
 /// Settings of `strong_motion_metrics`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -190,19 +197,25 @@ impl MetricsSettings {
                 self.damping
             )));
         }
-        if !(self.assumed_storey_height_m.is_finite() && self.assumed_storey_height_m > 0.0) {
+        if !(self.assumed_storey_height_m >= 0.5 && self.assumed_storey_height_m <= 50.0) {
             return Err(crate::error::Error::usage(format!(
-                "assumed_storey_height_m = {}: must be a positive height in metres",
+                "assumed_storey_height_m = {}: must be a storey height in metres, 0.5 to 50",
                 self.assumed_storey_height_m
+            )));
+        }
+        if self.periods_s.len() > MAX_SPECTRUM_PERIODS {
+            return Err(crate::error::Error::usage(format!(
+                "periods_s lists {} periods: at most {MAX_SPECTRUM_PERIODS} (each is an oscillator run over every sample of every channel)",
+                self.periods_s.len()
             )));
         }
         if let Some(t) = self
             .periods_s
             .iter()
-            .find(|t| !(t.is_finite() && **t > 0.0))
+            .find(|t| !(t.is_finite() && **t > 0.0 && **t <= MAX_SPECTRUM_PERIOD_S))
         {
             return Err(crate::error::Error::usage(format!(
-                "periods_s contains {t}: periods must be positive seconds"
+                "periods_s contains {t:?}: periods must be positive seconds, at most {MAX_SPECTRUM_PERIOD_S}"
             )));
         }
         Ok(())

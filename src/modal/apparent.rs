@@ -85,14 +85,15 @@ impl Default for ApparentSettings {
 impl ApparentSettings {
     pub fn validate(&self) -> Result<()> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
-        let problem = if !pos(self.window_periods) {
-            Some("window_periods must be > 0")
+        let problem = if !(pos(self.window_periods) && self.window_periods <= 1000.0) {
+            Some("window_periods must be in (0, 1000]")
         } else if !(self.min_window_s.is_finite() && self.min_window_s >= 0.0) {
             Some("min_window_s must be ≥ 0")
-        } else if !(pos(self.step_fraction) && self.step_fraction <= 1.0) {
-            Some("step_fraction must be in (0, 1]")
-        } else if !(self.samples_per_period.is_finite() && self.samples_per_period >= 4.0) {
-            Some("samples_per_period must be ≥ 4 (the pole must lie well below the decimated Nyquist frequency)")
+        } else if !(self.step_fraction >= 0.01 && self.step_fraction <= 1.0) {
+            // Steps below 1 % of the window only multiply the windows (and the time).
+            Some("step_fraction must be in [0.01, 1]")
+        } else if !(self.samples_per_period >= 4.0 && self.samples_per_period <= 1000.0) {
+            Some("samples_per_period must be in [4, 1000] (the pole must lie well below the decimated Nyquist frequency)")
         } else if !(2..=40).contains(&self.order) {
             Some("order must be in 2..=40")
         } else if !(pos(self.band[0]) && self.band[1].is_finite() && self.band[1] > self.band[0]) {

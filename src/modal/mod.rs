@@ -34,6 +34,7 @@ pub mod direction;
 pub mod fallback;
 pub mod global;
 pub mod hankel;
+pub mod params;
 pub mod poles;
 pub mod preprocess;
 pub mod selection;
@@ -125,6 +126,11 @@ pub const MAX_AUTO_ORDER: usize = 42;
 pub const AUTO_ORDERS_PER_OUTPUT: usize = 8;
 /// … and never above this.
 pub const MAX_AUTO_ORDER_CAP: usize = 120;
+/// Most rows of an explicit block rows' Hankel matrices (block rows × the
+/// rows of one block: outputs for `ssi-cov`, references + outputs for
+/// `ssi-data`, 2 × (inputs + outputs) for `io`): their Gram matrix, rows²
+/// values, stays ≤ 128 MiB and its cost (rows² × samples) bounded.
+pub const MAX_HANKEL_ROWS: usize = 4096;
 
 /// All settings of the modal stage (serialisable into the output metadata).
 /// `None` fields are resolved from the record by [`plan`] (issue 13).
@@ -775,6 +781,17 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
     let block_rows = match settings.block_rows {
         Some(p) if p < 2 => return Err(Error::usage("modal: block rows must be at least 2")),
         Some(p) => {
+            // p alone first: `needed` multiplies it.
+            let rows = if p > MAX_HANKEL_ROWS {
+                p
+            } else {
+                needed(p).0 * p
+            };
+            if rows > MAX_HANKEL_ROWS {
+                return Err(Error::usage(format!(
+                    "modal: block_rows = {p} with {l} outputs builds Hankel matrices of {rows} rows, at most {MAX_HANKEL_ROWS}: give fewer block rows or leave them automatic"
+                )));
+            }
             let need = needed(p).1;
             if n < need {
                 return Err(Error::input(
@@ -794,7 +811,7 @@ pub fn plan(input: &ModalInput, settings: &ModalSettings) -> Result<Plan> {
                 .as_ref()
                 .and_then(|o| o.last().copied())
                 .unwrap_or(0);
-            let p_order = want_order.div_ceil(columns_per_block) + 2;
+            let p_order = want_order.div_ceil(columns_per_block).saturating_add(2);
             // … bounded by the cost, but at least HORIZON_PERIODS periods of
             // the lowest frequency of interest (up to a larger bound, which
             // the automatic decimation keeps it within) …
@@ -999,6 +1016,15 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
         poles.extend(current);
         previous_range = Some((start, poles.len()));
         realised.push(n);
+    }
+    if realised.is_empty() && settings.orders.is_some() {
+        // Every explicit order lies above what the record supports: say so
+        // (usage) rather than report an empty stabilisation diagram.
+        return Err(Error::usage(format!(
+            "modal: orders {:?} all exceed the subspace dimension {} this record supports with {block_rows} block rows ((block rows − 1) × outputs at most): give lower orders",
+            plan.orders,
+            subspace.max_order()
+        )));
     }
     if !skipped.is_empty() {
         notes.push(format!(

@@ -31,6 +31,11 @@ pub fn parse_duration(flag: &str, text: &str) -> Result<i64> {
     Ok((seconds * 1e9).round() as i64)
 }
 
+/// Longest monitoring window (`--window`), ns: one day.
+pub const MAX_WINDOW_NS: i64 = 86_400 * 1_000_000_000;
+/// Most windows of one track run (a year of one-minute steps is 525 600).
+pub const MAX_WINDOWS: i64 = 1_000_000;
+
 /// The windows `[t, t + length)` for t = start, start + step, … that end
 /// by `end`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -49,6 +54,21 @@ impl WindowGrid {
         }
         if length_ns <= 0 || step_ns <= 0 {
             return Err(Error::usage("--window and --step must be positive"));
+        }
+        if length_ns > MAX_WINDOW_NS {
+            return Err(Error::usage(format!(
+                "--window {:.0} s: at most one day ({} s); a window's samples are held at once",
+                length_ns as f64 / 1e9,
+                MAX_WINDOW_NS / 1_000_000_000
+            )));
+        }
+        let windows =
+            (end_ns.saturating_sub(start_ns).saturating_sub(length_ns) / step_ns).saturating_add(1);
+        if windows > MAX_WINDOWS {
+            return Err(Error::usage(format!(
+                "--step {:.3} s gives {windows} windows from --start to --end: at most {MAX_WINDOWS} (choose a longer step or a shorter span)",
+                step_ns as f64 / 1e9
+            )));
         }
         if start_ns + length_ns > end_ns {
             return Err(Error::usage(format!(

@@ -53,6 +53,9 @@ pub struct ActuatorModel {
     pub delay_s: f64,
 }
 
+/// Longest pure delay of the actuator loop, s.
+pub const MAX_DELAY_S: f64 = 1.0;
+
 impl ActuatorModel {
     /// A perfect actuator: no lag, no delay.
     pub fn ideal() -> Self {
@@ -65,9 +68,9 @@ impl ActuatorModel {
     }
 
     pub fn check(&self) -> Result<()> {
-        if !(self.delay_s >= 0.0 && self.delay_s.is_finite()) {
+        if !(self.delay_s >= 0.0 && self.delay_s <= MAX_DELAY_S) {
             return Err(Error::usage(format!(
-                "actuator delay_s {} must be ≥ 0",
+                "actuator delay_s {} must lie in [0, {MAX_DELAY_S}] s (a laboratory loop's delay is milliseconds; the history kept grows with it)",
                 self.delay_s
             )));
         }

@@ -80,6 +80,10 @@ pub struct RehearseSettings {
     pub gravity: Option<bool>,
 }
 
+/// Most simulation steps per base-motion step (`substeps`; the automatic
+/// choice, ω_max Δt ≤ 1, needs far fewer).
+pub const MAX_SUBSTEPS: usize = 10_000;
+
 impl Default for RehearseSettings {
     fn default() -> Self {
         RehearseSettings {
@@ -111,8 +115,16 @@ impl RehearseSettings {
         if !(-1.0 / 3.0..=0.0).contains(&self.alpha) {
             return bad(format!("alpha {} must lie in [-1/3, 0]", self.alpha));
         }
-        if self.substeps == Some(0) {
-            return bad("substeps must be at least 1".into());
+        if let Some(n) = self.substeps.filter(|n| !(1..=MAX_SUBSTEPS).contains(n)) {
+            return bad(format!("substeps = {n}: must be 1..={MAX_SUBSTEPS}"));
+        }
+        let most = crate::design::plan::MAX_TIME_SCALES;
+        if self.time_scales.len() > most || self.ns_modes.len() > most {
+            return bad(format!(
+                "time_scales ({}) and ns_modes ({}) list at most {most} values each",
+                self.time_scales.len(),
+                self.ns_modes.len()
+            ));
         }
         if let Some(l) = self
             .time_scales
@@ -120,6 +132,13 @@ impl RehearseSettings {
             .find(|l| !(**l > 0.0 && l.is_finite()))
         {
             return bad(format!("time scale {l} must be positive"));
+        }
+        if !(self.delay_s >= 0.0 && self.delay_s <= actuator::MAX_DELAY_S) {
+            return bad(format!(
+                "delay_s {} must lie in [0, {}] s",
+                self.delay_s,
+                actuator::MAX_DELAY_S
+            ));
         }
         if let Some(b) = self.bandwidth_hz.filter(|b| !(*b > 0.0 && b.is_finite())) {
             return bad(format!("bandwidth_hz {b} must be positive"));

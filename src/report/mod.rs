@@ -140,15 +140,25 @@ impl ReportSettings {
                 )));
             }
         }
-        if self.max_points_per_trace < 10 || self.max_points_per_loop < 10 {
-            return Err(Error::usage(
-                "report settings: max_points_per_trace and max_points_per_loop must be at least 10",
-            ));
+        // The page embeds every point and row: beyond these it is no longer
+        // a page a browser opens.
+        const MAX_POINTS: usize = 1_000_000;
+        const MAX_ROWS: usize = 100_000;
+        for (key, v) in [
+            ("max_points_per_trace", self.max_points_per_trace),
+            ("max_points_per_loop", self.max_points_per_loop),
+        ] {
+            if !(10..=MAX_POINTS).contains(&v) {
+                return Err(Error::usage(format!(
+                    "report settings: {key} = {v}: must be 10..={MAX_POINTS}"
+                )));
+            }
         }
-        if self.max_table_rows == 0 {
-            return Err(Error::usage(
-                "report settings: max_table_rows must be at least 1",
-            ));
+        if !(1..=MAX_ROWS).contains(&self.max_table_rows) {
+            return Err(Error::usage(format!(
+                "report settings: max_table_rows = {}: must be 1..={MAX_ROWS}",
+                self.max_table_rows
+            )));
         }
         Ok(())
     }

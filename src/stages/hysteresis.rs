@@ -119,24 +119,31 @@ impl HysteresisParams {
         };
         s.form = self.form;
         s.velocity_drift = self.velocity_drift;
+        if !(self.band_low_hz.is_finite() && self.band_low_hz >= 0.0) {
+            return Err(Error::usage(format!(
+                "band_low_hz = {}: must be a frequency ≥ 0 Hz",
+                self.band_low_hz
+            )));
+        }
         if self.band_low_hz > 0.0 {
             s.band = FrequencyBand::above(self.band_low_hz);
             s.transform = crate::hysteresis::Transform::Fft;
         }
-        if !(self.exponent_min >= 1.0
-            && self.exponent_max > self.exponent_min
-            && self.exponent_resolution > 0.0)
-        {
-            return Err(Error::usage(
-                "exponent range must satisfy 1 ≤ exponent_min < exponent_max, resolution > 0",
-            ));
-        }
-        if !(self.reduced_mass_step > 0.0 && self.reduced_mass_step <= 0.001) {
-            return Err(Error::usage(
-                "reduced_mass_step must be in (0, 0.001] (Eq. 35–36 search resolution)",
-            ));
-        }
-        self.window.validate().map(|()| s)
+        Ok(s)
+    }
+
+    /// The settings of the whole identification, checked
+    /// (`EventSettings::validate`: the bounds' one home).
+    pub fn event_settings(&self) -> Result<EventSettings> {
+        let settings = EventSettings {
+            identify: self.identify_settings()?,
+            reduced_mass_step: self.reduced_mass_step,
+            mass_lumping: self.mass_lumping,
+            directions: self.directions.clone(),
+            window: self.window,
+            fail_on_error: self.fail_on_error,
+        };
+        settings.validate().map(|()| settings)
     }
 }
 
@@ -148,15 +155,7 @@ pub fn identify_event_at(
     event_dir: Option<&Path>,
     p: &HysteresisParams,
 ) -> Result<(Vec<DirectionOutcome>, Vec<MassResolution>)> {
-    let settings = EventSettings {
-        identify: p.identify_settings()?,
-        reduced_mass_step: p.reduced_mass_step,
-        mass_lumping: p.mass_lumping,
-        directions: p.directions.clone(),
-        window: p.window,
-        fail_on_error: p.fail_on_error,
-    };
-    identify_event(event, event_dir, &settings)
+    identify_event(event, event_dir, &p.event_settings()?)
 }
 
 /// Writes the three identification tables.
@@ -188,7 +187,7 @@ pub fn write_identification(
 
 fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
     let params: HysteresisParams = src.params()?;
-    params.identify_settings().map_err(|e| src.invalid(e))?;
+    params.event_settings().map_err(|e| src.invalid(e))?;
     Ok(Box::new(Hysteresis { params }))
 }
 

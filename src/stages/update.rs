@@ -92,7 +92,8 @@ impl UpdateParams {
     pub fn validate(&self) -> Result<()> {
         self.build_solvers()?;
         self.ensemble_options()?;
-        Ok(())
+        let extra_model_modes = self.extra_model_modes;
+        ObjectiveOptions { extra_model_modes }.validate()
     }
 
     /// The candidate solvers named in `solvers` (usage error for an empty list or repeated names).
@@ -112,19 +113,13 @@ impl UpdateParams {
     }
 
     pub fn ensemble_options(&self) -> Result<EnsembleOptions> {
-        let selection = self.selection;
-        if self.max_rounds == 0 {
-            return Err(Error::usage("update: max_rounds must be at least 1"));
-        }
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return Err(Error::usage("update: tolerance must be a positive number"));
-        }
-        Ok(EnsembleOptions {
+        let options = EnsembleOptions {
             max_rounds: self.max_rounds,
             variance_tolerance: self.tolerance,
-            selection,
+            selection: self.selection,
             seed: self.seed,
-        })
+        };
+        options.validate().map(|()| options)
     }
 }
 

@@ -131,10 +131,11 @@ impl ArchiveSettings {
                 self.rate_hz
             )));
         }
-        if !(self.day_length_s.is_finite() && self.day_length_s >= 600.0) {
-            return Err(Error::usage(
-                "synth-archive: the day length must be at least 600 s",
-            ));
+        if !(self.day_length_s >= 600.0 && self.day_length_s <= 86_400.0) {
+            return Err(Error::usage(format!(
+                "synth-archive: --day-length {} s must lie in [600 s, 24h]",
+                self.day_length_s
+            )));
         }
         Ok(())
     }

@@ -360,6 +360,10 @@ pub fn lanczos_with_factor(
 /// Largest model solved with the dense method by `TwinSystem::modes`.
 pub const DENSE_LIMIT: usize = 1500;
 
+/// Most modes asked of a twin (`quaketwin twin modes --count`): the Lanczos
+/// basis holds a few vectors per mode of every DoF.
+pub const MAX_MODES: usize = 1000;
+
 impl super::assembly::TwinSystem {
     /// Turn a solver failure into a user-facing error naming the twin file and DoF.
     pub fn eigen_error(&self, failure: EigenFailure) -> crate::Error {
@@ -380,6 +384,12 @@ impl super::assembly::TwinSystem {
     /// The `count` lowest modes at parameters θ (dense up to `DENSE_LIMIT` DoFs, else
     /// shift-invert Lanczos).
     pub fn modes(&self, theta: &[f64], count: usize) -> crate::Result<Modes> {
+        if count > MAX_MODES {
+            return Err(crate::Error::usage(format!(
+                "{}: mode count {count}: at most {MAX_MODES}",
+                self.source
+            )));
+        }
         self.check_parameters(theta)?;
         let k = self.stiffness_at(theta);
         super::assembly::check_stiffness_diagonal(self, &k)?;

@@ -75,6 +75,28 @@ impl Default for EnsembleOptions {
     }
 }
 
+/// Most ensemble rounds (`max_rounds`; default 8): each runs every solver
+/// to its budget.
+pub const MAX_ROUNDS: usize = 1000;
+
+impl EnsembleOptions {
+    /// Options an update can run with, else a usage error naming the key.
+    pub fn validate(&self) -> crate::Result<()> {
+        if !(1..=MAX_ROUNDS).contains(&self.max_rounds) {
+            return Err(crate::Error::usage(format!(
+                "update: max_rounds = {}: must be 1..={MAX_ROUNDS}",
+                self.max_rounds
+            )));
+        }
+        if !(self.variance_tolerance.is_finite() && self.variance_tolerance > 0.0) {
+            return Err(crate::Error::usage(
+                "update: tolerance must be a positive number",
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// One candidate in one round (a row of twin_update.parquet).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CandidateRecord {

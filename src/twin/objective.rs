@@ -157,6 +157,22 @@ impl Default for ObjectiveOptions {
     }
 }
 
+/// Most model modes computed beyond the measured ones (`extra_model_modes`).
+pub const MAX_EXTRA_MODEL_MODES: usize = 100;
+
+impl ObjectiveOptions {
+    /// Options the objective can use, else a usage error naming the key.
+    pub fn validate(&self) -> crate::Result<()> {
+        if self.extra_model_modes > MAX_EXTRA_MODEL_MODES {
+            return Err(crate::Error::usage(format!(
+                "update: extra_model_modes = {}: at most {MAX_EXTRA_MODEL_MODES}",
+                self.extra_model_modes
+            )));
+        }
+        Ok(())
+    }
+}
+
 /// The modal updating objective of a twin against measured modes.
 #[derive(Debug, Clone)]
 pub struct ModalObjective<'a> {

@@ -206,6 +206,6 @@ fn the_window_is_bounded_by_max_s() {
             window: bad,
             ..HysteresisParams::default()
         };
-        assert!(p.identify_settings().is_err(), "{bad:?}");
+        assert!(p.event_settings().is_err(), "{bad:?}");
     }
 }

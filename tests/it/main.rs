@@ -44,6 +44,7 @@ mod modal;
 mod modal_buildings;
 mod modal_synthetic;
 mod outdir;
+mod param_bounds;
 mod path_policy;
 mod pipeline;
 mod plackett_luce;

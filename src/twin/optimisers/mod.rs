@@ -100,6 +100,10 @@ impl Default for Convergence {
     }
 }
 
+/// Most iterations without progress (`convergence.window`) before a solver
+/// stops: beyond any solver's budget.
+pub const MAX_CONVERGENCE_WINDOW: usize = 100_000;
+
 impl Convergence {
     /// The rule itself, or a usage error naming the setting it cannot use.
     pub fn checked(self) -> crate::Result<Convergence> {
@@ -111,8 +115,8 @@ impl Convergence {
         if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
             return bad("tolerance must be a number ≥ 0");
         }
-        if self.window == 0 {
-            return bad("window must be at least 1");
+        if !(1..=MAX_CONVERGENCE_WINDOW).contains(&self.window) {
+            return bad("window must be 1..=100000 iterations");
         }
         if !(self.collapse.is_finite() && self.collapse >= 0.0) {
             return bad("collapse must be a number ≥ 0");
