@@ -107,18 +107,50 @@ impl Chunked {
                 a | u64::from_ne_bytes(w.try_into().unwrap_or([1; 8]))
             }) == 0
                 && tail.iter().all(|&b| b == 0);
-            if !zero {
-                if let Some(i) = block
-                    .iter()
-                    .position(|b| matches!(b, b'D' | b'R' | b'Q' | b'M'))
-                {
-                    return Ok(Some(q + i as u64 - 6));
-                }
+            if zero {
+                // A hole of a sparse file reads as zeros at the cost of
+                // zero-filling the page cache (15 s for 3 GiB here): jump
+                // to the next byte the file system holds instead.
+                q = match next_data(&self.file, q) {
+                    Some(d) => d.max(q + n as u64),
+                    None => q + n as u64,
+                };
+                continue;
+            }
+            if let Some(i) = block
+                .iter()
+                .position(|b| matches!(b, b'D' | b'R' | b'Q' | b'M'))
+            {
+                return Ok(Some(q + i as u64 - 6));
             }
             q += n as u64;
         }
         Ok(None)
     }
+}
+
+/// The first offset ≥ `from` that is not in a hole of the file (its length
+/// when only holes follow); `None` when the file system cannot say.
+#[cfg(target_os = "linux")]
+fn next_data(file: &File, from: u64) -> Option<u64> {
+    use std::os::fd::AsRawFd;
+    let from = libc::off_t::try_from(from).ok()?;
+    // SAFETY: lseek reads no memory of ours; it moves the offset of a
+    // descriptor this scan owns, and every read seeks before reading.
+    let at = unsafe { libc::lseek(file.as_raw_fd(), from, libc::SEEK_DATA) };
+    if at >= 0 {
+        return u64::try_from(at).ok();
+    }
+    match std::io::Error::last_os_error().raw_os_error() {
+        // ENXIO: no data after `from`.
+        Some(libc::ENXIO) => file.metadata().ok().map(|m| m.len()),
+        _ => None,
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn next_data(_file: &File, _from: u64) -> Option<u64> {
+    None
 }
 
 /// What one offset of the file holds, for the scan.

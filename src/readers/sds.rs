@@ -10,11 +10,19 @@
 //!   (`*` and `?` wildcards per field);
 //! - [`SdsArchive::read_window`] returns the samples of every selected
 //!   stream in `[t0, t1)`.  Memory stays at about one window: a day file is
-//!   read once to index its records (headers only, [`mseed::index`]; the
-//!   index, a few hundred kB per day, is kept for the next windows), then
-//!   only the records overlapping the window are read from disk and decoded.
-//!   The file of the day before is consulted too, so a record that starts
-//!   before midnight and ends after it is found;
+//!   scanned once, record by record from disk, to index its records
+//!   (headers only, [`dayfile::scan`]: a chunk in memory, never the whole
+//!   file; the index, a few hundred kB per day, is kept for the next
+//!   windows), then only the records overlapping the window are read from
+//!   disk and decoded.  The file of the day before is consulted too, so a
+//!   record that starts before midnight and ends after it is found;
+//! - damage costs only the windows it overlaps (issue 33 item 4): a
+//!   stretch the scan could not read, or a record whose samples do not
+//!   decode, is skipped and its time span left without samples (a gap, as
+//!   below); every window it overlaps carries a note ([`damage_note`]:
+//!   stream, file, byte offset, why, the time without samples), and a
+//!   window where it leaves a stream with no sample at all is an input
+//!   error naming the file and offset;
 //! - the records of a stream are joined by [`mseed::join_segments`]: gaps
 //!   up to its limit are filled by linear interpolation, overlaps keep the
 //!   earlier samples.  Only recorded samples count as present: a window's
@@ -24,8 +32,10 @@
 //! - all selected streams must share one sampling rate (an input error
 //!   naming them otherwise: resample the archive first); the streams are cut
 //!   to their common span inside the window, on the grid of the first one;
-//! - a damaged file is an input error naming the file and byte offset; a
-//!   record whose header disagrees with the bytes present is never trusted.
+//! - a record whose header disagrees with the bytes present is never
+//!   trusted; a day file that is not a regular file, cannot be read or is
+//!   beyond the scan's limits is an input error naming it (the windows
+//!   that need it are skipped with that reason).
 //!
 //! Samples are as recorded (counts); the caller applies StationXML gains.
 
