@@ -80,6 +80,9 @@ struct Chunked {
 impl Chunked {
     /// Up to `n` bytes from `from` (fewer at the end of the file).
     fn bytes(&mut self, from: u64, n: usize) -> std::io::Result<&[u8]> {
+        if from >= self.len {
+            return Ok(&[]);
+        }
         let end = from.saturating_add(n as u64).min(self.len);
         if from < self.at || end > self.at + self.buf.len() as u64 {
             let want = (self.len - from).min(CHUNK.max(n) as u64) as usize;

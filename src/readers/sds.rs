@@ -164,6 +164,9 @@ pub struct WindowSamples {
     pub notes: Vec<String>,
 }
 
+/// Damaged stretches and records, each with its day file.
+type Damaged = Vec<(PathBuf, Damage)>;
+
 /// Index of one day file: its records and damaged stretches (empty when
 /// the file does not exist).
 type DayIndex = Arc<DayScan>;
@@ -314,12 +317,7 @@ impl SdsArchive {
     /// skipped when indexed, and records whose samples do not decode (a
     /// Steim integrity check failed, a data section shorter than its
     /// count), each with its file.
-    fn segments(
-        &self,
-        k: usize,
-        t0: i64,
-        t1: i64,
-    ) -> Result<(Vec<Segment>, Vec<(PathBuf, Damage)>)> {
+    fn segments(&self, k: usize, t0: i64, t1: i64) -> Result<(Vec<Segment>, Damaged)> {
         let mut out = Vec::new();
         let mut damaged = Vec::new();
         let id = self.streams[k].id();
