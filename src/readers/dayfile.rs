@@ -6,8 +6,9 @@
 //! indexes its data records (headers checked, no sample decoded).  A
 //! damaged stretch — a header that does not parse, a record of another
 //! stream, a sample count its data section cannot hold, a start outside
-//! the file's day, a record length that disagrees with the records around
-//! it, zeros where records should be, an incomplete last record — is
+//! the file's day, a record length or sampling rate that disagrees with
+//! the records around it, zeros where records should be, a truncated or
+//! incomplete last record — is
 //! skipped and kept as a [`Damage`]: byte offset, length, the reason, and
 //! the time span without samples it leaves (from the end of the last good
 //! record before it to the start of the next good one after it).  Reading
@@ -228,7 +229,9 @@ pub fn scan(path: &Path, id: &str, day: (i64, i64)) -> Result<DayScan> {
     let mut open: Option<(u64, String)> = None;
     // Index into `out.records` of the good record after each stretch.
     let mut next_good: Vec<usize> = Vec::new();
+    // Length and sampling rate of the last good record.
     let mut last_len: Option<u64> = None;
+    let mut last_rate: Option<f64> = None;
     let mut prev_good: Option<(u64, u64)> = None;
     let mut at = 0u64;
     let too_many = |what: String| Error::input(Location::file(src.file.clone()), what);
@@ -282,6 +285,26 @@ pub fn scan(path: &Path, id: &str, day: (i64, i64)) -> Result<DayScan> {
                     Found::Good(span)
                 }
             }
+            // The sampling rate disagrees with the record before and the
+            // record after agrees with that one: a damaged rate field (the
+            // join would refuse the window over it), not a change of rate.
+            Found::Good(span)
+                if last_rate.is_some_and(|r0| ((span.rate_hz - r0) / r0).abs() > 1e-6) =>
+            {
+                let r0 = last_rate.unwrap_or(0.0);
+                let after = at + span.len as u64;
+                let next = r.bytes(after, MAX_RECORD_LEN).map_err(io)?;
+                match classify(next, after, &src, id, day) {
+                    Found::Good(n) if ((n.rate_hz - r0) / r0).abs() <= 1e-6 => Found::Bad(
+                        span.len as u64,
+                        format!(
+                            "sampling rate {} Hz between records of {r0} Hz (rate field damaged?)",
+                            span.rate_hz
+                        ),
+                    ),
+                    _ => Found::Good(span),
+                }
+            }
             f => f,
         };
         // The good record just before `at`, if the last step read one:
@@ -298,6 +321,7 @@ pub fn scan(path: &Path, id: &str, day: (i64, i64)) -> Result<DayScan> {
                 }
                 at += span.len as u64;
                 last_len = Some(span.len as u64);
+                last_rate = Some(span.rate_hz);
                 out.records.push(span);
             }
             Found::Quiet(n) => {

@@ -99,8 +99,9 @@ fn flip_bit(path: &Path, byte: usize, bit: u8) {
     std::fs::write(path, b).unwrap();
 }
 
-/// One damage of each kind, each on its own stream and hour, plus a
-/// half-written last record: every window is still identified; the
+/// One damage of each kind, each on its own stream and hour (a truncated
+/// record, a zeroed 4 KiB block, flipped bits in a record length, a sample
+/// count and a sampling rate), plus a half-written last record: every window is still identified; the
 /// windows the damage overlaps (and only those) carry a note naming the
 /// file and the byte offset, in the table metadata, on stderr and in the
 /// report; the run exits 0.  Before issue 33 each of these made every
@@ -135,7 +136,12 @@ fn damaged_records_cost_only_the_windows_they_overlap() {
     let at = record_at(190.0);
     flip_bit(&file(3), at + 30, 7);
     expected.push((file(3), at, "2026-01-01T03:00:00"));
-    // 5. A half-written last record (stream 1): the file ends 1500 bytes into it.
+    // 5. A flipped bit in blockette 100's rate (50 → 200 Hz) (0:10): the
+    // join would have refused the window.
+    let at = record_at(10.0);
+    flip_bit(&file(2), at + 60, 0);
+    expected.push((file(2), at, "2026-01-01T00:00:00"));
+    // 6. A half-written last record (stream 1): the file ends 1500 bytes into it.
     let len = std::fs::metadata(file(1)).unwrap().len();
     let last = (len as usize / RECORD_LEN - 1) * RECORD_LEN;
     std::fs::OpenOptions::new()
@@ -200,6 +206,10 @@ fn damaged_records_cost_only_the_windows_they_overlap() {
     );
     says(
         by_offset(&expected[4].0, expected[4].1),
+        "sampling rate 200 Hz between records of 50 Hz",
+    );
+    says(
+        by_offset(&expected[5].0, expected[5].1),
         "still being written",
     );
     // The span of the flipped record: one record of samples, 20.16 s.
