@@ -17,7 +17,7 @@ use crate::monitor::tracking::{Reference, TrackSettings, TrackedMode};
 use crate::monitor::window::{parse_duration, WindowGrid, NS_PER_S};
 use crate::monitor::{analyse, identify_window, Tracking, WindowModes, WindowSignals};
 use crate::readers::mseed::StreamCodes;
-use crate::readers::sds::{SdsArchive, StreamPattern};
+use crate::readers::sds::{SdsArchive, StreamPattern, DAMAGE_NOTE};
 use crate::sinks::parquet::{write_parquet, TableBuilder};
 use crate::sinks::provenance::Provenance;
 use crate::vocab::tables::{modal_tracking as col, MODAL_TRACKING};
@@ -387,7 +387,13 @@ impl Prepared {
             ));
         }
         for w in &windows {
-            for n in w.notes.iter().filter(|n| n.starts_with("StationXML epoch")) {
+            // Epoch changes and damaged MiniSEED: what a reader of stderr
+            // must see (every note is in the table metadata too).
+            for n in w
+                .notes
+                .iter()
+                .filter(|n| n.starts_with("StationXML epoch") || n.starts_with(DAMAGE_NOTE))
+            {
                 crate::console::warn(format!(
                     "track: window {}: {n}",
                     format_epoch_ns(w.start_ns)

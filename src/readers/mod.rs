@@ -11,6 +11,7 @@
 pub mod at2;
 pub mod cosmos;
 pub mod csv;
+pub mod dayfile;
 pub mod dmg;
 pub mod geonet;
 pub mod mcap;

@@ -61,8 +61,6 @@ struct DataRecord {
     nsamples_bound: usize,
     /// Byte offset of the record in the file (for error messages).
     offset: usize,
-    /// Record length, bytes.
-    len: usize,
 }
 
 /// A run of samples on a uniform grid, to be joined with others of the same channel.
@@ -357,19 +355,19 @@ impl StreamCodes {
 }
 
 /// Where one data record of a file lies and what its header says: an
-/// entry of a file's index ([`index`]), from which a reader decodes only
-/// the records a time window needs ([`decode_record`]).
+/// entry of a day file's index ([`super::dayfile`]), from which a reader
+/// decodes only the records a time window needs ([`decode_record`]).  No
+/// stream id: the records of a day file are of its stream (checked when
+/// indexed), and an index holds up to a million of these.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecordSpan {
-    /// `NET.STA.LOC.CHA`.
-    pub id: String,
     /// Byte offset of the record in the file, and its length.
     pub offset: u64,
-    pub len: usize,
+    pub len: u32,
     /// Time of the first sample, ns since the Unix epoch (time correction applied).
     pub start_ns: i64,
     pub rate_hz: f64,
-    pub samples: usize,
+    pub samples: u32,
 }
 
 impl RecordSpan {
@@ -381,50 +379,69 @@ impl RecordSpan {
     }
 }
 
-/// Index of a whole MiniSEED file: every data record with samples, in file
-/// order, headers checked but no sample decoded.  Records without samples
-/// (logs, empty records) are left out, as [`read`] leaves them out.
-pub fn index(bytes: &[u8], source: &SourceRef) -> Result<Vec<RecordSpan>> {
+/// What the bytes at one offset of a file are, headers checked but no
+/// sample decoded ([`scan_header`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Scanned {
+    /// A data record: its `NET.STA.LOC.CHA`, where it lies and its time,
+    /// and `room`: the header's sample count capped at what the data
+    /// section can hold (below `span.samples` when that count is damaged
+    /// or the record incomplete).
+    Data {
+        id: String,
+        span: RecordSpan,
+        room: usize,
+    },
+    /// A record without samples (log, detection, empty) of `len` bytes.
+    NoSamples { len: usize },
+    /// Zeros or spaces up to the end of the bytes given.
+    Padding,
+}
+
+/// The record at the start of `rest`, which lies at byte `offset` of the
+/// file `source`: its header parsed and checked against the bytes present
+/// (the record's full length must be in `rest`), no sample decoded.  An
+/// error is a record that cannot be read (its message names the offset).
+pub fn scan_header(rest: &[u8], offset: u64, source: &SourceRef) -> Result<Scanned> {
     let mut src = source.clone();
     src.format = "mseed".into();
-    let mut out = Vec::new();
-    let mut offset = 0usize;
-    while offset < bytes.len() {
-        match parse_record(&bytes[offset..], offset, &src, false)? {
-            None => break,
-            Some((Parsed::Data(r), len)) => {
-                out.push(RecordSpan {
-                    id: r.id,
-                    offset: offset as u64,
-                    len: r.len,
-                    start_ns: r.start_ns,
-                    rate_hz: r.rate_hz,
-                    samples: r.nsamples,
-                });
-                offset += len;
-            }
-            Some((Parsed::Skipped(_), len)) => offset += len,
-        }
-    }
-    Ok(out)
+    Ok(match parse_record(rest, offset as usize, &src, false)? {
+        None => Scanned::Padding,
+        Some((Parsed::Skipped(_), len)) => Scanned::NoSamples { len },
+        Some((Parsed::Data(r), len)) => Scanned::Data {
+            room: r.nsamples_bound,
+            span: RecordSpan {
+                offset,
+                len: len as u32,
+                start_ns: r.start_ns,
+                rate_hz: r.rate_hz,
+                samples: r.nsamples as u32,
+            },
+            id: r.id,
+        },
+    })
 }
 
 /// Decodes one record, `bytes` being exactly the record that lies at
 /// `span.offset` of the file `source` (errors name that file and offset).
-/// The header is parsed again and must agree with the index entry.
-pub fn decode_record(bytes: &[u8], span: &RecordSpan, source: &SourceRef) -> Result<Segment> {
+/// The header is parsed again and must agree with the index entry and be
+/// of stream `id`.
+pub fn decode_record(
+    bytes: &[u8],
+    span: &RecordSpan,
+    id: &str,
+    source: &SourceRef,
+) -> Result<Segment> {
     let mut src = source.clone();
     src.format = "mseed".into();
     let at = span.offset as usize;
     match parse_record(bytes, at, &src, true)? {
-        Some((Parsed::Data(r), _)) if r.id == span.id && r.start_ns == span.start_ns => {
-            Ok(Segment {
-                start_ns: r.start_ns,
-                rate_hz: r.rate_hz,
-                samples: r.samples,
-                origin: format!("{} record at byte {at}", src.file),
-            })
-        }
+        Some((Parsed::Data(r), _)) if r.id == id && r.start_ns == span.start_ns => Ok(Segment {
+            start_ns: r.start_ns,
+            rate_hz: r.rate_hz,
+            samples: r.samples,
+            origin: format!("{} record at byte {at}", src.file),
+        }),
         _ => Err(Error::input(
             super::location(&src).at_byte(at as u64),
             "MiniSEED record changed since the file was indexed (the file is being rewritten?)",
@@ -791,7 +808,6 @@ fn parse_record(
         nsamples,
         nsamples_bound: nsamples.min(room),
         offset,
-        len: record_len,
     };
     Ok(Some((Parsed::Data(record), record_len)))
 }

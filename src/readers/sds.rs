@@ -10,11 +10,19 @@
 //!   (`*` and `?` wildcards per field);
 //! - [`SdsArchive::read_window`] returns the samples of every selected
 //!   stream in `[t0, t1)`.  Memory stays at about one window: a day file is
-//!   read once to index its records (headers only, [`mseed::index`]; the
-//!   index, a few hundred kB per day, is kept for the next windows), then
-//!   only the records overlapping the window are read from disk and decoded.
-//!   The file of the day before is consulted too, so a record that starts
-//!   before midnight and ends after it is found;
+//!   scanned once, record by record from disk, to index its records
+//!   (headers only, [`dayfile::scan`]: a chunk in memory, never the whole
+//!   file; the index, a few hundred kB per day, is kept for the next
+//!   windows), then only the records overlapping the window are read from
+//!   disk and decoded.  The file of the day before is consulted too, so a
+//!   record that starts before midnight and ends after it is found;
+//! - damage costs only the windows it overlaps (issue 33 item 4): a
+//!   stretch the scan could not read, or a record whose samples do not
+//!   decode, is skipped and its time span left without samples (a gap, as
+//!   below); every window it overlaps carries a note ([`damage_note`]:
+//!   stream, file, byte offset, why, the time without samples), and a
+//!   window where it leaves a stream with no sample at all is an input
+//!   error naming the file and offset;
 //! - the records of a stream are joined by [`mseed::join_segments`]: gaps
 //!   up to its limit are filled by linear interpolation, overlaps keep the
 //!   earlier samples.  Only recorded samples count as present: a window's
@@ -24,8 +32,10 @@
 //! - all selected streams must share one sampling rate (an input error
 //!   naming them otherwise: resample the archive first); the streams are cut
 //!   to their common span inside the window, on the grid of the first one;
-//! - a damaged file is an input error naming the file and byte offset; a
-//!   record whose header disagrees with the bytes present is never trusted.
+//! - a record whose header disagrees with the bytes present is never
+//!   trusted; a day file that is not a regular file, cannot be read or is
+//!   beyond the scan's limits is an input error naming it (the windows
+//!   that need it are skipped with that reason).
 //!
 //! Samples are as recorded (counts); the caller applies StationXML gains.
 
@@ -34,9 +44,10 @@ use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
+use super::dayfile::{self, Damage, DayScan};
 use super::mseed::{self, RecordSpan, Segment, StreamCodes};
 use crate::error::{Error, Location, Result};
-use crate::vocab::{day_start_ns, ordinal_from_epoch_ns, SourceRef};
+use crate::vocab::{day_start_ns, format_epoch_ns, ordinal_from_epoch_ns, SourceRef};
 
 const NS_PER_DAY: i64 = 86_400_000_000_000;
 
@@ -153,8 +164,12 @@ pub struct WindowSamples {
     pub notes: Vec<String>,
 }
 
-/// Index of one day file: its records (empty when the file does not exist).
-type DayIndex = Arc<Vec<RecordSpan>>;
+/// Damaged stretches and records, each with its day file.
+type Damaged = Vec<(PathBuf, Damage)>;
+
+/// Index of one day file: its records and damaged stretches (empty when
+/// the file does not exist).
+type DayIndex = Arc<DayScan>;
 
 /// An SDS archive and the streams selected in it.
 #[derive(Debug)]
@@ -272,32 +287,14 @@ impl SdsArchive {
     }
 
     /// The index of stream `k`'s day file for the day starting at `day_ns`
-    /// (read and indexed once, then kept).
+    /// (scanned once, then kept): its good records and damaged stretches.
     fn day_index(&self, k: usize, day_ns: i64) -> Result<DayIndex> {
         if let Some(ix) = self.lock().get(&(k, day_ns)) {
             return Ok(ix.clone());
         }
         let path = day_file(&self.root, &self.streams[k], day_ns);
-        // Regular files only (a FIFO day file would block); the size is
-        // bounded by the SDS reader's own budget, not here.
-        let spans = match crate::input_file::read(&path, u64::MAX) {
-            Ok(bytes) => {
-                let spans = mseed::index(&bytes, &source_of(&path))?;
-                let want = self.streams[k].id();
-                if let Some(other) = spans.iter().find(|s| s.id != want) {
-                    return Err(Error::input(
-                        Location::file(path.display().to_string()).at_byte(other.offset),
-                        format!("record of stream {} in the day file of {want}", other.id),
-                    ));
-                }
-                spans
-            }
-            Err(Error::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
-                Vec::new()
-            }
-            Err(e) => return Err(e),
-        };
-        let ix = Arc::new(spans);
+        let scan = dayfile::scan(&path, &self.streams[k].id(), (day_ns, day_ns + NS_PER_DAY))?;
+        let ix = Arc::new(scan);
         self.lock().insert((k, day_ns), ix.clone());
         Ok(ix)
     }
@@ -315,32 +312,60 @@ impl SdsArchive {
         self.lock().retain(|&(_, day), _| day >= keep_from);
     }
 
-    /// The recorded segments of stream `k` overlapping `[t0, t1)`.
-    fn segments(&self, k: usize, t0: i64, t1: i64) -> Result<Vec<Segment>> {
+    /// The recorded segments of stream `k` overlapping `[t0, t1)`, and the
+    /// damage that leaves samples missing there: stretches of its day files
+    /// skipped when indexed, and records whose samples do not decode (a
+    /// Steim integrity check failed, a data section shorter than its
+    /// count), each with its file.
+    fn segments(&self, k: usize, t0: i64, t1: i64) -> Result<(Vec<Segment>, Damaged)> {
         let mut out = Vec::new();
+        let mut damaged = Vec::new();
+        let id = self.streams[k].id();
         let mut day = day_start_ns(t0) - NS_PER_DAY;
         while day < t1 {
             let ix = self.day_index(k, day)?;
+            let path = day_file(&self.root, &self.streams[k], day);
+            damaged.extend(
+                ix.damage
+                    .iter()
+                    .filter(|d| overlaps(d.start_ns, d.end_ns, t0, t1))
+                    .map(|d| (path.clone(), d.clone())),
+            );
             let wanted: Vec<&RecordSpan> = ix
+                .records
                 .iter()
                 .filter(|s| s.start_ns < t1 && s.end_ns() > t0)
                 .collect();
             if !wanted.is_empty() {
-                let path = day_file(&self.root, &self.streams[k], day);
                 let src = source_of(&path);
                 let mut file = crate::input_file::open(&path)?;
                 let mut buf = Vec::new();
                 for span in wanted {
-                    buf.resize(span.len, 0);
+                    buf.resize(span.len as usize, 0);
                     file.seek(SeekFrom::Start(span.offset))
                         .and_then(|_| file.read_exact(&mut buf))
                         .map_err(|e| Error::io(&path, e))?;
-                    out.push(mseed::decode_record(&buf, span, &src)?);
+                    match mseed::decode_record(&buf, span, &id, &src) {
+                        Ok(seg) => out.push(seg),
+                        Err(e) => damaged.push((
+                            path.clone(),
+                            Damage {
+                                offset: span.offset,
+                                bytes: span.len as u64,
+                                why: match e {
+                                    Error::Input { message, .. } => message,
+                                    other => other.to_string(),
+                                },
+                                start_ns: span.start_ns,
+                                end_ns: span.end_ns(),
+                            },
+                        )),
+                    }
                 }
             }
             day += NS_PER_DAY;
         }
-        Ok(out)
+        Ok((out, damaged))
     }
 
     /// The samples of every selected stream in `[t0, t1)` (module doc);
@@ -356,10 +381,22 @@ impl SdsArchive {
         let mut rate: Option<(f64, String)> = None;
         for k in 0..self.streams.len() {
             let id = self.streams[k].id();
-            let segments = self.segments(k, t0, t1)?;
+            let (segments, damaged) = self.segments(k, t0, t1)?;
+            if let (true, Some((path, d))) = (segments.is_empty(), damaged.first()) {
+                return Err(Error::input(
+                    Location::file(path.display().to_string())
+                        .with_channel(&id)
+                        .at_byte(d.offset),
+                    format!(
+                        "no samples of {id} in the window: {}",
+                        damage_note(&id, path, d)
+                    ),
+                ));
+            }
             if segments.is_empty() {
                 return Ok(None);
             }
+            notes.extend(damaged.iter().map(|(p, d)| damage_note(&id, p, d)));
             let r = segments[0].rate_hz;
             match &rate {
                 None => rate = Some((r, id.clone())),
@@ -456,6 +493,33 @@ impl SdsArchive {
             notes,
         }))
     }
+}
+
+/// Whether the time span `[a, b)` (an instant when `a == b`) meets `[t0, t1)`.
+fn overlaps(a: i64, b: i64, t0: i64, t1: i64) -> bool {
+    if a == b {
+        (t0..t1).contains(&a)
+    } else {
+        a < t1 && b > t0
+    }
+}
+
+/// How every window note about damage begins (`track` picks them out for
+/// stderr and the report by it).
+pub const DAMAGE_NOTE: &str = "damaged MiniSEED skipped";
+
+/// The note of a damaged stretch: stream, file, byte offset and length,
+/// why, and the time left without samples.
+pub fn damage_note(id: &str, path: &Path, d: &Damage) -> String {
+    format!(
+        "{DAMAGE_NOTE}: {id}, {} byte {} ({} bytes): {}; no samples from {} to {}",
+        path.display(),
+        d.offset,
+        d.bytes,
+        d.why,
+        format_epoch_ns(d.start_ns),
+        format_epoch_ns(d.end_ns)
+    )
 }
 
 fn source_of(path: &Path) -> SourceRef {

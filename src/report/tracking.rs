@@ -246,6 +246,30 @@ pub fn page(t: &Tracking, units: &str, streams: &[String]) -> String {
             skipped.join("")
         ));
     }
+    // Damaged MiniSEED skipped by the reader (file, byte offset, time
+    // without samples), under the windows it cost.
+    let damaged: Vec<String> = t
+        .windows
+        .iter()
+        .flat_map(|w| {
+            w.notes
+                .iter()
+                .filter(|n| n.starts_with(crate::readers::sds::DAMAGE_NOTE))
+                .map(|n| {
+                    format!(
+                        "<li>{}: {}</li>",
+                        escape(&format_epoch_ns(w.start_ns)),
+                        escape(n)
+                    )
+                })
+        })
+        .collect();
+    if !damaged.is_empty() {
+        p.push_str(&format!(
+            "<h2 id=\"damaged\">Damaged records</h2><p class=\"note\">Skipped by the reader; each costs only the windows it overlaps (a gap, filled as gaps are, or the window skipped when nothing of the stream is left).</p><ul>{}</ul>\n",
+            damaged.join("")
+        ));
+    }
     p.push_str("</main>\n</body>\n</html>\n");
     p
 }

@@ -61,6 +61,7 @@ mod stage_params;
 mod structure_inference;
 mod synth;
 mod synth_benchmarks;
+mod track_damaged;
 mod tracking;
 mod twin;
 mod twin_update_io;

@@ -127,28 +127,47 @@ fn sds_window_spans_midnight_and_counts_gaps() {
         .contains("XX.STA..HNE"));
 }
 
-/// A damaged day file: the window is skipped with the file and byte offset
-/// in the reason, never a panic.
+/// A damaged record of a day file: skipped, its span a gap with a note
+/// naming the file, the record's byte offset and the reason (with the
+/// byte where it was found); the records around it read as written.
 #[test]
 fn sds_damaged_record_names_file_and_offset() {
     let dir = tempfile::tempdir().unwrap();
     let start = 1_767_225_600_000_000_000i64;
     let x: Vec<f64> = (0..20_000).map(|i| (i % 50) as f64).collect();
     write_stream(dir.path(), &codes("HNE"), start, 10.0, &x, 20_000..20_000);
+    write_stream(dir.path(), &codes("HNN"), start, 10.0, &x, 20_000..20_000);
     let path = day_file(dir.path(), &codes("HNE"), start);
     let mut bytes = std::fs::read(&path).unwrap();
     // Second record: blockette 1000's record length exponent out of range.
     bytes[4096 + 54] = 40;
     std::fs::write(&path, bytes).unwrap();
     let archive = SdsArchive::open(dir.path()).unwrap();
-    let e = archive
-        .read_window(start, start + HOUR_NS)
-        .unwrap_err()
-        .to_string();
+    let w = archive
+        .read_window(start, start + 2000 * 1_000_000_000)
+        .unwrap()
+        .unwrap();
+    let note = w
+        .notes
+        .iter()
+        .find(|n| n.starts_with("damaged MiniSEED skipped"))
+        .unwrap_or_else(|| panic!("{:?}", w.notes));
     assert!(
-        e.contains(&path.display().to_string()) && e.contains("4144"),
-        "{e}"
+        note.contains(&format!(
+            "XX.STA..HNE, {} byte 4096 (4096 bytes)",
+            path.display()
+        )) && note.contains("exponent 40")
+            && note.contains("(byte 4144)")
+            && note.contains(
+                "no samples from 2026-01-01T00:01:40.800000000Z to 2026-01-01T00:03:21.600000000Z"
+            ),
+        "{note}"
     );
+    // One record (1008 samples) missing of 20 000, the rest as written.
+    assert!((w.present_fraction - (20_000 - 1008) as f64 / 20_000.0).abs() < 1e-12);
+    assert_eq!(w.signals[0][..1008], x[..1008]);
+    assert_eq!(w.signals[0][2016..], x[2016..]);
+    assert_eq!(w.signals[1], x);
 }
 
 fn short_archive(dir: &Path) -> ArchiveSettings {
