@@ -361,7 +361,7 @@ pub fn report(dir: &Path, settings: Option<&Path>) -> Result<std::path::PathBuf>
     let settings: crate::report::ReportSettings = match settings {
         None => Default::default(),
         Some(p) => {
-            let text = crate::input_file::read_to_string(p, crate::input_file::MAX_INPUT_BYTES)?;
+            let text = crate::input_file::read_to_string(p, crate::input_file::MAX_SETTINGS_BYTES)?;
             toml::from_str(&text).map_err(|e: toml::de::Error| {
                 crate::error::Error::usage(format!("{}: {}", p.display(), e.message()))
             })?
@@ -513,7 +513,7 @@ pub fn update(
     let params: crate::stages::update::UpdateParams = match settings {
         None => Default::default(),
         Some(p) => {
-            let text = crate::input_file::read_to_string(p, crate::input_file::MAX_INPUT_BYTES)?;
+            let text = crate::input_file::read_to_string(p, crate::input_file::MAX_SETTINGS_BYTES)?;
             crate::stages::update::UpdateParams::from_toml(&text, &p.display().to_string())?
         }
     };
@@ -683,7 +683,7 @@ pub fn rehearse(
     let mut s: crate::rehearse::RehearseSettings = match settings {
         None => Default::default(),
         Some(p) => {
-            let text = crate::input_file::read_to_string(p, crate::input_file::MAX_INPUT_BYTES)?;
+            let text = crate::input_file::read_to_string(p, crate::input_file::MAX_SETTINGS_BYTES)?;
             toml::from_str(&text).map_err(|e| {
                 Error::usage(format!("{}: bad rehearsal settings: {e}", p.display()))
             })?

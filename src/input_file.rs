@@ -30,6 +30,12 @@ use crate::error::{Error, Location, Result};
 /// folder's `MAX_REFERENCED_BYTES` is this value.
 pub const MAX_INPUT_BYTES: u64 = 1 << 30;
 
+/// Largest settings file (`--settings` of `update`, `rehearse`, `report`),
+/// bytes: a hand-written TOML of a few keys is under a kilobyte; parsing a
+/// document costs several times its size, so a gigabyte of it (a mistaken
+/// path, a sparse file) is refused before it is read.
+pub const MAX_SETTINGS_BYTES: u64 = 1 << 20;
+
 /// What kind of file sits at a path, in words (for a file that is not a
 /// regular file).
 pub fn kind_of(meta: &Metadata) -> &'static str {
