@@ -7,6 +7,7 @@
 //! holds the types every stage speaks.
 
 pub mod assessment;
+pub mod bounded;
 pub mod commands;
 pub mod conditioning;
 pub mod console;

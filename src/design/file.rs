@@ -291,10 +291,21 @@ pub fn parse_design(text: &str, source: &str) -> Result<DesignDoc> {
     })
 }
 
+/// Largest design file read, bytes (checked before it is read or parsed; a
+/// design file is a few kB of settings).
+pub const MAX_DESIGN_FILE_BYTES: u64 = 1 << 20;
+
 /// Read the design file at `path`, load its twin and resolve it (see
 /// [`super::resolve::resolve_design`]).
 pub fn load_design(path: &Path) -> Result<LoadedDesign> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::bounded::read_text_capped(path, MAX_DESIGN_FILE_BYTES, |size| {
+        Error::input(
+            Location::file(path.display().to_string()),
+            format!(
+                "design file of {size} bytes: larger than the limit of {MAX_DESIGN_FILE_BYTES} bytes"
+            ),
+        )
+    })?;
     let source = path.display().to_string();
     let doc = parse_design(&text, &source)?;
     let base = path

@@ -111,7 +111,7 @@ unsafe impl GlobalAlloc for Counting {
 
 /// Runs `f` and returns its value with the most bytes it held at once on
 /// this thread beyond what was live before.
-fn with_peak<T>(label: &'static str, case: u64, f: impl FnOnce() -> T) -> (T, i64) {
+pub(crate) fn with_peak<T>(label: &'static str, case: u64, f: impl FnOnce() -> T) -> (T, i64) {
     let before = LIVE.with(|l| l.get());
     PEAK.with(|p| p.set(before));
     CASE.with(|c| c.set(Some((label, case))));
