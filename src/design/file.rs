@@ -295,17 +295,23 @@ pub fn parse_design(text: &str, source: &str) -> Result<DesignDoc> {
 /// design file is a few kB of settings).
 pub const MAX_DESIGN_FILE_BYTES: u64 = 1 << 20;
 
-/// Read the design file at `path`, load its twin and resolve it (see
-/// [`super::resolve::resolve_design`]).
-pub fn load_design(path: &Path) -> Result<LoadedDesign> {
-    let text = crate::bounded::read_text_capped(path, MAX_DESIGN_FILE_BYTES, |size| {
+/// The text of the design file at `path`, its size checked against
+/// [`MAX_DESIGN_FILE_BYTES`] before it is read.
+fn read_design_text(path: &Path) -> Result<String> {
+    crate::bounded::read_text_capped(path, MAX_DESIGN_FILE_BYTES, |size| {
         Error::input(
             Location::file(path.display().to_string()),
             format!(
                 "design file of {size} bytes: larger than the limit of {MAX_DESIGN_FILE_BYTES} bytes"
             ),
         )
-    })?;
+    })
+}
+
+/// Read the design file at `path`, load its twin and resolve it (see
+/// [`super::resolve::resolve_design`]).
+pub fn load_design(path: &Path) -> Result<LoadedDesign> {
+    let text = read_design_text(path)?;
     let source = path.display().to_string();
     let doc = parse_design(&text, &source)?;
     let base = path

@@ -386,7 +386,7 @@ impl Manifest {
                 }
             }
             if let Some(h) = s.height_m {
-                if !(h.is_finite() && h >= MIN_STOREY_HEIGHT_M && h <= 1000.0) {
+                if !(MIN_STOREY_HEIGHT_M..=1000.0).contains(&h) {
                     return Err(Error::input(
                         loc(),
                         format!("structure.height_m = {h}: not a structure's height in metres"),

@@ -13,7 +13,10 @@ pub mod structure;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-pub use archive::{collect, ArchiveLimits, EventFile, READ_LATER_ABOVE};
+pub use archive::{
+    collect, ArchiveLimits, EventFile, HEAD_BYTES, RATIO_GRACE_BYTES, READ_LATER_ABOVE,
+    RELATIVE_FLOOR_BYTES,
+};
 pub use manifest::{
     ChannelEntry, ColumnRef, DirectionEntry, FormatEntry, Manifest, RoleEntry, UnitsEntry,
 };

@@ -213,16 +213,22 @@ fn line_of(text: &str, offset: usize) -> usize {
 /// files (`[matrices]`), which are read on their own.
 pub const MAX_TWIN_FILE_BYTES: u64 = 8 << 20;
 
-/// Read and validate a twin file from disk.
-pub fn load_twin(path: &Path) -> Result<Twin> {
-    let text = crate::bounded::read_text_capped(path, MAX_TWIN_FILE_BYTES, |size| {
+/// The text of the twin file at `path`, its size checked against
+/// [`MAX_TWIN_FILE_BYTES`] before it is read.
+fn read_twin_text(path: &Path) -> Result<String> {
+    crate::bounded::read_text_capped(path, MAX_TWIN_FILE_BYTES, |size| {
         Error::input(
             Location::file(path.display().to_string()),
             format!(
                 "twin file of {size} bytes: larger than the limit of {MAX_TWIN_FILE_BYTES} bytes (give a large model's matrices as Matrix Market files)"
             ),
         )
-    })?;
+    })
+}
+
+/// Read and validate a twin file from disk.
+pub fn load_twin(path: &Path) -> Result<Twin> {
+    let text = read_twin_text(path)?;
     let base = path
         .parent()
         .map(Path::to_path_buf)

@@ -437,6 +437,33 @@ fn the_event_budget_counts_every_member_and_level() {
 }
 
 #[test]
+fn the_absolute_budget_is_checked_before_a_member_is_inflated() {
+    // 12 members of 1 MiB against an absolute budget of 10 MiB (the
+    // default, 2 GiB, needs a 20 MB zip: the mechanism is the same).
+    let dir = tempfile::tempdir().unwrap();
+    let members: Vec<Member> = (0..12)
+        .map(|i| {
+            let mut m = bomb(&format!("pad{i:02}.csv"), b'0', MB);
+            m.crc = crc32(&vec![b'0'; MB as usize]);
+            m
+        })
+        .collect();
+    let p = write(dir.path(), "absolute.zip", &zip(&members));
+    let limits = quaketwin::event_folder::ArchiveLimits {
+        max_total_bytes: 10 * MB,
+        ..Default::default()
+    };
+    let (result, held) = peak_of(|| quaketwin::event_folder::collect(&p, &limits));
+    let msg = result.unwrap_err().to_string();
+    assert!(
+        msg.contains("absolute.zip:pad10.csv")
+            && msg.contains("above the limit of 10485760 bytes decompressed per event"),
+        "{msg}"
+    );
+    assert!(held <= 16 * MB, "held {} MB", held >> 20);
+}
+
+#[test]
 fn skipped_members_are_never_inflated() {
     // Three 2 GiB members that are not records (6.2 GB before) beside one
     // record: listed as skipped, read only up to their heads.
@@ -454,7 +481,7 @@ fn skipped_members_are_never_inflated() {
     let files = quaketwin::event_folder::collect(&p, &Default::default()).unwrap();
     for f in files.iter().filter(|f| f.base_name() != "rec.csv") {
         assert!(
-            f.head.len() <= 64 << 10,
+            f.head.len() <= quaketwin::event_folder::HEAD_BYTES,
             "{}: {} bytes",
             f.base_name(),
             f.head.len()
@@ -803,5 +830,36 @@ fn oversized_pipeline_design_and_twin_files_are_refused_before_reading() {
                 quaketwin::twin::file::MAX_TWIN_FILE_BYTES
             )),
         "{e}"
+    );
+}
+
+#[test]
+fn a_bomb_beside_a_referenced_file_is_not_extracted() {
+    // A zipped event's referenced files are extracted member by member
+    // within the budget: the bomb is left out, and is an error only if named.
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "twin-event.zip",
+        &zip(&[
+            bomb("junk.csv", b',', GIB),
+            stored("twin.toml", b"[twin]\nname = \"x\"\n"),
+            stored("rec.csv", &record_csv()),
+        ]),
+    );
+    let mut refs = quaketwin::event_folder::ReferencedFiles::new(&p);
+    let (twin, held) = peak_of(|| refs.resolve("twin.toml", "structure.twin"));
+    assert_eq!(
+        std::fs::read(twin.unwrap()).unwrap(),
+        b"[twin]\nname = \"x\"\n"
+    );
+    assert!(held <= 16 * MB, "held {} MB", held >> 20);
+    let msg = refs
+        .resolve("junk.csv", "design file")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("junk.csv") && msg.contains("more than the limit of 100:1"),
+        "{msg}"
     );
 }
