@@ -56,7 +56,7 @@ impl Default for ArchiveLimits {
     fn default() -> Self {
         ArchiveLimits {
             max_zip_depth: 3,
-            max_member_bytes: 1 << 30,
+            max_member_bytes: 2 << 30,
             max_total_bytes: 2 << 30,
             max_total_ratio: 100,
             max_member_ratio: 100,
