@@ -105,19 +105,25 @@ pub fn open(path: &Path) -> Result<File> {
 /// The whole content of the regular file at `path`, refused (an input error
 /// naming the path and the limit) above `max_bytes`.
 pub fn read(path: &Path, max_bytes: u64) -> Result<Vec<u8>> {
-    let file = open(path)?;
-    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
-    let too_big = |n: u64| {
+    read_or(path, max_bytes, |n| {
         Error::input(
             Location::file(path.display().to_string()),
             format!("has {n} bytes; the limit is {max_bytes} bytes"),
         )
-    };
+    })
+}
+
+/// [`read`] with the caller's error for a file above `max_bytes` (which
+/// limit, which exit code: a pipeline file too big is a usage error).  The
+/// size is taken from the open file before reading, and the read stops one
+/// byte past the cap should the file grow meanwhile.
+pub fn read_or(path: &Path, max_bytes: u64, too_big: impl Fn(u64) -> Error) -> Result<Vec<u8>> {
+    let file = open(path)?;
+    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     if len > max_bytes {
         return Err(too_big(len));
     }
     let mut bytes = Vec::with_capacity(len as usize);
-    // One byte past the cap tells a file that grew while it was read.
     file.take(max_bytes.saturating_add(1))
         .read_to_end(&mut bytes)
         .map_err(|e| Error::io(path, e))?;
@@ -130,7 +136,20 @@ pub fn read(path: &Path, max_bytes: u64) -> Result<Vec<u8>> {
 /// [`read`] as UTF-8 text; text that is not UTF-8 is an input error naming
 /// the path and the byte offset.
 pub fn read_to_string(path: &Path, max_bytes: u64) -> Result<String> {
-    String::from_utf8(read(path, max_bytes)?).map_err(|e| {
+    utf8(path, read(path, max_bytes)?)
+}
+
+/// [`read_or`] as UTF-8 text.
+pub fn read_to_string_or(
+    path: &Path,
+    max_bytes: u64,
+    too_big: impl Fn(u64) -> Error,
+) -> Result<String> {
+    utf8(path, read_or(path, max_bytes, too_big)?)
+}
+
+fn utf8(path: &Path, bytes: Vec<u8>) -> Result<String> {
+    String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to() as u64;
         Error::input(
             Location::file(path.display().to_string()).at_byte(at),

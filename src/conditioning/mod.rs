@@ -644,9 +644,14 @@ fn check_qa_units(
             r.channel.qa.push(f);
         }
     }
-    let qa_codes = r.channel.qa.iter().map(|f| f.code()).collect();
     let units_from = r.channel.units.name();
     let factor = units_to_si(r).map_err(|e| (1, e))?;
+    if r.channel.units == Units::MPerS2 {
+        if let Some(f) = qa::implausible_acceleration(&r.samples) {
+            r.channel.qa.push(f);
+        }
+    }
+    let qa_codes = r.channel.qa.iter().map(|f| f.code()).collect();
     Ok(Trace {
         qa_codes,
         units_from,

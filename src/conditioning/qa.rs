@@ -220,6 +220,25 @@ pub fn snr_db(data: &[f64], dt: f64, noise_window_s: f64) -> Option<f64> {
     Some(20.0 * (signal / noise).log10())
 }
 
+/// Largest acceleration a structure's record can physically hold, m/s²
+/// (100 g: strong-motion sensors clip at a few g, the strongest ground
+/// motion recorded is about 4 g).  A record in SI above it comes from a
+/// wrong unit or sensitivity, and is flagged rather than written silently.
+pub const MAX_PLAUSIBLE_ACCELERATION_MS2: f64 = 100.0 * crate::vocab::STANDARD_GRAVITY;
+
+/// A note when an acceleration record in m/s² exceeds
+/// [`MAX_PLAUSIBLE_ACCELERATION_MS2`] (its units or sensitivity are wrong).
+pub fn implausible_acceleration(data_si: &[f64]) -> Option<QaFlag> {
+    let peak = data_si.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    (peak > MAX_PLAUSIBLE_ACCELERATION_MS2).then(|| QaFlag::Note {
+        text: format!(
+            "physically impossible: peak acceleration {peak:e} m/s² ({:e} g) is above {} g; check the channel's units and sensitivity",
+            peak / crate::vocab::STANDARD_GRAVITY,
+            MAX_PLAUSIBLE_ACCELERATION_MS2 / crate::vocab::STANDARD_GRAVITY
+        ),
+    })
+}
+
 /// All flags for one finite record (the caller refuses non-finite data first).
 pub fn quality_flags(data: &[f64], dt: f64, settings: &QaSettings) -> Vec<QaFlag> {
     let mut flags = Vec::new();

@@ -291,10 +291,27 @@ pub fn parse_design(text: &str, source: &str) -> Result<DesignDoc> {
     })
 }
 
+/// Largest design file read, bytes (checked before it is read or parsed; a
+/// design file is a few kB of settings).
+pub const MAX_DESIGN_FILE_BYTES: u64 = 1 << 20;
+
+/// The text of the design file at `path`, its size checked against
+/// [`MAX_DESIGN_FILE_BYTES`] before it is read.
+fn read_design_text(path: &Path) -> Result<String> {
+    crate::input_file::read_to_string_or(path, MAX_DESIGN_FILE_BYTES, |size| {
+        Error::input(
+            Location::file(path.display().to_string()),
+            format!(
+                "design file of {size} bytes: larger than the limit of {MAX_DESIGN_FILE_BYTES} bytes"
+            ),
+        )
+    })
+}
+
 /// Read the design file at `path`, load its twin and resolve it (see
 /// [`super::resolve::resolve_design`]).
 pub fn load_design(path: &Path) -> Result<LoadedDesign> {
-    let text = crate::input_file::read_to_string(path, crate::input_file::MAX_INPUT_BYTES)?;
+    let text = read_design_text(path)?;
     let source = path.display().to_string();
     let doc = parse_design(&text, &source)?;
     let base = path

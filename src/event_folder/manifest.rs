@@ -15,6 +15,45 @@ pub const MIN_STOREY_HEIGHT_M: f64 = 0.5;
 /// Origin times accepted (years), so a typo never wraps into another century.
 pub const ORIGIN_YEARS: std::ops::RangeInclusive<i64> = 1900..=2100;
 
+/// Largest `event.toml` read, bytes: checked before it is read or parsed (a
+/// manifest of a 100-channel building is tens of kB; `init` writes about
+/// 400 bytes per channel, so [`MAX_CHANNELS`] fit with room).
+pub const MAX_MANIFEST_BYTES: u64 = 4 << 20;
+
+/// Most `[[channel]]` entries a manifest may list (a large instrumented
+/// structure has a few hundred channels).
+pub const MAX_CHANNELS: usize = 4096;
+
+/// Storey heights accepted, metres (a smaller one is a unit slip or
+/// nonsense that would give absurd drift ratios; no storey is 100 m tall).
+pub const STOREY_HEIGHT_M: std::ops::RangeInclusive<f64> = MIN_STOREY_HEIGHT_M..=100.0;
+
+/// Mass of one level accepted, kg (a light timber floor is a few tonnes, the
+/// heaviest building floors or bridge segments ~10⁸ kg).
+pub const LEVEL_MASS_KG: std::ops::RangeInclusive<f64> = 1.0..=1e10;
+
+/// Sampling rates accepted, Hz (no strong-motion or structural record is
+/// sampled below 0.1 Hz or above 100 kHz).
+pub const SAMPLING_RATE_HZ: std::ops::RangeInclusive<f64> = 0.1..=100_000.0;
+
+/// Magnitude of a sensitivity accepted, counts per m/s² (a 1 V/g analog
+/// channel is ~0.1, a 24-bit digitiser ~10⁶; a sign states the polarity).
+/// Outside, one count would be more than 100 g, or less than 10⁻¹² m/s².
+pub const SENSITIVITY_COUNTS_PER_MS2: std::ops::RangeInclusive<f64> = 1e-3..=1e12;
+
+/// Highest level accepted (levels run 0 = base to the top floor; a
+/// structure has at most 300 storeys, as `structure.storeys`).
+pub const MAX_LEVEL: i32 = 300;
+
+/// Elevations accepted, metres (the deepest trench to above the highest peak).
+pub const ELEVATION_M: std::ops::RangeInclusive<f64> = -12_000.0..=9_000.0;
+
+/// Largest plan coordinate accepted (`position_m`, `centre_of_mass_m`), metres.
+pub const MAX_PLAN_COORDINATE_M: f64 = 100_000.0;
+
+/// Magnitudes accepted.
+pub const MAGNITUDE: std::ops::RangeInclusive<f64> = -3.0..=10.0;
+
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Manifest {
@@ -252,6 +291,23 @@ fn channel_id_at(text: &str, at: usize) -> Option<String> {
 impl Manifest {
     /// Parses manifest text; errors name the manifest file and line.
     pub fn parse(text: &str, file: &str) -> Result<Manifest> {
+        // Sizes first, before the parser holds the text many times over.
+        if text.len() as u64 > MAX_MANIFEST_BYTES {
+            return Err(Error::input(
+                Location::file(file),
+                format!(
+                    "event manifest of {} bytes: larger than the limit of {MAX_MANIFEST_BYTES} bytes",
+                    text.len()
+                ),
+            ));
+        }
+        let headers = text
+            .lines()
+            .filter(|l| l.trim().replace(' ', "") == "[[channel]]")
+            .count();
+        if headers > MAX_CHANNELS {
+            return Err(too_many_channels(file, headers));
+        }
         let m: Manifest = toml::from_str(text).map_err(|e| {
             let line = e
                 .span()
@@ -269,15 +325,34 @@ impl Manifest {
 
     fn validate(&self, file: &str) -> Result<()> {
         let loc = || Location::file(file);
+        if self.channels.len() > MAX_CHANNELS {
+            return Err(too_many_channels(file, self.channels.len()));
+        }
+        if let Some(mag) = self.event.magnitude {
+            if !MAGNITUDE.contains(&mag) {
+                return Err(Error::input(
+                    loc(),
+                    format!(
+                        "event.magnitude = {mag}: not a magnitude ({} to {})",
+                        MAGNITUDE.start(),
+                        MAGNITUDE.end()
+                    ),
+                ));
+            }
+        }
         if let Some(s) = &self.structure {
             if let Some(h) = s
                 .storey_heights_m
                 .iter()
-                .find(|h| !(h.is_finite() && **h >= MIN_STOREY_HEIGHT_M))
+                .find(|h| !STOREY_HEIGHT_M.contains(*h))
             {
                 return Err(Error::input(
                     loc(),
-                    format!("structure.storey_heights_m: {h} m is not a storey height (at least {MIN_STOREY_HEIGHT_M} m)"),
+                    format!(
+                        "structure.storey_heights_m: {h} m is not a storey height ({} to {} m)",
+                        STOREY_HEIGHT_M.start(),
+                        STOREY_HEIGHT_M.end()
+                    ),
                 ));
             }
             if !s.storey_heights_m.is_empty()
@@ -311,17 +386,21 @@ impl Manifest {
                 }
             }
             if let Some(h) = s.height_m {
-                if !(h.is_finite() && h >= MIN_STOREY_HEIGHT_M && h <= 1000.0) {
+                if !(MIN_STOREY_HEIGHT_M..=1000.0).contains(&h) {
                     return Err(Error::input(
                         loc(),
                         format!("structure.height_m = {h}: not a structure's height in metres"),
                     ));
                 }
             }
-            if s.masses_kg.iter().any(|m| !(m.is_finite() && *m > 0.0)) {
+            if let Some(m) = s.masses_kg.iter().find(|m| !LEVEL_MASS_KG.contains(*m)) {
                 return Err(Error::input(
                     loc(),
-                    "structure.masses_kg must be positive numbers",
+                    format!(
+                        "structure.masses_kg: {m} kg is not the mass of a level (masses_kg must be positive numbers from {:e} to {:e} kg)",
+                        LEVEL_MASS_KG.start(),
+                        LEVEL_MASS_KG.end()
+                    ),
                 ));
             }
             if let Some(az) = s.x_axis_azimuth_deg {
@@ -335,10 +414,10 @@ impl Manifest {
                 }
             }
             if let Some(c) = s.centre_of_mass_m {
-                if !c.iter().all(|v| v.is_finite()) {
+                if !c.iter().all(|v| v.abs() <= MAX_PLAN_COORDINATE_M) {
                     return Err(Error::input(
                         loc(),
-                        "structure.centre_of_mass_m must be two finite numbers [x, y] in metres",
+                        format!("structure.centre_of_mass_m must be two numbers [x, y] in metres, each within ±{MAX_PLAN_COORDINATE_M} m"),
                     ));
                 }
             }
@@ -360,19 +439,36 @@ impl Manifest {
                 }
             }
             if let Some(fs) = c.sampling_rate_hz {
-                if !(fs.is_finite() && fs > 0.0) {
-                    return Err(at(format!("sampling_rate_hz {fs} must be positive")));
+                if !SAMPLING_RATE_HZ.contains(&fs) {
+                    return Err(at(format!(
+                        "sampling_rate_hz {fs} must be positive, from {} to {} Hz",
+                        SAMPLING_RATE_HZ.start(),
+                        SAMPLING_RATE_HZ.end()
+                    )));
                 }
             }
             if let Some(s) = c.sensitivity {
-                if !(s.is_finite() && s != 0.0) {
-                    return Err(at(format!("sensitivity {s} must be a non-zero number")));
+                if !SENSITIVITY_COUNTS_PER_MS2.contains(&s.abs()) {
+                    return Err(at(format!(
+                        "sensitivity {s:e} must be a non-zero number of counts per m/s² of magnitude {:e} to {:e} (one count is then at most 1000 m/s²)",
+                        SENSITIVITY_COUNTS_PER_MS2.start(),
+                        SENSITIVITY_COUNTS_PER_MS2.end()
+                    )));
                 }
             }
             if let Some(level) = c.level {
-                if level < 0 {
+                if !(0..=MAX_LEVEL).contains(&level) {
                     return Err(at(format!(
-                        "level {level}: levels are 0 (base/ground) to n (top floor)"
+                        "level {level}: levels are 0 (base/ground) to n (top floor), at most {MAX_LEVEL}"
+                    )));
+                }
+            }
+            if let Some(e) = c.elevation_m {
+                if !ELEVATION_M.contains(&e) {
+                    return Err(at(format!(
+                        "elevation_m {e} must lie in [{}, {}] metres",
+                        ELEVATION_M.start(),
+                        ELEVATION_M.end()
                     )));
                 }
             }
@@ -382,13 +478,20 @@ impl Manifest {
                 }
             }
             if let Some(p) = c.position_m {
-                if !p.iter().all(|v| v.is_finite()) {
-                    return Err(at(
-                        "position_m must be two finite numbers [x, y] in metres".into()
-                    ));
+                if !p.iter().all(|v| v.abs() <= MAX_PLAN_COORDINATE_M) {
+                    return Err(at(format!(
+                        "position_m must be two numbers [x, y] in metres, each within ±{MAX_PLAN_COORDINATE_M} m"
+                    )));
                 }
             }
         }
         Ok(())
     }
+}
+
+fn too_many_channels(file: &str, n: usize) -> Error {
+    Error::input(
+        Location::file(file),
+        format!("event manifest lists {n} channels: more than the limit of {MAX_CHANNELS}"),
+    )
 }

@@ -13,7 +13,10 @@ pub mod structure;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-pub use archive::{collect, ArchiveLimits, EventFile, READ_LATER_ABOVE};
+pub use archive::{
+    collect, ArchiveLimits, EventFile, HEAD_BYTES, RATIO_GRACE_BYTES, READ_LATER_ABOVE,
+    RELATIVE_FLOOR_BYTES,
+};
 pub use manifest::{
     ChannelEntry, ColumnRef, DirectionEntry, FormatEntry, Manifest, RoleEntry, UnitsEntry,
 };
@@ -170,19 +173,30 @@ fn load_as_stated(
     if listed_channels {
         let m = manifest.as_ref().expect("checked above"); // ok: listed_channels implies Some
                                                            // Group entries by file, keeping manifest order within a file.
-        let mut by_file: BTreeMap<String, Vec<&ChannelEntry>> = BTreeMap::new();
-        for c in &m.channels {
-            by_file.entry(normalise_name(&c.file)).or_default().push(c);
+                                                           // With each entry its place in the manifest (records keep that order).
+        let mut by_file: BTreeMap<String, Vec<(usize, &ChannelEntry)>> = BTreeMap::new();
+        for (order, c) in m.channels.iter().enumerate() {
+            by_file
+                .entry(normalise_name(&c.file))
+                .or_default()
+                .push((order, c));
+        }
+        // The event's files by the names a manifest may use (one lookup per
+        // file named, not a scan of the folder each).
+        let mut by_name: std::collections::HashMap<String, &EventFile> =
+            std::collections::HashMap::new();
+        for f in files.iter().rev() {
+            // Reversed: the first file under a name wins, as a scan would.
+            by_name.insert(strip_root(f), f);
+            by_name.insert(normalise_name(&f.display_name()), f);
         }
         let manifest_name = manifest_file
             .map(|f| f.display_name())
             .unwrap_or_else(|| MANIFEST_NAME.into());
         let mut picked: Vec<(usize, Record)> = Vec::new();
-        for (name, entries) in &by_file {
-            let Some(file) = files
-                .iter()
-                .find(|f| normalise_name(&f.display_name()) == *name || strip_root(f) == *name)
-            else {
+        for (name, placed) in &by_file {
+            let entries: Vec<&ChannelEntry> = placed.iter().map(|p| p.1).collect();
+            let Some(&file) = by_name.get(name) else {
                 let first = entries[0];
                 return Err(Error::input(
                     Location::file(&manifest_name)
@@ -241,23 +255,23 @@ fn load_as_stated(
                 })
                 .collect();
             let mut slots: Vec<Option<Record>> = contents.records.into_iter().map(Some).collect();
-            for (k, entry) in entries.iter().enumerate() {
+            // The last entry naming each record takes it; earlier ones copy it.
+            let mut last_use = vec![usize::MAX; slots.len()];
+            for (k, p) in picks.iter().enumerate() {
+                if let Ok(i) = p {
+                    last_use[*i] = k;
+                }
+            }
+            for (k, (order, entry)) in placed.iter().enumerate() {
                 let i = std::mem::replace(&mut picks[k], Ok(usize::MAX))?;
-                // Taken, unless a later entry names the same record.
-                let shared = picks[k + 1..]
-                    .iter()
-                    .any(|p| p.as_ref().is_ok_and(|j| *j == i));
+                let shared = last_use[i] != k;
                 let rec = match (shared, slots[i].as_ref()) {
                     (true, Some(r)) => r.clone(),
                     _ => slots[i].take().ok_or_else(|| {
                         Error::input(file.location(), "record already taken (internal error)")
                     })?,
                 };
-                let order = m
-                    .channels
-                    .iter()
-                    .position(|c| std::ptr::eq(c, *entry))
-                    .unwrap_or(usize::MAX);
+                let order = *order;
                 let mut rec = apply_entry(rec, entry, &mut history_notes, file)?;
                 park(&mut rec)?;
                 picked.push((order, rec));
@@ -452,6 +466,17 @@ fn load_as_stated(
 }
 
 fn parse_manifest(f: &EventFile) -> Result<Manifest> {
+    // Its size before its content: a 1 GiB `event.toml` is never read.
+    if f.len() > manifest::MAX_MANIFEST_BYTES {
+        return Err(Error::input(
+            f.location(),
+            format!(
+                "event manifest of {} bytes: larger than the limit of {} bytes",
+                f.len(),
+                manifest::MAX_MANIFEST_BYTES
+            ),
+        ));
+    }
     let bytes = f.content()?;
     let text = std::str::from_utf8(&bytes)
         .map_err(|e| Error::input(f.location(), format!("manifest is not UTF-8: {e}")))?;

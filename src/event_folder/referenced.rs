@@ -9,7 +9,9 @@
 //! into a private temporary directory (removed when the resolver is dropped),
 //! so relative references between the files (a twin's matrices) resolve as
 //! they would in a folder. The member names were checked by `collect` (no
-//! `..`, no absolute paths) and their sizes bounded by [`ArchiveLimits`].
+//! `..`, no absolute paths) and each member is inflated within the zip's
+//! budget ([`ArchiveLimits`]); one past it is not extracted, and is an error
+//! only when it is referenced.
 
 use std::path::{Component, Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -25,6 +27,9 @@ pub const MAX_REFERENCED_BYTES: u64 = crate::input_file::MAX_INPUT_BYTES;
 pub struct ReferencedFiles {
     root: PathBuf,
     extracted: Option<TempTree>,
+    /// Members of a zipped event not extracted, with why (above a limit of
+    /// the zip's budget): an error only if one of them is referenced.
+    unreadable: Vec<(String, String)>,
 }
 
 impl ReferencedFiles {
@@ -32,6 +37,7 @@ impl ReferencedFiles {
         ReferencedFiles {
             root: event_path.to_path_buf(),
             extracted: None,
+            unreadable: Vec::new(),
         }
     }
 
@@ -62,6 +68,9 @@ impl ReferencedFiles {
             ));
         }
         let base = self.base()?;
+        if let Some((_, why)) = self.unreadable.iter().find(|(m, _)| m == rel) {
+            return Err(Error::input(here(), format!("{what} {rel:?}: {why}")));
+        }
         let path = base.join(rel);
         std::fs::symlink_metadata(&path)
             .map_err(|_| Error::input(here(), format!("{what} {rel:?} is not in the event")))?;
@@ -100,7 +109,16 @@ impl ReferencedFiles {
                 if let Some(parent) = dest.parent() {
                     std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
                 }
-                std::fs::write(&dest, &*f.content()?).map_err(|e| Error::io(&dest, e))?;
+                // One member at a time, within the zip's budget; a member
+                // past it (a bomb beside the twin) matters only if named.
+                let content = match f.content() {
+                    Ok(c) => c,
+                    Err(e) => {
+                        self.unreadable.push((member.to_string(), e.to_string()));
+                        continue;
+                    }
+                };
+                std::fs::write(&dest, &*content).map_err(|e| Error::io(&dest, e))?;
             }
             self.extracted = Some(tree);
         }

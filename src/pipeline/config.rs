@@ -9,11 +9,21 @@
 //! every product a stage needs is routed to the one declared input that
 //! provides it.
 
+use std::collections::HashMap;
+
 use serde::Deserialize;
 use toml::de::{DeTable, DeValue, ValueDeserializer};
 
 use super::stage::{ProductKind, Stage, StageKind};
 use crate::error::{Error, Result};
+
+/// Largest pipeline file read, bytes (checked before it is read or parsed;
+/// the bundled pipelines are 1–5 kB).
+pub const MAX_PIPELINE_BYTES: u64 = 1 << 20;
+
+/// Most stages a pipeline may declare (the bundled pipelines have up to a
+/// dozen; every stage runs on every event).
+pub const MAX_STAGES: usize = 256;
 
 /// The declaration of one stage, as written in the pipeline file.
 #[derive(Debug, Clone, Deserialize)]
@@ -109,17 +119,18 @@ fn params_value<'i>(
 }
 
 /// Deserializes typed parameters `T` from the `params` of stage `index` of
-/// the pipeline text; errors name the file and the line of the offending key
-/// or value.  A stage without `params` gets `T` from an empty table.
+/// the pipeline document `root` (the text parsed once, with spans); errors
+/// name the file and the line of the offending key or value.  A stage
+/// without `params` gets `T` from an empty table.
 pub fn typed_params<T: serde::de::DeserializeOwned>(
     text: &str,
+    root: &toml::Spanned<DeTable<'_>>,
     file: &str,
     index: usize,
     decl: &StageDecl,
 ) -> Result<T> {
     let what = format!("stage {:?} ({}): bad params", decl.name, decl.kind);
-    let root = DeTable::parse(text).map_err(|e| toml_error(file, text, &e, &what))?;
-    match params_value(&root, index) {
+    match params_value(root, index) {
         Some(v) => T::deserialize(ValueDeserializer::from(v))
             .map_err(|e| toml_error(file, text, &e, &what)),
         None => T::deserialize(
@@ -130,17 +141,47 @@ pub fn typed_params<T: serde::de::DeserializeOwned>(
     }
 }
 
+fn too_many_stages(file: &str, n: usize) -> Error {
+    Error::usage(format!(
+        "{file}: {n} stages declared: more than the limit of {MAX_STAGES}"
+    ))
+}
+
+fn too_big(file: &str, size: u64) -> Error {
+    Error::usage(format!(
+        "{file}: pipeline file of {size} bytes: larger than the limit of {MAX_PIPELINE_BYTES} bytes"
+    ))
+}
+
 impl Pipeline {
     /// Reads and builds a pipeline with the stage kinds of `catalog`.
     pub fn parse(text: &str, file: &str, catalog: &'static [StageKind]) -> Result<Pipeline> {
+        // Sizes first, before the parser holds the text many times over.
+        if text.len() as u64 > MAX_PIPELINE_BYTES {
+            return Err(too_big(file, text.len() as u64));
+        }
+        let headers = text
+            .lines()
+            .filter(|l| l.trim().replace(' ', "") == "[[stage]]")
+            .count();
+        if headers > MAX_STAGES {
+            return Err(too_many_stages(file, headers));
+        }
         let doc: PipelineDoc = toml::from_str(text)
             .map_err(|e| toml_error(file, text, &e, "invalid pipeline file"))?;
         if doc.stages.is_empty() {
             return Err(Error::usage(format!("{file}: no [[stage]] declared")));
         }
+        if doc.stages.len() > MAX_STAGES {
+            return Err(too_many_stages(file, doc.stages.len()));
+        }
+        // Parsed once with spans for every stage's typed params (not once per stage).
+        let root = DeTable::parse(text)
+            .map_err(|e| toml_error(file, text, &e, "invalid pipeline file"))?;
         let mut stages: Vec<PlannedStage> = Vec::with_capacity(doc.stages.len());
+        let mut by_name: HashMap<String, usize> = HashMap::new();
         for (index, decl) in doc.stages.into_iter().enumerate() {
-            if stages.iter().any(|s| s.decl.name == decl.name) {
+            if by_name.contains_key(&decl.name) {
                 return Err(Error::usage(format!(
                     "{file}: stage name {:?} is used twice",
                     decl.name
@@ -157,8 +198,8 @@ impl Pipeline {
             };
             let mut inputs = Vec::with_capacity(decl.inputs.len());
             for i in &decl.inputs {
-                match stages.iter().position(|s| &s.decl.name == i) {
-                    Some(j) => inputs.push(j),
+                match by_name.get(i) {
+                    Some(&j) => inputs.push(j),
                     None => {
                         return Err(Error::usage(format!(
                             "{file}: stage {:?} reads {:?}, which is not an earlier stage",
@@ -170,10 +211,12 @@ impl Pipeline {
             let routes = route(file, &decl, kind, &inputs, &stages)?;
             let stage = (kind.build)(&StageSource {
                 text,
+                root: &root,
                 file,
                 index,
                 decl: &decl,
             })?;
+            by_name.insert(decl.name.clone(), stages.len());
             stages.push(PlannedStage {
                 decl,
                 kind,
@@ -190,15 +233,23 @@ impl Pipeline {
 
     /// Reads and builds the pipeline file at `path`.
     pub fn load(path: &std::path::Path, catalog: &'static [StageKind]) -> Result<Pipeline> {
-        let text = crate::input_file::read_to_string(path, crate::input_file::MAX_INPUT_BYTES)?;
+        let text = Self::read_text(path)?;
         Self::parse(&text, &path.display().to_string(), catalog)
+    }
+
+    /// The text of the pipeline file at `path`, its size checked against
+    /// [`MAX_PIPELINE_BYTES`] before it is read.
+    pub fn read_text(path: &std::path::Path) -> Result<String> {
+        crate::input_file::read_to_string_or(path, MAX_PIPELINE_BYTES, |size| {
+            too_big(&path.display().to_string(), size)
+        })
     }
 }
 
 /// Every output file has one stage that writes it, and is a plain file name
 /// inside the output directory.
 fn check_outputs(file: &str, stages: &[PlannedStage]) -> Result<()> {
-    let mut seen: Vec<(String, &str)> = Vec::new();
+    let mut seen: HashMap<String, &str> = HashMap::new();
     for s in stages {
         for o in s.stage.outputs() {
             if !super::is_plain_name(&o) {
@@ -207,13 +258,13 @@ fn check_outputs(file: &str, stages: &[PlannedStage]) -> Result<()> {
                     s.decl.name
                 )));
             }
-            if let Some((_, other)) = seen.iter().find(|(f, _)| *f == o) {
+            if let Some(other) = seen.get(&o) {
                 return Err(Error::usage(format!(
                     "{file}: stages {other:?} and {:?} would both write {o}; give one of them another file name",
                     s.decl.name
                 )));
             }
-            seen.push((o, &s.decl.name));
+            seen.insert(o, &s.decl.name);
         }
     }
     Ok(())
@@ -268,6 +319,8 @@ fn route(
 /// in the pipeline text (for the line numbers of parameter errors).
 pub struct StageSource<'a> {
     text: &'a str,
+    /// The pipeline text parsed once, with spans.
+    root: &'a toml::Spanned<DeTable<'a>>,
     file: &'a str,
     index: usize,
     pub decl: &'a StageDecl,
@@ -277,7 +330,7 @@ impl StageSource<'_> {
     /// The stage's typed parameters (unknown keys and wrong types refused
     /// with file and line).
     pub fn params<T: serde::de::DeserializeOwned>(&self) -> Result<T> {
-        typed_params(self.text, self.file, self.index, self.decl)
+        typed_params(self.text, self.root, self.file, self.index, self.decl)
     }
     /// Two typed views of the params: `K` from the keys listed in `keys`
     /// (the stage's own, e.g. an output file name) and `T` from all the
@@ -293,8 +346,7 @@ impl StageSource<'_> {
             self.decl.name, self.decl.kind
         );
         let (file, text) = (self.file, self.text);
-        let root = DeTable::parse(text).map_err(|e| toml_error(file, text, &e, &what))?;
-        let Some(value) = params_value(&root, self.index) else {
+        let Some(value) = params_value(self.root, self.index) else {
             return Ok((self.params()?, self.params()?));
         };
         let DeValue::Table(table) = value.get_ref() else {
@@ -321,9 +373,7 @@ impl StageSource<'_> {
     /// A usage error for parameters that parse but make no sense, naming
     /// the file and stage (and the line of the stage's `params`).
     pub fn invalid(&self, e: impl std::fmt::Display) -> Error {
-        let line = DeTable::parse(self.text)
-            .ok()
-            .and_then(|root| params_value(&root, self.index))
+        let line = params_value(self.root, self.index)
             .map(|v| format!(" line {}", line_of(self.text, v.span().start)))
             .unwrap_or_default();
         Error::usage(format!(

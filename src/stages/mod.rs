@@ -53,7 +53,7 @@ pub fn load_pipeline(path: &Path) -> Result<Pipeline> {
 /// the file as written is built first (its errors name its lines), then the
 /// file with the reference.  A usage error when it has no `modal` stage.
 pub fn load_pipeline_with_reference(path: &Path, reference: &str) -> Result<Pipeline> {
-    let text = crate::input_file::read_to_string(path, crate::input_file::MAX_INPUT_BYTES)?;
+    let text = Pipeline::read_text(path)?;
     let file = path.display().to_string();
     Pipeline::parse(&text, &file, CATALOG)?;
     let mut doc: toml::Table = toml::from_str(&text)

@@ -207,9 +207,28 @@ fn line_of(text: &str, offset: usize) -> usize {
         .unwrap_or(1)
 }
 
+/// Largest twin file read, bytes (checked before it is read or parsed: the
+/// TOML parser holds a text tens of times over).  A model of thousands of
+/// nodes and elements is a few MB; larger systems come as Matrix Market
+/// files (`[matrices]`), which are read on their own.
+pub const MAX_TWIN_FILE_BYTES: u64 = 8 << 20;
+
+/// The text of the twin file at `path`, its size checked against
+/// [`MAX_TWIN_FILE_BYTES`] before it is read.
+fn read_twin_text(path: &Path) -> Result<String> {
+    crate::input_file::read_to_string_or(path, MAX_TWIN_FILE_BYTES, |size| {
+        Error::input(
+            Location::file(path.display().to_string()),
+            format!(
+                "twin file of {size} bytes: larger than the limit of {MAX_TWIN_FILE_BYTES} bytes (give a large model's matrices as Matrix Market files)"
+            ),
+        )
+    })
+}
+
 /// Read and validate a twin file from disk.
 pub fn load_twin(path: &Path) -> Result<Twin> {
-    let text = crate::input_file::read_to_string(path, crate::input_file::MAX_INPUT_BYTES)?;
+    let text = read_twin_text(path)?;
     let base = path
         .parent()
         .map(Path::to_path_buf)

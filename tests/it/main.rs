@@ -19,6 +19,7 @@ mod assessment_pipeline;
 
 mod big_input;
 mod bridge_consistency;
+mod budgets;
 mod buildings;
 mod child;
 mod cli_output;
