@@ -22,7 +22,7 @@ use crate::vocab::{Channel, Direction, Record, SourceRef, Units};
 const MAX_HEADER_LINES: usize = 12;
 
 pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
-    let text = textfmt::decode(bytes);
+    let text = textfmt::decode(bytes, source)?;
     let lines = Lines::new(&text, source);
     if lines.len() == 0 {
         return Err(lines.err_file("empty AT2 file"));

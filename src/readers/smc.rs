@@ -56,7 +56,7 @@ const DATA_LAYOUT: Layout = Layout::Fixed {
 };
 
 pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<FileContents> {
-    let text = textfmt::decode(bytes);
+    let text = textfmt::decode(bytes, source)?;
     let lines = Lines::new(&text, source);
     let first = lines.get(0).trim().to_ascii_uppercase();
     if first.contains("VELOCITY") || first.contains("DISPLACEMENT") {

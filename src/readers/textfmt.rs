@@ -11,38 +11,68 @@ use super::FileContents;
 use crate::error::{Error, Location, Result};
 use crate::vocab::{epoch_ns_from_civil, SourceRef, Units};
 
+/// Largest file the fixed-format text readers take (COSMOS, CSMIP/DMG,
+/// SMC, AT2, GeoNet), bytes: a day of one channel at 200 Hz in COSMOS is
+/// ≈ 170 MB; a larger "record" is something else, and its lines would cost
+/// memory several times its size.  It also keeps every line offset in a
+/// `u32` ([`Lines`]).
+pub const MAX_TEXT_RECORD_BYTES: usize = 256 << 20;
+
 /// The lines of a text file, `\r` stripped, with helpers that build errors
-/// naming the file, member and 1-based line.
+/// naming the file, member and 1-based line.  Lines are kept as the byte
+/// offsets where they start (4 bytes a line, not the 16 of a slice: a
+/// 300 MB file of short lines held 400 MB of slices).
 pub(crate) struct Lines<'a> {
-    lines: Vec<&'a str>,
+    text: &'a str,
+    /// Start of each line, and one past the end of the last (`len + 1` entries).
+    starts: Vec<u32>,
     source: &'a SourceRef,
 }
 
 impl<'a> Lines<'a> {
+    /// The lines of `text` (at most [`MAX_TEXT_RECORD_BYTES`]: [`decode`]
+    /// refuses more; a longer text is cut there rather than overflow).
     pub fn new(text: &'a str, source: &'a SourceRef) -> Self {
-        let mut lines: Vec<&str> = text
-            .split('\n')
-            .map(|l| l.strip_suffix('\r').unwrap_or(l))
-            .collect();
-        // A final newline leaves one empty element that is not a line.
-        if lines.last().is_some_and(|l| l.is_empty()) {
-            lines.pop();
+        let mut end = text.len().min(MAX_TEXT_RECORD_BYTES);
+        while !text.is_char_boundary(end) {
+            end -= 1;
         }
-        Lines { lines, source }
+        let text = &text[..end];
+        // Counted first: sized once, not doubled (a doubling vector of
+        // 25 M offsets held twice its size at its last growth).
+        let mut starts: Vec<u32> = Vec::with_capacity(memchr_newlines(text).count() + 2);
+        starts.push(0);
+        starts.extend(memchr_newlines(text).map(|i| (i + 1) as u32));
+        // A final newline leaves one empty element that is not a line.
+        if text.is_empty() || text.ends_with('\n') {
+            // The last start is the end of the text: it closes the last line.
+        } else {
+            starts.push(text.len() as u32 + 1);
+        }
+        Lines {
+            text,
+            starts,
+            source,
+        }
     }
     /// Characters of text in all lines (an upper bound on what a block can hold).
     pub fn text_len(&self) -> usize {
-        self.lines.iter().map(|l| l.len() + 1).sum()
+        self.text.len()
     }
     pub fn len(&self) -> usize {
-        self.lines.len()
+        self.starts.len() - 1
     }
     /// Line `i` (0-based), `""` past the end.
     pub fn get(&self, i: usize) -> &'a str {
-        self.lines.get(i).copied().unwrap_or("")
+        if i + 1 >= self.starts.len() {
+            return "";
+        }
+        let (from, to) = (self.starts[i] as usize, self.starts[i + 1] as usize - 1);
+        let line = &self.text[from..to.min(self.text.len())];
+        line.strip_suffix('\r').unwrap_or(line)
     }
     pub fn exists(&self, i: usize) -> bool {
-        i < self.lines.len()
+        i < self.len()
     }
     pub fn location(&self) -> Location {
         super::location(self.source)
@@ -83,7 +113,7 @@ pub(crate) fn read_channel_blocks(
     empty_message: &str,
     read_channel: ChannelBlockReader,
 ) -> Result<FileContents> {
-    let text = decode(bytes);
+    let text = decode(bytes, source)?;
     let lines = Lines::new(&text, source);
     let mut contents = FileContents::default();
     let mut b = 0;
@@ -102,17 +132,35 @@ pub(crate) fn read_channel_blocks(
     Ok(contents)
 }
 
-/// Decodes file bytes as text: UTF-8 when valid, otherwise Latin-1 (old
-/// strong-motion files are 7-bit ASCII, but degree signs and the like occur).
-/// A DOS end-of-file byte (Ctrl-Z, 0x1A) and anything after it is dropped:
-/// old CDMG files are padded with them.
-pub(crate) fn decode(bytes: &[u8]) -> String {
+/// Byte offsets of the newlines of `text`.
+fn memchr_newlines(text: &str) -> impl Iterator<Item = usize> + '_ {
+    text.bytes()
+        .enumerate()
+        .filter(|&(_, b)| b == b'\n')
+        .map(|(i, _)| i)
+}
+
+/// Decodes file bytes as text: UTF-8 when valid (borrowed, not copied),
+/// otherwise Latin-1 (old strong-motion files are 7-bit ASCII, but degree
+/// signs and the like occur).  A DOS end-of-file byte (Ctrl-Z, 0x1A) and
+/// anything after it is dropped: old CDMG files are padded with them.  A
+/// file above [`MAX_TEXT_RECORD_BYTES`] is an error naming it.
+pub(crate) fn decode<'b>(bytes: &'b [u8], source: &SourceRef) -> Result<std::borrow::Cow<'b, str>> {
     let end = bytes.iter().position(|&b| b == 0x1a).unwrap_or(bytes.len());
     let bytes = &bytes[..end];
-    match std::str::from_utf8(bytes) {
-        Ok(s) => s.to_string(),
-        Err(_) => bytes.iter().map(|&b| b as char).collect(),
+    if bytes.len() > MAX_TEXT_RECORD_BYTES {
+        return Err(Error::input(
+            super::location(source),
+            format!(
+                "{} bytes of text: more than the {MAX_TEXT_RECORD_BYTES} bytes a record of this format can hold (a day of one channel at 200 Hz is ≈ 170 MB)",
+                bytes.len()
+            ),
+        ));
     }
+    Ok(match std::str::from_utf8(bytes) {
+        Ok(s) => std::borrow::Cow::Borrowed(s),
+        Err(_) => std::borrow::Cow::Owned(bytes.iter().map(|&b| b as char).collect()),
+    })
 }
 
 /// Why a field is not a usable number.

@@ -219,8 +219,9 @@ fn an_oversized_input_file_is_refused_before_it_is_read() {
         ],
         QUICK,
     );
-    assert_refused(code, &e, 1, &big, "2147483648 bytes");
-    assert!(e.contains("the limit is 1073741824 bytes"), "{e}");
+    // A pipeline file is usage (exit 2), capped at 1 MiB (issue 33 item 2).
+    assert_refused(code, &e, 2, &big, "2147483648 bytes");
+    assert!(e.contains("the limit of 1048576 bytes"), "{e}");
 
     // The function itself, with a small cap: the read is bounded by it.
     let small = dir.path().join("eleven");

@@ -238,7 +238,10 @@ fn fifo_day_file_is_refused_without_blocking() {
     assert_eq!(o.status.code(), Some(1), "{stderr}");
     assert_eq!(v["ok"], false);
     assert!(
-        stderr.contains(&format!("{}: not a regular file", path.display())),
+        stderr.contains(&format!(
+            "{}: is a FIFO (named pipe), not a regular file",
+            path.display()
+        )),
         "{stderr}"
     );
     assert!(v["error"].as_str().unwrap().contains("no reference"), "{v}");
