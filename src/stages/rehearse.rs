@@ -73,7 +73,11 @@ pub fn rehearse_design_output(
 
 fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
     let settings: RehearseSettings = src.params()?;
-    settings.check(&format!("stage {:?} (rehearse): params", src.decl.name))?;
+    settings.check(&format!(
+        "{}: stage {:?} (rehearse): params",
+        src.file(),
+        src.decl.name
+    ))?;
     Ok(Box::new(Rehearse { settings }))
 }
 
