@@ -139,6 +139,29 @@ fn remove_files(out: &Path, names: impl IntoIterator<Item = String>) -> Result<V
     Ok(removed.into_iter().collect())
 }
 
+/// Names of the files quaketwin's stages write by default: every table of
+/// `vocab::tables` (and the raw samples beside the conditioned ones), the
+/// run's JSON and HTML, the updated twin, the design's matrices.  Kept here
+/// as the one list the output directory's cleaning needs; a stage that
+/// writes a new default file name adds it to its table or to this list.
+pub fn known_output_names() -> impl Iterator<Item = String> {
+    const OTHER_OUTPUTS: &[&str] = &[
+        "samples_as_recorded.parquet",
+        "event.json",
+        "report.html",
+        "tracking.html",
+        "twin_updated.toml",
+        "rehearsal_model.json",
+        "prototype_stiffness.mtx",
+        "prototype_mass.mtx",
+        "ps_basis.mtx",
+    ];
+    crate::vocab::tables::ALL_TABLES
+        .iter()
+        .map(|t| t.file.to_string())
+        .chain(OTHER_OUTPUTS.iter().map(|s| s.to_string()))
+}
+
 /// Outputs listed by the stamps of quaketwin versions before the run
 /// manifest (`DIR/.quaketwin/<stage>.stamp.json`); the stamps are removed.
 fn take_legacy_stamps(out: &Path) -> Result<Vec<String>> {
@@ -356,6 +379,22 @@ fn clean_out_dir(out: &Path, pipeline: &Pipeline, event: &EventIdentity) -> Resu
         }
     }
     let kept = current.all_files();
+    // A file bearing the name of a quaketwin output that no manifest lists
+    // (another run's table dropped in, a directory of unknown origin) is
+    // not a result of this run: it goes too, so the directory never shows
+    // another event's file beside this one's.
+    let stray: Vec<String> = known_output_names()
+        .filter(|n| !kept.contains(n) && out.join(n).is_file())
+        .collect();
+    if !stray.is_empty() {
+        groups.push((
+            format!(
+                "files named as quaketwin outputs that no run manifest lists ({})",
+                manifest::MANIFEST_FILE
+            ),
+            stray,
+        ));
+    }
     for (what, files) in groups {
         let removed = remove_files(out, files.into_iter().filter(|f| !kept.contains(f)))?;
         if !removed.is_empty() {
