@@ -519,6 +519,18 @@ fn read_file(file: &EventFile, format: Format, opts: &ReadOptions) -> Result<Fil
         column: None,
         format: format.name().into(),
     };
+    // A size the format cannot hold is refused before the bytes are read or
+    // inflated (a 1 GiB "AT2" member within the zip budgets held 1 GiB).
+    if let Some(most) = format.max_file_bytes().filter(|&m| file.len() > m) {
+        return Err(Error::input(
+            file.location(),
+            format!(
+                "{} bytes: more than the {most} bytes a {} record can hold",
+                file.len(),
+                format.name()
+            ),
+        ));
+    }
     let contents = readers::read(format, &file.content()?, &source, opts)?;
     for r in &contents.records {
         if !(r.channel.sampling_rate_hz.is_finite() && r.channel.sampling_rate_hz > 0.0) {

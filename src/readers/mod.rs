@@ -106,6 +106,17 @@ pub enum Format {
 }
 
 impl Format {
+    /// The most bytes a file of this format may have, when the format sets
+    /// one: the fixed-format text readers ([`textfmt::MAX_TEXT_RECORD_BYTES`]),
+    /// checked on a member's size before it is decompressed or read.
+    pub fn max_file_bytes(&self) -> Option<u64> {
+        match self {
+            Format::Cosmos | Format::Dmg | Format::Smc | Format::At2 | Format::GeoNet => {
+                Some(textfmt::MAX_TEXT_RECORD_BYTES as u64)
+            }
+            _ => None,
+        }
+    }
     pub fn name(&self) -> &'static str {
         match self {
             Format::Cosmos => "cosmos",

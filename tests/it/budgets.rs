@@ -863,3 +863,29 @@ fn a_bomb_beside_a_referenced_file_is_not_extracted() {
         "{msg}"
     );
 }
+
+/// A text record larger than its format can hold (here a 300 MiB sparse
+/// file named as a PEER AT2) is refused on its size, before a byte of it is
+/// read: found by the structured fuzzing, where a 1 GiB "AT2" member within
+/// the zip budgets was inflated whole before the reader refused it.
+#[test]
+fn text_record_above_its_format_limit_is_refused_unread() {
+    let dir = tempfile::tempdir().unwrap();
+    let ev = dir.path().join("event");
+    std::fs::create_dir_all(&ev).unwrap();
+    let f = std::fs::File::create(ev.join("big.AT2")).unwrap();
+    f.set_len(300 << 20).unwrap();
+    drop(f);
+    let t0 = Instant::now();
+    let (result, peak) =
+        crate::fuzz::with_peak("budgets", 1, || quaketwin::event_folder::load(&ev));
+    let e = result.expect_err("a 300 MiB AT2 is no record");
+    let text = e.to_string();
+    assert!(
+        text.contains("big.AT2") && text.contains("268435456"),
+        "{text}"
+    );
+    assert_eq!(e.exit_code(), 1);
+    assert!(peak < 16 << 20, "held {peak} bytes");
+    assert!(t0.elapsed() < Duration::from_secs(5), "{:?}", t0.elapsed());
+}
