@@ -543,39 +543,8 @@ fn zip_folder(folder: &Path, zip_path: &Path) {
 // ---------------------------------------------------------------------------
 // Target 1: manifests with N channels and extreme values.
 
-fn manifest_case(rng: &mut Rng, dir: &Path) -> Case {
-    let long = long_run();
-    let ev = dir.join("event");
-    std::fs::create_dir_all(&ev).unwrap();
-    let columns = 1 + rng.below(6);
-    let rows = 50 + rng.below(3000);
-    let mut csv = String::from("time_s");
-    for c in 0..columns {
-        write!(csv, ",c{c}").unwrap();
-    }
-    csv.push('\n');
-    let uneven = rng.below(10) == 0;
-    let mut t = 0.0;
-    for r in 0..rows {
-        t += if uneven && rng.below(50) == 0 {
-            rng.uniform_in(0.0, 1e3)
-        } else {
-            0.01
-        };
-        write!(csv, "{t:.4}").unwrap();
-        for c in 0..columns {
-            write!(csv, ",{:.5}", ((r * (c + 1)) as f64 * 0.05).sin()).unwrap();
-        }
-        csv.push('\n');
-    }
-    std::fs::write(ev.join("rec.csv"), csv).unwrap();
-
-    let n_channels = match rng.below(20) {
-        0..=13 => 1 + rng.below(columns + 2),
-        14..=17 => 100 + rng.below(2900),
-        _ if long => 10_000 + rng.below(990_000),
-        _ => 3000 + rng.below(5000),
-    };
+/// A manifest whose every field may be extreme or wrong (most are refused).
+fn wild_manifest(rng: &mut Rng, columns: usize, n_channels: usize) -> String {
     let mut m = String::from("[event]\n");
     if rng.below(4) > 0 {
         let times = [
@@ -674,6 +643,84 @@ fn manifest_case(rng: &mut Rng, dir: &Path) -> Case {
             .unwrap();
         }
     }
+    m
+}
+
+/// A valid manifest (building levels 0–2, X/Y, input at the base), half the
+/// time with one `key = value` line's value replaced by an extreme or wrong
+/// one: the cases that get past the manifest into the readers and stages.
+fn nearly_valid_manifest(rng: &mut Rng, columns: usize, n_channels: usize) -> String {
+    let mut lines = vec![
+        "[event]".to_string(),
+        "origin_time = \"2026-01-15T10:20:30Z\"".to_string(),
+        "[structure]".to_string(),
+        "storey_heights_m = [3.5, 3.0]".to_string(),
+    ];
+    for i in 0..n_channels {
+        let level = if i % 2 == 0 { 0 } else { 2 };
+        lines.extend([
+            String::new(),
+            "[[channel]]".into(),
+            "file = \"rec.csv\"".into(),
+            format!("column = \"c{}\"", i % columns),
+            format!("id = \"C{i}\""),
+            format!("level = {level}"),
+            format!("direction = \"{}\"", if i % 4 < 2 { "X" } else { "Y" }),
+            format!("role = \"{}\"", if level == 0 { "input" } else { "output" }),
+            "units = \"m/s2\"".into(),
+            "time_column = \"time_s\"".into(),
+        ]);
+    }
+    let keyed: Vec<usize> = (0..lines.len())
+        .filter(|&i| lines[i].contains(" = "))
+        .collect();
+    // Half of them stay valid: the run goes all the way.
+    if rng.below(2) == 0 {
+        let i = *pick(rng, &keyed);
+        let key = lines[i].split(" = ").next().unwrap().to_string();
+        lines[i] = format!("{key} = {}", toml_any(rng, false));
+    }
+    lines.join("\n") + "\n"
+}
+
+fn manifest_case(rng: &mut Rng, dir: &Path) -> Case {
+    let long = long_run();
+    let ev = dir.join("event");
+    std::fs::create_dir_all(&ev).unwrap();
+    let columns = 1 + rng.below(6);
+    let rows = 50 + rng.below(3000);
+    let mut csv = String::from("time_s");
+    for c in 0..columns {
+        write!(csv, ",c{c}").unwrap();
+    }
+    csv.push('\n');
+    let uneven = rng.below(10) == 0;
+    let mut t = 0.0;
+    for r in 0..rows {
+        t += if uneven && rng.below(50) == 0 {
+            rng.uniform_in(0.0, 1e3)
+        } else {
+            0.01
+        };
+        write!(csv, "{t:.4}").unwrap();
+        for c in 0..columns {
+            write!(csv, ",{:.5}", ((r * (c + 1)) as f64 * 0.05).sin()).unwrap();
+        }
+        csv.push('\n');
+    }
+    std::fs::write(ev.join("rec.csv"), csv).unwrap();
+
+    let n_channels = match rng.below(20) {
+        0..=13 => 1 + rng.below(columns + 2),
+        14..=17 => 100 + rng.below(2900),
+        _ if long => 10_000 + rng.below(990_000),
+        _ => 3000 + rng.below(5000),
+    };
+    let m = if rng.below(2) == 0 {
+        nearly_valid_manifest(rng, columns, n_channels)
+    } else {
+        wild_manifest(rng, columns, n_channels)
+    };
     // Padding: NUL bytes or blank lines after the manifest (a size cap's case).
     let mut bytes = m.into_bytes();
     if rng.below(12) == 0 {
