@@ -256,7 +256,6 @@ def local_cluster(n_workers: Optional[int] = None, rayon_threads: Optional[int] 
         for k, v in dask.config.get("distributed.nanny.pre-spawn-environ").items()
         if k != "MALLOC_TRIM_THRESHOLD_"
     }
-    environ["RAYON_NUM_THREADS"] = str(rayon_threads)
     # A Nanny puts its pre-spawn variables into this process's environment
     # before spawning, so an earlier cluster's threshold would be inherited.
     os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
@@ -266,6 +265,10 @@ def local_cluster(n_workers: Optional[int] = None, rayon_threads: Optional[int] 
             threads_per_worker=threads,
             processes=True,
             dashboard_address=kwargs.pop("dashboard_address", None),
+            # Set in the worker only (a pre-spawn variable would stay in this
+            # process's environment, and every command it starts would run
+            # on one thread); rayon reads it at its first parallel call.
+            env={"RAYON_NUM_THREADS": str(rayon_threads), **kwargs.pop("env", {})},
             **kwargs,
         )
 
