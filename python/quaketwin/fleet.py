@@ -3,9 +3,12 @@ workers into one table-first Hive dataset on any fsspec file system
 (docs/python.md, "Fleet").
 
 Each event is one task.  A worker copies the event to its local disk when
-it is a URL, runs the pipeline into a local run directory (the Rust library,
-as ``quaketwin run``), then publishes: every table file is written under a
-temporary name and moved to ``OUT/<table>/structure=…/event=…/part-0.parquet``
+it is a URL, runs the pipeline into a run directory of its own (the Rust
+library, as ``quaketwin run``), then publishes: every table file is written
+under a temporary name and moved to
+``OUT/<table>/structure=…/event=…/part-0.parquet`` (when ``OUT`` is a local
+path the run directory is made inside it, under ``OUT/_fleet/work/``, so that
+publishing is one rename per file, never a copy)
 (a table the event's new run no longer has is withdrawn), the run's JSON and
 HTML go to ``OUT/runs/structure=…/event=…/``, and the event's commit record
 ``OUT/_fleet/commits/structure=…/event=…/commit.json`` is written last.  A
@@ -23,9 +26,11 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import hashlib
 import json
 import os
+import shutil
 import socket
 import sys
 import tempfile
@@ -61,13 +66,38 @@ def _join(root: str, *parts: str) -> str:
     return "/".join([root.rstrip("/")] + [p.strip("/") for p in parts])
 
 
+def _is_local(fs) -> bool:
+    from fsspec.implementations.local import LocalFileSystem
+
+    return isinstance(fs, LocalFileSystem)
+
+
 def _put_atomically(fs, local: str, remote: str) -> None:
-    """Writes ``local`` to ``remote`` under a temporary name beside it, then
-    moves it into place (a rename on local and POSIX-like file systems; on
-    object stores one PUT, itself atomic)."""
+    """Puts ``local`` at ``remote`` so that a reader sees the old file or the
+    new one, never a half one.  On a local file system ``local`` (made inside
+    the dataset, ``_fleet/work``) is renamed into place: no copy (a copy
+    under a temporary name, then a rename, when it is on another device).
+    Elsewhere it is written under a temporary name beside ``remote``, then
+    moved into place (a rename on POSIX-like file systems; on object stores
+    one PUT, itself atomic)."""
     parent = remote.rsplit("/", 1)[0]
-    fs.makedirs(parent, exist_ok=True)
     tmp = _join(parent, f".{os.path.basename(remote)}.{uuid.uuid4().hex}.tmp")
+    if _is_local(fs):
+        os.makedirs(parent, exist_ok=True)
+        try:
+            os.replace(local, remote)
+            return
+        except OSError as e:
+            if e.errno != errno.EXDEV:
+                raise
+        try:
+            shutil.copyfile(local, tmp)
+            os.replace(tmp, remote)
+        finally:
+            if os.path.lexists(tmp):
+                os.remove(tmp)
+        return
+    fs.makedirs(parent, exist_ok=True)
     fs.put_file(local, tmp)
     fs.mv(tmp, remote)
 
@@ -87,15 +117,24 @@ def _commit_path(out: str, partition: str) -> str:
     return _join(out, "_fleet", "commits", partition, "commit.json")
 
 
+def _work_root(out: str, run_id: str) -> str:
+    """Where the tasks of the fleet run ``run_id`` make their run directories
+    when the dataset is local: inside it, so that publishing is a rename
+    (removed when the run ends, with what a killed worker left there)."""
+    return _join(out, "_fleet", "work", run_id)
+
+
 def process_event(
     pipeline_text: str,
     pipeline_name: str,
     event: str,
     out: str,
     storage_options: Optional[dict] = None,
+    run_id: Optional[str] = None,
 ) -> dict:
     """One event of a fleet (the task a worker runs).  Never raises: the
-    outcome is returned as a ``fleet_runs`` row."""
+    outcome is returned as a ``fleet_runs`` row.  ``run_id`` names the fleet
+    run's work folder inside a local dataset (``_fleet/work/RUN_ID``)."""
     started = time.perf_counter()
     row = {
         "event": event,
@@ -107,7 +146,14 @@ def process_event(
     }
     try:
         fs, root = _fs(out, storage_options)
-        with tempfile.TemporaryDirectory(prefix="quaketwin-fleet-") as work:
+        work_dir = None
+        # The run directory on the dataset's own file system: its files
+            # are then published by rename (a copy of every table cost
+            # ≈ 13 ms an event; docs/performance.md, "Fleet").
+        if run_id is not None and _is_local(fs):
+            work_dir = _work_root(root, run_id)
+            os.makedirs(work_dir, exist_ok=True)
+        with tempfile.TemporaryDirectory(prefix="quaketwin-fleet-", dir=work_dir) as work:
             local = _local_event(event, work, storage_options)
             partition = _native.event_partition(local)
             row["partition"] = partition
@@ -171,23 +217,78 @@ def _write_fleet_runs(rows: list, out: str, storage_options: Optional[dict]) -> 
     return table
 
 
+# Dask settings of the cluster `local_cluster` makes.  The worker's
+# statistical profiler (a stack sample every 10 ms), the 20 ms event-loop
+# tick, the half-second system monitor and work stealing cost an idle
+# two-worker cluster 0.9 CPU-seconds every 10 s (4.6 % of this 2-core
+# machine); with these 0.14 s.  Tasks of a fleet are whole events, seconds
+# long: nothing here needs finer ticks.
+QUIET_DASK = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "500ms",
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.scheduler.work-stealing-interval": "1s",
+}
+
+
+def local_cluster(n_workers: Optional[int] = None, rayon_threads: Optional[int] = None, **kwargs):
+    """The ``LocalCluster`` ``run`` makes when given no client: one
+    single-threaded worker process per core (``n_workers``), the library's
+    own threads (rayon) in each capped to ``rayon_threads`` (default: the
+    cores shared among the workers, so the two levels of parallelism do not
+    fight over the cores), workers spawned without Dask's
+    ``MALLOC_TRIM_THRESHOLD_=65536`` (with it glibc unmaps and maps again
+    every freed block above 64 KiB: ten times the page faults and +20 %
+    wall time on half-second events; docs/python.md, "Throughput") and
+    with the quieter ticks of ``QUIET_DASK``.  ``kwargs`` go to
+    ``LocalCluster``.  Close it (or use it as a context manager)."""
+    import dask
+    import distributed  # noqa: F401  (loads the distributed config)
+    from dask.distributed import LocalCluster
+
+    cores = os.cpu_count() or 1
+    n_workers = n_workers or cores
+    threads = kwargs.pop("threads_per_worker", 1)
+    rayon_threads = rayon_threads or max(1, cores // (n_workers * threads))
+    environ = {
+        k: v
+        for k, v in dask.config.get("distributed.nanny.pre-spawn-environ").items()
+        if k != "MALLOC_TRIM_THRESHOLD_"
+    }
+    # A Nanny puts its pre-spawn variables into this process's environment
+    # before spawning, so an earlier cluster's threshold would be inherited.
+    os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+    with dask.config.set(dict(QUIET_DASK, **{"distributed.nanny.pre-spawn-environ": environ})):
+        return LocalCluster(
+            n_workers=n_workers,
+            threads_per_worker=threads,
+            processes=True,
+            dashboard_address=kwargs.pop("dashboard_address", None),
+            # Set in the worker only (a pre-spawn variable would stay in this
+            # process's environment, and every command it starts would run
+            # on one thread); rayon reads it at its first parallel call.
+            env={"RAYON_NUM_THREADS": str(rayon_threads), **kwargs.pop("env", {})},
+            **kwargs,
+        )
+
+
 @contextlib.contextmanager
-def _cluster(client):
-    """``client``, or (when None) a client of a ``LocalCluster`` of two
-    single-threaded worker processes on this machine, closed on exit."""
+def _cluster(client, **cluster):
+    """``client``, or (when None) a client of ``local_cluster(**cluster)``,
+    closed on exit."""
     if client is not None:
         yield client
         return
-    from dask.distributed import Client, LocalCluster
+    from dask.distributed import Client
 
-    cluster = LocalCluster(n_workers=min(2, os.cpu_count() or 1), threads_per_worker=1,
-                           processes=True, dashboard_address=None)
-    own = Client(cluster)
+    local = local_cluster(**cluster)
+    own = Client(local)
     try:
         yield own
     finally:
         own.close()
-        cluster.close()
+        local.close()
 
 
 def run(
@@ -211,6 +312,7 @@ def run(
         pipeline_text = f.read()
     events = [os.fspath(e) if not isinstance(e, str) else e for e in events]
     out = os.fspath(out) if not isinstance(out, str) else out
+    run_id = uuid.uuid4().hex
     with _cluster(client) as client:
         futures = [
             client.submit(
@@ -220,6 +322,7 @@ def run(
                 e,
                 out,
                 storage_options,
+                run_id,
                 key=f"quaketwin-event-{i}-{uuid.uuid4().hex}",
                 retries=2,
                 pure=False,
@@ -247,6 +350,12 @@ def run(
                     + (f" ({row['error']})" if row["error"] else ""),
                     file=sys.stderr,
                 )
+        fs, root = _fs(out, storage_options)
+        if _is_local(fs):
+            # Every task has ended: what is left is a killed worker's.
+            shutil.rmtree(_work_root(root, run_id), ignore_errors=True)
+            with contextlib.suppress(OSError):
+                os.rmdir(_join(root, "_fleet", "work"))
         return _write_fleet_runs(rows, out, storage_options)
 
 
@@ -275,7 +384,10 @@ def track(archive, out, client=None, **options) -> dict:
     days: dict = {}
     for t in starts:
         days.setdefault(t // day_ns, []).append(t)
-    with _cluster(client) as client:
+    # Two workers, each identifying its day's windows on every core (a
+    # handful of day tasks: the cores are used within a task).
+    cores = os.cpu_count() or 1
+    with _cluster(client, n_workers=min(2, cores), rayon_threads=cores) as client:
         futures = [
             client.submit(_identify_windows, options_json, group,
                           key=f"quaketwin-track-{day}-{uuid.uuid4().hex}", retries=2, pure=False)

@@ -18,6 +18,7 @@ import tempfile
 import threading
 import time
 import unittest
+import unittest.mock
 
 import duckdb
 import pyarrow as pa
@@ -194,6 +195,37 @@ class Fleet(unittest.TestCase):
             runs = result["runs"]
             self.assertEqual(runs.column("status").to_pylist(), ["ok"] * len(EVENTS), runs.to_pylist())
             self.assertEqual(modes_by_event(out), self.expected)
+            # The killed task's run directory (inside the dataset, so that
+            # publishing is a rename) is gone with the fleet's work folder,
+            # and no temporary file is left anywhere in the dataset.
+            self.assertFalse((pathlib.Path(out) / "_fleet" / "work").exists())
+            self.assertEqual([p for p in pathlib.Path(out).rglob("*") if p.name.endswith(".tmp")], [])
+
+    def test_the_fleets_own_cluster_is_sized_to_the_cores_without_the_trim_threshold(self):
+        # Issue 33: Dask's MALLOC_TRIM_THRESHOLD_=65536 made glibc unmap and
+        # map again every freed block above 64 KiB (ten times the page
+        # faults: +20 % wall time), and two workers each with rayon on every
+        # core oversubscribed the cores.
+        from dask.distributed import Client
+
+        with unittest.mock.patch.dict(os.environ, MALLOC_TRIM_THRESHOLD_="65536"):  # as an earlier cluster leaves it
+            cluster = quaketwin.fleet.local_cluster()
+        with cluster, Client(cluster) as client:
+            client.wait_for_workers(len(cluster.workers))
+            env = client.run(lambda: {k: os.environ.get(k) for k in ("MALLOC_TRIM_THRESHOLD_", "RAYON_NUM_THREADS")})
+            self.assertEqual(len(env), os.cpu_count())
+            cores = os.cpu_count()
+            for e in env.values():
+                self.assertIsNone(e["MALLOC_TRIM_THRESHOLD_"])
+                self.assertEqual(e["RAYON_NUM_THREADS"], str(max(1, cores // len(env))))
+            profiling = client.run(lambda: __import__("dask").config.get("distributed.worker.profile.enabled"))
+            self.assertEqual(set(profiling.values()), {False})
+            with tempfile.TemporaryDirectory() as out:
+                event = SAMPLES / "synthetic-2storey-yielding"
+                runs = quaketwin.fleet.run(PIPELINE, [event], out, client=client, progress=False)
+                self.assertEqual(runs.column("status").to_pylist(), ["ok"])
+                self.assertEqual(modes_by_event(out), [m for m in self.expected if m[0] == event.name])
+                self.assertFalse((pathlib.Path(out) / "_fleet" / "work").exists())
 
 
 class TrackTest(unittest.TestCase):
