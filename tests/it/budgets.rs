@@ -14,9 +14,7 @@
 //! the test process it was spawned from).
 
 use std::ffi::OsStr;
-use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use quaketwin::event_folder::manifest::{MAX_CHANNELS, MAX_MANIFEST_BYTES};
@@ -37,36 +35,18 @@ struct Measured {
 /// Runs `quaketwin --quiet ARGS`, killing it after `limit` (a hang fails
 /// the test rather than the suite), with its exit code, stderr and wall time.
 fn run(args: &[&OsStr], limit: Duration) -> Measured {
-    let started = Instant::now();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_quaketwin"))
-        .arg("--quiet")
-        .args(args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut pipe = child.stderr.take().unwrap();
-    let reader = std::thread::spawn(move || {
-        let mut s = String::new();
-        let _ = pipe.read_to_string(&mut s);
-        s
-    });
-    let status = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break status;
-        }
-        if started.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("quaketwin {args:?} still running after {limit:?}");
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    };
-    let elapsed = started.elapsed();
+    let mut all = vec![OsStr::new("--quiet")];
+    all.extend_from_slice(args);
+    let here = std::env::current_dir().unwrap();
+    let o = crate::child::run_quaketwin(&all, &here, limit);
+    assert!(
+        !o.timed_out,
+        "quaketwin {args:?} still running after {limit:?}"
+    );
     Measured {
-        code: status.code().unwrap_or(-1),
-        stderr: reader.join().unwrap(),
-        elapsed,
+        code: o.code.unwrap_or(-1),
+        stderr: o.stderr,
+        elapsed: o.elapsed,
     }
 }
 

@@ -9,8 +9,8 @@
 #![cfg(unix)]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
 fn exe() -> &'static str {
     env!("CARGO_BIN_EXE_quaketwin")
@@ -32,38 +32,15 @@ fn mkfifo(p: &Path) {
 /// Exit code and stderr of `quaketwin -q ARGS`, which must end within
 /// `limit` (killed and failed otherwise: it blocked).
 fn quaketwin(args: &[&dyn AsRef<std::ffi::OsStr>], limit: Duration) -> (i32, String) {
-    let logs = tempfile::tempdir().unwrap();
-    let err_path = logs.path().join("stderr");
-    let mut cmd = Command::new(exe());
-    cmd.arg("-q");
-    for a in args {
-        cmd.arg(a);
-    }
-    let mut child = cmd
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(std::fs::File::create(&err_path).unwrap())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!(
-                "quaketwin {:?} did not return within {limit:?} (it blocked)",
-                args.iter()
-                    .map(|a| a.as_ref().to_owned())
-                    .collect::<Vec<_>>()
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    let stderr = std::fs::read_to_string(&err_path).unwrap();
-    (status.code().unwrap_or(-1), stderr)
+    let mut all = vec![std::ffi::OsStr::new("-q")];
+    all.extend(args.iter().map(|a| a.as_ref()));
+    let here = std::env::current_dir().unwrap();
+    let o = crate::child::run_quaketwin(&all, &here, limit);
+    assert!(
+        !o.timed_out,
+        "quaketwin {all:?} did not return within {limit:?} (it blocked)"
+    );
+    (o.code.unwrap_or(-1), o.stderr)
 }
 
 /// Refusals come before any record is read: well within this.
