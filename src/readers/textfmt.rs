@@ -40,13 +40,12 @@ impl<'a> Lines<'a> {
         let text = &text[..end];
         // Counted first: sized once, not doubled (a doubling vector of
         // 25 M offsets held twice its size at its last growth).
-        let mut starts: Vec<u32> = Vec::with_capacity(memchr_newlines(text).count() + 2);
+        let mut starts: Vec<u32> = Vec::with_capacity(newline_offsets(text).count() + 2);
         starts.push(0);
-        starts.extend(memchr_newlines(text).map(|i| (i + 1) as u32));
-        // A final newline leaves one empty element that is not a line.
-        if text.is_empty() || text.ends_with('\n') {
-            // The last start is the end of the text: it closes the last line.
-        } else {
+        starts.extend(newline_offsets(text).map(|i| (i + 1) as u32));
+        // After a final newline the last start (the text's end) closes the
+        // last line; without one, a start one past the end closes it.
+        if !text.is_empty() && !text.ends_with('\n') {
             starts.push(text.len() as u32 + 1);
         }
         Lines {
@@ -133,7 +132,7 @@ pub(crate) fn read_channel_blocks(
 }
 
 /// Byte offsets of the newlines of `text`.
-fn memchr_newlines(text: &str) -> impl Iterator<Item = usize> + '_ {
+fn newline_offsets(text: &str) -> impl Iterator<Item = usize> + '_ {
     text.bytes()
         .enumerate()
         .filter(|&(_, b)| b == b'\n')
