@@ -876,6 +876,14 @@ pub fn track(opts: &crate::track::TrackOptions) -> Result<crate::track::TrackSum
     crate::track::run(opts).map(|(summary, _)| summary)
 }
 
+/// `quaketwin history DATASET [--structure ID] --out DIR`: the structure
+/// history of a many-event dataset ([`crate::dataset_history`]).
+pub fn history(
+    opts: &crate::dataset_history::HistoryOptions,
+) -> Result<crate::dataset_history::HistorySummary> {
+    crate::dataset_history::run(opts)
+}
+
 /// `quaketwin synth-archive --out DIR …`: the synthetic monitoring archive
 /// ([`crate::synth::archive`]).
 pub fn synth_archive(

@@ -265,6 +265,31 @@ enum Command {
         #[arg(long, default_value = "24h")]
         cycle: String,
     },
+    /// Structure history over a many-event dataset: each structure's modes
+    /// followed across its events, frequency against intensity with an
+    /// amplitude-dependence band, events outside it, permanent shifts, and
+    /// event-to-event prediction (history_modes.parquet,
+    /// history_events.parquet, history.html; docs/history.md).
+    #[command(after_help = "Examples:
+  quaketwin run pipelines/post-earthquake.toml EV1.zip EV2.zip EV3.zip --out dataset
+  quaketwin history dataset --out dataset-history
+  quaketwin history dataset --structure CE.89324 --out out/painter --json")]
+    History {
+        /// The dataset: the output directory of `quaketwin run PIPELINE EV1 EV2 … --out DIR` (or of the fleet).
+        dataset: PathBuf,
+        /// Only this structure: its partition name, or NETWORK.STATION for events without a named structure.
+        #[arg(long, value_name = "ID")]
+        structure: Option<String>,
+        /// Output directory (created; holds the results of this run only).
+        #[arg(long)]
+        out: PathBuf,
+        /// Intensity of the amplitude dependence: peak `response` (roof, deck) or `base` acceleration.
+        #[arg(long, default_value = "response", value_name = "response|base")]
+        intensity: String,
+        /// Skip the event-to-event prediction (it reads every event's samples).
+        #[arg(long)]
+        no_prediction: bool,
+    },
     /// Generate a synthetic SDS archive of the 4-storey building under ambient
     /// excitation (daily temperature cycle, a 2 % stiffness drop on day 2),
     /// with StationXML and the true frequencies (truth.csv).
@@ -572,6 +597,52 @@ fn run_command(cli: &Cli) -> Result<()> {
                     Some(t) => format!("anomaly from {t}"),
                     None => "no sustained anomaly".into(),
                 },
+                s.seconds,
+                out.display()
+            ));
+            print_json(json, &s)
+        }
+        Command::History {
+            dataset,
+            structure,
+            out,
+            intensity,
+            no_prediction,
+        } => {
+            let mut opts = quaketwin::dataset_history::HistoryOptions::new(dataset, out);
+            opts.structure = structure.clone();
+            opts.predict = !no_prediction;
+            let result = quaketwin::dataset_history::Intensity::from_name(intensity)
+                .ok_or_else(|| {
+                    quaketwin::error::Error::usage(format!(
+                        "--intensity {intensity:?}: expected response or base"
+                    ))
+                })
+                .and_then(|i| {
+                    opts.intensity = i;
+                    commands::history(&opts)
+                });
+            let s = match result {
+                Ok(s) => s,
+                Err(e) => {
+                    print_json(
+                        json,
+                        &quaketwin::dataset_history::HistorySummary::failed(&opts, &e),
+                    )?;
+                    return Err(e);
+                }
+            };
+            let flagged: usize = s
+                .structures
+                .iter()
+                .flat_map(|st| &st.modes)
+                .map(|m| m.flagged.len())
+                .sum();
+            console::info(format!(
+                "history: {} structure(s), {} event(s), {} flagged mode-event(s); {:.1} s; wrote {}",
+                s.structures.len(),
+                s.structures.iter().map(|st| st.events).sum::<usize>(),
+                flagged,
                 s.seconds,
                 out.display()
             ));

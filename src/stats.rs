@@ -1,6 +1,7 @@
 //! Distribution functions of the statistical tests (generic special functions,
 //! no crate in the tree provides them): the F distribution's survival function
-//! through the regularised incomplete beta function, and ln Γ.
+//! through the regularised incomplete beta function, and ln Γ; the
+//! least-squares fit with its prediction interval ([`LinearFit`]).
 
 // `!(x > 0.0)` checks deliberately reject NaN as well.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -154,4 +155,99 @@ fn erfc(x: f64) -> f64 {
     } else {
         2.0 - r
     }
+}
+
+/// An ordinary least-squares fit y = X β + ε, ε ~ N(0, σ²), with what its
+/// prediction interval needs (e.g. Montgomery, Peck & Vining, *Introduction
+/// to Linear Regression Analysis*, §3.5):
+/// β̂ = (XᵀX)⁻¹ Xᵀ y, s² = ‖y − X β̂‖² / (n − p), and for a new x₀ the
+/// two-sided interval ŷ₀ ± t_{(1+c)/2, n−p} · s · √(1 + x₀ᵀ (XᵀX)⁻¹ x₀).
+/// The one home of this regression: the monitoring band (docs/monitoring.md
+/// Eqs. M1–M3) and the amplitude dependence of a structure's history
+/// (docs/history.md) both use it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearFit {
+    /// β̂, in the order of the regressors (the columns of X).
+    pub coefficients: Vec<f64>,
+    /// Residual standard deviation s.
+    pub residual_std: f64,
+    /// Residual sum of squares ‖y − X β̂‖².
+    pub rss: f64,
+    /// Degrees of freedom n − p.
+    pub dof: usize,
+    /// (XᵀX)⁻¹, row-major p × p.
+    pub xtx_inverse: Vec<Vec<f64>>,
+}
+
+impl LinearFit {
+    /// Fits `y` on the rows of `x` (each of the same length p); `None` when
+    /// n ≤ p, when a value is not finite or when XᵀX is singular.
+    pub fn fit(x: &[Vec<f64>], y: &[f64]) -> Option<LinearFit> {
+        let n = y.len();
+        let p = x.first()?.len();
+        if n != x.len() || n <= p || p == 0 {
+            return None;
+        }
+        if x.iter()
+            .any(|r| r.len() != p || r.iter().any(|v| !v.is_finite()))
+            || y.iter().any(|v| !v.is_finite())
+        {
+            return None;
+        }
+        let xtx =
+            nalgebra::DMatrix::<f64>::from_fn(p, p, |i, j| x.iter().map(|r| r[i] * r[j]).sum());
+        let inv = xtx.try_inverse()?;
+        let xty: Vec<f64> = (0..p)
+            .map(|i| x.iter().zip(y).map(|(r, v)| r[i] * v).sum())
+            .collect();
+        let beta: Vec<f64> = (0..p)
+            .map(|i| (0..p).map(|j| inv[(i, j)] * xty[j]).sum())
+            .collect();
+        let rss: f64 = x
+            .iter()
+            .zip(y)
+            .map(|(r, v)| (v - dot(r, &beta)).powi(2))
+            .sum();
+        let dof = n - p;
+        Some(LinearFit {
+            coefficients: beta,
+            residual_std: (rss / dof as f64).sqrt(),
+            rss,
+            dof,
+            xtx_inverse: (0..p)
+                .map(|i| (0..p).map(|j| inv[(i, j)]).collect())
+                .collect(),
+        })
+    }
+
+    /// ŷ₀ = x₀ᵀ β̂.
+    pub fn predict(&self, x0: &[f64]) -> f64 {
+        dot(x0, &self.coefficients)
+    }
+
+    /// Leverage of a new point, x₀ᵀ (XᵀX)⁻¹ x₀.
+    pub fn leverage(&self, x0: &[f64]) -> f64 {
+        (0..x0.len())
+            .map(|i| {
+                (0..x0.len())
+                    .map(|j| x0[i] * self.xtx_inverse[i][j] * x0[j])
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
+    /// t_{(1+confidence)/2, n−p}.
+    pub fn t_quantile(&self, confidence: f64) -> f64 {
+        student_t_upper_quantile(0.5 * (1.0 - confidence), self.dof as f64)
+    }
+
+    /// Half width of the prediction interval at x₀ for the quantile `t`
+    /// ([`LinearFit::t_quantile`]): t · s · √(1 + x₀ᵀ (XᵀX)⁻¹ x₀).
+    pub fn prediction_half_width(&self, x0: &[f64], t: f64) -> f64 {
+        t * self.residual_std * (1.0 + self.leverage(x0)).sqrt()
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

@@ -211,13 +211,39 @@ fn describe(m: &Mode, index: usize) -> String {
     format!("mode {} ({:.4} Hz{dir})", index + 1, m.frequency_hz)
 }
 
-/// Pairs the modes of `reference` and `current` on their shared channels
-/// and reports the frequency shifts (module doc).
-pub fn compare_events(
-    reference: ModeSet,
-    current: ModeSet,
-    settings: &PairingSettings,
-) -> Comparison {
+/// One admissible pair of a comparison: reference mode `reference`,
+/// current mode `current`, its score (higher is better: the MAC, or −|Δf|/f
+/// when paired by frequency and direction), its MAC and |Δf|/f_ref.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Candidate {
+    reference: usize,
+    current: usize,
+    score: f64,
+    mac: Option<f64>,
+    window: f64,
+}
+
+/// Best candidate first: higher score, then smaller |Δf|/f, then smaller
+/// indices (deterministic).
+fn best_first(x: &Candidate, y: &Candidate) -> std::cmp::Ordering {
+    y.score
+        .total_cmp(&x.score)
+        .then(x.window.total_cmp(&y.window))
+        .then(x.reference.cmp(&y.reference))
+        .then(x.current.cmp(&y.current))
+}
+
+/// Every admissible pair of two events' modes under the module's rule,
+/// best first; the shared channels (indices into reference, current), the
+/// basis, and notes on channels only one side has and modes left out.
+struct Candidates {
+    shared: Vec<(usize, usize)>,
+    basis: PairingBasis,
+    list: Vec<Candidate>,
+    notes: Vec<String>,
+}
+
+fn candidates(reference: ModeSet, current: ModeSet, settings: &PairingSettings) -> Candidates {
     let mut notes = Vec::new();
     let shared: Vec<(usize, usize)> = reference
         .channels
@@ -230,10 +256,6 @@ pub fn compare_events(
                 .position(|c| c == id)
                 .map(|b| (a, b))
         })
-        .collect();
-    let shared_channels: Vec<String> = shared
-        .iter()
-        .map(|&(a, _)| reference.channels[a].clone())
         .collect();
     let only = |of: &[String], other: &[String]| -> Vec<String> {
         of.iter().filter(|c| !other.contains(c)).cloned().collect()
@@ -250,16 +272,6 @@ pub fn compare_events(
         }
     }
     let (ra, rb) = (reference.modes, current.modes);
-    if ra.is_empty() {
-        notes.push(
-            "the reference run identified no mode (its modes.parquet warnings say why)".into(),
-        );
-    }
-    if rb.is_empty() {
-        notes.push(
-            "this event's identification found no mode (modes.parquet warnings say why)".into(),
-        );
-    }
     let window = |i: usize, j: usize| {
         let f_ref = ra[i].frequency_hz;
         ((rb[j].frequency_hz - f_ref) / f_ref).abs()
@@ -275,8 +287,7 @@ pub fn compare_events(
         ));
         PairingBasis::FrequencyAndDirection
     };
-    // (i, j, score, mac): score orders the candidates, best first.
-    let mut candidates: Vec<(usize, usize, f64, Option<f64>)> = Vec::new();
+    let mut list: Vec<Candidate> = Vec::new();
     match basis {
         PairingBasis::MacAndFrequency => {
             let (ia, ib): (Vec<usize>, Vec<usize>) = shared.iter().copied().unzip();
@@ -300,7 +311,13 @@ pub fn compare_events(
                     }
                     let m = mac(&a[i].0, &b[j].0);
                     if m >= settings.min_mac && in_window(i, j) {
-                        candidates.push((i, j, m, Some(m)));
+                        list.push(Candidate {
+                            reference: i,
+                            current: j,
+                            score: m,
+                            mac: Some(m),
+                            window: window(i, j),
+                        });
                     }
                 }
             }
@@ -309,25 +326,65 @@ pub fn compare_events(
             for i in 0..ra.len() {
                 for j in 0..rb.len() {
                     if ra[i].direction == rb[j].direction && in_window(i, j) {
-                        candidates.push((i, j, -window(i, j), None));
+                        list.push(Candidate {
+                            reference: i,
+                            current: j,
+                            score: -window(i, j),
+                            mac: None,
+                            window: window(i, j),
+                        });
                     }
                 }
             }
         }
     }
-    candidates.sort_by(|x, y| {
-        y.2.total_cmp(&x.2)
-            .then(window(x.0, x.1).total_cmp(&window(y.0, y.1)))
-            .then(x.0.cmp(&y.0))
-            .then(x.1.cmp(&y.1))
-    });
-    let scored: Vec<(usize, usize, f64)> = candidates.iter().map(|c| (c.0, c.1, c.2)).collect();
+    list.sort_by(best_first);
+    Candidates {
+        shared,
+        basis,
+        list,
+        notes,
+    }
+}
+
+/// Pairs the modes of `reference` and `current` on their shared channels
+/// and reports the frequency shifts (module doc).
+pub fn compare_events(
+    reference: ModeSet,
+    current: ModeSet,
+    settings: &PairingSettings,
+) -> Comparison {
+    let Candidates {
+        shared,
+        basis,
+        list: candidates,
+        mut notes,
+    } = candidates(reference, current, settings);
+    let shared_channels: Vec<String> = shared
+        .iter()
+        .map(|&(a, _)| reference.channels[a].clone())
+        .collect();
+    let (ra, rb) = (reference.modes, current.modes);
+    if ra.is_empty() {
+        notes.push(
+            "the reference run identified no mode (its modes.parquet warnings say why)".into(),
+        );
+    }
+    if rb.is_empty() {
+        notes.push(
+            "this event's identification found no mode (modes.parquet warnings say why)".into(),
+        );
+    }
+    let scored: Vec<(usize, usize, f64)> = candidates
+        .iter()
+        .map(|c| (c.reference, c.current, c.score))
+        .collect();
     let taken = assign(&scored, ra.len(), rb.len());
     let mac_of = |i: usize, j: usize| {
         candidates
             .iter()
-            .find(|c| c.0 == i && c.1 == j)
-            .and_then(|c| c.3)
+            .find(|c| c.reference == i && c.current == j)
+            .and_then(|c| c.mac)
     };
     let shifts: Vec<FrequencyShift> = taken
         .iter()
@@ -368,6 +425,148 @@ pub fn compare_events(
         shifts,
         notes,
     }
+}
+
+/// One event's mode in a [`ModeTrack`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackMember {
+    /// Index of the event (into the sets given to [`track_across_events`]).
+    pub event: usize,
+    /// Index of the mode in that event's set.
+    pub mode: usize,
+    /// The earlier member it was paired with (event, mode); `None` for the
+    /// member that opened the track.
+    pub paired_with: Option<(usize, usize)>,
+    /// MAC to that member on the channels the two events share; `None`
+    /// when it opened the track or was paired by frequency and direction.
+    pub mac: Option<f64>,
+}
+
+/// One mode followed across N events: its members in event order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModeTrack {
+    pub members: Vec<TrackMember>,
+    /// The direction label most of its members carry (ties: the earliest
+    /// member's; empty labels count only when no member has another).
+    pub direction: String,
+}
+
+/// The pre/post pairing generalised to N events (issue 35): the events are
+/// taken in the order given (the caller's: by date, so that a growing
+/// history keeps its ids); the first event's modes open one track each;
+/// every later event's modes are paired with the tracks built so far, one
+/// to one, by the rule of [`compare_events`] applied between the new
+/// event and each earlier event that holds a member of a track (shapes on
+/// the channels the two events share, MAC ≥ `min_mac` within the frequency
+/// window, or frequency and direction below two shared channels).  A
+/// track's score for a new mode is that of its best-scoring member, so a
+/// mode is followed even when its frequency wanders from event to event
+/// (amplitude dependence) or when one event shares few channels with
+/// another; candidates are taken greedily, best first, as in the pre/post
+/// pairing.  A mode no track takes opens a new one.  Tracks are returned in
+/// the order they were opened (the track id is that rank + 1).
+pub fn track_across_events(sets: &[ModeSet], settings: &PairingSettings) -> Vec<ModeTrack> {
+    let mut tracks: Vec<ModeTrack> = Vec::new();
+    // Track of each (event, mode) already placed.
+    let mut track_of: std::collections::BTreeMap<(usize, usize), usize> = Default::default();
+    for (new, set) in sets.iter().enumerate() {
+        // (track, new mode) → the best candidate over the track's members.
+        let mut best: std::collections::BTreeMap<(usize, usize), (Candidate, (usize, usize))> =
+            Default::default();
+        for earlier in 0..new {
+            if !track_of.keys().any(|&(e, _)| e == earlier) {
+                continue;
+            }
+            for c in candidates(sets[earlier], *set, settings).list {
+                let Some(&t) = track_of.get(&(earlier, c.reference)) else {
+                    continue;
+                };
+                let entry = best.entry((t, c.current));
+                let better = |old: &(Candidate, (usize, usize))| {
+                    best_first(&c, &old.0) == std::cmp::Ordering::Less
+                };
+                match entry {
+                    std::collections::btree_map::Entry::Vacant(v) => {
+                        v.insert((c, (earlier, c.reference)));
+                    }
+                    std::collections::btree_map::Entry::Occupied(mut o) => {
+                        if better(o.get()) {
+                            o.insert((c, (earlier, c.reference)));
+                        }
+                    }
+                }
+            }
+        }
+        // One greedy assignment of tracks to this event's modes.
+        let mut scored: Vec<(Candidate, usize, (usize, usize))> = best
+            .into_iter()
+            .map(|((t, _), (c, member))| (Candidate { reference: t, ..c }, t, member))
+            .collect();
+        scored.sort_by(|x, y| best_first(&x.0, &y.0));
+        let list: Vec<(usize, usize, f64)> = scored
+            .iter()
+            .map(|(c, t, _)| (*t, c.current, c.score))
+            .collect();
+        let taken = assign(&list, tracks.len(), set.modes.len());
+        for j in 0..set.modes.len() {
+            let member = match taken.iter().find(|p| p.1 == j) {
+                Some(&(t, _, _)) => {
+                    let (c, _, with) = scored
+                        .iter()
+                        .find(|(c, tt, _)| *tt == t && c.current == j)
+                        .copied()
+                        .expect("a taken pair is a candidate"); // ok: `taken` ⊆ `list`
+                    tracks[t].members.push(TrackMember {
+                        event: new,
+                        mode: j,
+                        paired_with: Some(with),
+                        mac: c.mac,
+                    });
+                    t
+                }
+                None => {
+                    tracks.push(ModeTrack {
+                        members: vec![TrackMember {
+                            event: new,
+                            mode: j,
+                            paired_with: None,
+                            mac: None,
+                        }],
+                        direction: String::new(),
+                    });
+                    tracks.len() - 1
+                }
+            };
+            track_of.insert((new, j), member);
+        }
+    }
+    for t in &mut tracks {
+        t.direction = majority_direction(
+            t.members
+                .iter()
+                .map(|m| sets[m.event].modes[m.mode].direction.as_str()),
+        );
+    }
+    tracks
+}
+
+/// The label most of `labels` carry (ties: the earliest); empty labels
+/// count only when all are empty.
+fn majority_direction<'a>(labels: impl Iterator<Item = &'a str>) -> String {
+    let mut counts: Vec<(&str, usize)> = Vec::new();
+    for l in labels.filter(|l| !l.is_empty()) {
+        match counts.iter_mut().find(|(k, _)| *k == l) {
+            Some(c) => c.1 += 1,
+            None => counts.push((l, 1)),
+        }
+    }
+    // max_by_key keeps the last maximum: scan in reverse for the earliest.
+    counts
+        .iter()
+        .rev()
+        .max_by_key(|(_, n)| *n)
+        .map(|(l, _)| l.to_string())
+        .unwrap_or_default()
 }
 
 fn shift(

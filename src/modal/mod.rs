@@ -42,8 +42,8 @@ pub mod spectrum;
 pub mod ssi;
 
 pub use compare::{
-    compare_events, mac_matrix, pair_modes, Comparison, FrequencyShift, ModePair, ModeSet,
-    PairingBasis, PairingSettings,
+    compare_events, mac_matrix, pair_modes, track_across_events, Comparison, FrequencyShift,
+    ModePair, ModeSet, ModeTrack, PairingBasis, PairingSettings, TrackMember,
 };
 pub use fallback::{identify_event_or_output_only, MIN_AMPLIFICATION};
 pub use poles::{mac, mpc_mpd, Pole, StabilityTolerances};

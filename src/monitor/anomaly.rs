@@ -25,9 +25,7 @@
 //! With too few training windows for four coefficients (n < p + 3) the
 //! harmonic is dropped (p = 2), and with fewer than four no band is given.
 
-use nalgebra::DMatrix;
-
-use crate::stats::student_t_upper_quantile;
+use crate::stats::LinearFit;
 
 /// Settings of the band.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -66,7 +64,7 @@ pub struct BandModel {
     rms_std: f64,
     cycle_period_s: f64,
     #[serde(skip)]
-    xtx_inverse: Vec<Vec<f64>>,
+    fit: LinearFit,
 }
 
 /// The band of one window (M3) and whether its frequency lies outside (M4).
@@ -92,15 +90,8 @@ impl BandModel {
     /// The band at `o` and the flag of its frequency (M3, M4).
     pub fn band(&self, o: &Observation) -> Band {
         let x = self.regressors_of(o);
-        let predicted: f64 = x.iter().zip(&self.coefficients).map(|(a, b)| a * b).sum();
-        let leverage: f64 = (0..x.len())
-            .map(|i| {
-                (0..x.len())
-                    .map(|j| x[i] * self.xtx_inverse[i][j] * x[j])
-                    .sum::<f64>()
-            })
-            .sum();
-        let half = self.t_quantile * self.residual_std_hz * (1.0 + leverage).sqrt();
+        let predicted = self.fit.predict(&x);
+        let half = self.fit.prediction_half_width(&x, self.t_quantile);
         Band {
             predicted_hz: predicted,
             low_hz: predicted - half,
@@ -157,35 +148,17 @@ pub fn fit(observations: &[Observation], settings: &BandSettings) -> Option<Band
         .map(|o| regressors(o, rms_mean, rms_std, settings.cycle_period_s, p))
         .collect();
     let y: Vec<f64> = train.iter().map(|o| o.frequency_hz).collect();
-    let xtx = DMatrix::<f64>::from_fn(p, p, |i, j| x.iter().map(|r| r[i] * r[j]).sum());
-    let xty: Vec<f64> = (0..p)
-        .map(|i| x.iter().zip(&y).map(|(r, v)| r[i] * v).sum())
-        .collect();
-    let inv = xtx.try_inverse()?;
-    let beta: Vec<f64> = (0..p)
-        .map(|i| (0..p).map(|j| inv[(i, j)] * xty[j]).sum())
-        .collect();
-    let rss: f64 = x
-        .iter()
-        .zip(&y)
-        .map(|(r, v)| {
-            let fit: f64 = r.iter().zip(&beta).map(|(a, b)| a * b).sum();
-            (v - fit).powi(2)
-        })
-        .sum();
-    let dof = (n - p) as f64;
+    let fit = LinearFit::fit(&x, &y)?;
     Some(BandModel {
         regressors: names[..p].to_vec(),
-        coefficients: beta,
-        residual_std_hz: (rss / dof).sqrt(),
+        coefficients: fit.coefficients.clone(),
+        residual_std_hz: fit.residual_std,
         training_windows: n,
-        t_quantile: student_t_upper_quantile(0.5 * (1.0 - settings.confidence), dof),
+        t_quantile: fit.t_quantile(settings.confidence),
         rms_mean,
         rms_std,
         cycle_period_s: settings.cycle_period_s,
-        xtx_inverse: (0..p)
-            .map(|i| (0..p).map(|j| inv[(i, j)]).collect())
-            .collect(),
+        fit,
     })
 }
 

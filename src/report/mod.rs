@@ -15,6 +15,7 @@
 //! summary; the raw processing history is in the appendix.
 //! Rating thresholds and their rationale: docs/report.md.
 
+pub mod history;
 mod html;
 pub mod plot;
 pub use plot::decimate_curve;

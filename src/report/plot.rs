@@ -517,6 +517,61 @@ fn clean_svg(svg: &str) -> String {
         .replacen("<svg ", "<svg class=\"plot\" role=\"img\" ", 1)
 }
 
+/// Shades a band on a rendered chart: a translucent polygon through
+/// (x, low) and (x, high) in the colour `colour`, with `title` as its
+/// tooltip, mapped onto the chart's plot area (`data-plot-area` of the
+/// rendered SVG).  The chart's ranges must be explicit, so the mapping is
+/// exact: linear, or in ln on a log x axis.  Values outside the y range are
+/// clamped to it.
+pub fn shade_band(
+    svg: &str,
+    chart: &Chart,
+    band: &[(f64, f64, f64)],
+    colour: usize,
+    title: &str,
+) -> String {
+    let (Some((x0, x1)), Some((y0, y1))) = (chart.x_range, chart.y_range) else {
+        return svg.to_string();
+    };
+    let area: Option<Vec<f64>> = svg
+        .split("data-plot-area=\"")
+        .nth(1)
+        .and_then(|r| r.split('"').next())
+        .map(|a| a.split(' ').filter_map(|v| v.parse().ok()).collect());
+    let Some([px0, py0, px1, py1]) = area.as_deref().and_then(|a| <[f64; 4]>::try_from(a).ok())
+    else {
+        return svg.to_string();
+    };
+    let fx = |x: f64| {
+        if chart.log_x {
+            (x.ln() - x0.ln()) / (x1.ln() - x0.ln())
+        } else {
+            (x - x0) / (x1 - x0)
+        }
+    };
+    let px = |x: f64| px0 + fx(x) * (px1 - px0);
+    let py = |y: f64| py1 - (y.clamp(y0, y1) - y0) / (y1 - y0) * (py1 - py0);
+    let mut points: Vec<String> = band
+        .iter()
+        .map(|&(x, _, hi)| format!("{:.1},{:.1}", px(x), py(hi)))
+        .collect();
+    points.extend(
+        band.iter()
+            .rev()
+            .map(|&(x, lo, _)| format!("{:.1},{:.1}", px(x), py(lo))),
+    );
+    let polygon = format!(
+        "<polygon points=\"{}\" fill=\"{}\" fill-opacity=\"0.18\" stroke=\"none\"><title>{}</title></polygon>",
+        points.join(" "),
+        css_colour(colour),
+        escape(title)
+    );
+    match svg.rfind("</svg>") {
+        Some(at) => format!("{}{polygon}{}", &svg[..at], &svg[at..]),
+        None => svg.to_string(),
+    }
+}
+
 /// HTML legend: a swatch (colour and mark) and the label of every series.
 pub fn legend(series: &[Series]) -> String {
     let mut s = String::from("<ul class=\"legend\">");

@@ -6,7 +6,7 @@
 //! as the event report (inline SVG and CSS, no scripts, no network).
 
 use super::html::{escape, format_number};
-use super::plot::{css_colour, render, Chart, Mark, RefLine, Series};
+use super::plot::{render, shade_band, Chart, Mark, RefLine, Series};
 use crate::monitor::Tracking;
 use crate::vocab::format_epoch_ns;
 
@@ -15,44 +15,6 @@ const NS_PER_H: f64 = 3.6e12;
 const IDENTIFIED: usize = 0;
 const FLAGGED: usize = 1;
 const BAND: usize = 2;
-
-/// Shades the band: a translucent polygon through (x, low) and (x, high),
-/// mapped onto the chart's plot area (`data-plot-area` of the rendered SVG;
-/// the chart's ranges are explicit, so the mapping is linear and exact).
-fn shade_band(svg: &str, chart: &Chart, band: &[(f64, f64, f64)]) -> String {
-    let (Some((x0, x1)), Some((y0, y1))) = (chart.x_range, chart.y_range) else {
-        return svg.to_string();
-    };
-    let area: Option<Vec<f64>> = svg
-        .split("data-plot-area=\"")
-        .nth(1)
-        .and_then(|r| r.split('"').next())
-        .map(|a| a.split(' ').filter_map(|v| v.parse().ok()).collect());
-    let Some([px0, py0, px1, py1]) = area.as_deref().and_then(|a| <[f64; 4]>::try_from(a).ok())
-    else {
-        return svg.to_string();
-    };
-    let px = |x: f64| px0 + (x - x0) / (x1 - x0) * (px1 - px0);
-    let py = |y: f64| py1 - (y.clamp(y0, y1) - y0) / (y1 - y0) * (py1 - py0);
-    let mut points: Vec<String> = band
-        .iter()
-        .map(|&(x, _, hi)| format!("{:.1},{:.1}", px(x), py(hi)))
-        .collect();
-    points.extend(
-        band.iter()
-            .rev()
-            .map(|&(x, lo, _)| format!("{:.1},{:.1}", px(x), py(lo))),
-    );
-    let polygon = format!(
-        "<polygon points=\"{}\" fill=\"{}\" fill-opacity=\"0.18\" stroke=\"none\"><title>99 % prediction band</title></polygon>",
-        points.join(" "),
-        css_colour(BAND)
-    );
-    match svg.rfind("</svg>") {
-        Some(at) => format!("{}{polygon}{}", &svg[..at], &svg[at..]),
-        None => svg.to_string(),
-    }
-}
 
 /// One mode's chart: hours since `origin` on x.
 fn mode_chart(t: &Tracking, id: usize, origin: i64) -> String {
@@ -134,7 +96,7 @@ fn mode_chart(t: &Tracking, id: usize, origin: i64) -> String {
     match render(&chart) {
         Ok(svg) => format!(
             "{}{}",
-            shade_band(&svg, &chart, &band),
+            shade_band(&svg, &chart, &band, BAND, "99 % prediction band"),
             super::plot::legend(&chart.series)
         ),
         Err(e) => format!("<p class=\"note\">No chart: {}</p>", escape(&e)),

@@ -200,3 +200,91 @@ fn same_file(a: &Path, b: &Path) -> bool {
         false
     }
 }
+
+/// One event of a dataset: its partition values and the tables it published.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DatasetEvent {
+    /// The `structure=` value.
+    pub structure: String,
+    /// The `event=` value.
+    pub event: String,
+    /// `structure=<S>/event=<E>` (relative).
+    pub partition: PathBuf,
+    /// Declared tables with a `part-0.parquet` in this partition, by name.
+    pub tables: Vec<&'static str>,
+}
+
+impl DatasetEvent {
+    /// The file of `table` for this event under `root`.
+    pub fn table_file(&self, root: &Path, table: &str) -> PathBuf {
+        root.join(table).join(&self.partition).join(PART_FILE)
+    }
+
+    /// The event's run directory under `root`.
+    pub fn run_dir(&self, root: &Path) -> PathBuf {
+        run_dir(root, &self.partition)
+    }
+}
+
+/// What a directory holds as a dataset: `Ok(None)` when it is no dataset
+/// at all (neither a table folder with `structure=` partitions nor a
+/// `runs/` folder), else its events, sorted by structure then event (an
+/// empty list for a dataset every event of which was withdrawn).  Read from
+/// the table folders (`<table>/structure=<S>/event=<E>/part-0.parquet`) of
+/// the declared tables only; an event that published no table (its run
+/// failed) is not listed.
+pub fn list_events(root: &Path) -> Result<Option<Vec<DatasetEvent>>> {
+    let dirs = |p: &Path| -> Result<Vec<(String, PathBuf)>> {
+        let mut v = Vec::new();
+        for e in std::fs::read_dir(p).map_err(|e| Error::io(p, e))? {
+            let e = e.map_err(|e| Error::io(p, e))?;
+            let path = e.path();
+            if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_dir()) {
+                v.push((e.file_name().to_string_lossy().into_owned(), path));
+            }
+        }
+        v.sort();
+        Ok(v)
+    };
+    let mut is_dataset = root.join(RUNS_DIR).is_dir();
+    let mut events: std::collections::BTreeMap<(String, String), Vec<&'static str>> =
+        Default::default();
+    for (name, folder) in dirs(root)? {
+        let Some(table) = tables::by_name(&name) else {
+            continue;
+        };
+        for (s, structure_dir) in dirs(&folder)? {
+            let Some(structure) = s.strip_prefix("structure=") else {
+                continue;
+            };
+            is_dataset = true;
+            for (e, event_dir) in dirs(&structure_dir)? {
+                let Some(event) = e.strip_prefix("event=") else {
+                    continue;
+                };
+                let part = event_dir.join(PART_FILE);
+                if std::fs::symlink_metadata(&part).is_ok_and(|m| m.is_file()) {
+                    events
+                        .entry((structure.to_string(), event.to_string()))
+                        .or_default()
+                        .push(table.name);
+                }
+            }
+        }
+    }
+    if !is_dataset {
+        return Ok(None);
+    }
+    Ok(Some(
+        events
+            .into_iter()
+            .map(|((structure, event), tables)| DatasetEvent {
+                partition: Path::new(&format!("structure={structure}"))
+                    .join(format!("event={event}")),
+                structure,
+                event,
+                tables,
+            })
+            .collect(),
+    ))
+}

@@ -441,6 +441,57 @@ declare!(ASSESSMENT, assessment, "assessment", "assessment.parquet",
     ASSUMPTIONS: "assumptions", ListUtf8, required, "", "what the assessment assumed: a default building type, an assumed storey height, a roof level…";
 });
 
+declare!(HISTORY_MODES, history_modes, "history_modes", "history_modes.parquet",
+    "one row per structure, followed mode and event holding it: the mode's frequency against the event's intensity, the amplitude-dependence band, the flags and a permanent shift (`quaketwin history`, docs/history.md)", {
+    STRUCTURE: "structure", Utf8, required, "", "structure id: the dataset's `structure=` partition, or for events whose manifest names no structure (`structure=unknown`) the recording station `NETWORK.STATION` of their channels";
+    EVENT: "event", Utf8, required, "", "event (the dataset's `event=` partition)";
+    EVENT_TIME: "event_time", TimestampNsUtc, nullable, "", "origin time, else the start of the event's records (`time_source` of history_events.parquet)";
+    MODE: "mode", U32, required, "", "id of the followed mode: 1-based, in the order the modes first appear in date order; the same in every event";
+    DIRECTION: "direction", Utf8, required, "", "direction label of the followed mode: the label most of its events give it (`X`, `Y`, `torsion`, `vertical`, `mixed`, an azimuth; empty when unknown)";
+    EVENT_MODE: "event_mode", U32, required, "", "the mode's number in this event's modes.parquet (`mode`)";
+    EVENT_DIRECTION: "event_direction", Utf8, required, "", "direction label of the mode in this event (`direction` of its modes.parquet)";
+    FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "identified frequency in this event";
+    FREQUENCY_STD_HZ: "frequency_std_hz", F64, required, "Hz", "its scatter over the model orders (`frequency_std_hz` of modes.parquet)";
+    DAMPING_RATIO: "damping_ratio", F64, required, "1", "identified damping ratio in this event";
+    PAIRED_WITH_EVENT: "paired_with_event", Utf8, nullable, "", "the earlier event whose mode this one was paired with (null for the event where the mode first appears)";
+    MAC: "mac", F64, nullable, "1", "MAC to that event's mode on the channels the two events share (null when first, or when paired by frequency and direction: fewer than two shared channels)";
+    INTENSITY_M_S2: "intensity_m_s2", F64, nullable, "m/s^2", "the event's intensity the band is fitted on (`--intensity`: the largest horizontal peak acceleration of the response channels, or of the base channels); null when unknown";
+    PREDICTED_FREQUENCY_HZ: "predicted_frequency_hz", F64, nullable, "Hz", "frequency the amplitude dependence predicts at this intensity (Eq. H1); null without a band";
+    BAND_LOW_HZ: "band_low_hz", F64, nullable, "Hz", "lower end of the prediction interval (Eq. H3)";
+    BAND_HIGH_HZ: "band_high_hz", F64, nullable, "Hz", "upper end of the prediction interval (Eq. H3)";
+    DEVIATION_PERCENT: "deviation_percent", F64, nullable, "%", "100 (f − predicted) / predicted";
+    STATUS: "status", Utf8, required, "", "`in_band`, `amplitude_softened` (below the band at an intensity above every fitted event's, a later event back inside), `below_band`, `above_band` (Eq. H6), `no_band` (too few events or no intensity spread), `no_intensity`";
+    FITTED: "fitted", Bool, required, "", "the event is among those the band was fitted on (not taken out as an outlier, Eq. H4)";
+    AFTER_STEP: "after_step", Bool, required, "", "the event is on or after the mode's permanent shift (Eq. H5)";
+    STEP_EVENT: "step_event", Utf8, nullable, "", "first event of the mode's permanent shift (Eq. H5): the shift happened between the event before it and this one; null when none (same on every row of the mode)";
+    STEP_TIME: "step_time", TimestampNsUtc, nullable, "", "time of `step_event`";
+    STEP_PERCENT: "step_percent", F64, nullable, "%", "100 (e^c − 1): the shift at equal intensity (negative = softening); null when none";
+    STEP_P_VALUE: "step_p_value", F64, nullable, "1", "Bonferroni-adjusted p-value of the shift's F test; null when none";
+});
+
+declare!(HISTORY_EVENTS, history_events, "history_events", "history_events.parquet",
+    "one row per structure and event: its date, intensity, rating, the flags of its modes, and the prediction of its response by the model of the event before (`quaketwin history`, docs/history.md)", {
+    STRUCTURE: "structure", Utf8, required, "", "structure id (as in history_modes.parquet)";
+    STRUCTURE_NAME: "structure_name", Utf8, nullable, "", "the structure's name as the event's manifest or headers give it (`structure.name` of event.json)";
+    EVENT: "event", Utf8, required, "", "event (the dataset's `event=` partition)";
+    PARTITION: "partition", Utf8, required, "", "the event's partition `structure=<S>/event=<E>`: its tables are `DATASET/<table>/<partition>/part-0.parquet`, its run directory (report.html) `DATASET/runs/<partition>/`";
+    EVENT_TIME: "event_time", TimestampNsUtc, nullable, "", "origin time (event.json), else the earliest start of its channels";
+    TIME_SOURCE: "time_source", Utf8, required, "", "`origin_time`, `record_start` or `unknown`";
+    PEAK_BASE_M_S2: "peak_base_m_s2", F64, nullable, "m/s^2", "largest horizontal peak acceleration of the input (base, ground) channels (`pga_m_s2` of channels.parquet)";
+    PEAK_RESPONSE_M_S2: "peak_response_m_s2", F64, nullable, "m/s^2", "largest horizontal peak acceleration of the response (output) channels: the roof of a building, the deck of a bridge";
+    INTENSITY_M_S2: "intensity_m_s2", F64, nullable, "m/s^2", "the one of the two the bands are fitted on (`--intensity`)";
+    RATING: "rating", Utf8, nullable, "", "the event's colour (`rating` of assessment.parquet); null when the run had no `assess` stage";
+    MODES: "modes", U32, required, "", "modes identified in the event";
+    STATUS: "status", Utf8, required, "", "the event's most severe mode status: `step` (a permanent shift starts here), `below_band`, `amplitude_softened`, `above_band`, `in_band`, `no_band`, `no_modes`";
+    FLAGS: "flags", ListUtf8, required, "", "one sentence per mode outside its band or starting a shift";
+    PREDICTED_FROM: "predicted_from", Utf8, nullable, "", "the event whose model predicted this one's response: the latest earlier event with a model (Eqs. H7–H9); null when none";
+    PREDICTION_CHANNELS: "prediction_channels", ListUtf8, required, "", "output channels of the prediction";
+    PREDICTION_ERRORS: "prediction_errors", ListF64, required, "1", "normalised error ‖y − ŷ‖/‖y‖ per channel of `prediction_channels` (Eq. H9)";
+    PREDICTION_ERROR_MEDIAN: "prediction_error_median", F64, nullable, "1", "median of `prediction_errors`";
+    MODEL_ERROR_MEDIAN: "model_error_median", F64, nullable, "1", "median normalised error of this event's own model on its own records (Eq. H9 with the model event itself): what the model leaves out";
+    NOTES: "notes", ListUtf8, required, "", "why a value is missing: no modes, no prediction and why";
+});
+
 /// Every table quaketwin writes, in pipeline order.
 pub const ALL_TABLES: &[&TableSchema] = &[
     &SAMPLES,
@@ -467,6 +518,8 @@ pub const ALL_TABLES: &[&TableSchema] = &[
     &FREQUENCY_TRACK,
     &ASSESSMENT,
     &MODAL_TRACKING,
+    &HISTORY_MODES,
+    &HISTORY_EVENTS,
 ];
 
 /// The declared table of a `quaketwin.schema` name.
