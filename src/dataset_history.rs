@@ -439,7 +439,8 @@ fn median(values: &[f64]) -> Option<f64> {
 
 /// Eqs. H7–H9 over a structure's events (date order): every event with
 /// modes gets its model (fitted on its own records), then every event is
-/// predicted by the model of the latest earlier event that has one.  Each
+/// predicted by the model of the latest earlier event that has one and
+/// whose input and output channels the event recorded.  Each
 /// event's samples are read in its own task, at most twice (to fit, to be
 /// predicted), so memory holds a few events at a time.
 fn predict_events(
@@ -470,21 +471,40 @@ fn predict_events(
                 Ok((_, own)) => p.model_error_median = own.is_finite().then_some(*own),
                 Err(why) => p.notes.push(format!("no model of this event: {why}")),
             }
-            let Some(j) = (0..k).rev().find(|&j| models[j].is_ok()) else {
+            let earlier: Vec<usize> = (0..k).rev().filter(|&j| models[j].is_ok()).collect();
+            if earlier.is_empty() {
                 p.notes
                     .push("no prediction: no earlier event with a model".into());
                 return p;
-            };
-            let Ok((model, _)) = &models[j] else {
-                return p;
-            };
-            let from = history.events[j].event.clone();
-            match io_record(root, &sources[k]).and_then(|r| prediction::predict(model, &r)) {
-                Ok(errors) => {
-                    p.errors = errors;
-                    p.from = Some(from);
+            }
+            let record = match io_record(root, &sources[k]) {
+                Ok(r) => r,
+                Err(why) => {
+                    p.notes.push(format!("no prediction: {why}"));
+                    return p;
                 }
-                Err(why) => p.notes.push(format!("no prediction from {from}: {why}")),
+            };
+            // The latest earlier model whose inputs and outputs this event
+            // recorded (a channel added or removed between two events
+            // leaves the model before it to predict).
+            let mut refused = Vec::new();
+            for j in earlier {
+                let Ok((model, _)) = &models[j] else { continue };
+                let from = &history.events[j].event;
+                match prediction::predict(model, &record) {
+                    Ok(errors) => {
+                        p.errors = errors;
+                        p.from = Some(from.clone());
+                        break;
+                    }
+                    Err(why) => refused.push(format!("{from}: {why}")),
+                }
+            }
+            if p.from.is_none() {
+                p.notes.push(format!(
+                    "no prediction: no earlier model applies ({})",
+                    refused.join("; ")
+                ));
             }
             p
         })

@@ -12,18 +12,28 @@
 //! (H2) ordinary least squares over the fitted events ([`LinearFit`]);
 //! (H3) the prediction interval of confidence γ at an event:
 //!      exp(ŷ ± t_{(1+γ)/2, n−p} s √(1 + x₀ᵀ(XᵀX)⁻¹x₀));
-//! (H4) outliers: each fitted event is tested against the interval of the
-//!      fit *without* it (a deletion residual: one strong, softened event
-//!      must not bend the line it is tested against); the one furthest
-//!      outside (in half-widths) leaves the fit, and the test is repeated,
-//!      at most ⌊n/4⌋ times and never below `min_events` fitted events;
+//! (H4) outliers: the Bonferroni outlier test on the externally
+//!      studentised residuals (e.g. Weisberg, *Applied Linear Regression*,
+//!      4th ed., §9.1): each of the n fitted events is compared with the
+//!      fit *without* it (one strong, softened event must not bend the line
+//!      it is tested against), t_e = (y_e − ŷ_(e)) / (s_(e) √(1 + h_e)); the
+//!      event with the largest |t_e| leaves the fit when it exceeds
+//!      t_{1 − (1−γ)/(2n), n−p−1} (the family-wise level of γ over the n
+//!      tests), and the test is repeated on the rest, at most ⌊n/4⌋ times
+//!      and never below `min_events` fitted events;
 //! (H5) a permanent shift: for every candidate date τ (an event with at
-//!      least `min_before` fitted events before it and `min_after` from it
-//!      on, so one odd event cannot make a step), the fit with S_e(τ)
-//!      against the fit without: F = (RSS₀ − RSS₁)/(RSS₁/(n − 3)); the
-//!      largest F is taken when its p-value P(F(1, n−3) > F) times the
-//!      number of candidates (Bonferroni) is below `step_alpha` and the
-//!      shift |e^c − 1| is at least `min_step`; dated by its first event;
+//!      least `min_before` events before it and `min_after` from it on, so
+//!      one odd event cannot make a step), H4 run with the step S_e(τ) in
+//!      the model (an outlier hides a step from a fit without one, and a
+//!      step hides an outlier), then on the events kept the fit with the
+//!      step against the fit without: F = (RSS₀ − RSS₁)/(RSS₁/(n − 3));
+//!      a date qualifies when its p-value P(F(1, n−3) > F) times the number
+//!      of candidates (Bonferroni) is below `step_alpha` and the shift
+//!      |e^c − 1| is at least `min_step`; of the qualifying dates the one
+//!      whose H4 keeps the most events is taken (a step one event off takes
+//!      that event out as an outlier and fits as well), then the largest F;
+//!      dated by its first event, which must stay in the fit.
+//!      Without a step, H4 runs with H1 alone;
 //! (H6) status of an event: inside the interval → `in_band`; below it →
 //!      `amplitude_softened` when its intensity exceeds every fitted
 //!      event's and a later event of the mode is back inside the band
@@ -205,42 +215,8 @@ fn fit_over(points: &[Point], use_: &[usize], step_from: Option<usize>) -> Optio
     LinearFit::fit(&x, &y)
 }
 
-/// H5 over the fitted points `use_` (ascending indices = date order).
-fn best_step(points: &[Point], use_: &[usize], s: &BandSettings) -> Option<Step> {
-    let n = use_.len();
-    // The step model has three coefficients; two degrees of freedom at least.
-    if n < s.min_before + s.min_after || n < 5 {
-        return None;
-    }
-    let base = fit_over(points, use_, None)?;
-    let candidates: Vec<usize> = (s.min_before.max(1)..=n - s.min_after).collect();
-    let mut best: Option<(f64, LinearFit, usize)> = None;
-    for &k in &candidates {
-        let Some(f1) = fit_over(points, use_, Some(use_[k])) else {
-            continue;
-        };
-        let f_stat = if f1.rss > 0.0 {
-            (base.rss - f1.rss).max(0.0) / (f1.rss / f1.dof as f64)
-        } else {
-            f64::INFINITY
-        };
-        if best.as_ref().is_none_or(|b| f_stat > b.0) {
-            best = Some((f_stat, f1, use_[k]));
-        }
-    }
-    let (f_stat, f1, from) = best?;
-    let p = (f_survival(f_stat, 1.0, f1.dof as f64) * candidates.len() as f64).min(1.0);
-    let change = f1.coefficients[2].exp() - 1.0;
-    (p < s.step_alpha && change.abs() >= s.min_step).then_some(Step {
-        from,
-        relative_change: change,
-        f_statistic: f_stat,
-        p_value: p,
-    })
-}
-
-/// H4: the fitted point furthest outside the interval of the fit without
-/// it, and by how many half-widths (> 1), if any.
+/// H4: the fitted point with the largest externally studentised residual
+/// beyond the Bonferroni critical value, and that |t|, if any.
 fn worst_outlier(
     points: &[Point],
     use_: &[usize],
@@ -248,6 +224,7 @@ fn worst_outlier(
     s: &BandSettings,
 ) -> Option<(usize, f64)> {
     let step_from = step.map(|st| st.from);
+    let n = use_.len() as f64;
     let mut worst: Option<(usize, f64)> = None;
     for &e in use_ {
         let others: Vec<usize> = use_.iter().copied().filter(|&i| i != e).collect();
@@ -255,13 +232,114 @@ fn worst_outlier(
             continue;
         };
         let x = regressors(points[e].intensity_m_s2, step_from.map(|f| e >= f));
-        let half = fit.prediction_half_width(&x, fit.t_quantile(s.confidence));
-        let ratio = (points[e].frequency_hz.ln() - fit.predict(&x)).abs() / half;
-        if ratio > 1.0 && worst.is_none_or(|w| ratio > w.1) {
-            worst = Some((e, ratio));
+        let critical = crate::stats::student_t_upper_quantile(
+            (1.0 - s.confidence) / (2.0 * n),
+            fit.dof as f64,
+        );
+        let t = (points[e].frequency_hz.ln() - fit.predict(&x)).abs()
+            / fit.prediction_half_width(&x, 1.0);
+        if t > critical && worst.is_none_or(|w| t > w.1) {
+            worst = Some((e, t));
         }
     }
     worst
+}
+
+/// H4 repeated: the fit over `usable` (with the step from index
+/// `step_from`, if any) after taking out, one at a time, the events the
+/// outlier test rejects; the events kept and their fit.
+fn outlier_loop(
+    points: &[Point],
+    usable: &[usize],
+    step_from: Option<usize>,
+    s: &BandSettings,
+) -> Option<(Vec<usize>, LinearFit)> {
+    let min_events = s.min_events.max(4);
+    let max_removed = (s.max_outlier_fraction * usable.len() as f64).floor() as usize;
+    let step = step_from.map(|from| Step {
+        from,
+        relative_change: 0.0,
+        f_statistic: 0.0,
+        p_value: 1.0,
+    });
+    let mut fitted = usable.to_vec();
+    loop {
+        let fit = fit_over(points, &fitted, step_from)?;
+        let removed = usable.len() - fitted.len();
+        if removed < max_removed && fitted.len() > min_events {
+            if let Some((e, _)) = worst_outlier(points, &fitted, step.as_ref(), s) {
+                fitted.retain(|&i| i != e);
+                continue;
+            }
+        }
+        return Some((fitted, fit));
+    }
+}
+
+/// H5: for every candidate date (an event of `usable` with `min_before`
+/// usable events before it and `min_after` from it on), the outlier loop
+/// with the step there, and the F test of the step on the events that loop
+/// kept; among the dates whose step passes (Bonferroni over the candidates)
+/// and is large enough, the one keeping the most events, then the largest F.  Searching the step with the outliers taken
+/// out under the step model itself: an outlier hides a step from a
+/// no-step fit (it inflates s), and a step hides an outlier.
+fn best_step(
+    points: &[Point],
+    usable: &[usize],
+    s: &BandSettings,
+) -> Option<(Step, LinearFit, Vec<usize>)> {
+    let n = usable.len();
+    if n < s.min_before + s.min_after || n < 5 {
+        return None;
+    }
+    let candidates: Vec<usize> = (s.min_before.max(1)..=n - s.min_after)
+        .map(|k| usable[k])
+        .collect();
+    let mut best: Option<(Step, LinearFit, Vec<usize>)> = None;
+    for &from in &candidates {
+        let Some((kept, f1)) = outlier_loop(points, usable, Some(from), s) else {
+            continue;
+        };
+        // The step is dated by an event on the new level: the candidate's
+        // own event must stay in the fit.
+        let after = kept.iter().filter(|&&i| i >= from).count();
+        if !kept.contains(&from)
+            || after < s.min_after
+            || kept.len() - after < s.min_before
+            || f1.dof < 2
+        {
+            continue;
+        }
+        let Some(base) = fit_over(points, &kept, None) else {
+            continue;
+        };
+        let f_stat = if f1.rss > 0.0 {
+            (base.rss - f1.rss).max(0.0) / (f1.rss / f1.dof as f64)
+        } else {
+            f64::INFINITY
+        };
+        let p = (f_survival(f_stat, 1.0, f1.dof as f64) * candidates.len() as f64).min(1.0);
+        let change = f1.coefficients[2].exp() - 1.0;
+        if !(p < s.step_alpha && change.abs() >= s.min_step) {
+            continue;
+        }
+        // Among the significant dates, the one that leaves the fewest
+        // events out of the fit (a date one event off takes that event out
+        // as an outlier and fits as well), then the largest F.
+        if best
+            .as_ref()
+            .is_none_or(|b| (kept.len(), f_stat) > (b.2.len(), b.0.f_statistic))
+        {
+            let step = Step {
+                from,
+                relative_change: change,
+                f_statistic: f_stat,
+                p_value: p,
+            };
+            best = Some((step, f1, kept));
+        }
+    }
+    best
 }
 
 /// The band of one mode and the verdict of each of its events (module doc,
@@ -292,24 +370,15 @@ pub fn assess(points: &[Point], s: &BandSettings) -> ModeAssessment {
             usable.len()
         ));
     }
-    let max_removed = (s.max_outlier_fraction * usable.len() as f64).floor() as usize;
-    let mut fitted = usable.clone();
-    let (fit, step) = loop {
-        let step = best_step(points, &fitted, s);
-        let Some(fit) = fit_over(points, &fitted, step.map(|st| st.from)) else {
-            return no_band(
-                "the intensities of the events do not vary: the amplitude dependence cannot be fitted"
-                    .into(),
-            );
-        };
-        let removed = usable.len() - fitted.len();
-        if removed < max_removed && fitted.len() > min_events {
-            if let Some((e, _)) = worst_outlier(points, &fitted, step.as_ref(), s) {
-                fitted.retain(|&i| i != e);
-                continue;
-            }
-        }
-        break (fit, step);
+    let Some((fitted, fit)) = outlier_loop(points, &usable, None, s) else {
+        return no_band(
+            "the intensities of the events do not vary: the amplitude dependence cannot be fitted"
+                .into(),
+        );
+    };
+    let (fitted, fit, step) = match best_step(points, &usable, s) {
+        Some((st, f, set)) => (set, f, Some(st)),
+        None => (fitted, fit, None),
     };
     let band = ModeBand {
         t_quantile: fit.t_quantile(s.confidence),

@@ -40,6 +40,7 @@ impl Default for HistorySettings {
             // below two shared channels the direction label must agree.
             pairing: PairingSettings {
                 frequency_window: 0.5,
+                min_mac_same_direction: Some(0.5),
                 ..PairingSettings::default()
             },
             band: BandSettings::default(),

@@ -10,6 +10,8 @@
 //! - with at least [`MIN_SHARED_FOR_MAC`] shared channels a pair needs
 //!   MAC ≥ `min_mac` AND |f − f_ref|/f_ref ≤ `frequency_window`; candidates
 //!   are taken by decreasing MAC (ties: smaller |Δf|, then smaller indices).
+//!   with `min_mac_same_direction` set (a structure's history), two modes
+//!   with the same known direction label pair from that lower MAC on.
 //!   A mode holding less than [`MIN_SHARED_ENERGY`] of its shape's energy on
 //!   the shared channels is not paired (its MAC there would be noise);
 //! - with fewer shared channels a MAC says nothing (one component: always 1),
@@ -105,6 +107,15 @@ pub struct PairingSettings {
     /// Least relative standard deviation of each frequency in the shift's
     /// uncertainty (module doc); 0 = the modes' `frequency_std_hz` alone.
     pub frequency_std_floor: f64,
+    /// Least MAC of a pair whose two modes carry the same (known) direction
+    /// label, when lower than `min_mac`; `None` (the pre/post comparison):
+    /// `min_mac` for every pair.  A structure's history sets it (module doc
+    /// of `crate::history`): across decades a mode's shape departs from
+    /// itself (strong shaking softens one support more than another; a new
+    /// recorder generation reverses a channel's polarity) while its
+    /// direction stays.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_mac_same_direction: Option<f64>,
 }
 
 impl Default for PairingSettings {
@@ -113,6 +124,7 @@ impl Default for PairingSettings {
             min_mac: 0.8,
             frequency_window: 0.2,
             frequency_std_floor: 0.002,
+            min_mac_same_direction: None,
         }
     }
 }
@@ -310,7 +322,16 @@ fn candidates(reference: ModeSet, current: ModeSet, settings: &PairingSettings) 
                         continue;
                     }
                     let m = mac(&a[i].0, &b[j].0);
-                    if m >= settings.min_mac && in_window(i, j) {
+                    let least = match settings.min_mac_same_direction {
+                        Some(v)
+                            if !ra[i].direction.is_empty()
+                                && ra[i].direction == rb[j].direction =>
+                        {
+                            v.min(settings.min_mac)
+                        }
+                        _ => settings.min_mac,
+                    };
+                    if m >= least && in_window(i, j) {
                         list.push(Candidate {
                             reference: i,
                             current: j,

@@ -82,6 +82,7 @@ impl ReferenceParams {
             min_mac: self.reference_min_mac,
             frequency_window: self.reference_frequency_window,
             frequency_std_floor: self.reference_frequency_std_floor,
+            min_mac_same_direction: None,
         };
         self.reference_modes
             .as_deref()

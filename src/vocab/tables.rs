@@ -484,7 +484,7 @@ declare!(HISTORY_EVENTS, history_events, "history_events", "history_events.parqu
     MODES: "modes", U32, required, "", "modes identified in the event";
     STATUS: "status", Utf8, required, "", "the event's most severe mode status: `step` (a permanent shift starts here), `below_band`, `amplitude_softened`, `above_band`, `in_band`, `no_band`, `no_modes`";
     FLAGS: "flags", ListUtf8, required, "", "one sentence per mode outside its band or starting a shift";
-    PREDICTED_FROM: "predicted_from", Utf8, nullable, "", "the event whose model predicted this one's response: the latest earlier event with a model (Eqs. H7–H9); null when none";
+    PREDICTED_FROM: "predicted_from", Utf8, nullable, "", "the event whose model predicted this one's response: the latest earlier event with a model whose input and output channels this event recorded (Eqs. H7–H9); null when none";
     PREDICTION_CHANNELS: "prediction_channels", ListUtf8, required, "", "output channels of the prediction";
     PREDICTION_ERRORS: "prediction_errors", ListF64, required, "1", "normalised error ‖y − ŷ‖/‖y‖ per channel of `prediction_channels` (Eq. H9)";
     PREDICTION_ERROR_MEDIAN: "prediction_error_median", F64, nullable, "1", "median of `prediction_errors`";

@@ -34,6 +34,7 @@ mod exit_codes;
 mod fuzz;
 mod fuzz_structured;
 mod geometry;
+mod history;
 mod hysteresis;
 mod hysteresis_masses;
 mod hysteresis_partial;
