@@ -261,7 +261,7 @@ fn mode_section(h: &StructureHistory, m: &ModeHistory, confidence: f64) -> Strin
                 format_number(b.fit.residual_std),
                 b.fitted.len(),
                 m.track.members.len(),
-                format_number(100.0 * confidence),
+                super::html::short_number(100.0 * confidence),
                 match b.step {
                     Some(st) => format!(
                         "; <b>permanent shift of {:+.1} %</b> from {} (p = {:.2e}, Eq. H5)",

@@ -520,3 +520,145 @@ fn history_command_on_a_synthetic_dataset() {
     ]);
     assert_eq!(o.status.code(), Some(1));
 }
+
+// ---- real records ------------------------------------------------------------
+
+/// `quaketwin run pipelines/post-earthquake.toml EVENTS… --out DS` then
+/// `quaketwin history DS --out H`; the rows of both tables.
+fn real_history(
+    events: &[PathBuf],
+    tmp: &Path,
+) -> (
+    Vec<quaketwin::sinks::history_tables::HistoryModeRow>,
+    Vec<quaketwin::sinks::history_tables::HistoryEventRow>,
+) {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let ds = tmp.join("ds");
+    let o = bin()
+        .arg("-q")
+        .arg("run")
+        .arg(root.join("pipelines/post-earthquake.toml"))
+        .args(events)
+        .arg("--out")
+        .arg(&ds)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = tmp.join("history");
+    let o = bin()
+        .arg("-q")
+        .arg("history")
+        .arg(&ds)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    (
+        quaketwin::sinks::history_tables::read_modes(&out.join("history_modes.parquet")).unwrap(),
+        quaketwin::sinks::history_tables::read_events(&out.join("history_events.parquet")).unwrap(),
+    )
+}
+
+/// Three Painter St. events 40 years apart (1982 film, the 1 g Petrolia
+/// shaking of 1992, a 2021 digital record), zips without a manifest: one
+/// structure (the station CE.89324), one transverse (Y) mode followed
+/// across all three although its shape at 1 g (MAC 0.64 to 1982) and the
+/// polarity of the longitudinal channel between the recorder generations
+/// (MAC 0.77) keep them below the pre/post MAC of 0.8; three events give
+/// no band, and say so.  About 2 s in a debug build.
+#[test]
+fn shared_history_follows_the_painter_street_transverse_mode_across_recorders() {
+    use crate::common::shared_record;
+    let events = [
+        shared_record("cesmd-bridges-corpus/painter-st-ce89324/riodell82_ce89324p.zip"),
+        shared_record("csmip-ce89324-painterst-overpass/petrolia_25apr1992_ce89324p.zip"),
+        shared_record("cesmd-bridges-corpus/painter-st-ce89324/nc73666231_ce89324p.zip"),
+    ];
+    let tmp = tempfile::tempdir().unwrap();
+    let (modes, rows) = real_history(&events, tmp.path());
+    assert!(rows.iter().all(|r| r.structure == "CE.89324"), "{rows:?}");
+    let names: Vec<&str> = rows.iter().map(|r| r.event.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "riodell82_ce89324p",
+            "petrolia_25apr1992_ce89324p",
+            "nc73666231_ce89324p"
+        ],
+        "date order"
+    );
+    let transverse: Vec<_> = modes.iter().filter(|r| r.mode == 1).collect();
+    assert_eq!(transverse.len(), 3, "{modes:#?}");
+    assert!(transverse.iter().all(|r| r.direction == "Y"));
+    let f: Vec<f64> = transverse.iter().map(|r| r.frequency_hz).collect();
+    assert!(
+        (3.8..4.1).contains(&f[0]) && (2.3..2.6).contains(&f[1]) && (4.3..4.5).contains(&f[2]),
+        "{f:?}"
+    );
+    assert!(transverse.iter().all(|r| r.status == "no_band"));
+    // The two later events were predicted from the model of an earlier one.
+    assert!(
+        rows[1..]
+            .iter()
+            .all(|r| r.predicted_from.is_some() && !r.prediction_errors.is_empty()),
+        "{rows:#?}"
+    );
+}
+
+/// Issue 35 must-show: the bridge corpus (18 events of 4 bridges) with the
+/// 1992 Petrolia record of Painter St. (`csmip-ce89324-painterst-overpass`,
+/// and its 2023 event there) as one dataset: Painter St.'s transverse mode
+/// in 12 events, the 1992 event `amplitude_softened`, every other event
+/// inside the band, no permanent shift; the other bridges (1–3 events) no
+/// band.  About 10 s in a debug build; run with
+/// `cargo test --release --test it shared_history_of_the_bridge_corpus -- --ignored`.
+#[test]
+#[ignore]
+fn shared_history_of_the_bridge_corpus() {
+    use crate::common::shared_record;
+    let mut events: Vec<PathBuf> = Vec::new();
+    for folder in [
+        "cesmd-bridges-corpus/painter-st-ce89324",
+        "cesmd-bridges-corpus/ridgecrest-ce33742",
+        "cesmd-bridges-corpus/crowley-ce54730",
+        "cesmd-bridges-corpus/capistrano-ce13795",
+        "csmip-ce89324-painterst-overpass",
+    ] {
+        let dir = shared_record(folder);
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_some_and(|x| x.eq_ignore_ascii_case("zip")) {
+                events.push(p);
+            }
+        }
+    }
+    events.sort();
+    assert_eq!(events.len(), 20);
+    let tmp = tempfile::tempdir().unwrap();
+    let (modes, rows) = real_history(&events, tmp.path());
+    let mut structures: Vec<&str> = rows.iter().map(|r| r.structure.as_str()).collect();
+    structures.dedup();
+    assert_eq!(structures, ["CE.13795", "CE.33742", "CE.54730", "CE.89324"]);
+    let painter: Vec<_> = modes
+        .iter()
+        .filter(|r| r.structure == "CE.89324" && r.mode == 1)
+        .collect();
+    assert_eq!(painter.len(), 12, "{painter:#?}");
+    for r in &painter {
+        assert_eq!(r.direction, "Y");
+        assert!(r.step_event.is_none(), "{r:?}");
+        if r.event == "petrolia_25apr1992_ce89324p" {
+            assert_eq!(r.status, "amplitude_softened", "{r:?}");
+            assert!(r.deviation_percent.unwrap() < -25.0, "{r:?}");
+        } else {
+            assert_eq!(r.status, "in_band", "{r:?}");
+        }
+    }
+    for id in ["CE.13795", "CE.33742", "CE.54730"] {
+        assert!(modes
+            .iter()
+            .filter(|r| r.structure == id && r.mode == 1)
+            .all(|r| r.status == "no_band" && r.direction == "Y"));
+    }
+}
