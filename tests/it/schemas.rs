@@ -109,6 +109,11 @@ const DESIGN_TABLES: [&str; 7] = [
     "rehearsal",
 ];
 
+/// Tables of a structure's history, made from a dataset of many events:
+/// `quaketwin.event` names the dataset and `quaketwin.history` holds the
+/// `history` step; each event's own processing is in its tables.
+const DATASET_TABLES: [&str; 2] = ["history_modes", "history_events"];
+
 fn run(pipeline: &Path, event: &str, out: &Path) {
     quaketwin::commands::run_pipeline(
         pipeline,
@@ -170,7 +175,7 @@ fn check_outputs(dir: &Path, seen: &mut BTreeSet<String>) {
         // and by which steps, in the Arrow schema (where pyarrow and polars
         // look) and in the footer.  The hybrid-test design tables carry
         // their own provenance (design file, twin, motion source) instead.
-        if !DESIGN_TABLES.contains(&name.as_str()) {
+        if !DESIGN_TABLES.contains(&name.as_str()) && !DATASET_TABLES.contains(&name.as_str()) {
             for key in [EVENT_KEY, HISTORY_KEY] {
                 assert!(footer.iter().any(|k| k == key), "{p}: footer lacks {key}");
             }
@@ -237,8 +242,25 @@ fn every_table_of_the_sample_runs_matches_its_declaration() {
     opts.end = Some("2026-01-01T01:00:00Z".into());
     quaketwin::track::run(&opts).unwrap();
 
+    // history_*.parquet: the quake's run published as a one-event dataset.
+    let dataset = tempfile::tempdir().unwrap();
+    let partition = quaketwin::sinks::dataset::partition("building", "quake");
+    quaketwin::sinks::dataset::publish_tables(dataset.path(), &partition, quake.path()).unwrap();
+    let history = dataset.path().join("history");
+    quaketwin::dataset_history::write_history(dataset.path(), None, &history).unwrap();
+    for name in DATASET_TABLES {
+        let file = history.join(format!("{name}.parquet"));
+        let meta = quaketwin::sinks::parquet::ReadTable::open(&file).unwrap();
+        assert!(meta
+            .metadata(EVENT_KEY)
+            .is_some_and(|e| e.contains("dataset")));
+        assert!(meta
+            .metadata(HISTORY_KEY)
+            .is_some_and(|h| h.contains("\"history\"")));
+    }
+
     let mut seen = BTreeSet::new();
-    for dir in [quake.path(), design.path(), &out, &track] {
+    for dir in [quake.path(), design.path(), &out, &track, &history] {
         check_outputs(dir, &mut seen);
     }
     let never: Vec<&str> = ALL_TABLES
