@@ -39,6 +39,13 @@ fn g(x: Option<f64>) -> String {
         .unwrap_or_else(|| "—".into())
 }
 
+/// Adds a series of points unless there are none.
+fn push_points(chart: &mut Chart, label: &str, points: Vec<(f64, f64)>, colour: usize, mark: Mark) {
+    if !points.is_empty() {
+        chart.series.push(Series::new(label, points, colour, mark));
+    }
+}
+
 /// Frequency against intensity (log axis, in g) with the band shaded.
 fn intensity_chart(h: &StructureHistory, m: &ModeHistory) -> String {
     let mut groups: [Vec<(f64, f64)>; 3] = Default::default();
@@ -130,30 +137,27 @@ fn intensity_chart(h: &StructureHistory, m: &ModeHistory) -> String {
         }
     }
     let [ok, flagged, after] = groups;
-    if !ok.is_empty() {
-        chart.series.push(Series::new(
-            "in band / no band",
-            ok,
-            IN_BAND,
-            Mark::FilledCircle,
-        ));
-    }
-    if !after.is_empty() {
-        chart.series.push(Series::new(
-            "after the shift",
-            after,
-            AFTER_STEP,
-            Mark::Triangle,
-        ));
-    }
-    if !flagged.is_empty() {
-        chart.series.push(Series::new(
-            "outside the band",
-            flagged,
-            FLAGGED,
-            Mark::Cross,
-        ));
-    }
+    push_points(
+        &mut chart,
+        "in band / no band",
+        ok,
+        IN_BAND,
+        Mark::FilledCircle,
+    );
+    push_points(
+        &mut chart,
+        "after the shift",
+        after,
+        AFTER_STEP,
+        Mark::Triangle,
+    );
+    push_points(
+        &mut chart,
+        "outside the band",
+        flagged,
+        FLAGGED,
+        Mark::Cross,
+    );
     match render(&chart) {
         Ok(svg) => {
             let mut svg = shade_band(&svg, &chart, &band_points, BAND, "prediction band (Eq. H3)");
@@ -194,27 +198,21 @@ fn date_chart(h: &StructureHistory, m: &ModeHistory) -> String {
         return "<p class=\"note\">No event with a known date.</p>".into();
     }
     let mut chart = Chart::new(560, 300, "event date (year)", "frequency (Hz)");
-    if !predicted.is_empty() {
-        chart.series.push(Series::new(
-            "predicted at the event's intensity",
-            predicted,
-            PREDICTED,
-            Mark::HollowCircle,
-        ));
-    }
-    if !ok.is_empty() {
-        chart
-            .series
-            .push(Series::new("identified", ok, IN_BAND, Mark::FilledCircle));
-    }
-    if !flagged.is_empty() {
-        chart.series.push(Series::new(
-            "outside the band",
-            flagged,
-            FLAGGED,
-            Mark::Cross,
-        ));
-    }
+    push_points(
+        &mut chart,
+        "predicted at the event's intensity",
+        predicted,
+        PREDICTED,
+        Mark::HollowCircle,
+    );
+    push_points(&mut chart, "identified", ok, IN_BAND, Mark::FilledCircle);
+    push_points(
+        &mut chart,
+        "outside the band",
+        flagged,
+        FLAGGED,
+        Mark::Cross,
+    );
     if let Some(step) = m.assessment.band.as_ref().and_then(|b| b.step) {
         if let Some(t) = h.events[m.track.members[step.from].event].time_ns {
             chart.ref_lines.push(RefLine {

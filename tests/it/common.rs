@@ -225,3 +225,25 @@ pub fn fixed_e10(values: &[f64]) -> Vec<String> {
         .map(|c| c.iter().map(|v| format!("{v:10.4E}")).collect())
         .collect()
 }
+
+/// A mode of a modal table with a real shape (largest component as given),
+/// for tests of the pairing: frequency `f`, its standard deviation `sd`,
+/// damping 2 %, direction label `direction`.
+pub fn test_mode(f: f64, sd: f64, direction: &str, shape: &[f64]) -> quaketwin::modal::Mode {
+    quaketwin::modal::Mode {
+        frequency_hz: f,
+        frequency_std_hz: sd,
+        damping_ratio: 0.02,
+        damping_std: 0.001,
+        shape: shape.iter().map(|&x| faer::c64::new(x, 0.0)).collect(),
+        shape_std: vec![0.0; shape.len()],
+        mpc: 1.0,
+        mpd_deg: 0.0,
+        mean_mac: 1.0,
+        pole_count: 10,
+        order_min: 10,
+        order_max: 40,
+        manual: false,
+        direction: direction.into(),
+    }
+}

@@ -39,23 +39,8 @@ fn stiffness_at(a_g: f64, extra: f64) -> f64 {
 /// largest component 1) with relative frequency noise `df`.
 fn mode_of(f: f64, shape: &[f64], df: f64, direction: &str) -> Mode {
     let top = shape.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let shape = shape.iter().map(|v| c64::new(v / top, 0.0)).collect();
-    Mode {
-        frequency_hz: f * (1.0 + df),
-        frequency_std_hz: 0.001 * f,
-        damping_ratio: 0.03,
-        damping_std: 0.001,
-        shape,
-        shape_std: vec![0.0; 3],
-        mpc: 1.0,
-        mpd_deg: 0.0,
-        mean_mac: 1.0,
-        pole_count: 10,
-        order_min: 10,
-        order_max: 40,
-        manual: false,
-        direction: direction.into(),
-    }
+    let shape: Vec<f64> = shape.iter().map(|v| v / top).collect();
+    crate::common::test_mode(f * (1.0 + df), 0.001 * f, direction, &shape)
 }
 
 /// Intensities (g) of `n` events, log-spread over 0.01–0.4 g in a shuffled
@@ -368,29 +353,13 @@ fn write_dataset_events(dir: &Path) -> Vec<PathBuf> {
         .collect()
 }
 
-const PIPELINE: &str = r#"
-[pipeline]
-name = "history-test"
-[[stage]]
-name = "ingest"
-kind = "ingest"
-[[stage]]
-name = "condition"
-kind = "condition"
-inputs = ["ingest"]
-[stage.params]
-detrend = { method = "mean" }
-taper_fraction = 0.05
-filter = { order = 4, band = "bandpass", corners_hz = [0.1, 20.0], zero_phase = true }
-[[stage]]
-name = "metrics"
-kind = "metrics"
-inputs = ["condition"]
-[[stage]]
-name = "modal"
-kind = "modal"
-inputs = ["condition"]
-"#;
+/// The ingest pipeline and the modal stage.
+fn ingest_and_modal() -> String {
+    format!(
+        "{}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n",
+        quaketwin::commands::INGEST_PIPELINE
+    )
+}
 
 /// The command end to end: `run` of the synthetic events into a dataset,
 /// then `history`: the step dated at its event, the outlier flagged, the
@@ -403,7 +372,7 @@ fn history_command_on_a_synthetic_dataset() {
     let tmp = tempfile::tempdir().unwrap();
     let events = write_dataset_events(&tmp.path().join("events"));
     let pipeline = tmp.path().join("pipeline.toml");
-    std::fs::write(&pipeline, PIPELINE).unwrap();
+    std::fs::write(&pipeline, ingest_and_modal()).unwrap();
     let ds = tmp.path().join("ds");
     let o = bin()
         .arg("-q")

@@ -318,37 +318,17 @@ fn bad_pairing_settings_are_refused_when_the_pipeline_is_read() {
 // Pairing of two events' modes on their shared channels (moved from
 // src/modal/compare.rs: the library has no unit-test harness).
 mod pairing {
-    use faer::c64;
     use quaketwin::modal::compare::{
         compare_events, relative_shift, Comparison, ModeSet, PairingBasis, PairingSettings,
     };
     use quaketwin::modal::Mode;
-
-    fn real(v: &[f64]) -> Vec<c64> {
-        v.iter().map(|&x| c64::new(x, 0.0)).collect()
-    }
 
     fn ids(v: &[&str]) -> Vec<String> {
         v.iter().map(|s| s.to_string()).collect()
     }
 
     fn mode(f: f64, sd: f64, direction: &str, shape: &[f64]) -> Mode {
-        Mode {
-            frequency_hz: f,
-            frequency_std_hz: sd,
-            damping_ratio: 0.02,
-            damping_std: 0.001,
-            shape: real(shape),
-            shape_std: vec![0.0; shape.len()],
-            mpc: 1.0,
-            mpd_deg: 0.0,
-            mean_mac: 1.0,
-            pole_count: 10,
-            order_min: 10,
-            order_max: 40,
-            manual: false,
-            direction: direction.into(),
-        }
+        crate::common::test_mode(f, sd, direction, shape)
     }
 
     /// [`compare_events`] with the modes' own std (no floor).
