@@ -78,6 +78,21 @@ fn pole(m: &ModalTerm) -> c64 {
     c64::new(-z * w, w * (1.0 - z * z).sqrt())
 }
 
+/// (index in `ids`, index in the record's outputs) of each of `ids` the
+/// record holds as an output, in the order of `ids`.
+fn held_outputs(ids: &[String], record: &IoRecord) -> Vec<(usize, usize)> {
+    ids.iter()
+        .enumerate()
+        .filter_map(|(k, id)| {
+            record
+                .output_ids
+                .iter()
+                .position(|o| o == id)
+                .map(|o| (k, o))
+        })
+        .collect()
+}
+
 /// Samples every channel of `record` holds (the shortest channel).
 fn common_length(record: &IoRecord) -> usize {
     record
@@ -137,17 +152,7 @@ pub fn fit(
         return Err(format!("sampling interval {} s", record.dt));
     }
     // Outputs: the shape's channels the record holds.
-    let outputs: Vec<(usize, usize)> = shape_ids
-        .iter()
-        .enumerate()
-        .filter_map(|(s, id)| {
-            record
-                .output_ids
-                .iter()
-                .position(|o| o == id)
-                .map(|o| (s, o))
-        })
-        .collect();
+    let outputs = held_outputs(shape_ids, record);
     if outputs.is_empty() {
         return Err("none of the modes' channels is among the record's outputs".into());
     }
@@ -253,18 +258,7 @@ pub fn simulate(
                 .ok_or_else(|| format!("input channel {id} of the model is not in this event"))
         })
         .collect::<Result<_, _>>()?;
-    let outputs: Vec<(usize, usize)> = model
-        .output_ids
-        .iter()
-        .enumerate()
-        .filter_map(|(c, id)| {
-            record
-                .output_ids
-                .iter()
-                .position(|o| o == id)
-                .map(|o| (c, o))
-        })
-        .collect();
+    let outputs = held_outputs(&model.output_ids, record);
     if outputs.is_empty() {
         return Err("none of the model's output channels is in this event".into());
     }

@@ -39,6 +39,15 @@ fn g(x: Option<f64>) -> String {
         .unwrap_or_else(|| "—".into())
 }
 
+/// The rendered chart, passed through `decorate` (shading), with its
+/// legend; a note when it cannot be drawn.
+fn figure(chart: &Chart, decorate: impl FnOnce(String) -> String) -> String {
+    match render(chart) {
+        Ok(svg) => format!("{}{}", decorate(svg), super::plot::legend(&chart.series)),
+        Err(e) => format!("<p class=\"note\">No chart: {}</p>", escape(&e)),
+    }
+}
+
 /// Adds a series of points unless there are none.
 fn push_points(chart: &mut Chart, label: &str, points: Vec<(f64, f64)>, colour: usize, mark: Mark) {
     if !points.is_empty() {
@@ -158,22 +167,19 @@ fn intensity_chart(h: &StructureHistory, m: &ModeHistory) -> String {
         FLAGGED,
         Mark::Cross,
     );
-    match render(&chart) {
-        Ok(svg) => {
-            let mut svg = shade_band(&svg, &chart, &band_points, BAND, "prediction band (Eq. H3)");
-            if !after_points.is_empty() {
-                svg = shade_band(
-                    &svg,
-                    &chart,
-                    &after_points,
-                    AFTER_STEP,
-                    "prediction band after the shift",
-                );
-            }
-            format!("{svg}{}", super::plot::legend(&chart.series))
+    figure(&chart, |svg| {
+        let svg = shade_band(&svg, &chart, &band_points, BAND, "prediction band (Eq. H3)");
+        if after_points.is_empty() {
+            return svg;
         }
-        Err(e) => format!("<p class=\"note\">No chart: {}</p>", escape(&e)),
-    }
+        shade_band(
+            &svg,
+            &chart,
+            &after_points,
+            AFTER_STEP,
+            "prediction band after the shift",
+        )
+    })
 }
 
 /// Frequency against the event date, with the predicted frequency at each
@@ -222,10 +228,7 @@ fn date_chart(h: &StructureHistory, m: &ModeHistory) -> String {
             });
         }
     }
-    match render(&chart) {
-        Ok(svg) => format!("{svg}{}", super::plot::legend(&chart.series)),
-        Err(e) => format!("<p class=\"note\">No chart: {}</p>", escape(&e)),
-    }
+    figure(&chart, |svg| svg)
 }
 
 fn mode_section(h: &StructureHistory, m: &ModeHistory, confidence: f64) -> String {
