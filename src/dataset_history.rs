@@ -322,9 +322,30 @@ pub fn run(opts: &HistoryOptions) -> Result<HistorySummary> {
 
 /// `--out` must not be the dataset itself nor one of its table folders.
 fn check_out(opts: &HistoryOptions) -> Result<()> {
-    let canonical = |p: &Path| std::fs::canonicalize(p).ok();
-    let (Some(root), Some(out)) = (canonical(&opts.dataset), canonical(&opts.out)) else {
+    let Some(root) = std::fs::canonicalize(&opts.dataset).ok() else {
         return Ok(());
+    };
+    // `--out` need not exist yet: its nearest existing ancestor, resolved,
+    // with the rest of the path.
+    let out = {
+        let mut existing = opts.out.as_path();
+        let mut rest = Vec::new();
+        loop {
+            if let Ok(p) = std::fs::canonicalize(existing) {
+                break rest.iter().rev().fold(p, |p: PathBuf, c| p.join(c));
+            }
+            match (existing.parent(), existing.file_name()) {
+                (Some(parent), Some(name)) => {
+                    rest.push(name.to_os_string());
+                    existing = if parent.as_os_str().is_empty() {
+                        Path::new(".")
+                    } else {
+                        parent
+                    };
+                }
+                _ => return Ok(()),
+            }
+        }
     };
     let inside_table = out
         .strip_prefix(&root)

@@ -481,6 +481,10 @@ fn history_command_on_a_synthetic_dataset() {
     );
     let o = run(&[ds.as_os_str(), "--out".as_ref(), ds.as_os_str()]);
     assert_eq!(o.status.code(), Some(2));
+    let in_table = ds.join("modes").join("history");
+    let o = run(&[ds.as_os_str(), "--out".as_ref(), in_table.as_os_str()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!in_table.exists(), "nothing written into a table folder");
     let missing = tmp.path().join("missing");
     let o = run(&[
         missing.as_os_str(),
