@@ -41,7 +41,12 @@ impl Stage for Ingest {
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let path = ctx.out_dir.join(EVENT_JSON);
-        let json = inventory_json(ctx.loaded_event()?)?;
+        let window = ctx.event_window()?;
+        if let Some(w) = &window {
+            crate::console::note(format!("ingest: {}", w.describe()));
+        }
+        let window = window.map(|w| w.history());
+        let json = inventory_json_with(ctx.loaded_event()?, window)?;
         crate::sinks::parquet::write_bytes_atomically(&path, &json)?;
         Ok(None)
     }
@@ -75,10 +80,21 @@ struct EventJson<'a> {
     history: &'a crate::vocab::ProcessingHistory,
     /// The building geometry applied at ingest (axes, rotations, floors).
     geometry: &'a crate::geometry::GeometryReport,
+    /// A continuous record's event window (`conditioning::event_window`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    event_window: Option<serde_json::Value>,
 }
 
 /// The inventory of a loaded event as pretty JSON.
 pub fn inventory_json(loaded: &LoadedEvent) -> Result<Vec<u8>> {
+    inventory_json_with(loaded, None)
+}
+
+/// As [`inventory_json`], with the event window of a continuous record.
+fn inventory_json_with(
+    loaded: &LoadedEvent,
+    event_window: Option<serde_json::Value>,
+) -> Result<Vec<u8>> {
     let e = &loaded.event;
     let doc = EventJson {
         name: &e.name,
@@ -107,6 +123,7 @@ pub fn inventory_json(loaded: &LoadedEvent) -> Result<Vec<u8>> {
             .collect(),
         history: &e.history,
         geometry: &loaded.geometry,
+        event_window,
     };
     serde_json::to_vec_pretty(&doc)
         .map_err(|err| Error::numerical(format!("serialising the inventory: {err}")))

@@ -30,6 +30,7 @@ mod design_io;
 mod determinism;
 mod end_to_end;
 mod event_folder;
+mod event_window;
 mod exit_codes;
 mod fuzz;
 mod fuzz_structured;
