@@ -291,7 +291,7 @@ fn load_run_pipeline(
 /// rewrites).
 pub fn check_reference(reference: &Path, out: &Path) -> Result<std::path::PathBuf> {
     let file = crate::sinks::modal_tables::locate_modes(reference)
-        .map_err(|e| crate::error::Error::usage(format!("--reference: {e}")))?;
+        .map_err(|e| e.usage_about("--reference"))?;
     if let (Ok(f), Ok(o)) = (std::fs::canonicalize(&file), std::fs::canonicalize(out)) {
         if f.starts_with(&o) {
             return Err(crate::error::Error::usage(format!(
