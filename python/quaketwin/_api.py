@@ -63,24 +63,25 @@ def inspect(event: PathLike) -> Dict[str, Any]:
 
 def run(
     pipeline: PathLike,
-    event: PathLike,
+    event: Union[PathLike, Sequence[PathLike]],
     out: PathLike,
     reference: Optional[PathLike] = None,
 ) -> Dict[str, Any]:
-    """Runs a pipeline file on an event, or on every event of a folder of
-    events, into ``out`` (``quaketwin run``).
+    """Runs a pipeline file on one event, or on many, into ``out``
+    (``quaketwin run``).
 
     The output directory rules of the command line apply: a lock, the run
-    manifest ``run.json``, re-runs skip the stages that are up to date.  A
-    folder of events gives the many-event layout: a Hive dataset
-    ``out/<table>/structure=…/event=…/part-0.parquet`` (docs/cli.md).
+    manifest ``run.json``, re-runs skip the stages that are up to date.
+    Several events, or a folder of event folders, give the many-event
+    layout: a Hive dataset ``out/<table>/structure=…/event=…/part-0.parquet``
+    that DuckDB, pyarrow and polars read as one table (docs/cli.md).
 
     Parameters
     ----------
     pipeline : str or os.PathLike
         A pipeline file (``pipelines/*.toml``, docs/pipelines.md).
-    event : str or os.PathLike
-        An event folder or zip, or a folder of them.
+    event : str, os.PathLike or a sequence of them
+        An event folder or zip, a folder of event folders, or a list of events.
     out : str or os.PathLike
         The output directory (made if missing).
     reference : str or os.PathLike, optional
@@ -90,8 +91,11 @@ def run(
     Returns
     -------
     dict
-        The run summary of ``quaketwin run --json`` (docs/cli.md): ``ok``,
-        ``stages``, ``outputs``, ``modes``, ``assessment`` …
+        One event: the run summary of ``quaketwin run --json`` (docs/cli.md:
+        ``ok``, ``stages``, ``outputs``, ``modes``, ``assessment`` …).  Many:
+        ``{"summary_version", "dataset", "events": [run summary, …]}``, where
+        an event that failed has ``ok`` false and its ``error`` (the others
+        still ran).
 
     Raises
     ------
@@ -99,11 +103,15 @@ def run(
         The pipeline, the event or the reference does not exist.
     UsageError
         The pipeline file or a parameter is wrong (the message names the key).
+    QuaketwinError
+        The one event's run failed.
     """
+    if isinstance(event, (str, os.PathLike)):
+        events = [_path(event, "event")]
+    else:
+        events = [_path(e, "event") for e in event]
     ref = None if reference is None else _path(reference, "reference")
-    return json.loads(
-        _native.run_json(_path(pipeline, "pipeline"), _path(event, "event"), _path(out, "out"), ref)
-    )
+    return json.loads(_native.run_json(_path(pipeline, "pipeline"), events, _path(out, "out"), ref))
 
 
 def _track_options(archive: PathLike, out: PathLike, options: Dict[str, Any], caller: str) -> str:
@@ -342,8 +350,19 @@ def update(
 
 
 def event_partition(event: PathLike) -> str:
-    """The Hive partition ``structure=…/event=…`` of an event: where its
-    tables go in a many-event dataset (and in ``quaketwin.fleet``'s)."""
+    """The Hive partition of an event in a many-event dataset.
+
+    Parameters
+    ----------
+    event : str or os.PathLike
+        An event folder or zip.
+
+    Returns
+    -------
+    str
+        ``structure=…/event=…``: where the event's tables go in a many-event
+        dataset (``run`` on several events, ``quaketwin.fleet``).
+    """
     return _native.event_partition(_path(event, "event"))
 
 

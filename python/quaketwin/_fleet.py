@@ -178,7 +178,7 @@ def process_event(
             with open(pipeline_path, "w", encoding="utf-8") as f:
                 f.write(pipeline_text)
             run_dir = os.path.join(work, "run")
-            summary = json.loads(_native.run_json(pipeline_path, local, run_dir, None))
+            summary = json.loads(_native.run_json(pipeline_path, [local], run_dir, None))
             tables = _native.run_tables(run_dir)
             produced = sorted(t for _, t in tables)
             for file, table in tables:
@@ -286,6 +286,15 @@ def _check_script_guard(what: str) -> None:
     main = sys.modules.get("__main__")
     path = getattr(main, "__file__", None)
     if main is None or path is None:
+        return
+    # What multiprocessing.spawn runs again in a child (its
+    # get_preparation_data and _fixup_main_from_name/_path): a main module
+    # run by name (`python -m pkg.mod`) unless it is a package's
+    # `__main__`; a script run by path unless it is IPython's.
+    name = getattr(getattr(main, "__spec__", None), "name", None)
+    if name is not None and (name == "__main__" or name.endswith(".__main__")):
+        return
+    if name is None and os.path.splitext(os.path.basename(path))[0] == "ipython":
         return
     top = [f for f in stack if f.f_globals is main.__dict__ and f.f_code.co_name == "<module>"]
     if not top:

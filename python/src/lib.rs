@@ -120,7 +120,12 @@ fn raise(py: Python<'_>, e: Error) -> PyErr {
         _ => ("QuaketwinError", 0, None),
     };
     match path {
-        Some(path) => exception(py, class, (errno, text.clone(), path.clone()), &text),
+        Some(path) => exception(
+            py,
+            class,
+            (errno, text.clone(), path.as_os_str().to_os_string()),
+            &text,
+        ),
         None => exception(py, class, (text.clone(),), &text),
     }
 }
@@ -192,25 +197,34 @@ fn summary_json(
     quaketwin::summary::to_json(&summary)
 }
 
-/// Runs a pipeline file on one event into `out`; the run summary as JSON text.
+/// `quaketwin run`: a pipeline file on one event into `out`, or on several
+/// events (or a folder of events) into the many-event dataset at `out`; the
+/// `--json` document as JSON text.  One event's failure raises; of many
+/// events, each one's failure is in its summary (as `quaketwin.fleet.run`
+/// reports them), and only an error before any event ran raises.
 #[pyfunction]
-#[pyo3(signature = (pipeline, event, out, reference=None))]
+#[pyo3(signature = (pipeline, events, out, reference=None))]
 fn run_json(
     py: Python<'_>,
     pipeline: PathBuf,
-    event: PathBuf,
+    events: Vec<PathBuf>,
     out: PathBuf,
     reference: Option<PathBuf>,
 ) -> PyResult<String> {
     guarded(py, "run_json", || {
-        let result = quaketwin::commands::run_pipeline_with(
+        let runs = quaketwin::commands::run_events(
             &pipeline,
-            &event,
+            &events,
             &out,
             reference.as_deref(),
-            true,
-        );
-        summary_json(&pipeline.display().to_string(), &event, &out, result)
+            // Not quiet: the stage lines go to Python's logging (INFO).
+            false,
+        )?;
+        let json = runs.summary_json(&pipeline.display().to_string(), &out)?;
+        if let quaketwin::commands::Runs::One { .. } = runs {
+            runs.into_result()?;
+        }
+        Ok(json)
     })
 }
 
@@ -218,7 +232,7 @@ fn run_json(
 #[pyfunction]
 fn hysteresis_json(py: Python<'_>, event: PathBuf, out: PathBuf) -> PyResult<String> {
     guarded(py, "hysteresis_json", || {
-        let result = quaketwin::commands::hysteresis(&event, &out, true);
+        let result = quaketwin::commands::hysteresis(&event, &out, false);
         summary_json("hysteresis (built-in)", &event, &out, result)
     })
 }
