@@ -291,7 +291,7 @@ fn load_run_pipeline(
 /// rewrites).
 pub fn check_reference(reference: &Path, out: &Path) -> Result<std::path::PathBuf> {
     let file = crate::sinks::modal_tables::locate_modes(reference)
-        .map_err(|e| crate::error::Error::usage(format!("--reference: {e}")))?;
+        .map_err(|e| e.usage_about("--reference"))?;
     if let (Ok(f), Ok(o)) = (std::fs::canonicalize(&file), std::fs::canonicalize(out)) {
         if f.starts_with(&o) {
             return Err(crate::error::Error::usage(format!(
@@ -868,6 +868,78 @@ pub fn run_many_with(
         })
         .collect();
     Ok(runs)
+}
+
+/// The runs of `quaketwin run PIPELINE EVENT… --out DIR` ([`run_events`]).
+#[derive(Debug)]
+pub enum Runs {
+    /// One event given, and it is one event: run into `out` itself.
+    One {
+        event: std::path::PathBuf,
+        result: Result<Vec<(String, StageOutcome)>>,
+    },
+    /// Several events, or a folder of events: the many-event dataset at
+    /// `out` ([`run_many_with`]).
+    Many(Vec<EventRun>),
+}
+
+/// `quaketwin run PIPELINE EVENT… --out DIR` (and Python's
+/// `quaketwin.run`): one event runs into `out`; several events, or a folder
+/// of events ([`expand_events`]), run into the many-event dataset at `out`.
+pub fn run_events(
+    pipeline_path: &Path,
+    event: &[std::path::PathBuf],
+    out: &Path,
+    reference: Option<&Path>,
+    quiet: bool,
+) -> Result<Runs> {
+    let events = expand_events(event);
+    if event.len() == 1 && events.len() == 1 && events[0] == event[0] {
+        let result = run_pipeline_with(pipeline_path, &events[0], out, reference, quiet);
+        return Ok(Runs::One {
+            event: events[0].clone(),
+            result,
+        });
+    }
+    run_many_with(pipeline_path, &events, out, reference, quiet).map(Runs::Many)
+}
+
+impl Runs {
+    /// The `--json` document: the run summary of the one event, or
+    /// `{summary_version, dataset, events: [run summary…]}`.
+    pub fn summary_json(&self, pipeline_label: &str, out: &Path) -> Result<String> {
+        use crate::summary::{to_json, RunSummary, SUMMARY_VERSION};
+        match self {
+            Runs::One { event, result } => {
+                to_json(&RunSummary::of_run(pipeline_label, event, out, result))
+            }
+            Runs::Many(runs) => {
+                let summaries: Vec<RunSummary> = runs
+                    .iter()
+                    .map(|r| {
+                        let dir = r.run_dir.clone().unwrap_or_else(|| out.to_path_buf());
+                        RunSummary::of_run(pipeline_label, &r.event, &dir, &r.result)
+                    })
+                    .collect();
+                to_json(&serde_json::json!({
+                    "summary_version": SUMMARY_VERSION,
+                    "dataset": out,
+                    "events": summaries,
+                }))
+            }
+        }
+    }
+
+    /// The error of the one event, or of the first event that failed.
+    pub fn into_result(self) -> Result<()> {
+        match self {
+            Runs::One { result, .. } => result.map(|_| ()),
+            Runs::Many(runs) => match runs.into_iter().find(|r| r.result.is_err()) {
+                Some(failed) => failed.result.map(|_| ()),
+                None => Ok(()),
+            },
+        }
+    }
 }
 
 /// `quaketwin track ARCHIVE --out DIR …`: continuous monitoring from an SDS

@@ -645,36 +645,14 @@ fn run_command(cli: &Cli) -> Result<()> {
             out,
             reference,
         } => {
-            let events = commands::expand_events(event);
-            let reference = reference.as_deref();
-            let label = pipeline.display().to_string();
-            if event.len() == 1 && events.len() == 1 && events[0] == event[0] {
-                let result =
-                    commands::run_pipeline_with(pipeline, &events[0], out, reference, quiet);
-                return summarise_run(json, &label, &events[0], out, result);
-            }
-            let runs = commands::run_many_with(pipeline, &events, out, reference, quiet)?;
+            let runs = commands::run_events(pipeline, event, out, reference.as_deref(), quiet)?;
             if json {
-                let summaries: Vec<RunSummary> = runs
-                    .iter()
-                    .map(|r| {
-                        let dir = r.run_dir.clone().unwrap_or_else(|| out.clone());
-                        RunSummary::of_run(&label, &r.event, &dir, &r.result)
-                    })
-                    .collect();
-                print_json(
-                    true,
-                    &serde_json::json!({
-                        "summary_version": quaketwin::summary::SUMMARY_VERSION,
-                        "dataset": out,
-                        "events": summaries,
-                    }),
-                )?;
+                print!(
+                    "{}",
+                    runs.summary_json(&pipeline.display().to_string(), out)?
+                );
             }
-            match runs.into_iter().find(|r| r.result.is_err()) {
-                Some(failed) => failed.result.map(|_| ()),
-                None => Ok(()),
-            }
+            runs.into_result()
         }
     }
 }
