@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::conditioning::event_window::EventWindow;
 use crate::error::{Error, Result};
 use crate::event_folder::LoadedEvent;
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
@@ -45,8 +46,7 @@ impl Stage for Ingest {
         if let Some(w) = &window {
             crate::console::note(format!("ingest: {}", w.describe()));
         }
-        let window = window.map(|w| w.history());
-        let json = inventory_json_with(ctx.loaded_event()?, window)?;
+        let json = inventory_json_with(ctx.loaded_event()?, window.as_ref())?;
         crate::sinks::parquet::write_bytes_atomically(&path, &json)?;
         Ok(None)
     }
@@ -91,17 +91,16 @@ pub fn inventory_json(loaded: &LoadedEvent) -> Result<Vec<u8>> {
 }
 
 /// As [`inventory_json`], with the event window of a continuous record.
-fn inventory_json_with(
-    loaded: &LoadedEvent,
-    event_window: Option<serde_json::Value>,
-) -> Result<Vec<u8>> {
+fn inventory_json_with(loaded: &LoadedEvent, window: Option<&EventWindow>) -> Result<Vec<u8>> {
     let e = &loaded.event;
+    let mut notes = e.notes.clone();
+    notes.extend(window.map(EventWindow::describe));
     let doc = EventJson {
         name: &e.name,
         origin_time: e.origin_ns.map(format_epoch_ns),
         magnitude: e.magnitude,
         structure: e.structure.as_ref(),
-        notes: &e.notes,
+        notes: &notes,
         files: loaded
             .files
             .iter()
@@ -123,7 +122,7 @@ fn inventory_json_with(
             .collect(),
         history: &e.history,
         geometry: &loaded.geometry,
-        event_window,
+        event_window: window.map(EventWindow::history),
     };
     serde_json::to_vec_pretty(&doc)
         .map_err(|err| Error::numerical(format!("serialising the inventory: {err}")))
