@@ -244,8 +244,12 @@ pub fn structure(
         p.push_str(&format!("<dt>Kind</dt><dd>{}</dd>", escape(&k)));
     }
     if let Some((lat, lon)) = s.position() {
+        let ns = if lat < 0.0 { 'S' } else { 'N' };
+        let ew = if lon < 0.0 { 'W' } else { 'E' };
         p.push_str(&format!(
-            "<dt>Position</dt><dd>{lat:.5}° N, {lon:.5}° E</dd>"
+            "<dt>Position</dt><dd>{:.5}° {ns}, {:.5}° {ew}</dd>",
+            lat.abs(),
+            lon.abs()
         ));
     }
     p.push_str("</dl></section>\n");

@@ -16,7 +16,8 @@
 //!
 //! The 20-event study on a real 20-channel record (latency figure of
 //! docs/monitoring-network.md) is `#[ignore]`d:
-//! `cargo test --release --test it watch_twenty -- --ignored --nocapture`.
+//! `cargo build --release --bin quaketwin && QUAKETWIN_BIN=target/release/quaketwin
+//! cargo test --test it watch_twenty -- --ignored --nocapture`.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::{Read, Write};
@@ -31,6 +32,15 @@ use crate::common::column_str;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The binary the scenarios run: `QUAKETWIN_BIN` when set (a release build
+/// for the latency study, without building the tests in release), else the
+/// one under test.
+fn binary() -> PathBuf {
+    std::env::var_os("QUAKETWIN_BIN")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_BIN_EXE_quaketwin")))
 }
 
 /// The quick pipeline of these tests: `pipelines/ingest.toml` (which ends
@@ -246,7 +256,7 @@ struct Watch {
 
 impl Watch {
     fn start(args: &[String], log: PathBuf) -> Watch {
-        let child = Command::new(env!("CARGO_BIN_EXE_quaketwin"))
+        let child = Command::new(binary())
             .args(args)
             .stdin(Stdio::null())
             .stdout(Stdio::null())
@@ -853,7 +863,8 @@ fn watch_retries_dead_letters_and_runs_commands() {
 /// post-earthquake pipeline; kill -9 during the 8th event and a restart.
 /// Prints the median latency from complete upload to notification (docs/
 /// monitoring-network.md quotes it, release build):
-/// `cargo test --release --test it watch_twenty -- --ignored --nocapture`.
+/// `cargo build --release --bin quaketwin && QUAKETWIN_BIN=target/release/quaketwin
+/// cargo test --test it watch_twenty -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn watch_twenty_events_latency_shared() {
