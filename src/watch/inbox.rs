@@ -111,6 +111,9 @@ pub enum Judgement {
     /// Still changing, or not yet at rest for the settle period (or
     /// waiting for its marker): looked at again at the next poll.
     Waiting(String),
+    /// No marker, and only a marker completes an entry (`--require-done`):
+    /// nothing but the uploader can change that (`--once` does not wait for it).
+    Unmarked(String),
     /// At rest for the settle period but not whole (a zip whose directory
     /// does not read): never processed as it is; looked at again when it
     /// changes.
@@ -173,7 +176,7 @@ impl Settling {
             };
         }
         if rule.require_done {
-            return Judgement::Waiting(format!("no {}{DONE_SUFFIX} marker yet", entry.name));
+            return Judgement::Unmarked(format!("no {}{DONE_SUFFIX} marker yet", entry.name));
         }
         if !at_rest {
             return Judgement::Waiting(format!(

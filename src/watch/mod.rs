@@ -234,6 +234,11 @@ pub fn run(o: &WatchOptions) -> Result<WatchSummary> {
                         log::info("entry_waiting", json!({"entry": entry.name, "reason": why}));
                     }
                 }
+                Judgement::Unmarked(why) => {
+                    if said.insert(entry.name.clone(), why.clone()).is_none() {
+                        log::info("entry_waiting", json!({"entry": entry.name, "reason": why}));
+                    }
+                }
                 Judgement::Incomplete(why) => {
                     if said.insert(entry.name.clone(), why.clone()).as_ref() != Some(&why) {
                         log::warn(

@@ -728,6 +728,8 @@ fn watch_retries_dead_letters_and_runs_commands() {
         &inbox.join("ev"),
     );
     std::fs::write(inbox.join("ev").join(".done"), b"").unwrap();
+    // No marker: with --require-done it waits, and --once does not wait for it.
+    copy_dir(&root().join("sample-records/synthetic-2storey-yielding"), &inbox.join("later"));
     let pipeline = quick_pipeline(work.path());
     let flaky = Receiver::start(2);
     let closed = {
