@@ -91,7 +91,7 @@ pub fn write_site(dataset: &Path, site: &Path) -> Result<SiteWritten> {
             let copied = match &e.report {
                 Some(src) => {
                     let rel = format!("reports/{}/{}.html", s.key, partition_value(&e.event));
-                    link_or_copy_atomically(src, &site.join(&rel))?;
+                    place(src, &site.join(&rel))?;
                     files.push(rel.clone());
                     Some(rel)
                 }
@@ -102,7 +102,7 @@ pub fn write_site(dataset: &Path, site: &Path) -> Result<SiteWritten> {
         let hdir = history_dir(dataset, &s.key);
         let history = if hdir.join("history.html").is_file() {
             let rel = format!("history/{}.html", s.key);
-            link_or_copy_atomically(&hdir.join("history.html"), &site.join(&rel))?;
+            place(&hdir.join("history.html"), &site.join(&rel))?;
             files.push(rel.clone());
             Some(rel)
         } else {
@@ -162,6 +162,21 @@ pub fn write_site(dataset: &Path, site: &Path) -> Result<SiteWritten> {
         events,
         files: files.len(),
     })
+}
+
+/// Puts `src` (a report, a history page) at `to` in the site: a hard link,
+/// else a copy — skipped when `to` is already a copy of it (same size, made
+/// after `src` was last written), so that a site on another file system is
+/// not copied whole again after every event.
+fn place(src: &Path, to: &Path) -> Result<()> {
+    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| Ok((m.len(), m.modified()?)));
+    if let (Ok((n, made)), Ok((m, written))) = (modified(to), modified(src)) {
+        let regular = std::fs::symlink_metadata(to).is_ok_and(|m| m.is_file());
+        if regular && n == m && made >= written {
+            return Ok(());
+        }
+    }
+    link_or_copy_atomically(src, to)
 }
 
 /// The history tables of a structure (`history_*.parquet` in its history

@@ -15,17 +15,7 @@ use std::process::Command;
 use crate::common::column_str;
 use crate::report_browser::{attribute, rendered_dom, CHROMIUM};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let p = e.unwrap().path();
-        std::fs::copy(&p, to.join(p.file_name().unwrap())).unwrap();
-    }
-}
+use crate::watch::{copy_dir, root, run_into_dataset};
 
 /// Copies a sample folder as event `name`, editing its manifest with `edit`.
 fn event(events: &Path, sample: &str, name: &str, edit: impl Fn(String) -> String) -> PathBuf {
@@ -153,20 +143,7 @@ fn dashboard_lists_every_structure_with_its_colour_and_links_that_resolve() {
             dir
         },
     ];
-    let run = Command::new(env!("CARGO_BIN_EXE_quaketwin"))
-        .arg("-q")
-        .arg("run")
-        .arg(&pipeline)
-        .args(&evs)
-        .arg("--out")
-        .arg(&dataset)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    run_into_dataset(&pipeline, &evs, &dataset);
     // A history for one structure (what `quaketwin history` will write):
     // its page is copied into the site, its tables shown.
     let history = dataset.join("history/structure=Sample_4-storey_frame");

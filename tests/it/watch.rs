@@ -30,8 +30,27 @@ use std::time::{Duration, Instant};
 
 use crate::common::column_str;
 
-fn root() -> PathBuf {
+pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `quaketwin run PIPELINE EVENTS… --out dataset` (several events: the
+/// many-event dataset); panics with its stderr when it fails.
+pub fn run_into_dataset(pipeline: &Path, events: &[PathBuf], dataset: &Path) {
+    let run = Command::new(env!("CARGO_BIN_EXE_quaketwin"))
+        .arg("-q")
+        .arg("run")
+        .arg(pipeline)
+        .args(events)
+        .arg("--out")
+        .arg(dataset)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
 }
 
 /// The binary the scenarios run: `QUAKETWIN_BIN` when set (a release build
@@ -184,7 +203,7 @@ pub struct Planned {
     pub start: Duration,
 }
 
-fn copy_dir(from: &Path, to: &Path) {
+pub fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for e in std::fs::read_dir(from).unwrap() {
         let p = e.unwrap().path();
@@ -654,20 +673,7 @@ fn watch_survives_kill_9_and_restart() {
     let reference = o.work.path().join("reference");
     let mut events: Vec<PathBuf> = o.complete.keys().map(|n| o.inbox.join(n)).collect();
     events.sort();
-    let run = Command::new(env!("CARGO_BIN_EXE_quaketwin"))
-        .arg("-q")
-        .arg("run")
-        .arg(&o.pipeline)
-        .args(&events)
-        .arg("--out")
-        .arg(&reference)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    run_into_dataset(&o.pipeline, &events, &reference);
     let (watched, plain) = (table_files(&o.dataset), table_files(&reference));
     assert_eq!(
         watched.keys().collect::<Vec<_>>(),
@@ -729,7 +735,10 @@ fn watch_retries_dead_letters_and_runs_commands() {
     );
     std::fs::write(inbox.join("ev").join(".done"), b"").unwrap();
     // No marker: with --require-done it waits, and --once does not wait for it.
-    copy_dir(&root().join("sample-records/synthetic-2storey-yielding"), &inbox.join("later"));
+    copy_dir(
+        &root().join("sample-records/synthetic-2storey-yielding"),
+        &inbox.join("later"),
+    );
     let pipeline = quick_pipeline(work.path());
     let flaky = Receiver::start(2);
     let closed = {
