@@ -113,6 +113,12 @@ pub fn note(line: impl Display) {
     emit(Kind::Note, &line.to_string());
 }
 
+/// A structured log line (one JSON object, `quaketwin watch`): shown at
+/// every verbosity, since an unattended service's log is its output.
+pub fn record(line: impl Display) {
+    emit(&line.to_string());
+}
+
 /// A bar of `len` steps labelled `prefix` (an event's name in many-event
 /// runs), hidden with `-q` or when `hidden`.  Remove it with
 /// `finish_and_clear` when its work ends.

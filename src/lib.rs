@@ -10,6 +10,7 @@ pub mod assessment;
 pub mod commands;
 pub mod conditioning;
 pub mod console;
+pub mod dashboard;
 pub mod design;
 pub mod error;
 pub mod event_folder;
@@ -35,6 +36,7 @@ pub mod synth;
 pub mod track;
 pub mod twin;
 pub mod vocab;
+pub mod watch;
 
 pub use error::{Error, Location, Result};
 

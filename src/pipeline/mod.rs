@@ -20,6 +20,7 @@
 
 pub mod config;
 pub mod context;
+pub mod dataset;
 pub mod fingerprint;
 pub mod lock;
 pub mod manifest;
