@@ -171,6 +171,18 @@ impl<'p> RunContext<'p> {
         self.spill.clone()
     }
 
+    /// The spill file when `samples` (what a stage produces) are more than
+    /// the park threshold, `None` otherwise — even when the event is parked:
+    /// a continuous event's window is small beside the records, and parking
+    /// it would only grow the spill file.
+    pub fn spill_for(&mut self, samples: usize) -> Result<Option<Arc<dyn SampleStore>>> {
+        if samples > self.park_above {
+            self.spill().map(Some)
+        } else {
+            Ok(None)
+        }
+    }
+
     /// The spill file when `samples` (of an event or a product read back)
     /// are more than the park threshold, or when the event is parked.
     pub fn spill_above(&mut self, samples: usize) -> Result<Option<Arc<dyn SampleStore>>> {

@@ -141,7 +141,10 @@ impl Stage for Condition {
         // Cloning a parked event copies its channels' descriptions, not their
         // samples; a continuous record is cut to its event window.
         let mut event = ctx.analysis_event()?;
-        let spill = ctx.parked();
+        // What this stage makes is parked when it is big (a continuous
+        // event's window is not: it stays in memory).
+        let produced: usize = event.records.iter().map(|r| r.samples.len()).sum();
+        let spill = ctx.spill_for(produced)?;
         // A parked event's motions are parked series by series as each is
         // final (two series of a day-long channel in memory, not three).
         let park_series = |values: Vec<f64>| -> Result<Samples> {
