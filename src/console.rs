@@ -116,7 +116,7 @@ pub fn note(line: impl Display) {
 /// A structured log line (one JSON object, `quaketwin watch`): shown at
 /// every verbosity, since an unattended service's log is its output.
 pub fn record(line: impl Display) {
-    emit(&line.to_string());
+    emit(Kind::Info, &line.to_string());
 }
 
 /// A bar of `len` steps labelled `prefix` (an event's name in many-event
