@@ -52,6 +52,19 @@ struct Parked {
 }
 
 impl Parked {
+    /// Values `start..start + len` of these (a window of them), multiplied
+    /// by `factor`, reading the same stored values; nothing cached.
+    fn view(&self, start: usize, len: usize, factor: f64) -> Parked {
+        Parked {
+            store: self.store.clone(),
+            position: self.position,
+            start: self.start + start,
+            len,
+            negate: self.negate,
+            scale: self.scale * factor,
+            cache: OnceLock::new(),
+        }
+    }
     fn read(&self) -> std::io::Result<Vec<f64>> {
         self.read_range(0, self.len)
     }
@@ -176,15 +189,7 @@ impl Samples {
         let start = range.start.min(end);
         match &self.0 {
             Repr::Memory(v) => Samples::new(v[start..end].to_vec()),
-            Repr::Parked(p) => Samples(Repr::Parked(Parked {
-                store: p.store.clone(),
-                position: p.position,
-                start: p.start + start,
-                len: end - start,
-                negate: p.negate,
-                scale: p.scale,
-                cache: OnceLock::new(),
-            })),
+            Repr::Parked(p) => Samples(Repr::Parked(p.view(start, end - start, 1.0))),
         }
     }
 
@@ -195,15 +200,7 @@ impl Samples {
     pub fn scaled(&self, factor: f64) -> Samples {
         match &self.0 {
             Repr::Memory(v) => Samples::new(v.iter().map(|x| x * factor).collect()),
-            Repr::Parked(p) => Samples(Repr::Parked(Parked {
-                store: p.store.clone(),
-                position: p.position,
-                start: p.start,
-                len: p.len,
-                negate: p.negate,
-                scale: p.scale * factor,
-                cache: OnceLock::new(),
-            })),
+            Repr::Parked(p) => Samples(Repr::Parked(p.view(0, p.len, factor))),
         }
     }
 
@@ -304,15 +301,7 @@ impl Clone for Samples {
     fn clone(&self) -> Self {
         match &self.0 {
             Repr::Memory(v) => Samples::new(v.clone()),
-            Repr::Parked(p) => Samples(Repr::Parked(Parked {
-                store: p.store.clone(),
-                position: p.position,
-                start: p.start,
-                len: p.len,
-                negate: p.negate,
-                scale: p.scale,
-                cache: OnceLock::new(),
-            })),
+            Repr::Parked(p) => Samples(Repr::Parked(p.view(0, p.len, 1.0))),
         }
     }
 }
