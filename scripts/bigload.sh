@@ -77,16 +77,36 @@ measure() { # name, output dir, command…
     local name="$1" out="$2"
     shift 2
     rm -rf "$out"
-    /usr/bin/time -v -o "$work/$name.time" "$@" >"$work/$name.log" 2>&1 || {
+    /usr/bin/time -v -o "$work/$name.time" "$@" >"$work/$name.log" 2>&1 &
+    local timed=$!
+    # The spill file is unlinked as soon as it is open: its size is read
+    # through the process's open file descriptors, its largest kept.
+    local spill=0 size f pid
+    while kill -0 "$timed" 2>/dev/null; do
+        for pid in $(pgrep -P "$timed" || true); do
+            for f in /proc/"$pid"/fd/*; do
+                case "$(readlink "$f" 2>/dev/null)" in
+                    *.samples.quaketwin-*) size=$(stat -Lc %s "$f" 2>/dev/null || echo 0)
+                        [ "$size" -gt "$spill" ] && spill=$size ;;
+                esac
+            done
+        done
+        sleep 1
+    done
+    wait "$timed" || {
         cat "$work/$name.log" >&2
         echo "bigload.sh: $name failed" >&2
         exit 1
     }
-    local wall rss out_mb
+    local wall rss out_mb in_bytes out_bytes
     wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n = split($2, p, ":"); s = 0; for (i = 1; i <= n; i++) s = s * 60 + p[i]; print s}' "$work/$name.time")
     rss=$(awk -F': ' '/Maximum resident set size/ {printf "%.0f", $2 / 1024}' "$work/$name.time")
     out_mb=$(du -sm "$out" | cut -f1)
-    echo "bigload $name hours=$hours channels=$channels format=$format wall_s=$wall peak_rss_mb=$rss out_mb=$out_mb"
+    in_bytes=$(du -sb "$event" | cut -f1)
+    out_bytes=$(du -sb "$out" | cut -f1)
+    echo "bigload $name hours=$hours channels=$channels format=$format wall_s=$wall peak_rss_mb=$rss out_mb=$out_mb" \
+        "input_bytes=$in_bytes output_bytes=$out_bytes spill_bytes=$spill"
+    awk -F': ' '/User time|System time/ {printf "    %s: %s s\n", $1, $2}' "$work/$name.time"
     grep -E '^\[[^]]*\] +[a-z-]+ +(done|not applicable)' "$work/$name.log" | sed 's/^/    /' || true
 }
 

@@ -7,7 +7,6 @@ use std::path::Path;
 use crate::error::Result;
 use crate::event_folder::{self, LoadedEvent};
 use crate::pipeline::{self, StageOutcome};
-use crate::sinks::dataset;
 use crate::stages::{load_pipeline, parse_pipeline};
 use crate::vocab::format_epoch_ns;
 
@@ -291,7 +290,7 @@ fn load_run_pipeline(
 /// rewrites).
 pub fn check_reference(reference: &Path, out: &Path) -> Result<std::path::PathBuf> {
     let file = crate::sinks::modal_tables::locate_modes(reference)
-        .map_err(|e| crate::error::Error::usage(format!("--reference: {e}")))?;
+        .map_err(|e| e.usage_about("--reference"))?;
     if let (Ok(f), Ok(o)) = (std::fs::canonicalize(&file), std::fs::canonicalize(out)) {
         if f.starts_with(&o) {
             return Err(crate::error::Error::usage(format!(
@@ -782,21 +781,10 @@ fn holds_records(dir: &Path) -> bool {
         })
 }
 
-/// The Hive partition of one event, `structure=<name>/event=<name>` (the
-/// structure's name from the manifest, else `unknown`; the event folder's
-/// name), relative to the dataset root.
+/// The Hive partition of one event, `structure=<name>/event=<name>`
+/// ([`pipeline::dataset::event_partition`]).
 pub fn event_partition(event: &Path) -> Result<std::path::PathBuf> {
-    // The manifest alone: the records are read by the run itself.
-    let manifest = event_folder::read_manifest(event)?;
-    let folder = event
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let structure = manifest
-        .and_then(|m| m.structure)
-        .and_then(|s| s.name)
-        .unwrap_or_else(|| "unknown".into());
-    Ok(dataset::partition(&structure, &folder))
+    pipeline::dataset::event_partition(event)
 }
 
 /// One event of a many-event run: where it ran and how it ended.
@@ -812,7 +800,7 @@ pub struct EventRun {
 /// `quaketwin run PIPELINE EVENT1 EVENT2 … --out DIR`: events in parallel on
 /// all cores, each into its run directory `DIR/runs/structure=…/event=…/`,
 /// its tables then published table-first, `DIR/<table>/structure=…/event=…/
-/// part-0.parquet` ([`dataset`]), so that one table of a whole network reads
+/// part-0.parquet` ([`pipeline::dataset`]), so that one table of a whole network reads
 /// as one dataset (pyarrow, DuckDB, polars).  Every event is attempted; each
 /// one's result is returned, in the order given.  On a terminal each event
 /// running shows its own bar (its stage lines with `-v`), and a line when it
@@ -840,20 +828,9 @@ pub fn run_many_with(
     let runs: Vec<EventRun> = events
         .par_iter()
         .map(|e| {
-            let mut run_dir = None;
-            let result = event_partition(e).and_then(|partition| {
-                let dir = dataset::run_dir(out, &partition);
-                run_dir = Some(dir.clone());
-                let progress = pipeline::Progress {
-                    quiet,
-                    label: Some(partition.display().to_string()),
-                };
-                let outcomes = pipeline::run_showing(&p, e, &dir, &progress)?;
-                dataset::publish_tables(out, &partition, &dir)?;
-                Ok(outcomes)
-            });
+            let run = pipeline::dataset::add_event(&p, e, out, quiet);
             if !quiet {
-                match &result {
+                match &run.result {
                     Ok(_) => crate::console::info(format!("[{name}] {} done", e.display())),
                     Err(err) => {
                         crate::console::info(format!("[{name}] {} failed: {err}", e.display()))
@@ -862,12 +839,84 @@ pub fn run_many_with(
             }
             EventRun {
                 event: e.clone(),
-                run_dir,
-                result,
+                run_dir: run.run_dir,
+                result: run.result,
             }
         })
         .collect();
     Ok(runs)
+}
+
+/// The runs of `quaketwin run PIPELINE EVENT… --out DIR` ([`run_events`]).
+#[derive(Debug)]
+pub enum Runs {
+    /// One event given, and it is one event: run into `out` itself.
+    One {
+        event: std::path::PathBuf,
+        result: Result<Vec<(String, StageOutcome)>>,
+    },
+    /// Several events, or a folder of events: the many-event dataset at
+    /// `out` ([`run_many_with`]).
+    Many(Vec<EventRun>),
+}
+
+/// `quaketwin run PIPELINE EVENT… --out DIR` (and Python's
+/// `quaketwin.run`): one event runs into `out`; several events, or a folder
+/// of events ([`expand_events`]), run into the many-event dataset at `out`.
+pub fn run_events(
+    pipeline_path: &Path,
+    event: &[std::path::PathBuf],
+    out: &Path,
+    reference: Option<&Path>,
+    quiet: bool,
+) -> Result<Runs> {
+    let events = expand_events(event);
+    if event.len() == 1 && events.len() == 1 && events[0] == event[0] {
+        let result = run_pipeline_with(pipeline_path, &events[0], out, reference, quiet);
+        return Ok(Runs::One {
+            event: events[0].clone(),
+            result,
+        });
+    }
+    run_many_with(pipeline_path, &events, out, reference, quiet).map(Runs::Many)
+}
+
+impl Runs {
+    /// The `--json` document: the run summary of the one event, or
+    /// `{summary_version, dataset, events: [run summary…]}`.
+    pub fn summary_json(&self, pipeline_label: &str, out: &Path) -> Result<String> {
+        use crate::summary::{to_json, RunSummary, SUMMARY_VERSION};
+        match self {
+            Runs::One { event, result } => {
+                to_json(&RunSummary::of_run(pipeline_label, event, out, result))
+            }
+            Runs::Many(runs) => {
+                let summaries: Vec<RunSummary> = runs
+                    .iter()
+                    .map(|r| {
+                        let dir = r.run_dir.clone().unwrap_or_else(|| out.to_path_buf());
+                        RunSummary::of_run(pipeline_label, &r.event, &dir, &r.result)
+                    })
+                    .collect();
+                to_json(&serde_json::json!({
+                    "summary_version": SUMMARY_VERSION,
+                    "dataset": out,
+                    "events": summaries,
+                }))
+            }
+        }
+    }
+
+    /// The error of the one event, or of the first event that failed.
+    pub fn into_result(self) -> Result<()> {
+        match self {
+            Runs::One { result, .. } => result.map(|_| ()),
+            Runs::Many(runs) => match runs.into_iter().find(|r| r.result.is_err()) {
+                Some(failed) => failed.result.map(|_| ()),
+                None => Ok(()),
+            },
+        }
+    }
 }
 
 /// `quaketwin track ARCHIVE --out DIR …`: continuous monitoring from an SDS
@@ -913,4 +962,16 @@ pub fn synth_archive(
         ..defaults
     };
     crate::synth::archive::write_archive(out, &settings)
+}
+
+/// `quaketwin watch INBOX --pipeline P --out DATASET …`: unattended intake
+/// ([`crate::watch`]).
+pub fn watch(opts: &crate::watch::WatchOptions) -> Result<crate::watch::WatchSummary> {
+    crate::watch::run(opts)
+}
+
+/// `quaketwin dashboard DATASET --out SITE`: the fleet's static site
+/// ([`crate::dashboard`]).
+pub fn dashboard(dataset: &Path, site: &Path) -> Result<crate::dashboard::SiteWritten> {
+    crate::dashboard::write_site(dataset, site)
 }

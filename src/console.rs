@@ -9,6 +9,12 @@
 //!
 //! The verbosity is process-wide, like a logger's level: the binary sets it
 //! once from its flags; the library's default is [`Verbosity::Normal`].
+//!
+//! A host that is not a terminal program installs a [`Sink`] instead
+//! ([`set_sink`]): every line then goes to it, with its [`Kind`], and
+//! nothing to stderr.  The Python bindings do, so that warnings reach
+//! Python's `warnings` module and the other lines its `logging` (a library
+//! must not write to a notebook's stderr; docs/python.md).
 
 use std::fmt::Display;
 use std::sync::atomic::{AtomicU8, Ordering};
@@ -50,41 +56,74 @@ fn bars() -> &'static MultiProgress {
     BARS.get_or_init(|| MultiProgress::with_draw_target(ProgressDrawTarget::stderr()))
 }
 
-fn emit(line: &str) {
-    bars().suspend(|| eprintln!("{line}"));
+/// What a line is (what a [`Sink`] is told with it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Info,
+    Detail,
+    Warning,
+    Note,
+}
+
+/// Where lines go instead of stderr: called with the line's kind and its
+/// text (without the `quaketwin: warning:` prefix), from any thread.
+pub type Sink = fn(Kind, &str);
+
+static SINK: OnceLock<Sink> = OnceLock::new();
+
+/// Sends every line of this process to `sink` from now on (once per
+/// process: false when a sink was already installed).  Progress bars are
+/// then hidden too.
+pub fn set_sink(sink: Sink) -> bool {
+    SINK.set(sink).is_ok()
+}
+
+fn emit(kind: Kind, line: &str) {
+    match (SINK.get(), kind) {
+        (Some(sink), _) => sink(kind, line),
+        (None, Kind::Warning) => bars().suspend(|| eprintln!("quaketwin: warning: {line}")),
+        (None, Kind::Note) => bars().suspend(|| eprintln!("quaketwin: note: {line}")),
+        (None, _) => bars().suspend(|| eprintln!("{line}")),
+    }
 }
 
 /// A progress line (`-q` hides it).
 pub fn info(line: impl Display) {
     if verbosity() >= Verbosity::Normal {
-        emit(&line.to_string());
+        emit(Kind::Info, &line.to_string());
     }
 }
 
 /// A detail shown with `-v` only.
 pub fn detail(line: impl Display) {
     if verbosity() >= Verbosity::Verbose {
-        emit(&line.to_string());
+        emit(Kind::Detail, &line.to_string());
     }
 }
 
 /// Something the user should act on or know about the results; shown at
 /// every verbosity.
 pub fn warn(line: impl Display) {
-    emit(&format!("quaketwin: warning: {line}"));
+    emit(Kind::Warning, &line.to_string());
 }
 
 /// What a run removed or took over (why files disappeared); shown at every
 /// verbosity.
 pub fn note(line: impl Display) {
-    emit(&format!("quaketwin: note: {line}"));
+    emit(Kind::Note, &line.to_string());
+}
+
+/// A structured log line (one JSON object, `quaketwin watch`): shown at
+/// every verbosity, since an unattended service's log is its output.
+pub fn record(line: impl Display) {
+    emit(Kind::Info, &line.to_string());
 }
 
 /// A bar of `len` steps labelled `prefix` (an event's name in many-event
 /// runs), hidden with `-q` or when `hidden`.  Remove it with
 /// `finish_and_clear` when its work ends.
 pub fn bar(len: u64, prefix: &str, unit: &str, hidden: bool) -> ProgressBar {
-    if hidden || verbosity() == Verbosity::Quiet {
+    if hidden || verbosity() == Verbosity::Quiet || SINK.get().is_some() {
         return ProgressBar::hidden();
     }
     let b = bars().add(ProgressBar::new(len));

@@ -231,13 +231,21 @@ pub fn run(opts: &HistoryOptions) -> Result<HistorySummary> {
     check_out(opts)?;
     let mut groups = structures(&opts.dataset)?;
     if let Some(id) = &opts.structure {
+        // A structure id, or a partition name (`watch` refreshes the
+        // structures of the partition an event went to).
         let known: Vec<String> = groups.keys().cloned().collect();
-        groups.retain(|k, _| k == id);
+        let partitions: std::collections::BTreeSet<String> = groups
+            .values()
+            .flatten()
+            .map(|s| s.event.structure.clone())
+            .collect();
+        groups.retain(|k, sources| k == id || sources.iter().any(|s| s.event.structure == *id));
         if groups.is_empty() {
             return Err(Error::usage(format!(
-                "--structure {id:?}: no such structure in {}; it holds {}",
+                "--structure {id:?}: no such structure in {}; it holds {} (partitions structure={})",
                 opts.dataset.display(),
-                known.join(", ")
+                known.join(", "),
+                partitions.into_iter().collect::<Vec<_>>().join(", structure=")
             )));
         }
     }

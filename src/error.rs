@@ -76,6 +76,12 @@ pub enum Error {
     /// Bad settings, pipeline file or command-line usage.
     #[error("{0}")]
     Usage(String),
+    /// A path the user named in a setting or flag (`--reference`,
+    /// `reference_modes`) that does not exist: a usage error (exit code 2)
+    /// that keeps the path, so that a host can tell it from other usage
+    /// errors (Python's `FileNotFoundError`).
+    #[error("{message}")]
+    MissingPath { path: PathBuf, message: String },
     /// A method could not produce a trustworthy answer from valid data
     /// (e.g. a non-yielding response for Bouc-Wen identification).
     #[error("{stage}: {message}")]
@@ -108,6 +114,18 @@ impl Error {
     pub fn usage(message: impl Into<String>) -> Self {
         Error::Usage(message.into())
     }
+    /// This error as a usage error about the setting or flag `what`
+    /// (`"--reference: …"`); a missing path stays one.
+    pub fn usage_about(self, what: &str) -> Self {
+        match self {
+            Error::Usage(m) => Error::Usage(format!("{what}: {m}")),
+            Error::MissingPath { path, message } => Error::MissingPath {
+                path,
+                message: format!("{what}: {message}"),
+            },
+            other => Error::Usage(format!("{what}: {other}")),
+        }
+    }
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
@@ -134,6 +152,10 @@ impl Error {
                 message: message.clone(),
             },
             Error::Usage(m) => Error::Usage(m.clone()),
+            Error::MissingPath { path, message } => Error::MissingPath {
+                path: path.clone(),
+                message: message.clone(),
+            },
             Error::NotIdentifiable {
                 stage,
                 message,
@@ -158,7 +180,7 @@ impl Error {
     /// Process exit code: 1 for bad input or failed processing, 2 for usage errors.
     pub fn exit_code(&self) -> i32 {
         match self {
-            Error::Usage(_) => 2,
+            Error::Usage(_) | Error::MissingPath { .. } => 2,
             _ => 1,
         }
     }

@@ -10,6 +10,7 @@ pub mod assessment;
 pub mod commands;
 pub mod conditioning;
 pub mod console;
+pub mod dashboard;
 pub mod dataset_history;
 pub mod design;
 pub mod error;
@@ -37,6 +38,7 @@ pub mod synth;
 pub mod track;
 pub mod twin;
 pub mod vocab;
+pub mod watch;
 
 pub use error::{Error, Location, Result};
 

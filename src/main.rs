@@ -337,6 +337,68 @@ enum Command {
         #[arg(long, value_name = "ADDRESS")]
         scheduler: Option<String>,
     },
+    /// Unattended intake: process each event folder or zip that lands in
+    /// INBOX once its upload is complete, add it to the dataset, notify,
+    /// refresh the dashboard (docs/monitoring-network.md).
+    #[command(after_help = "Examples:
+  quaketwin watch /srv/inbox --pipeline pipelines/post-earthquake.toml --out /srv/dataset --notify http://alerts.local:8080/quake
+  quaketwin watch inbox --pipeline pipelines/ingest.toml --out dataset --notify 'cmd:sendmail ops@example.org' --require-done
+  quaketwin watch inbox --pipeline pipelines/ingest.toml --out dataset --once --settle 2 --json")]
+    Watch {
+        /// Folder watched: every folder or .zip directly inside it is an event (only read, never modified).
+        inbox: PathBuf,
+        /// Pipeline file run on each event.
+        #[arg(long)]
+        pipeline: PathBuf,
+        /// Dataset the events are added to (its state in DATASET/_watch/).
+        #[arg(long)]
+        out: PathBuf,
+        /// Where a notification goes: http://HOST[:PORT]/PATH (POST of the JSON) or cmd:COMMAND (JSON on stdin); repeatable.
+        #[arg(long, value_name = "URL|cmd:COMMAND")]
+        notify: Vec<String>,
+        /// Seconds between two looks at the inbox.
+        #[arg(long, default_value_t = 2.0, value_name = "SECONDS")]
+        poll: f64,
+        /// Seconds an entry must rest unchanged to be complete (without a .done marker).
+        #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+        settle: f64,
+        /// Only a marker (NAME.done beside the entry, or NAME/.done inside a folder) completes an entry.
+        #[arg(long)]
+        require_done: bool,
+        /// Process what is complete, deliver the notifications, and exit.
+        #[arg(long)]
+        once: bool,
+        /// Folder of the dashboard (default DATASET/dashboard).
+        #[arg(long, value_name = "DIR", conflicts_with = "no_dashboard")]
+        dashboard: Option<PathBuf>,
+        /// Do not write the dashboard.
+        #[arg(long)]
+        no_dashboard: bool,
+        /// Attempts to deliver a notification before it goes to DATASET/_watch/dead_letter/.
+        #[arg(long, default_value_t = 8, value_name = "N")]
+        notify_attempts: u32,
+        /// Seconds before the first retry (doubled after each failure).
+        #[arg(long, default_value_t = 2.0, value_name = "SECONDS")]
+        notify_backoff: f64,
+        /// Longest wait between two attempts, seconds.
+        #[arg(long, default_value_t = 600.0, value_name = "SECONDS")]
+        notify_max_delay: f64,
+        /// Seconds one delivery may take (HTTP request, or the command, then killed).
+        #[arg(long, default_value_t = 30.0, value_name = "SECONDS")]
+        notify_timeout: f64,
+    },
+    /// The fleet as a static site: structures by inspection priority, a map,
+    /// per structure its events and reports (docs/monitoring-network.md).
+    #[command(after_help = "Examples:
+  quaketwin dashboard out/network --out out/site
+  quaketwin dashboard /srv/dataset --out /var/www/quakes --json")]
+    Dashboard {
+        /// Dataset (quaketwin run … --out DIR, quaketwin watch … --out DIR, quaketwin fleet).
+        dataset: PathBuf,
+        /// Folder of the site (index.html, structures/, reports/, site.json).
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Run a pipeline file on an event folder; several events (or a folder of
     /// event folders) run in parallel into a table-first Hive dataset:
     /// DIR/<table>/structure=…/event=…/part-0.parquet, each event's run
@@ -399,6 +461,29 @@ enum TwinCommand {
         #[arg(long)]
         out: PathBuf,
     },
+}
+
+/// Longest duration a seconds flag takes (one day).
+const MAX_FLAG_SECONDS: f64 = 86_400.0;
+
+/// A positive number of seconds (usage error naming the flag otherwise).
+fn seconds(flag: &str, s: f64) -> Result<std::time::Duration> {
+    if s.is_finite() && s > 0.0 && s <= MAX_FLAG_SECONDS {
+        Ok(std::time::Duration::from_secs_f64(s))
+    } else {
+        Err(quaketwin::error::Error::usage(format!(
+            "{flag} {s}: seconds, positive and at most {MAX_FLAG_SECONDS}"
+        )))
+    }
+}
+
+/// [`seconds`], zero allowed.
+fn seconds_or_zero(flag: &str, s: f64) -> Result<std::time::Duration> {
+    if s == 0.0 {
+        Ok(std::time::Duration::ZERO)
+    } else {
+        seconds(flag, s)
+    }
 }
 
 /// Prints `value` as JSON on stdout when `--json` was given.
@@ -710,42 +795,80 @@ fn run_command(cli: &Cli) -> Result<()> {
             ));
             print_json(json, &s)
         }
+        Command::Watch {
+            inbox,
+            pipeline,
+            out,
+            notify,
+            poll,
+            settle,
+            require_done,
+            once,
+            dashboard,
+            no_dashboard,
+            notify_attempts,
+            notify_backoff,
+            notify_max_delay,
+            notify_timeout,
+        } => {
+            let opts = quaketwin::watch::WatchOptions {
+                inbox: inbox.clone(),
+                pipeline: pipeline.clone(),
+                out: out.clone(),
+                notify: notify.clone(),
+                poll: seconds("--poll", *poll)?,
+                rule: quaketwin::watch::inbox::CompletionRule {
+                    settle: seconds_or_zero("--settle", *settle)?,
+                    require_done: *require_done,
+                },
+                retry: quaketwin::watch::outbox::RetryPolicy {
+                    first: seconds("--notify-backoff", *notify_backoff)?,
+                    max_delay: seconds("--notify-max-delay", *notify_max_delay)?,
+                    attempts: *notify_attempts,
+                    timeout: seconds("--notify-timeout", *notify_timeout)?,
+                },
+                dashboard: match (no_dashboard, dashboard) {
+                    (true, _) => None,
+                    (false, Some(d)) => Some(d.clone()),
+                    (false, None) => Some(out.join("dashboard")),
+                },
+                once: *once,
+            };
+            let s = commands::watch(&opts)?;
+            print_json(json, &s)?;
+            if s.has_failures() {
+                return Err(quaketwin::error::Error::numerical(format!(
+                    "watch: {} events failed, {} notifications in the dead-letter folder (the log above names them)",
+                    s.failed.len(),
+                    s.notifications_dead
+                )));
+            }
+            Ok(())
+        }
+        Command::Dashboard { dataset, out } => {
+            let w = commands::dashboard(dataset, out)?;
+            console::info(format!(
+                "dashboard: {} structures, {} events; wrote {}",
+                w.structures,
+                w.events,
+                out.join("index.html").display()
+            ));
+            print_json(json, &w)
+        }
         Command::Run {
             pipeline,
             event,
             out,
             reference,
         } => {
-            let events = commands::expand_events(event);
-            let reference = reference.as_deref();
-            let label = pipeline.display().to_string();
-            if event.len() == 1 && events.len() == 1 && events[0] == event[0] {
-                let result =
-                    commands::run_pipeline_with(pipeline, &events[0], out, reference, quiet);
-                return summarise_run(json, &label, &events[0], out, result);
-            }
-            let runs = commands::run_many_with(pipeline, &events, out, reference, quiet)?;
+            let runs = commands::run_events(pipeline, event, out, reference.as_deref(), quiet)?;
             if json {
-                let summaries: Vec<RunSummary> = runs
-                    .iter()
-                    .map(|r| {
-                        let dir = r.run_dir.clone().unwrap_or_else(|| out.clone());
-                        RunSummary::of_run(&label, &r.event, &dir, &r.result)
-                    })
-                    .collect();
-                print_json(
-                    true,
-                    &serde_json::json!({
-                        "summary_version": quaketwin::summary::SUMMARY_VERSION,
-                        "dataset": out,
-                        "events": summaries,
-                    }),
-                )?;
+                print!(
+                    "{}",
+                    runs.summary_json(&pipeline.display().to_string(), out)?
+                );
             }
-            match runs.into_iter().find(|r| r.result.is_err()) {
-                Some(failed) => failed.result.map(|_| ()),
-                None => Ok(()),
-            }
+            runs.into_result()
         }
     }
 }

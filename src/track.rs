@@ -30,8 +30,10 @@ pub const TABLE_FILE: &str = MODAL_TRACKING.file;
 pub const REPORT_FILE: &str = "tracking.html";
 
 /// The command's flags, as typed (checked by [`TrackOptions::plan`] before any work).
+/// Unknown fields are refused (a misspelt option from Python, `windw`,
+/// must not silently run the whole archive with the default window).
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct TrackOptions {
     pub archive: PathBuf,
     pub out: PathBuf,

@@ -2,44 +2,142 @@
 //! layer.  Every function calls one library function; tables cross the
 //! boundary through the Arrow C data interface (`arrow-pyarrow`: pyarrow
 //! takes the Rust buffers without a copy, and hands its own over the same
-//! way); errors become Python exceptions with the library's message.  The
-//! GIL is released while the library works.  The Python package
-//! (python/quaketwin) wraps these with docstrings and the fleet runner.
+//! way); errors become Python exceptions of their kind with the library's
+//! message (the classes are python/quaketwin/_errors.py); the library's
+//! warnings and log lines go to Python's `warnings` and `logging`.  The GIL
+//! is released while the library works.  The Python package
+//! (python/quaketwin) wraps these with docstrings, the Event and Modes
+//! objects and the fleet runner; `_native.pyi` types them.
 
 use std::path::PathBuf;
+use std::sync::Mutex;
 
 use arrow_array::RecordBatch;
 use arrow_pyarrow::{FromPyArrow, IntoPyArrow, Table as PyArrowTable};
-use pyo3::create_exception;
-use pyo3::exceptions::PyException;
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
+use quaketwin::console::Kind;
+use quaketwin::error::Error;
 use quaketwin::in_memory::{self, Table};
 
-create_exception!(
-    _native,
-    QuaketwinError,
-    PyException,
-    "A quaketwin error: bad input (names the file, channel, line or byte offset) or a failed stage."
-);
-create_exception!(
-    _native,
-    UsageError,
-    QuaketwinError,
-    "Bad settings, pipeline file or arguments (exit code 2 on the command line)."
-);
+/// The lines the library logged (warnings, notes, progress) since the last
+/// call ended, from any thread: the console's sink in this process (a
+/// library must not write to a notebook's stderr).  The call that ends next
+/// hands them to Python ([`deliver`]).  Bounded: past the cap a line is
+/// counted, not kept.
+static LINES: Mutex<(Vec<(Kind, String)>, usize)> = Mutex::new((Vec::new(), 0));
+const MAX_PENDING_LINES: usize = 10_000;
 
-/// The library's error as the Python exception of its kind.
-fn raise(e: quaketwin::error::Error) -> PyErr {
-    let text =
-        quaketwin::error::printable(&e.to_string(), quaketwin::error::MAX_PRINTED_ERROR_CHARS);
-    match e {
-        quaketwin::error::Error::Usage(_) => UsageError::new_err(text),
-        _ => QuaketwinError::new_err(text),
+fn collect(kind: Kind, line: &str) {
+    let line = quaketwin::error::printable(line, quaketwin::error::MAX_PRINTED_ERROR_CHARS);
+    let mut pending = LINES
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    if pending.0.len() < MAX_PENDING_LINES {
+        pending.0.push((kind, line));
+    } else {
+        pending.1 += 1;
     }
 }
 
+/// Hands the pending lines to `quaketwin._errors._deliver` (Python's
+/// `warnings` and `logging`).  Its error — a warning the caller's filters
+/// turn into an exception — is the call's.
+fn deliver(py: Python<'_>) -> PyResult<()> {
+    let (lines, dropped) = {
+        let mut pending = LINES
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        (
+            std::mem::take(&mut pending.0),
+            std::mem::take(&mut pending.1),
+        )
+    };
+    if lines.is_empty() && dropped == 0 {
+        return Ok(());
+    }
+    let mut out: Vec<(&str, String)> = lines
+        .into_iter()
+        .map(|(kind, line)| {
+            let kind = match kind {
+                Kind::Warning => "warning",
+                Kind::Note => "note",
+                Kind::Info => "info",
+                Kind::Detail => "detail",
+            };
+            (kind, line)
+        })
+        .collect();
+    if dropped > 0 {
+        out.push(("info", format!("{dropped} more log lines left out")));
+    }
+    py.import("quaketwin._errors")?
+        .getattr("_deliver")?
+        .call1((out,))?;
+    Ok(())
+}
+
+/// The Python exception of `class` (python/quaketwin/_errors.py) with
+/// `args`; a RuntimeError when the package cannot be imported.
+fn exception<'py>(
+    py: Python<'py>,
+    class: &str,
+    args: impl pyo3::call::PyCallArgs<'py>,
+    text: &str,
+) -> PyErr {
+    let made = py
+        .import("quaketwin._errors")
+        .and_then(|m| m.getattr(class))
+        .and_then(|c| c.call1(args));
+    match made {
+        Ok(e) => PyErr::from_value(e),
+        Err(_) => PyRuntimeError::new_err(text.to_string()),
+    }
+}
+
+/// The library's error as the Python exception of its kind: bad settings
+/// `UsageError` and bad input `InputError` (both `ValueError`s), a missing
+/// path `PathNotFoundError` (a `FileNotFoundError`), a refused one
+/// `PathPermissionError`, another failure on a path `PathError` (an
+/// `OSError`), the rest `QuaketwinError`.  An OS error carries its errno
+/// and the path as `filename`.
+fn raise(py: Python<'_>, e: Error) -> PyErr {
+    let text =
+        quaketwin::error::printable(&e.to_string(), quaketwin::error::MAX_PRINTED_ERROR_CHARS);
+    // POSIX numbers (ENOENT, EACCES): the same on every platform CPython runs on.
+    let (class, errno, path) = match &e {
+        Error::Usage(_) => ("UsageError", 0, None),
+        Error::Input { .. } => ("InputError", 0, None),
+        Error::MissingPath { path, .. } => ("PathNotFoundError", 2, Some(path)),
+        Error::Io { path, source } => {
+            let (class, errno) = match source.kind() {
+                std::io::ErrorKind::NotFound => ("PathNotFoundError", 2),
+                std::io::ErrorKind::PermissionDenied => ("PathPermissionError", 13),
+                _ => ("PathError", 0),
+            };
+            (class, source.raw_os_error().unwrap_or(errno), Some(path))
+        }
+        _ => ("QuaketwinError", 0, None),
+    };
+    match path {
+        Some(path) => exception(
+            py,
+            class,
+            (errno, text.clone(), path.as_os_str().to_os_string()),
+            &text,
+        ),
+        None => exception(py, class, (text.clone(),), &text),
+    }
+}
+
+/// `QuaketwinError` with `text`.
+fn quaketwin_error(py: Python<'_>, text: String) -> PyErr {
+    exception(py, "QuaketwinError", (text.clone(),), &text)
+}
+
 /// Runs `f` (the library call of the exported function `name`) without the
-/// GIL; a panic inside becomes `QuaketwinError` naming the function — never
+/// GIL, then hands the lines it logged to Python; a panic inside becomes
+/// `QuaketwinError` naming the function — never
 /// `pyo3_runtime.PanicException`, which `except Exception` misses.  The
 /// parameters are bounded where they are parsed, so a panic is a bug.
 fn guarded<T: Send>(
@@ -47,24 +145,29 @@ fn guarded<T: Send>(
     name: &str,
     f: impl FnOnce() -> quaketwin::error::Result<T> + Send,
 ) -> PyResult<T> {
-    py.detach(|| std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)))
+    let result = py.detach(|| std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)));
+    deliver(py)?;
+    result
         .map_err(|panic| {
             let what = panic
                 .downcast_ref::<&str>()
                 .map(|s| s.to_string())
                 .or_else(|| panic.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "no message".into());
-            QuaketwinError::new_err(format!(
-                "internal error in quaketwin.{name} (a bug, please report it): {}",
-                quaketwin::error::printable(&what, quaketwin::error::MAX_PRINTED_ERROR_CHARS)
-            ))
+            quaketwin_error(
+                py,
+                format!(
+                    "internal error in quaketwin.{name} (a bug, please report it): {}",
+                    quaketwin::error::printable(&what, quaketwin::error::MAX_PRINTED_ERROR_CHARS)
+                ),
+            )
         })?
-        .map_err(raise)
+        .map_err(|e| raise(py, e))
 }
 
 fn to_pyarrow<'py>(py: Python<'py>, t: Table) -> PyResult<Bound<'py, PyAny>> {
     let table = PyArrowTable::try_new(t.batches, t.schema)
-        .map_err(|e| QuaketwinError::new_err(e.to_string()))?;
+        .map_err(|e| quaketwin_error(py, e.to_string()))?;
     table.into_pyarrow(py)
 }
 
@@ -94,25 +197,34 @@ fn summary_json(
     quaketwin::summary::to_json(&summary)
 }
 
-/// Runs a pipeline file on one event into `out`; the run summary as JSON text.
+/// `quaketwin run`: a pipeline file on one event into `out`, or on several
+/// events (or a folder of events) into the many-event dataset at `out`; the
+/// `--json` document as JSON text.  One event's failure raises; of many
+/// events, each one's failure is in its summary (as `quaketwin.fleet.run`
+/// reports them), and only an error before any event ran raises.
 #[pyfunction]
-#[pyo3(signature = (pipeline, event, out, reference=None))]
+#[pyo3(signature = (pipeline, events, out, reference=None))]
 fn run_json(
     py: Python<'_>,
     pipeline: PathBuf,
-    event: PathBuf,
+    events: Vec<PathBuf>,
     out: PathBuf,
     reference: Option<PathBuf>,
 ) -> PyResult<String> {
     guarded(py, "run_json", || {
-        let result = quaketwin::commands::run_pipeline_with(
+        let runs = quaketwin::commands::run_events(
             &pipeline,
-            &event,
+            &events,
             &out,
             reference.as_deref(),
-            true,
-        );
-        summary_json(&pipeline.display().to_string(), &event, &out, result)
+            // Not quiet: the stage lines go to Python's logging (INFO).
+            false,
+        )?;
+        let json = runs.summary_json(&pipeline.display().to_string(), &out)?;
+        if let quaketwin::commands::Runs::One { .. } = runs {
+            runs.into_result()?;
+        }
+        Ok(json)
     })
 }
 
@@ -120,7 +232,7 @@ fn run_json(
 #[pyfunction]
 fn hysteresis_json(py: Python<'_>, event: PathBuf, out: PathBuf) -> PyResult<String> {
     guarded(py, "hysteresis_json", || {
-        let result = quaketwin::commands::hysteresis(&event, &out, true);
+        let result = quaketwin::commands::hysteresis(&event, &out, false);
         summary_json("hysteresis (built-in)", &event, &out, result)
     })
 }
@@ -158,7 +270,14 @@ fn modal<'py>(
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Vec<String>)> {
     let samples = from_pyarrow(samples)?;
     let settings = settings_json.to_string();
-    let r = guarded(py, "modal", || in_memory::modal(&samples, &settings))?;
+    let r = guarded(py, "modal", || {
+        let r = in_memory::modal(&samples, &settings)?;
+        // Warned as the pipeline's modal stage does.
+        for w in &r.warnings {
+            quaketwin::console::warn(format!("modal: {w}"));
+        }
+        Ok(r)
+    })?;
     Ok((
         to_pyarrow(py, r.modes)?,
         to_pyarrow(py, r.stabilization)?,
@@ -245,9 +364,11 @@ fn _panic_probe(py: Python<'_>) -> PyResult<()> {
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // Results independent of the thread count, as from the command line.
     quaketwin::fixed_order_reductions();
+    // The library's lines go to Python's warnings and logging (every
+    // detail: the logger's level decides what is shown), never to stderr.
+    quaketwin::console::set_sink(collect);
+    quaketwin::console::set_verbosity(quaketwin::console::Verbosity::Verbose);
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add("QuaketwinError", m.py().get_type::<QuaketwinError>())?;
-    m.add("UsageError", m.py().get_type::<UsageError>())?;
     m.add_function(wrap_pyfunction!(inspect_json, m)?)?;
     m.add_function(wrap_pyfunction!(run_json, m)?)?;
     m.add_function(wrap_pyfunction!(hysteresis_json, m)?)?;

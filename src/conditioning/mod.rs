@@ -7,6 +7,7 @@
 
 pub mod baseline;
 pub mod butterworth;
+pub mod event_window;
 pub mod integrate;
 pub mod qa;
 pub mod resample;

@@ -127,6 +127,12 @@ pub fn manifest_text(loaded: &LoadedEvent, source: &str, zip_event: bool) -> Str
             "# x_axis_azimuth_deg = 0.0  # not stated: inferred from the sensor azimuths at load\n",
         ),
     }
+    match (st.latitude_deg, st.longitude_deg) {
+        (Some(lat), Some(lon)) => {
+            let _ = writeln!(s, "latitude_deg = {lat}\nlongitude_deg = {lon}");
+        }
+        _ => s.push_str("# latitude_deg = 34.05  # unknown: position (WGS 84, north and east positive), for the fleet dashboard's map\n# longitude_deg = -118.25\n"),
+    }
     if let Some(t) = &st.twin {
         let _ = writeln!(s, "twin = {}", quoted(t));
     }

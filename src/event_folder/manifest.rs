@@ -102,6 +102,10 @@ pub struct StructureSection {
     pub design_level: Option<String>,
     /// "building", "bridge", …
     pub kind: Option<String>,
+    /// Geographic position of the structure (WGS 84 degrees, north and
+    /// east positive): the fleet dashboard's map.
+    pub latitude_deg: Option<f64>,
+    pub longitude_deg: Option<f64>,
 }
 
 impl StructureSection {
@@ -120,6 +124,8 @@ impl StructureSection {
             building_type: self.building_type.clone(),
             design_level: self.design_level.clone(),
             kind: self.kind.clone(),
+            latitude_deg: self.latitude_deg,
+            longitude_deg: self.longitude_deg,
             inferred: Vec::new(),
         }
     }
@@ -419,6 +425,23 @@ impl Manifest {
                         loc(),
                         format!("structure.centre_of_mass_m must be two numbers [x, y] in metres, each within ±{MAX_PLAN_COORDINATE_M} m"),
                     ));
+                }
+            }
+            match (s.latitude_deg, s.longitude_deg) {
+                (None, None) => {}
+                (Some(lat), Some(lon))
+                    if (-90.0..=90.0).contains(&lat) && (-180.0..=180.0).contains(&lon) => {}
+                (Some(_), Some(_)) => {
+                    return Err(Error::input(
+                        loc(),
+                        "structure.latitude_deg must be within ±90 and structure.longitude_deg within ±180 degrees",
+                    ))
+                }
+                _ => {
+                    return Err(Error::input(
+                        loc(),
+                        "structure.latitude_deg and structure.longitude_deg go together: state both or neither",
+                    ))
                 }
             }
         }

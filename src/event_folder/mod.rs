@@ -14,8 +14,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 pub use archive::{
-    collect, ArchiveLimits, EventFile, HEAD_BYTES, RATIO_GRACE_BYTES, READ_LATER_ABOVE,
-    RELATIVE_FLOOR_BYTES,
+    collect, zip_is_whole, ArchiveLimits, EventFile, HEAD_BYTES, RATIO_GRACE_BYTES,
+    READ_LATER_ABOVE, RELATIVE_FLOOR_BYTES,
 };
 pub use manifest::{
     ChannelEntry, ColumnRef, DirectionEntry, FormatEntry, Manifest, RoleEntry, UnitsEntry,

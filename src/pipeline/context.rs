@@ -8,9 +8,10 @@ use std::sync::Arc;
 
 use super::config::Pipeline;
 use super::stage::{Product, ProductKind};
+use crate::conditioning::event_window::{cut_to_window, envelope, event_window, EventWindow};
 use crate::error::{Error, Result};
 use crate::event_folder::{LoadedEvent, ReferencedFiles};
-use crate::vocab::SampleStore;
+use crate::vocab::{Event, Record, SampleStore};
 
 /// Environment variable overriding [`super::spill::PARK_ABOVE_SAMPLES`]
 /// (the tests set it to 0 to run the parked paths on small events).
@@ -27,6 +28,8 @@ pub struct RunContext<'p> {
     /// Index of the stage being run.
     current: usize,
     event: Option<LoadedEvent>,
+    /// The event window of a continuous event (found as the event is loaded).
+    window: Option<EventWindow>,
     /// Product of each stage (by index), once it ran or was restored.
     products: Vec<Option<Product>>,
     /// Events with more samples than this are parked in the spill file.
@@ -45,6 +48,7 @@ impl<'p> RunContext<'p> {
             pipeline,
             current: 0,
             event: None,
+            window: None,
             products: (0..pipeline.stages.len()).map(|_| None).collect(),
             park_above: std::env::var(PARK_ABOVE_ENV)
                 .ok()
@@ -63,8 +67,34 @@ impl<'p> RunContext<'p> {
     /// Uses `loaded` as the run's event instead of reading `event_path`
     /// (an event built in memory).
     pub fn with_loaded_event(mut self, loaded: LoadedEvent) -> Self {
+        let envelopes: Vec<_> = loaded
+            .event
+            .records
+            .iter()
+            .filter_map(|r| record_envelope(r))
+            .collect();
+        self.window = event_window(&envelopes);
         self.event = Some(loaded);
         self
+    }
+
+    /// The event window when the event is a continuous record
+    /// (`conditioning::event_window`), `None` for a triggered one.
+    pub fn event_window(&mut self) -> Result<Option<EventWindow>> {
+        self.loaded_event()?;
+        Ok(self.window.clone())
+    }
+
+    /// The event the analyses run on: the loaded event, cut to its event
+    /// window when it is a continuous record (parked samples as views: nothing
+    /// is read or copied).
+    pub fn analysis_event(&mut self) -> Result<Event> {
+        let window = self.event_window()?;
+        let event = &self.loaded_event()?.event;
+        Ok(match &window {
+            Some(w) => cut_to_window(event, w),
+            None => event.clone(),
+        })
     }
 
     /// Runs stage `index` alone (no manifest, no fingerprint: the pipeline's
@@ -103,10 +133,13 @@ impl<'p> RunContext<'p> {
             let (threshold, out_dir) = (self.park_above, self.out_dir.clone());
             let mut spill: Option<Arc<dyn SampleStore>> = self.spill.clone();
             let mut total = 0usize;
+            let mut envelopes = Vec::new();
             let mut loaded = crate::event_folder::load_parking(
                 &self.event_path,
                 &Default::default(),
                 &mut |r| {
+                    // Each record's envelope as it is read (before it is parked).
+                    envelopes.extend(record_envelope(r));
                     total += r.samples.len();
                     if total <= threshold {
                         return Ok(());
@@ -121,6 +154,7 @@ impl<'p> RunContext<'p> {
                 },
             )?;
             self.spill = spill;
+            self.window = event_window(&envelopes);
             if let Some(s) = &self.spill {
                 for r in loaded.event.records.iter_mut() {
                     park(&mut r.samples, s)?;
@@ -135,6 +169,18 @@ impl<'p> RunContext<'p> {
     /// produce there too); `None` for an event held in memory.
     pub fn parked(&self) -> Option<Arc<dyn SampleStore>> {
         self.spill.clone()
+    }
+
+    /// The spill file when `samples` (what a stage produces) are more than
+    /// the park threshold, `None` otherwise — even when the event is parked:
+    /// a continuous event's window is small beside the records, and parking
+    /// it would only grow the spill file.
+    pub fn spill_for(&mut self, samples: usize) -> Result<Option<Arc<dyn SampleStore>>> {
+        if samples > self.park_above {
+            self.spill().map(Some)
+        } else {
+            Ok(None)
+        }
     }
 
     /// The spill file when `samples` (of an event or a product read back)
@@ -198,4 +244,13 @@ pub fn park(samples: &mut crate::vocab::Samples, store: &Arc<dyn SampleStore>) -
             format!("parking samples: {e}"),
         )
     })
+}
+
+/// The envelope of a record as read, for its event window (records in
+/// memory only: a parked record's was taken as it was read).
+fn record_envelope(r: &Record) -> Option<crate::conditioning::event_window::Envelope> {
+    if r.samples.is_parked() {
+        return None;
+    }
+    envelope(&r.samples, r.channel.sampling_rate_hz, r.channel.start_ns)
 }

@@ -20,6 +20,7 @@
 
 pub mod config;
 pub mod context;
+pub mod dataset;
 pub mod fingerprint;
 pub mod lock;
 pub mod manifest;
@@ -625,6 +626,10 @@ fn run_stages(
         }
         let product = planned.stage.run(ctx).map_err(|e| match e {
             Error::Usage(m) => Error::Usage(format!("stage {:?}: {m}", stage.name)),
+            Error::MissingPath { path, message } => Error::MissingPath {
+                path,
+                message: format!("stage {:?}: {message}", stage.name),
+            },
             Error::Numerical(m) => Error::Numerical(format!("stage {:?}: {m}", stage.name)),
             other => other,
         })?;

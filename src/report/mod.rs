@@ -20,7 +20,10 @@ mod html;
 pub mod plot;
 pub use plot::decimate_curve;
 mod sections;
-pub use sections::assessment::{read_assessment, AssessmentView, IndicatorView};
+pub use sections::assessment::{
+    badge as rating_badge, read_assessment, AssessmentView, IndicatorView,
+};
+pub use sections::page_head_with_script;
 pub mod table;
 pub mod tracking;
 
@@ -30,7 +33,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-pub use html::{escape, format_number};
+pub use html::{escape, format_number, whole_table};
 
 /// Green/yellow/red limits of one criterion: value < `yellow` is green,
 /// `yellow` ≤ value < `red` is yellow, value ≥ `red` is red.

@@ -6,6 +6,8 @@
 //! DIR/<table>/structure=<S>/event=<E>/part-0.parquet   one file per table and event
 //! DIR/runs/structure=<S>/event=<E>/                    the event's run: run.json, event.json,
 //!                                                      report.html, twin_updated.toml, tables
+//! DIR/history/structure=<S>/                           the structure's history (quaketwin history)
+//! DIR/_watch/                                          quaketwin watch's journal and outbox
 //! ```
 //!
 //! Each event runs into its own run directory (locked, with its run manifest,
@@ -26,6 +28,17 @@ use crate::vocab::tables;
 pub const RUNS_DIR: &str = "runs";
 /// The one file of a table in an event's partition.
 pub const PART_FILE: &str = "part-0.parquet";
+/// Folder of the structure histories (`quaketwin history`, refreshed by
+/// `quaketwin watch`), beside the table folders.
+pub const HISTORY_DIR: &str = "history";
+
+/// Where the history of the structure whose partition value is `structure`
+/// lives in the dataset `root`: `root/history/structure=<S>/` (its
+/// `history_*.parquet` and `history.html`; read by the dashboard).
+pub fn history_dir(root: &Path, structure: &str) -> PathBuf {
+    root.join(HISTORY_DIR)
+        .join(format!("structure={}", partition_value(structure)))
+}
 
 /// A Hive partition value: ASCII letters, digits, `-`, `_` and `.` kept,
 /// anything else (`/`, `=`, spaces) replaced by `_`, so that a name can
@@ -139,11 +152,15 @@ pub fn run_tables(run_dir: &Path) -> Result<Vec<(String, String)>> {
         .collect())
 }
 
-/// Puts a hard link to `from` (a copy where linking fails) at `to`: made
+/// Puts a hard link to `from` (a copy where linking fails) at `to` (its
+/// folder created): made
 /// under a temporary name beside `to`, then renamed over it, so a reader of
 /// the dataset sees the old file or the new one, never a missing or half
 /// file.  Anything but a regular file at `to` is an error, never replaced.
-fn link_or_copy_atomically(from: &Path, to: &Path) -> Result<()> {
+pub fn link_or_copy_atomically(from: &Path, to: &Path) -> Result<()> {
+    if let Some(dir) = to.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    }
     if let Ok(m) = std::fs::symlink_metadata(to) {
         if !m.is_file() {
             return Err(Error::output(
@@ -153,7 +170,11 @@ fn link_or_copy_atomically(from: &Path, to: &Path) -> Result<()> {
         }
     }
     // Temporary files a killed publication left are swept first.
-    let prefix = format!(".{PART_FILE}.quaketwin-");
+    let name = to
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let prefix = format!(".{name}.quaketwin-");
     if let Some(Ok(entries)) = to.parent().map(std::fs::read_dir) {
         for e in entries.flatten() {
             let name = e.file_name();

@@ -364,10 +364,18 @@ pub fn locate_modes(path: &Path) -> Result<std::path::PathBuf> {
     let shown = path.display();
     let file = match std::fs::metadata(path) {
         Err(e) => {
-            return Err(Error::usage(format!(
+            let message = format!(
                 "{shown}: {e}: expected the output directory of an earlier run (holding {}) or a {} file",
                 MODES.file, MODES.file
-            )))
+            );
+            return Err(if e.kind() == std::io::ErrorKind::NotFound {
+                Error::MissingPath {
+                    path: path.to_path_buf(),
+                    message,
+                }
+            } else {
+                Error::usage(message)
+            });
         }
         Ok(m) if m.is_dir() => {
             let f = path.join(MODES.file);

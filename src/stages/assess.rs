@@ -165,7 +165,7 @@ impl Stage for Assess {
 /// The reference run's `modes.parquet` (an output directory or the file).
 fn reference_file(p: &Path) -> Result<PathBuf> {
     crate::sinks::modal_tables::locate_modes(p)
-        .map_err(|e| Error::usage(format!("assess: reference_modes: {e}")))
+        .map_err(|e| e.usage_about("assess: reference_modes"))
 }
 
 /// A table of the run, when the run manifest lists it and it reads.

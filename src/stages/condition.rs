@@ -2,6 +2,7 @@
 //! (resampling/alignment, detrend, taper, zero-phase band-pass, integration;
 //! METHODS §1) → `samples.parquet`.
 
+use crate::conditioning::event_window::EventWindow;
 use crate::conditioning::{
     condition_event_each, BandType, ConditioningSettings, Motion, ParkSeries, Step,
 };
@@ -111,6 +112,25 @@ pub fn with_auto_high_pass(
     Ok(settings)
 }
 
+/// The whole records of `loaded` in SI units, described as the records of
+/// `conditioned` (its channels — units, QA — and history) are: the records
+/// as recorded of a continuous event, whose analyses took its window.
+/// Parked samples are scaled as they are read, nothing is copied.
+fn whole_records(loaded: &Event, conditioned: &Event) -> Result<Event> {
+    let mut whole = conditioned.clone();
+    for r in whole.records.iter_mut() {
+        let Some(source) = loaded.record(&r.channel.id) else {
+            continue;
+        };
+        let Some(factor) = source.channel.units.to_si_factor() else {
+            continue;
+        };
+        r.samples = source.samples.scaled(factor);
+        r.channel.start_ns = source.channel.start_ns;
+    }
+    Ok(whole)
+}
+
 impl Stage for Condition {
     fn outputs(&self) -> Vec<String> {
         vec![self.samples_file.clone()]
@@ -118,9 +138,13 @@ impl Stage for Condition {
     /// A channel at a time: a parked event's channels are read back, conditioned
     /// and parked again one by one (issue 14 item 5).
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
-        // Cloning a parked event copies its channels' descriptions, not their samples.
-        let mut event = ctx.loaded_event()?.event.clone();
-        let spill = ctx.parked();
+        // Cloning a parked event copies its channels' descriptions, not their
+        // samples; a continuous record is cut to its event window.
+        let mut event = ctx.analysis_event()?;
+        // What this stage makes is parked when it is big (a continuous
+        // event's window is not: it stays in memory).
+        let produced: usize = event.records.iter().map(|r| r.samples.len()).sum();
+        let spill = ctx.spill_for(produced)?;
         // A parked event's motions are parked series by series as each is
         // final (two series of a day-long channel in memory, not three).
         let park_series = |values: Vec<f64>| -> Result<Samples> {
@@ -149,14 +173,35 @@ impl Stage for Condition {
             }
             park(&mut record.samples, spill)
         })?;
-        event_tables::write_samples(&ctx.out_dir.join(&self.samples_file), &event, &motions)?;
+        let path = ctx.out_dir.join(&self.samples_file);
+        match ctx.event_window()? {
+            // The records as recorded of a continuous event are written
+            // whole (the full-rate acceleration once), the analyses take
+            // the window.
+            Some(_) if self.settings.steps.is_empty() => {
+                let whole = whole_records(&ctx.loaded_event()?.event, &event)?;
+                event_tables::write_samples(&path, &whole, &[])?;
+            }
+            _ => event_tables::write_samples(&path, &event, &motions)?,
+        }
         Ok(Some(Box::new(Conditioned { event, motions })))
     }
     fn restore(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let path = ctx.out_dir.join(&self.samples_file);
         // Samples read back are parked as the event's would be (by their number).
-        let (event, motions) =
+        let (mut event, motions) =
             event_tables::read_samples_parked(&path, |rows| ctx.spill_above(rows))?;
+        // Whole records of a continuous event, read back: cut as the run cut them.
+        if let Some(window) = EventWindow::from_history(&event.history) {
+            let span_s = window.window_s[1] - window.window_s[0];
+            for r in event.records.iter_mut() {
+                let range = window.samples_of(r);
+                let whole = r.samples.len() as f64 > span_s * r.channel.sampling_rate_hz + 1.0;
+                if whole && range.len() < r.samples.len() {
+                    r.samples = r.samples.window(range);
+                }
+            }
+        }
         Ok(Some(Box::new(Conditioned { event, motions })))
     }
 }

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::conditioning::event_window::EventWindow;
 use crate::error::{Error, Result};
 use crate::event_folder::LoadedEvent;
 use crate::pipeline::{Product, ProductKind, RunContext, Stage, StageKind, StageSource};
@@ -41,7 +42,11 @@ impl Stage for Ingest {
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let path = ctx.out_dir.join(EVENT_JSON);
-        let json = inventory_json(ctx.loaded_event()?)?;
+        let window = ctx.event_window()?;
+        if let Some(w) = &window {
+            crate::console::note(format!("ingest: {}", w.describe()));
+        }
+        let json = inventory_json_with(ctx.loaded_event()?, window.as_ref())?;
         crate::sinks::parquet::write_bytes_atomically(&path, &json)?;
         Ok(None)
     }
@@ -75,17 +80,27 @@ struct EventJson<'a> {
     history: &'a crate::vocab::ProcessingHistory,
     /// The building geometry applied at ingest (axes, rotations, floors).
     geometry: &'a crate::geometry::GeometryReport,
+    /// A continuous record's event window (`conditioning::event_window`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    event_window: Option<serde_json::Value>,
 }
 
 /// The inventory of a loaded event as pretty JSON.
 pub fn inventory_json(loaded: &LoadedEvent) -> Result<Vec<u8>> {
+    inventory_json_with(loaded, None)
+}
+
+/// As [`inventory_json`], with the event window of a continuous record.
+fn inventory_json_with(loaded: &LoadedEvent, window: Option<&EventWindow>) -> Result<Vec<u8>> {
     let e = &loaded.event;
+    let mut notes = e.notes.clone();
+    notes.extend(window.map(EventWindow::describe));
     let doc = EventJson {
         name: &e.name,
         origin_time: e.origin_ns.map(format_epoch_ns),
         magnitude: e.magnitude,
         structure: e.structure.as_ref(),
-        notes: &e.notes,
+        notes: &notes,
         files: loaded
             .files
             .iter()
@@ -107,6 +122,7 @@ pub fn inventory_json(loaded: &LoadedEvent) -> Result<Vec<u8>> {
             .collect(),
         history: &e.history,
         geometry: &loaded.geometry,
+        event_window: window.map(EventWindow::history),
     };
     serde_json::to_vec_pretty(&doc)
         .map_err(|err| Error::numerical(format!("serialising the inventory: {err}")))

@@ -42,8 +42,9 @@ impl Stage for Metrics {
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let out = ctx.out_dir.clone();
-        // Residual drift needs the records before any filter: the run's source.
-        let residual = storey_residual_drifts(&ctx.loaded_event()?.event)?;
+        // Residual drift needs the records before any filter: the run's
+        // source (on its event window, as the conditioned records).
+        let residual = storey_residual_drifts(&ctx.analysis_event()?)?;
         let Conditioned { event, motions } = ctx.input(ProductKind::ConditionedEvent)?;
         // Parked motions are read back a channel — a series — at a time; long
         // channels one after the other (two in flight would double the memory).

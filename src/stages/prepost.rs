@@ -87,8 +87,7 @@ impl ReferenceParams {
         self.reference_modes
             .as_deref()
             .map(|p| {
-                let file = tables::locate_modes(p)
-                    .map_err(|e| Error::usage(format!("{REFERENCE_KEY}: {e}")))?;
+                let file = tables::locate_modes(p).map_err(|e| e.usage_about(REFERENCE_KEY))?;
                 Ok(ReferenceRun { file, pairing })
             })
             .transpose()

@@ -468,7 +468,59 @@ pub fn write_archive(out: &Path, settings: &ArchiveSettings) -> Result<ArchiveWr
     })
 }
 
-/// StationXML of the archive's streams: gain, orientation, floor elevation.
+/// Sensitivity of the synthetic accelerometer (response stage 1), V per
+/// m/s²: about the 10 V/g of force-balance accelerometers.  The digitizer
+/// (stage 2) has the rest of the gain G, so the stages multiply to G.
+pub const SENSOR_V_PER_M_S2: f64 = 1.0;
+
+/// The `<Response>` of a channel: the overall sensitivity G (counts per
+/// m/s² at 1 Hz) and the stages it is made of, so that response removal
+/// (ObsPy's `remove_response`, evalresp) can evaluate it at every
+/// frequency.  The simulation records the floor acceleration itself —
+/// samples of the true acceleration at the output rate, no sensor dynamics,
+/// no anti-alias filter — so the true response is flat:
+///
+/// - stage 1, the sensor: poles and zeros, none of either (flat), gain
+///   [`SENSOR_V_PER_M_S2`], m/s² → V;
+/// - stage 2, the digitizer: a digital filter of one coefficient 1 (no
+///   filtering), decimation factor 1 at the archive's rate (no FIR stages:
+///   nothing is decimated), gain G / [`SENSOR_V_PER_M_S2`], V → counts.
+///
+/// Stage gains are given at 1 Hz, the sensitivity's frequency: with a flat
+/// response the product of the stage gains is G at every frequency.
+fn response_xml(gain_counts_per_m_s2: f64, rate_hz: f64) -> String {
+    let sensor = SENSOR_V_PER_M_S2;
+    let digitizer = gain_counts_per_m_s2 / sensor;
+    let acc = "<Name>m/s**2</Name><Description>acceleration</Description>";
+    let volts = "<Name>V</Name><Description>volts</Description>";
+    let counts = "<Name>counts</Name><Description>digital counts</Description>";
+    format!(
+        r#"        <Response>
+          <InstrumentSensitivity><Value>{gain_counts_per_m_s2}</Value><Frequency>1</Frequency><InputUnits>{acc}</InputUnits><OutputUnits>{counts}</OutputUnits></InstrumentSensitivity>
+          <Stage number="1">
+            <PolesZeros name="sensor">
+              <InputUnits>{acc}</InputUnits><OutputUnits>{volts}</OutputUnits>
+              <PzTransferFunctionType>LAPLACE (RADIANS/SECOND)</PzTransferFunctionType>
+              <NormalizationFactor>1</NormalizationFactor><NormalizationFrequency>1</NormalizationFrequency>
+            </PolesZeros>
+            <StageGain><Value>{sensor}</Value><Frequency>1</Frequency></StageGain>
+          </Stage>
+          <Stage number="2">
+            <Coefficients name="digitizer">
+              <InputUnits>{volts}</InputUnits><OutputUnits>{counts}</OutputUnits>
+              <CfTransferFunctionType>DIGITAL</CfTransferFunctionType>
+              <Numerator>1</Numerator>
+            </Coefficients>
+            <Decimation><InputSampleRate>{rate_hz}</InputSampleRate><Factor>1</Factor><Offset>0</Offset><Delay>0</Delay><Correction>0</Correction></Decimation>
+            <StageGain><Value>{digitizer}</Value><Frequency>1</Frequency></StageGain>
+          </Stage>
+        </Response>
+"#
+    )
+}
+
+/// StationXML of the archive's streams: response (sensitivity and stages,
+/// [`response_xml`]), orientation, floor elevation.
 fn stationxml_text(settings: &ArchiveSettings, end_ns: i64) -> String {
     let heights = super::event::STOREY_HEIGHTS_M;
     let mut channels = String::new();
@@ -481,14 +533,13 @@ fn stationxml_text(settings: &ArchiveSettings, end_ns: i64) -> String {
         <Azimuth>{azimuth}</Azimuth><Dip>0</Dip>
         <SampleRate>{rate}</SampleRate>
         <Sensor><Description>synthetic accelerometer, floor {floor} {axis}</Description></Sensor>
-        <Response><InstrumentSensitivity><Value>{gain}</Value><Frequency>1</Frequency><InputUnits><Name>m/s**2</Name></InputUnits><OutputUnits><Name>counts</Name></OutputUnits></InstrumentSensitivity></Response>
-      </Channel>
+{response}      </Channel>
 "#,
             cha = c.channel,
             loc = c.location,
             start = format_epoch_ns(settings.start_ns),
             rate = settings.rate_hz,
-            gain = settings.gain_counts_per_m_s2,
+            response = response_xml(settings.gain_counts_per_m_s2, settings.rate_hz),
         );
     }
     format!(

@@ -70,6 +70,12 @@ pub struct Structure {
     /// Kind of structure: "building", "bridge", … when stated or inferred.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kind: Option<String>,
+    /// Geographic position (WGS 84 degrees, north and east positive), when
+    /// stated (`structure.latitude_deg`, `structure.longitude_deg`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub latitude_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub longitude_deg: Option<f64>,
     /// What of the structure was inferred rather than stated, with how
     /// ("storeys=7 from station name \"Van Nuys - 7-story Hotel\"").
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

@@ -38,22 +38,44 @@ pub trait SampleStore: Send + Sync {
 struct Parked {
     store: Arc<dyn SampleStore>,
     position: u64,
+    /// The first stored value these samples start at (a window of a longer
+    /// parked series, [`Samples::window`], shares its stored values).
+    start: usize,
     len: usize,
     /// Read back negated (a sign flip recorded while parked).
     negate: bool,
+    /// Read back multiplied by this after the sign flip (a view in other
+    /// units, [`Samples::scaled`]); 1 for the values as stored.
+    scale: f64,
     /// What dereferencing read, kept until released.
     cache: OnceLock<Vec<f64>>,
 }
 
 impl Parked {
+    /// Values `start..start + len` of these (a window of them), multiplied
+    /// by `factor`, reading the same stored values; nothing cached.
+    fn view(&self, start: usize, len: usize, factor: f64) -> Parked {
+        Parked {
+            store: self.store.clone(),
+            position: self.position,
+            start: self.start + start,
+            len,
+            negate: self.negate,
+            scale: self.scale * factor,
+            cache: OnceLock::new(),
+        }
+    }
     fn read(&self) -> std::io::Result<Vec<f64>> {
         self.read_range(0, self.len)
     }
     fn read_range(&self, start: usize, len: usize) -> std::io::Result<Vec<f64>> {
         let mut v = vec![0.0; len];
-        self.store.get(self.position, start, &mut v)?;
+        self.store.get(self.position, self.start + start, &mut v)?;
         if self.negate {
             v.iter_mut().for_each(|x| *x = -*x);
+        }
+        if self.scale != 1.0 {
+            v.iter_mut().for_each(|x| *x *= self.scale);
         }
         Ok(v)
     }
@@ -113,8 +135,10 @@ impl Samples {
                 self.0 = Repr::Parked(Parked {
                     store: store.clone(),
                     position,
+                    start: 0,
                     len: v.len(),
                     negate: false,
+                    scale: 1.0,
                     cache: OnceLock::new(),
                 });
                 Ok(())
@@ -154,6 +178,29 @@ impl Samples {
                     .map(Cow::Owned)
                     .map_err(|e| self.read_error(e)),
             },
+        }
+    }
+
+    /// Samples `range` as a series of their own (out-of-range bounds cut to
+    /// the samples): parked samples give a view of the same stored values,
+    /// nothing is read or copied; samples in memory are copied.
+    pub fn window(&self, range: std::ops::Range<usize>) -> Samples {
+        let end = range.end.min(self.len());
+        let start = range.start.min(end);
+        match &self.0 {
+            Repr::Memory(v) => Samples::new(v[start..end].to_vec()),
+            Repr::Parked(p) => Samples(Repr::Parked(p.view(start, end - start, 1.0))),
+        }
+    }
+
+    /// The samples multiplied by `factor` (each value `v * factor`, as a
+    /// units conversion in place computes it): parked samples give a view of
+    /// the same stored values, multiplied as they are read; samples in memory
+    /// are copied.
+    pub fn scaled(&self, factor: f64) -> Samples {
+        match &self.0 {
+            Repr::Memory(v) => Samples::new(v.iter().map(|x| x * factor).collect()),
+            Repr::Parked(p) => Samples(Repr::Parked(p.view(0, p.len, factor))),
         }
     }
 
@@ -254,13 +301,7 @@ impl Clone for Samples {
     fn clone(&self) -> Self {
         match &self.0 {
             Repr::Memory(v) => Samples::new(v.clone()),
-            Repr::Parked(p) => Samples(Repr::Parked(Parked {
-                store: p.store.clone(),
-                position: p.position,
-                len: p.len,
-                negate: p.negate,
-                cache: OnceLock::new(),
-            })),
+            Repr::Parked(p) => Samples(Repr::Parked(p.view(0, p.len, 1.0))),
         }
     }
 }

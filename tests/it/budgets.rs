@@ -20,6 +20,9 @@ use std::time::{Duration, Instant};
 use quaketwin::event_folder::manifest::{MAX_CHANNELS, MAX_MANIFEST_BYTES};
 use quaketwin::pipeline::config::{MAX_PIPELINE_BYTES, MAX_STAGES};
 
+/// A member below the one-member limit (768 MiB), so that the ratio, the
+/// manifest's cap or the budget — not the member limit — refuses it.
+const BELOW_MEMBER_LIMIT: u64 = 700 << 20;
 const GIB: u64 = 1 << 30;
 const MB: u64 = 1 << 20;
 
@@ -335,7 +338,9 @@ fn hand_made_deflate_stream_inflates_to_what_it_claims() {
 #[test]
 fn zips_of_1_gib_members_are_refused_within_memory() {
     // 1 MB zips holding 1 GiB of commas, zeros or spaces (4–7 GB and an
-    // abort before), and a zip holding a zip of such a CSV.
+    // abort before), and a zip holding a zip of such a CSV: refused for
+    // their size before a byte is inflated.  Below the member limit
+    // (700 MiB), refused for their ratio as they inflate.
     let dir = tempfile::tempdir().unwrap();
     let cases = [
         ("commas.zip", zip(&[bomb("rec.csv", b',', GIB)])),
@@ -346,6 +351,35 @@ fn zips_of_1_gib_members_are_refused_within_memory() {
             zip(&[stored("inner.zip", &zip(&[bomb("rec.csv", b',', GIB)]))]),
         ),
     ];
+    for (name, bytes) in cases.iter().take(2) {
+        let big = name.replace(".zip", "-1gib.zip");
+        let p = write(dir.path(), &big, bytes);
+        assert_refused(
+            &p,
+            &big,
+            &[
+                &big,
+                "rec.csv",
+                "above the limit of 805306368 bytes for one member",
+            ],
+            64 * MB,
+            Duration::from_secs(20),
+        );
+    }
+    let cases = cases.map(|(name, _)| {
+        let fill = match name {
+            "zeros.zip" => b'0',
+            "spaces.zip" => b' ',
+            _ => b',',
+        };
+        let member = bomb("rec.csv", fill, BELOW_MEMBER_LIMIT);
+        let bytes = if name == "nested.zip" {
+            zip(&[stored("inner.zip", &zip(&[member]))])
+        } else {
+            zip(&[member])
+        };
+        (name, bytes)
+    });
     for (name, bytes) in cases {
         assert!(
             bytes.len() as u64 <= 11 * MB / 10,
@@ -543,7 +577,7 @@ fn an_event_toml_of_1_gib_of_nul_bytes_is_never_read() {
     write(&ev, "rec.csv", &record_csv());
     std::fs::File::create(ev.join("event.toml"))
         .unwrap()
-        .set_len(GIB)
+        .set_len(BELOW_MEMBER_LIMIT)
         .unwrap();
     let limit = format!("larger than the limit of {MAX_MANIFEST_BYTES} bytes");
     assert_refused(
@@ -556,7 +590,10 @@ fn an_event_toml_of_1_gib_of_nul_bytes_is_never_read() {
     let p = write(
         dir.path(),
         "nul.zip",
-        &zip(&[bomb("event.toml", 0, GIB), stored("rec.csv", &record_csv())]),
+        &zip(&[
+            bomb("event.toml", 0, BELOW_MEMBER_LIMIT),
+            stored("rec.csv", &record_csv()),
+        ]),
     );
     assert_refused(
         &p,
@@ -822,7 +859,7 @@ fn a_bomb_beside_a_referenced_file_is_not_extracted() {
         dir.path(),
         "twin-event.zip",
         &zip(&[
-            bomb("junk.csv", b',', GIB),
+            bomb("junk.csv", b',', BELOW_MEMBER_LIMIT),
             stored("twin.toml", b"[twin]\nname = \"x\"\n"),
             stored("rec.csv", &record_csv()),
         ]),

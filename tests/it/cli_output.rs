@@ -382,6 +382,8 @@ fn help_has_an_example_per_command_and_a_description_per_flag() {
         "synth",
         "run",
         "fleet",
+        "watch",
+        "dashboard",
         "rehearse",
         "twin export",
         "twin modes",

@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 
 use crate::common::{column_str, run_sample_pipeline};
 
-const CHROMIUM: &str = "/usr/bin/chromium";
+pub(crate) const CHROMIUM: &str = "/usr/bin/chromium";
 
 /// (pipeline, sample event) of the four bundled samples.
 const SAMPLES: [(&str, &str); 4] = [
@@ -79,7 +79,7 @@ fn chromium(profile: &Path, extra: &[String], page: &Path) -> Command {
 
 /// The rendered DOM of `page` (Chromium's serialisation), checked free of
 /// console errors and blocked requests.
-fn rendered_dom(page: &Path) -> String {
+pub(crate) fn rendered_dom(page: &Path) -> String {
     let profile = tempfile::tempdir().unwrap();
     let (ok, dom, err) = run_with_timeout(
         chromium(profile.path(), &["--dump-dom".to_string()], page),
@@ -120,7 +120,7 @@ fn print_pdf(page: &Path, pdf: &Path) -> Vec<u8> {
 }
 
 /// The value of attribute `name` in the start tag beginning at `tag`.
-fn attribute<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
+pub(crate) fn attribute<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
     let head = &tag[..tag.find('>')?];
     let at = head.find(&format!(" {name}=\""))? + name.len() + 3;
     Some(&head[at..at + head[at..].find('"')?])

@@ -493,3 +493,91 @@ fn stationxml_epochs_give_each_window_its_response() {
         .to_string();
     assert!(e.contains("XX.STA..HNZ") && !e.contains("HNE"), "{e}");
 }
+
+/// The synthetic archive's StationXML carries a full response (issue 34
+/// item 5): per channel, stages numbered from 1 whose units chain from the
+/// sensitivity's input (m/s²) to its output (counts), whose gains multiply
+/// to the InstrumentSensitivity, with the digitizer's decimation at the
+/// channel's rate; and quaketwin's own reader still takes the sensitivity
+/// from it.  (python/tests: ObsPy's `remove_response` accepts it.)
+#[test]
+fn synthetic_stationxml_has_stages_that_multiply_to_the_sensitivity() {
+    let dir = tempfile::tempdir().unwrap();
+    let settings = ArchiveSettings {
+        days: 1,
+        day_length_s: 600.0,
+        channels: 4,
+        rate_hz: 20.0,
+        ..Default::default()
+    };
+    let written = write_archive(dir.path(), &settings).unwrap();
+    let text = std::fs::read_to_string(&written.stationxml).unwrap();
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    fn named<'a, 'i>(n: roxmltree::Node<'a, 'i>, name: &str) -> roxmltree::Node<'a, 'i> {
+        n.children()
+            .find(|c| c.is_element() && c.tag_name().name() == name)
+            .unwrap_or_else(|| panic!("<{name}> missing under <{}>", n.tag_name().name()))
+    }
+    let number = |n: roxmltree::Node, name: &str| -> f64 {
+        named(n, name).text().unwrap().trim().parse().unwrap()
+    };
+    let unit = |n: roxmltree::Node, name: &str| -> String {
+        named(named(n, name), "Name").text().unwrap().to_string()
+    };
+    let channels: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("Channel"))
+        .collect();
+    assert_eq!(channels.len(), 4);
+    for ch in channels {
+        let response = named(ch, "Response");
+        let sensitivity = named(response, "InstrumentSensitivity");
+        let overall = number(sensitivity, "Value");
+        assert_eq!(overall, settings.gain_counts_per_m_s2);
+        let stages: Vec<_> = response
+            .children()
+            .filter(|n| n.has_tag_name("Stage"))
+            .collect();
+        assert_eq!(stages.len(), 2);
+        let mut product = 1.0;
+        let mut units = unit(sensitivity, "InputUnits");
+        assert_eq!(units, "m/s**2");
+        for (k, stage) in stages.iter().enumerate() {
+            assert_eq!(
+                stage.attribute("number"),
+                Some((k + 1).to_string().as_str())
+            );
+            let filter = stage
+                .children()
+                .find(|c| c.has_tag_name("PolesZeros") || c.has_tag_name("Coefficients"))
+                .unwrap();
+            assert_eq!(unit(filter, "InputUnits"), units, "stage {}", k + 1);
+            units = unit(filter, "OutputUnits");
+            let gain = named(*stage, "StageGain");
+            assert_eq!(number(gain, "Frequency"), number(sensitivity, "Frequency"));
+            product *= number(gain, "Value");
+            if filter.has_tag_name("Coefficients") {
+                let decimation = named(*stage, "Decimation");
+                assert_eq!(number(decimation, "InputSampleRate"), settings.rate_hz);
+                assert_eq!(number(decimation, "Factor"), 1.0);
+            }
+        }
+        assert_eq!(units, unit(sensitivity, "OutputUnits"));
+        assert!(
+            (product - overall).abs() <= 1e-12 * overall,
+            "{product} vs {overall}"
+        );
+    }
+    let source = quaketwin::vocab::SourceRef {
+        file: written.stationxml.display().to_string(),
+        member: None,
+        column: None,
+        format: "stationxml".into(),
+    };
+    let meta = quaketwin::readers::stationxml::parse(text.as_bytes(), &source).unwrap();
+    assert_eq!(meta.len(), 4);
+    for m in meta {
+        let s = m.sensitivity.unwrap();
+        assert_eq!((s.value, s.input_units.as_str()), (4e5, "m/s**2"));
+    }
+}

@@ -165,7 +165,7 @@ fn symbol_of(rating: &str) -> &'static str {
 }
 
 /// A badge: colour, symbol and text (never colour alone).
-pub(super) fn badge(rating: &str) -> String {
+pub fn badge(rating: &str) -> String {
     format!(
         "<span class=\"badge {}\">{} {}</span>",
         class_of(rating),

@@ -1,0 +1,65 @@
+//! One event added to a many-event dataset ([`crate::sinks::dataset`]): the
+//! event's Hive partition, its run in `DIR/runs/<partition>/` (locked, with
+//! its run manifest, stages skipped when up to date), then its tables
+//! published table-first.  The one home of this sequence: `quaketwin run`
+//! with several events and `quaketwin watch` both add events through it.
+
+use std::path::{Path, PathBuf};
+
+use super::{run_showing, Pipeline, Progress, StageOutcome};
+use crate::error::Result;
+use crate::sinks::dataset;
+
+/// The Hive partition of one event, `structure=<name>/event=<name>` (the
+/// structure's name from the manifest, else `unknown`; the event folder's
+/// name, or the zip's without its extension), relative to the dataset root.
+pub fn event_partition(event: &Path) -> Result<PathBuf> {
+    // The manifest alone: the records are read by the run itself.
+    let manifest = crate::event_folder::read_manifest(event)?;
+    let folder = event
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let structure = manifest
+        .and_then(|m| m.structure)
+        .and_then(|s| s.name)
+        .unwrap_or_else(|| "unknown".into());
+    Ok(dataset::partition(&structure, &folder))
+}
+
+/// How adding one event to a dataset ended.
+#[derive(Debug)]
+pub struct DatasetRun {
+    /// The event's partition (`None` when the event could not be read far
+    /// enough to name it).
+    pub partition: Option<PathBuf>,
+    /// Its run directory `DIR/runs/<partition>/`.
+    pub run_dir: Option<PathBuf>,
+    pub result: Result<Vec<(String, StageOutcome)>>,
+}
+
+/// Runs `pipeline` on `event` into its run directory under the dataset
+/// `root` and publishes its tables.  Idempotent: a second call on the same
+/// event finds every stage up to date and publishes the same files again, so
+/// the event is in the dataset once however often (or however interrupted)
+/// it was added.  `progress.label` is set to the partition.
+pub fn add_event(pipeline: &Pipeline, event: &Path, root: &Path, quiet: bool) -> DatasetRun {
+    let mut run = DatasetRun {
+        partition: None,
+        run_dir: None,
+        result: Ok(Vec::new()),
+    };
+    run.result = event_partition(event).and_then(|partition| {
+        let dir = dataset::run_dir(root, &partition);
+        run.partition = Some(partition.clone());
+        run.run_dir = Some(dir.clone());
+        let progress = Progress {
+            quiet,
+            label: Some(partition.display().to_string()),
+        };
+        let outcomes = run_showing(pipeline, event, &dir, &progress)?;
+        dataset::publish_tables(root, &partition, &dir)?;
+        Ok(outcomes)
+    });
+    run
+}
