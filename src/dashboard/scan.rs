@@ -96,38 +96,6 @@ impl StructureView {
     }
 }
 
-/// The values of `key=` sub-folders of `dir`, sorted (none when `dir` is absent).
-fn partition_values(dir: &Path, key: &str) -> Result<Vec<String>> {
-    let entries = match std::fs::read_dir(dir) {
-        Ok(e) => e,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
-        Err(e) => return Err(Error::io(dir, e)),
-    };
-    let prefix = format!("{key}=");
-    let mut out: Vec<String> = entries
-        .flatten()
-        .filter(|e| e.path().is_dir())
-        .filter_map(|e| {
-            e.file_name()
-                .to_str()
-                .and_then(|n| n.strip_prefix(&prefix).map(str::to_string))
-        })
-        .collect();
-    out.sort();
-    Ok(out)
-}
-
-/// The (structure, event) partitions under `root` (`runs/` or a table folder).
-fn partitions_under(root: &Path) -> Result<Vec<(String, String)>> {
-    let mut out = Vec::new();
-    for s in partition_values(root, "structure")? {
-        for e in partition_values(&root.join(format!("structure={s}")), "event")? {
-            out.push((s.clone(), e));
-        }
-    }
-    Ok(out)
-}
-
 /// Reads every structure of the dataset at `root`, sorted by key; each
 /// structure's events oldest first.
 pub fn scan(root: &Path) -> Result<Vec<StructureView>> {
@@ -137,8 +105,8 @@ pub fn scan(root: &Path) -> Result<Vec<StructureView>> {
             root.display()
         )));
     }
-    let mut keys: Vec<(String, String)> = partitions_under(&root.join(RUNS_DIR))?;
-    keys.extend(partitions_under(&root.join(t::ASSESSMENT.name))?);
+    let mut keys: Vec<(String, String)> = dataset::partitions_under(&root.join(RUNS_DIR))?;
+    keys.extend(dataset::partitions_under(&root.join(t::ASSESSMENT.name))?);
     keys.sort();
     keys.dedup();
     let mut by_structure: BTreeMap<String, Vec<EventView>> = BTreeMap::new();

@@ -222,6 +222,40 @@ fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
+/// The values of the `key=` sub-folders of `dir`, sorted (none when `dir`
+/// is absent).
+pub fn partition_values(dir: &Path, key: &str) -> Result<Vec<String>> {
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(Error::io(dir, e)),
+    };
+    let prefix = format!("{key}=");
+    let mut out: Vec<String> = entries
+        .flatten()
+        .filter(|e| e.path().is_dir())
+        .filter_map(|e| {
+            e.file_name()
+                .to_str()
+                .and_then(|n| n.strip_prefix(&prefix).map(str::to_string))
+        })
+        .collect();
+    out.sort();
+    Ok(out)
+}
+
+/// The (structure, event) partitions under `root` (`runs/` or a table
+/// folder), sorted.
+pub fn partitions_under(root: &Path) -> Result<Vec<(String, String)>> {
+    let mut out = Vec::new();
+    for s in partition_values(root, "structure")? {
+        for e in partition_values(&root.join(format!("structure={s}")), "event")? {
+            out.push((s.clone(), e));
+        }
+    }
+    Ok(out)
+}
+
 /// One event of a dataset: its partition values and the tables it published.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct DatasetEvent {
@@ -231,7 +265,8 @@ pub struct DatasetEvent {
     pub event: String,
     /// `structure=<S>/event=<E>` (relative).
     pub partition: PathBuf,
-    /// Declared tables with a `part-0.parquet` in this partition, by name.
+    /// Declared tables with a `part-0.parquet` in this partition, in the
+    /// order of [`tables::ALL_TABLES`].
     pub tables: Vec<&'static str>,
 }
 
@@ -255,41 +290,24 @@ impl DatasetEvent {
 /// the declared tables only; an event that published no table (its run
 /// failed) is not listed.
 pub fn list_events(root: &Path) -> Result<Option<Vec<DatasetEvent>>> {
-    let dirs = |p: &Path| -> Result<Vec<(String, PathBuf)>> {
-        let mut v = Vec::new();
-        for e in std::fs::read_dir(p).map_err(|e| Error::io(p, e))? {
-            let e = e.map_err(|e| Error::io(p, e))?;
-            let path = e.path();
-            if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_dir()) {
-                v.push((e.file_name().to_string_lossy().into_owned(), path));
-            }
-        }
-        v.sort();
-        Ok(v)
-    };
     let mut is_dataset = root.join(RUNS_DIR).is_dir();
     let mut events: std::collections::BTreeMap<(String, String), Vec<&'static str>> =
         Default::default();
-    for (name, folder) in dirs(root)? {
-        let Some(table) = tables::by_name(&name) else {
-            continue;
-        };
-        for (s, structure_dir) in dirs(&folder)? {
-            let Some(structure) = s.strip_prefix("structure=") else {
-                continue;
-            };
+    for table in tables::ALL_TABLES {
+        let folder = root.join(table.name);
+        if !partition_values(&folder, "structure")?.is_empty() {
             is_dataset = true;
-            for (e, event_dir) in dirs(&structure_dir)? {
-                let Some(event) = e.strip_prefix("event=") else {
-                    continue;
-                };
-                let part = event_dir.join(PART_FILE);
-                if std::fs::symlink_metadata(&part).is_ok_and(|m| m.is_file()) {
-                    events
-                        .entry((structure.to_string(), event.to_string()))
-                        .or_default()
-                        .push(table.name);
-                }
+        }
+        for (structure, event) in partitions_under(&folder)? {
+            let part = folder
+                .join(format!("structure={structure}"))
+                .join(format!("event={event}"))
+                .join(PART_FILE);
+            if std::fs::symlink_metadata(&part).is_ok_and(|m| m.is_file()) {
+                events
+                    .entry((structure, event))
+                    .or_default()
+                    .push(table.name);
             }
         }
     }
