@@ -155,6 +155,10 @@ fn load_as_stated(
     let files = collect(path, limits)?;
     let manifest_file = files.iter().find(|f| is_manifest(f));
     let manifest = manifest_file.map(parse_manifest).transpose()?;
+    // Where the manifest is, as errors name it (the zip's name included).
+    let manifest_name = manifest_file
+        .map(|f| f.display_name())
+        .unwrap_or_else(|| MANIFEST_NAME.into());
     let default_name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -190,9 +194,6 @@ fn load_as_stated(
             by_name.insert(strip_root(f), f);
             by_name.insert(normalise_name(&f.display_name()), f);
         }
-        let manifest_name = manifest_file
-            .map(|f| f.display_name())
-            .unwrap_or_else(|| MANIFEST_NAME.into());
         let mut picked: Vec<(usize, Record)> = Vec::new();
         for (name, placed) in &by_file {
             let entries: Vec<&ChannelEntry> = placed.iter().map(|p| p.1).collect();
@@ -387,7 +388,7 @@ fn load_as_stated(
         if let Some(t) = &m.event.origin_time {
             let bad = || {
                 Error::input(
-                    Location::file(MANIFEST_NAME),
+                    Location::file(&manifest_name),
                     format!(
                         "event.origin_time {t:?} is not an ISO-8601 UTC time in the years {}–{}",
                         manifest::ORIGIN_YEARS.start(),

@@ -212,6 +212,25 @@ fn manifest_errors_name_the_manifest_and_line() {
     );
 }
 
+/// Found by the in-process structured fuzz run (case 1258 of seed 33): an
+/// origin time out of range in a zipped event's manifest named
+/// `event.toml` alone, not the zip it is in.
+#[test]
+fn a_bad_origin_time_names_the_zip_holding_the_manifest() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = b"[event]\norigin_time = \"Z\"\n\n[[channel]]\nfile = \"a.AT2\"\nlevel = 0\ndirection = \"X\"\nrole = \"input\"\n";
+    let zip = temp_file(
+        dir.path(),
+        "quake-17.zip",
+        &zip_bytes(&[("a.AT2", AT2.as_bytes()), ("event.toml", manifest)]),
+    );
+    let msg = input_error_text(event_folder::load(&zip).unwrap_err());
+    assert!(
+        msg.contains("quake-17.zip") && msg.contains("event.toml") && msg.contains("origin_time"),
+        "{msg}"
+    );
+}
+
 #[test]
 fn manifest_naming_a_missing_file_is_an_error() {
     let dir = tempfile::tempdir().unwrap();

@@ -1020,6 +1020,10 @@ fn pipeline_case(rng: &mut Rng, dir: &Path) -> Case {
     let text = std::fs::read_to_string(root().join("pipelines").join(file)).unwrap();
     let mut doc: toml::Table = toml::from_str(&text).unwrap();
     let mut what = format!("{file}");
+    // The thousands of copied stages are appended as text: serialising them
+    // inside the document made `toml::to_string` spend most of a long run's
+    // time copying its buffer.
+    let mut copied_stages = String::new();
     if let Some(toml::Value::Array(stages)) = doc.get_mut("stage") {
         let n = stages.len();
         for _ in 0..1 + rng.below(3) {
@@ -1039,24 +1043,30 @@ fn pipeline_case(rng: &mut Rng, dir: &Path) -> Case {
             } else {
                 1000 + rng.below(9000)
             };
-            if let Some(cond) = stages
+            if let Some(mut cond) = stages
                 .iter()
                 .find(|s| s["kind"].as_str() == Some("condition"))
                 .cloned()
             {
+                const NAME: &str = "\"quaketwin-fuzz-copy\"";
+                cond.as_table_mut()
+                    .unwrap()
+                    .insert("name".into(), NAME.trim_matches('"').into());
+                let block = toml::to_string(&toml::Table::from_iter([(
+                    "stage".to_string(),
+                    toml::Value::Array(vec![cond]),
+                )]))
+                .unwrap();
                 for c in 0..copies {
-                    let mut s = cond.clone();
-                    s.as_table_mut()
-                        .unwrap()
-                        .insert("name".into(), format!("copy{c}").into());
-                    stages.push(s);
+                    copied_stages.push('\n');
+                    copied_stages.push_str(&block.replace(NAME, &format!("\"copy{c}\"")));
                 }
                 write!(what, ", {copies} more stages").unwrap();
             }
         }
     }
     let pfile = dir.join("pipeline.toml");
-    std::fs::write(&pfile, toml::to_string(&doc).unwrap()).unwrap();
+    std::fs::write(&pfile, toml::to_string(&doc).unwrap() + &copied_stages).unwrap();
     Case {
         what,
         input: pfile.clone(),
@@ -1603,15 +1613,22 @@ fn fuzz_structured_in_process_long_run() {
 
     use crate::fuzz::{GLOBAL_COUNTING, GLOBAL_LIVE, GLOBAL_PEAK};
 
-    let total: u64 = std::env::var("QUAKETWIN_FUZZ_CASES")
-        .ok()
-        .and_then(|s| s.replace('_', "").parse().ok())
-        .unwrap_or(1_000_000);
+    let count = |var: &str, default: u64| -> u64 {
+        std::env::var(var)
+            .ok()
+            .and_then(|s| s.replace('_', "").parse().ok())
+            .unwrap_or(default)
+    };
+    let total = count("QUAKETWIN_FUZZ_CASES", 1_000_000);
+    // A shard of a long run: cases FIRST..FIRST+CASES (each case's input
+    // depends on its number alone, so shards run anywhere add up to the
+    // run of their union).
+    let first = count("QUAKETWIN_FUZZ_FIRST", 0);
     let started = std::time::Instant::now();
     let (mut ok, mut errors, mut max_peak, mut slowest) = (0u64, 0u64, 0i64, Duration::ZERO);
     let mut failures = Vec::new();
     GLOBAL_COUNTING.store(true, Ordering::Relaxed);
-    for i in 0..total {
+    for i in first..first + total {
         let dir = tempfile::tempdir().unwrap();
         let mut rng = case_rng(7, i);
         let pipeline = i % 2 == 1;
@@ -1657,12 +1674,15 @@ fn fuzz_structured_in_process_long_run() {
             problems.push(format!("took {took:.1?}"));
         }
         if !problems.is_empty() {
-            failures.push(format!("case {i} ({}): {}", case.what, problems.join("; ")));
+            let failure = format!("case {i} ({}): {}", case.what, problems.join("; "));
+            // At once: a long run stopped early still shows what it found.
+            eprintln!("fuzz in-process FAILURE {failure}");
+            failures.push(failure);
         }
-        if i % 10_000 == 9_999 {
+        if (i - first) % 10_000 == 9_999 {
             eprintln!(
-                "fuzz in-process: {} cases in {:.0?}, {} failures",
-                i + 1,
+                "fuzz in-process: {} cases (up to case {i}) in {:.0?}, {} failures",
+                i + 1 - first,
                 started.elapsed(),
                 failures.len()
             );
@@ -1670,7 +1690,8 @@ fn fuzz_structured_in_process_long_run() {
     }
     GLOBAL_COUNTING.store(false, Ordering::Relaxed);
     eprintln!(
-        "fuzz in-process long run: {total} cases ({ok} ok, {errors} errors) in {:.0?}; largest peak {} MB; slowest {slowest:.2?}; failures {}",
+        "fuzz in-process long run: {total} cases {first}..{} ({ok} ok, {errors} errors) in {:.0?}; largest peak {} MB; slowest {slowest:.2?}; failures {}",
+        first + total,
         started.elapsed(),
         max_peak >> 20,
         failures.len()
