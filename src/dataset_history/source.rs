@@ -14,8 +14,7 @@ use crate::sinks::dataset::DatasetEvent;
 use crate::sinks::parquet::ReadTable;
 use crate::vocab::tables::{self, assessment, channels};
 
-/// The partition value of events whose manifest names no structure.
-pub const UNKNOWN_STRUCTURE: &str = "unknown";
+use crate::sinks::dataset::UNKNOWN_STRUCTURE;
 
 /// Largest event.json read, bytes.
 const MAX_EVENT_JSON: u64 = 64 << 20;
@@ -92,17 +91,10 @@ fn peak(rows: &[ChannelRow], role: &str) -> Option<f64> {
         .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))))
 }
 
-/// The station most of the channels give (ties: the first in name order).
+/// The station most of the channels give (datasets written before events
+/// without a manifest were partitioned by station).
 fn station(rows: &[ChannelRow]) -> Option<String> {
-    let mut counts: std::collections::BTreeMap<&str, usize> = Default::default();
-    for s in rows.iter().filter_map(|r| r.station.as_deref()) {
-        *counts.entry(s).or_default() += 1;
-    }
-    let most = counts.values().copied().max()?;
-    counts
-        .into_iter()
-        .find(|(_, n)| *n == most)
-        .map(|(s, _)| s.to_string())
+    crate::vocab::most_common_station(rows.iter().map(|r| (None, r.station.as_deref())))
 }
 
 fn rating(path: &Path) -> Result<Option<String>> {

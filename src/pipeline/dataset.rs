@@ -10,21 +10,35 @@ use super::{run_showing, Pipeline, Progress, StageOutcome};
 use crate::error::Result;
 use crate::sinks::dataset;
 
-/// The Hive partition of one event, `structure=<name>/event=<name>` (the
-/// structure's name from the manifest, else `unknown`; the event folder's
-/// name, or the zip's without its extension), relative to the dataset root.
+/// The Hive partition of one event, `structure=<S>/event=<E>`, relative to
+/// the dataset root.  `S`: the structure's name from the manifest; without
+/// one (a network's zip as published), the recording station
+/// `NETWORK.STATION` most of the channels' headers give, so that the events
+/// of one instrumented structure share a partition; `unknown` when neither
+/// is known.  `E`: the event folder's name, or the zip's without its
+/// extension.
 pub fn event_partition(event: &Path) -> Result<PathBuf> {
-    // The manifest alone: the records are read by the run itself.
     let manifest = crate::event_folder::read_manifest(event)?;
     let folder = event
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let structure = manifest
-        .and_then(|m| m.structure)
-        .and_then(|s| s.name)
-        .unwrap_or_else(|| "unknown".into());
+    let structure = match manifest.and_then(|m| m.structure).and_then(|s| s.name) {
+        Some(name) => name,
+        None => recording_station(event).unwrap_or_else(|| dataset::UNKNOWN_STRUCTURE.into()),
+    };
     Ok(dataset::partition(&structure, &folder))
+}
+
+/// The station of an event without a manifest, from its records' headers
+/// (samples are let go as they are read).  An event that cannot be read is
+/// `None` here: its run says why, under `structure=unknown`.
+fn recording_station(event: &Path) -> Option<String> {
+    let loaded = crate::event_folder::load_headers(event).ok()?;
+    let channels = loaded.event.records.iter().map(|r| &r.channel);
+    crate::vocab::most_common_station(
+        channels.map(|c| (c.network.as_deref(), c.station.as_deref())),
+    )
 }
 
 /// How adding one event to a dataset ended.

@@ -63,6 +63,10 @@ pub fn partition_value(s: &str) -> String {
     }
 }
 
+/// The `structure=` value of events whose structure nothing names (no
+/// manifest name, no station in the headers).
+pub const UNKNOWN_STRUCTURE: &str = "unknown";
+
 /// The partition path `structure=<S>/event=<E>` (relative).
 pub fn partition(structure: &str, event: &str) -> PathBuf {
     Path::new(&format!("structure={}", partition_value(structure)))

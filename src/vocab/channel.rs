@@ -266,3 +266,24 @@ impl Channel {
         }
     }
 }
+
+/// The recording station most of the channels give, `NETWORK.STATION` (or
+/// `STATION` without a network code); ties go to the first in name order.
+/// What names an instrumented structure when nothing else does (a network's
+/// zip without `event.toml`): the dataset's partition and the history's
+/// grouping both use it.
+pub fn most_common_station<'a>(
+    channels: impl Iterator<Item = (Option<&'a str>, Option<&'a str>)>,
+) -> Option<String> {
+    let mut counts: std::collections::BTreeMap<String, usize> = Default::default();
+    for (network, station) in channels {
+        let station = match (network.map(str::trim), station.map(str::trim)) {
+            (_, None) | (_, Some("")) => continue,
+            (Some(n), Some(s)) if !n.is_empty() => format!("{n}.{s}"),
+            (_, Some(s)) => s.to_string(),
+        };
+        *counts.entry(station).or_default() += 1;
+    }
+    let most = counts.values().copied().max()?;
+    counts.into_iter().find(|(_, n)| *n == most).map(|(s, _)| s)
+}

@@ -12,7 +12,7 @@ pub mod tables;
 mod time;
 mod units;
 
-pub use channel::{Axis, Channel, Direction, QaFlag, Role, SourceRef};
+pub use channel::{most_common_station, Axis, Channel, Direction, QaFlag, Role, SourceRef};
 pub use event::{Event, Record, Structure};
 pub use history::{ProcessingHistory, ProcessingStep};
 pub use samples::{SampleStore, Samples};

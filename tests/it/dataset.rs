@@ -336,3 +336,37 @@ print(bad, first >= 1_000_000_000 * 10**9)
     };
     assert_eq!(stdout.trim(), format!("{}\n0 True", expected.join(" ")));
 }
+
+/// Network zips as published carry no `event.toml`: their events are
+/// partitioned by the recording station of their headers, so the events of
+/// one instrumented structure share a partition (1980s CSMIP V2 and
+/// post-2014 COSMOS zips of Painter St. alike), and two structures never do.
+#[test]
+fn zips_without_a_manifest_are_partitioned_by_their_station() {
+    let corpus = crate::common::shared_records().join("cesmd-bridges-corpus");
+    let events = [
+        "painter-st-ce89324/riodell82_ce89324p.zip",
+        "painter-st-ce89324/nc73201181_ce89324p.zip",
+        "capistrano-ce13795/Inglewood_17May2009_CE13795P.zip",
+    ];
+    let out = tempfile::tempdir().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_quaketwin"))
+        .args(["--quiet", "run"])
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/ingest.toml"))
+        .args(events.iter().map(|e| corpus.join(e)))
+        .arg("--out")
+        .arg(out.path())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let partitions = quaketwin::sinks::dataset::partitions_under(&out.path().join("runs")).unwrap();
+    let expected: Vec<(String, String)> = [
+        ("CE.13795", "Inglewood_17May2009_CE13795P"),
+        ("CE.89324", "nc73201181_ce89324p"),
+        ("CE.89324", "riodell82_ce89324p"),
+    ]
+    .iter()
+    .map(|(s, e)| (s.to_string(), e.to_string()))
+    .collect();
+    assert_eq!(partitions, expected);
+}
