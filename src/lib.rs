@@ -15,6 +15,7 @@ pub mod dataset_history;
 pub mod design;
 pub mod error;
 pub mod event_folder;
+pub mod flags;
 pub mod geometry;
 pub mod hash;
 pub mod history;

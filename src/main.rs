@@ -357,10 +357,10 @@ enum Command {
         #[arg(long, value_name = "URL|cmd:COMMAND")]
         notify: Vec<String>,
         /// Seconds between two looks at the inbox.
-        #[arg(long, default_value_t = 2.0, value_name = "SECONDS")]
+        #[arg(long, default_value_t = quaketwin::watch::flags::DEFAULT_POLL_S, value_name = "SECONDS")]
         poll: f64,
         /// Seconds an entry must rest unchanged to be complete (without a .done marker).
-        #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+        #[arg(long, default_value_t = quaketwin::watch::flags::DEFAULT_SETTLE_S, value_name = "SECONDS")]
         settle: f64,
         /// Only a marker (NAME.done beside the entry, or NAME/.done inside a folder) completes an entry.
         #[arg(long)]
@@ -375,16 +375,16 @@ enum Command {
         #[arg(long)]
         no_dashboard: bool,
         /// Attempts to deliver a notification before it goes to DATASET/_watch/dead_letter/.
-        #[arg(long, default_value_t = 8, value_name = "N")]
+        #[arg(long, default_value_t = quaketwin::watch::flags::DEFAULT_NOTIFY_ATTEMPTS, value_name = "N")]
         notify_attempts: u32,
         /// Seconds before the first retry (doubled after each failure).
-        #[arg(long, default_value_t = 2.0, value_name = "SECONDS")]
+        #[arg(long, default_value_t = quaketwin::watch::flags::DEFAULT_NOTIFY_BACKOFF_S, value_name = "SECONDS")]
         notify_backoff: f64,
         /// Longest wait between two attempts, seconds.
-        #[arg(long, default_value_t = 600.0, value_name = "SECONDS")]
+        #[arg(long, default_value_t = quaketwin::watch::flags::DEFAULT_NOTIFY_MAX_DELAY_S, value_name = "SECONDS")]
         notify_max_delay: f64,
         /// Seconds one delivery may take (HTTP request, or the command, then killed).
-        #[arg(long, default_value_t = 30.0, value_name = "SECONDS")]
+        #[arg(long, default_value_t = quaketwin::watch::flags::DEFAULT_NOTIFY_TIMEOUT_S, value_name = "SECONDS")]
         notify_timeout: f64,
     },
     /// The fleet as a static site: structures by inspection priority, a map,
@@ -461,29 +461,6 @@ enum TwinCommand {
         #[arg(long)]
         out: PathBuf,
     },
-}
-
-/// Longest duration a seconds flag takes (one day).
-const MAX_FLAG_SECONDS: f64 = 86_400.0;
-
-/// A positive number of seconds (usage error naming the flag otherwise).
-fn seconds(flag: &str, s: f64) -> Result<std::time::Duration> {
-    if s.is_finite() && s > 0.0 && s <= MAX_FLAG_SECONDS {
-        Ok(std::time::Duration::from_secs_f64(s))
-    } else {
-        Err(quaketwin::error::Error::usage(format!(
-            "{flag} {s}: seconds, positive and at most {MAX_FLAG_SECONDS}"
-        )))
-    }
-}
-
-/// [`seconds`], zero allowed.
-fn seconds_or_zero(flag: &str, s: f64) -> Result<std::time::Duration> {
-    if s == 0.0 {
-        Ok(std::time::Duration::ZERO)
-    } else {
-        seconds(flag, s)
-    }
 }
 
 /// Prints `value` as JSON on stdout when `--json` was given.
@@ -811,29 +788,23 @@ fn run_command(cli: &Cli) -> Result<()> {
             notify_max_delay,
             notify_timeout,
         } => {
-            let opts = quaketwin::watch::WatchOptions {
+            let opts = quaketwin::watch::flags::WatchFlags {
                 inbox: inbox.clone(),
                 pipeline: pipeline.clone(),
                 out: out.clone(),
                 notify: notify.clone(),
-                poll: seconds("--poll", *poll)?,
-                rule: quaketwin::watch::inbox::CompletionRule {
-                    settle: seconds_or_zero("--settle", *settle)?,
-                    require_done: *require_done,
-                },
-                retry: quaketwin::watch::outbox::RetryPolicy {
-                    first: seconds("--notify-backoff", *notify_backoff)?,
-                    max_delay: seconds("--notify-max-delay", *notify_max_delay)?,
-                    attempts: *notify_attempts,
-                    timeout: seconds("--notify-timeout", *notify_timeout)?,
-                },
-                dashboard: match (no_dashboard, dashboard) {
-                    (true, _) => None,
-                    (false, Some(d)) => Some(d.clone()),
-                    (false, None) => Some(out.join("dashboard")),
-                },
+                poll: *poll,
+                settle: *settle,
+                require_done: *require_done,
                 once: *once,
-            };
+                dashboard: dashboard.clone(),
+                no_dashboard: *no_dashboard,
+                notify_attempts: *notify_attempts,
+                notify_backoff: *notify_backoff,
+                notify_max_delay: *notify_max_delay,
+                notify_timeout: *notify_timeout,
+            }
+            .options()?;
             let s = commands::watch(&opts)?;
             print_json(json, &s)?;
             if s.has_failures() {

@@ -22,6 +22,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from . import _native
+from ._api import _path as _api_path
 from ._api import _track_options
 from ._errors import QuaketwinError
 from ._optional import need
@@ -538,6 +539,109 @@ def track(archive: Any, out: Any, client: Any = None, **options: Any) -> Dict[st
         ]
         parts = client.gather(futures)
     return json.loads(_native.track_finish_json(options_json, parts))
+
+
+def watch(
+    inbox: Any,
+    pipeline: Any,
+    out: Any,
+    *,
+    staging: Any = None,
+    storage_options: Optional[dict] = None,
+    notify: Iterable[str] = (),
+    poll: Optional[float] = None,
+    settle: Optional[float] = None,
+    require_done: bool = False,
+    once: bool = False,
+    dashboard: Any = None,
+    no_dashboard: bool = False,
+    notify_attempts: Optional[int] = None,
+    notify_backoff: Optional[float] = None,
+    notify_max_delay: Optional[float] = None,
+    notify_timeout: Optional[float] = None,
+) -> Dict[str, Any]:
+    """``quaketwin watch`` over an inbox on any fsspec file system: a local
+    folder, or a prefix of an object store (``s3://bucket/inbox``, polled).
+
+    A local inbox is watched by the library's watch itself.  A remote one is
+    mirrored entry by entry into a local staging inbox once an entry is
+    complete (a ``NAME.done`` marker, or unchanged for ``settle`` seconds: a
+    partial upload is never mirrored), and the library's watch processes
+    the staged copies: each event added to the dataset once, notified, the
+    structure's history and the dashboard refreshed (docs/monitoring-network.md).
+
+    Parameters
+    ----------
+    inbox : str or os.PathLike
+        The inbox: a folder or an fsspec URL whose entries (``NAME.zip``
+        objects, ``NAME/`` prefixes) are events.  Only read.
+    pipeline : str or os.PathLike
+        The pipeline file run on each event.
+    out : str or os.PathLike
+        The dataset (a local folder; its state in ``out/_watch/``).
+    staging : str or os.PathLike, optional
+        The local copy of a remote inbox (default ``out`` + ``.inbox``
+        beside the dataset); unused for a local inbox.
+    storage_options : dict, optional
+        fsspec options of the inbox's file system (credentials, endpoint).
+    notify : iterable of str
+        Notification targets, as ``--notify``: ``http://…`` or ``cmd:…``.
+    poll, settle : float, optional
+        Seconds between two looks at the inbox (default 2) and seconds an
+        unmarked entry must rest unchanged (default 10).
+    require_done : bool
+        Only a marker completes an entry.
+    once : bool
+        Process what is complete, deliver, return (else run until stopped).
+    dashboard : str or os.PathLike, optional
+        Folder of the dashboard (default ``out/dashboard``).
+    no_dashboard : bool
+        Do not write the dashboard.
+    notify_attempts, notify_backoff, notify_max_delay, notify_timeout : optional
+        The delivery retries, as the command's flags (8, 2 s, 600 s, 30 s).
+
+    Returns
+    -------
+    dict
+        With ``once``: the summary of ``quaketwin watch --once --json``
+        (``processed``, ``failed``, ``incomplete``, ``notifications_sent``,
+        ``notifications_dead``).  Without it the call returns only by an
+        exception.
+    """
+    from . import _watch
+
+    out_path = _api_path(out, "out")
+    if "://" in out_path:
+        raise ValueError(f"watch: the dataset {out_path!r} must be a local folder")
+    options = _watch.watch_options(
+        _api_path(pipeline, "pipeline"),
+        out_path,
+        notify,
+        poll=poll,
+        settle=settle,
+        require_done=require_done,
+        dashboard=None if dashboard is None else _api_path(dashboard, "dashboard"),
+        no_dashboard=no_dashboard,
+        notify_attempts=notify_attempts,
+        notify_backoff=notify_backoff,
+        notify_max_delay=notify_max_delay,
+        notify_timeout=notify_timeout,
+    )
+    inbox_url = _api_path(inbox, "inbox")
+    fs, root = _fs(inbox_url, storage_options)
+    if _is_local(fs):
+        return json.loads(_native.watch_json(json.dumps(dict(options, inbox=root, once=once))))
+    staging_dir = _watch.staging_for(out_path) if staging is None else _api_path(staging, "staging")
+    return _watch.watch_remote(
+        fs,
+        root,
+        staging_dir,
+        options,
+        poll=2.0 if poll is None else float(poll),
+        settle=10.0 if settle is None else float(settle),
+        require_done=require_done,
+        once=once,
+    )
 
 
 def main(argv: Optional[list] = None) -> int:

@@ -21,6 +21,10 @@ instead of stopping the fleet.
 Command line: ``python -m quaketwin.fleet PIPELINE EVENT… --out URL
 [--scheduler ADDRESS]`` (also ``quaketwin fleet …``).
 
+``watch`` is ``quaketwin watch`` over an inbox on any fsspec file system (an
+object-store prefix, polled): complete remote entries are mirrored into a
+local staging inbox that the library's watch processes.
+
 In a script, the calls that start a local cluster (``run`` and ``track``
 without a client, ``local_cluster``) go under ``if __name__ ==
 "__main__":``: Dask starts its worker processes by running the script again
@@ -38,6 +42,7 @@ from ._fleet import (
     process_event,
     run,
     track,
+    watch,
 )
 
 __all__ = [
@@ -49,6 +54,7 @@ __all__ = [
     "process_event",
     "run",
     "track",
+    "watch",
 ]
 
 if __name__ == "__main__":

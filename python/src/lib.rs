@@ -323,6 +323,18 @@ fn track_json(py: Python<'_>, options_json: &str) -> PyResult<String> {
     })
 }
 
+/// `quaketwin watch` in this process (options as JSON, the fields of the
+/// library's `WatchFlags`); the summary as JSON.  With `once` false it runs
+/// until the process is stopped.
+#[pyfunction]
+fn watch_json(py: Python<'_>, options_json: &str) -> PyResult<String> {
+    guarded(py, "watch_json", || {
+        let opts = quaketwin::watch::flags::options_from_json(options_json)?;
+        let summary = quaketwin::watch::run(&opts)?;
+        quaketwin::summary::to_json(&summary)
+    })
+}
+
 /// The start times (ns since the epoch) of every window of a track run.
 #[pyfunction]
 fn track_starts(py: Python<'_>, options_json: &str) -> PyResult<Vec<i64>> {
@@ -382,6 +394,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(track_starts, m)?)?;
     m.add_function(wrap_pyfunction!(track_windows_json, m)?)?;
     m.add_function(wrap_pyfunction!(track_finish_json, m)?)?;
+    m.add_function(wrap_pyfunction!(watch_json, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_probe, m)?)?;
     Ok(())
 }

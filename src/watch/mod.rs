@@ -24,6 +24,7 @@
 //! State lives in `DATASET/_watch/` (locked by the running watch): the
 //! inbox is only read.
 
+pub mod flags;
 pub mod inbox;
 pub mod journal;
 pub mod log;
