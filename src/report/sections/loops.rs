@@ -52,7 +52,7 @@ fn corrected_residuals(drift_table: &Loaded) -> BTreeMap<(String, String), Resid
             .and_then(|s| s.parse::<i32>().ok())
             .unwrap_or(storey - 1);
         if let Some(res) = residual(t, r) {
-            out.insert((dir, format!("L{lower}–L{storey}")), res);
+            out.insert((dir, format!("L{lower}-L{storey}")), res);
         }
     }
     out
