@@ -29,6 +29,9 @@ from ._optional import need
 fsspec = need("fsspec", "quaketwin.fleet")
 
 PART_FILE = "part-0.parquet"
+# The table tree (`OUT/tables/<table>/…`), a sibling of the run folders
+# (`OUT/runs/…`): no glob under it meets a run's copy (issue 34).
+TABLES_DIR = "tables"
 RUN_FILES = ("run.json", "event.json", "report.html", "twin_updated.toml")
 FLEET_RUNS_SCHEMA = pa.schema(
     [
@@ -183,7 +186,7 @@ def process_event(
             produced = sorted(t for _, t in tables)
             for file, table in tables:
                 _put_atomically(
-                    fs, os.path.join(run_dir, file), _join(root, table, partition, PART_FILE)
+                    fs, os.path.join(run_dir, file), _join(root, TABLES_DIR, table, partition, PART_FILE)
                 )
             # Withdraw the tables an earlier commit of this event published
             # and this run did not produce.
@@ -191,7 +194,7 @@ def process_event(
                 with fs.open(commit, "r") as f:
                     earlier = json.load(f).get("tables", [])
                 for table in sorted(set(earlier) - set(produced)):
-                    stale = _join(root, table, partition, PART_FILE)
+                    stale = _join(root, TABLES_DIR, table, partition, PART_FILE)
                     if fs.exists(stale):
                         fs.rm(stale)
             for file in RUN_FILES:

@@ -10,21 +10,39 @@ use super::{run_showing, Pipeline, Progress, StageOutcome};
 use crate::error::Result;
 use crate::sinks::dataset;
 
-/// The Hive partition of one event, `structure=<name>/event=<name>` (the
-/// structure's name from the manifest, else `unknown`; the event folder's
-/// name, or the zip's without its extension), relative to the dataset root.
-pub fn event_partition(event: &Path) -> Result<PathBuf> {
+/// The ids of one event in a many-event dataset, (structure, event), in the
+/// canonical form of [`dataset::partition_value`]: the manifest's
+/// `structure.id`, else its `structure.name`, else `unknown`; the manifest's
+/// `event.id`, else the event folder's name (the zip's without its
+/// extension).  The free-text names are columns of `event.parquet`.
+pub fn event_ids(event: &Path) -> Result<(String, String)> {
     // The manifest alone: the records are read by the run itself.
     let manifest = crate::event_folder::read_manifest(event)?;
     let folder = event
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let stated = |s: &Option<String>| s.clone().filter(|v| !v.trim().is_empty());
     let structure = manifest
-        .and_then(|m| m.structure)
-        .and_then(|s| s.name)
+        .as_ref()
+        .and_then(|m| m.structure.as_ref())
+        .and_then(|s| stated(&s.id).or_else(|| stated(&s.name)))
         .unwrap_or_else(|| "unknown".into());
-    Ok(dataset::partition(&structure, &folder))
+    let event_id = manifest
+        .as_ref()
+        .and_then(|m| stated(&m.event.id))
+        .unwrap_or(folder);
+    Ok((
+        dataset::partition_value(&structure),
+        dataset::partition_value(&event_id),
+    ))
+}
+
+/// The Hive partition of one event, `structure=<id>/event=<id>` ([`event_ids`]),
+/// relative to the dataset root.
+pub fn event_partition(event: &Path) -> Result<PathBuf> {
+    let (structure, event) = event_ids(event)?;
+    Ok(dataset::partition(&structure, &event))
 }
 
 /// How adding one event to a dataset ended.

@@ -14,7 +14,9 @@ use super::parquet::{write_parquet, write_parquet_stream, ReadTable, TableBuilde
 use crate::conditioning::Motion;
 use crate::error::{Error, Result};
 use crate::metrics::{DriftRow, DriftTable, ResidualDrift, StrongMotionMetrics};
-use crate::vocab::tables::{channels, drift, samples, spectra, CHANNELS, DRIFT, SAMPLES, SPECTRA};
+use crate::vocab::tables::{
+    channels, drift, event as ev, samples, spectra, CHANNELS, DRIFT, EVENT, SAMPLES, SPECTRA,
+};
 use crate::vocab::{Channel, Direction, Event, ProcessingHistory, Record, SampleStore, Samples};
 use std::sync::Arc;
 
@@ -49,6 +51,32 @@ pub fn time_base(channel: &Channel, origin_ns: Option<i64>) -> (Option<i64>, &'s
 /// Event-level metadata stored in every table's key/value metadata.
 fn event_metadata(event: &Event) -> Vec<(String, String)> {
     super::provenance::Provenance::of_event(event).metadata()
+}
+
+/// `event.parquet`: one row, the event and its structure — the ids
+/// `(structure_id, event_id)` a many-event dataset partitions by
+/// (`pipeline::dataset::event_ids`) beside the free-text names.
+pub fn write_event(path: &Path, event: &Event, ids: (&str, &str)) -> Result<()> {
+    let s = event.structure.as_ref();
+    let record_start = event
+        .records
+        .iter()
+        .filter_map(|r| r.channel.start_ns)
+        .min();
+    let batch = TableBuilder::new(&EVENT)
+        .str(ev::STRUCTURE_ID, &[ids.0])
+        .opt_str(ev::STRUCTURE_NAME, &[s.and_then(|s| s.name.clone())])
+        .str(ev::EVENT_ID, &[ids.1])
+        .str(ev::EVENT_NAME, &[event.name.as_str()])
+        .opt_timestamp_ns(ev::ORIGIN_TIME, vec![event.origin_ns])
+        .opt_f64(ev::MAGNITUDE, vec![event.magnitude])
+        .opt_timestamp_ns(ev::RECORD_START, vec![record_start])
+        .u32(ev::CHANNELS, vec![event.records.len() as u32])
+        .opt_str(ev::STRUCTURE_KIND, &[s.and_then(|s| s.kind.clone())])
+        .opt_f64(ev::LATITUDE_DEG, vec![s.and_then(|s| s.latitude_deg)])
+        .opt_f64(ev::LONGITUDE_DEG, vec![s.and_then(|s| s.longitude_deg)])
+        .build()?;
+    write_parquet(path, &[batch], &event_metadata(event))
 }
 
 /// `channels.parquet`: one row per channel, metadata + QA + metrics.

@@ -50,6 +50,21 @@ macro_rules! declare {
     (@null nullable) => { true };
 }
 
+declare!(EVENT, event, "event", "event.parquet",
+    "one row: the event and its structure, their ids (the partitions of a many-event dataset) beside the free-text names the manifest or the records give", {
+    STRUCTURE_ID: "structure_id", Utf8, required, "", "the structure's id: `structure.id` of event.toml, else its `structure.name`, else `unknown`, in canonical form (lower case, runs of other characters one `-`): the `structure=` partition of a many-event dataset";
+    STRUCTURE_NAME: "structure_name", Utf8, nullable, "", "the structure's name as given (free text; `structure.name`, else from the records' headers); null when none";
+    EVENT_ID: "event_id", Utf8, required, "", "the event's id: `event.id` of event.toml, else the event folder's (zip's) name, in canonical form: the `event=` partition of a many-event dataset";
+    EVENT_NAME: "event_name", Utf8, required, "", "the event's name as given (free text; `event.name`, else from the headers or the folder)";
+    ORIGIN_TIME: "origin_time", TimestampNsUtc, nullable, "", "origin time (UTC), when stated";
+    MAGNITUDE: "magnitude", F64, nullable, "1", "magnitude, when stated";
+    RECORD_START: "record_start", TimestampNsUtc, nullable, "", "earliest start time of the records (UTC); null when no record states one";
+    CHANNELS: "channels", U32, required, "", "channels read";
+    STRUCTURE_KIND: "structure_kind", Utf8, nullable, "", "`building`, `bridge`, … when stated or inferred";
+    LATITUDE_DEG: "latitude_deg", F64, nullable, "deg", "the structure's latitude (WGS 84, north positive), when stated";
+    LONGITUDE_DEG: "longitude_deg", F64, nullable, "deg", "the structure's longitude (WGS 84, east positive), when stated";
+});
+
 declare!(CHANNELS, channels, "channels", "channels.parquet",
     "one row per channel: metadata, QA and strong-motion metrics", {
     CHANNEL_ID: "channel_id", Utf8, required, "", "unique id within the event";
@@ -489,7 +504,7 @@ declare!(HISTORY_EVENTS, history_events, "history_events", "history_events.parqu
     STRUCTURE: "structure", Utf8, required, "", "structure id (as in history_modes.parquet)";
     STRUCTURE_NAME: "structure_name", Utf8, nullable, "", "the structure's name as the event's manifest or headers give it (`structure.name` of event.json)";
     EVENT: "event", Utf8, required, "", "event (the dataset's `event=` partition)";
-    PARTITION: "partition", Utf8, required, "", "the event's partition `structure=<S>/event=<E>`: its tables are `DATASET/<table>/<partition>/part-0.parquet`, its run directory (report.html) `DATASET/runs/<partition>/`";
+    PARTITION: "partition", Utf8, required, "", "the event's partition `structure=<S>/event=<E>`: its tables are `DATASET/tables/<table>/<partition>/part-0.parquet`, its run directory (report.html) `DATASET/runs/<partition>/`";
     EVENT_TIME: "event_time", TimestampNsUtc, nullable, "", "origin time (event.json), else the earliest start of its channels";
     TIME_SOURCE: "time_source", Utf8, required, "", "`origin_time`, `record_start` or `unknown`";
     PEAK_BASE_M_S2: "peak_base_m_s2", F64, nullable, "m/s^2", "largest horizontal peak acceleration of the input (base, ground) channels (`pga_m_s2` of channels.parquet)";
@@ -509,6 +524,7 @@ declare!(HISTORY_EVENTS, history_events, "history_events", "history_events.parqu
 
 /// Every table quaketwin writes, in pipeline order.
 pub const ALL_TABLES: &[&TableSchema] = &[
+    &EVENT,
     &SAMPLES,
     &CHANNELS,
     &SPECTRA,

@@ -395,7 +395,7 @@ fn history_command_on_a_synthetic_dataset() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(summary["ok"], true);
-    assert_eq!(summary["structures"][0]["structure"], "test_building");
+    assert_eq!(summary["structures"][0]["structure"], "test-building");
     let modes = read_modes(&out.join("history_modes.parquet")).unwrap();
     let rows = read_events(&out.join("history_events.parquet")).unwrap();
     assert_eq!(rows.len(), DATASET_EVENTS);
@@ -476,15 +476,19 @@ fn history_command_on_a_synthetic_dataset() {
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("nope") && err.contains("test_building"),
+        err.contains("nope") && err.contains("test-building"),
         "{err}"
     );
     let o = run(&[ds.as_os_str(), "--out".as_ref(), ds.as_os_str()]);
     assert_eq!(o.status.code(), Some(2));
-    let in_table = ds.join("modes").join("history");
-    let o = run(&[ds.as_os_str(), "--out".as_ref(), in_table.as_os_str()]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(!in_table.exists(), "nothing written into a table folder");
+    for in_table in [
+        ds.join("tables").join("history"),
+        ds.join("tables/modes/history"),
+    ] {
+        let o = run(&[ds.as_os_str(), "--out".as_ref(), in_table.as_os_str()]);
+        assert_eq!(o.status.code(), Some(2));
+        assert!(!in_table.exists(), "nothing written into the table tree");
+    }
     let missing = tmp.path().join("missing");
     let o = run(&[
         missing.as_os_str(),
