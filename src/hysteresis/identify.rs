@@ -54,7 +54,7 @@ pub struct DirectionIdentification {
     pub k0_delta_matrix: Vec<Vec<f64>>,
     pub masses: Vec<f64>,
     /// Segment of each DoF (`L0-L1`, `L1-L3`…: from the instrumented level
-    /// below to the DoF's own); `L<d−1>–L<d>` unless the caller knows the levels.
+    /// below to the DoF's own); `L<d−1>-L<d>` unless the caller knows the levels.
     pub segments: Vec<String>,
     pub damage: DamageSeries,
     /// Declared processing plus this stage's steps and settings.
