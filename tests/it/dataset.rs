@@ -217,7 +217,7 @@ rows = duckdb.sql(f"select event, rating from read_parquet('{root}/tables/assess
 print("duckdb-assessment", line(rows))
 # Issue 34: the whole table tree in one glob: every file once (no run copy),
 # the tables' columns side by side (one type per column name).
-n, runs = duckdb.sql(f"select count(*), count(*) filter (where filename like '%/runs/%') from read_parquet('{root}/tables/**/*.parquet', union_by_name=true, hive_partitioning=true, filename=true)").fetchone()
+n, runs = duckdb.sql(f"select count(*), count(*) filter (where filename like '%/runs/%') from read_parquet('{root}/tables/**/*.parquet', union_by_name=true, hive_partitioning=true, filename=true)").fetchall()[0]
 print("duckdb-tree", n, runs)
 # The free text beside the ids: the structure's name for its partition.
 names = duckdb.sql(f"select distinct structure, structure_name from read_parquet('{root}/tables/event/**/*.parquet', hive_partitioning=true) where event = 'synthetic-4storey-quake'").fetchall()
