@@ -33,14 +33,20 @@ PART_FILE = "part-0.parquet"
 # (`OUT/runs/…`): no glob under it meets a run's copy (issue 34).
 TABLES_DIR = "tables"
 RUN_FILES = ("run.json", "event.json", "report.html", "twin_updated.toml")
+def _field(name: str, type_: pa.DataType, unit: str, description: str) -> pa.Field:
+    """A field with its unit and meaning in its metadata, as every table of
+    the Rust library carries them (docs/formats.md)."""
+    return pa.field(name, type_, metadata={"unit": unit, "description": description})
+
+
 FLEET_RUNS_SCHEMA = pa.schema(
     [
-        ("event", pa.string()),
-        ("partition", pa.string()),
-        ("status", pa.string()),  # ok, skipped, failed
-        ("error", pa.string()),
-        ("seconds", pa.float64()),
-        ("worker", pa.string()),
+        _field("event", pa.string(), "", "the event as given"),
+        _field("partition", pa.string(), "", "structure=…/event=… in the dataset; null when the event could not be read"),
+        _field("status", pa.string(), "", "ok, skipped (committed before with the same pipeline and event) or failed"),
+        _field("error", pa.string(), "", "the exception and its message when failed"),
+        _field("seconds", pa.float64(), "s", "wall time of the task"),
+        _field("worker", pa.string(), "", "host name of the worker"),
     ]
 )
 
