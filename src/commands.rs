@@ -799,7 +799,7 @@ pub struct EventRun {
 
 /// `quaketwin run PIPELINE EVENT1 EVENT2 … --out DIR`: events in parallel on
 /// all cores, each into its run directory `DIR/runs/structure=…/event=…/`,
-/// its tables then published table-first, `DIR/<table>/structure=…/event=…/
+/// its tables then published table-first, `DIR/tables/<table>/structure=…/event=…/
 /// part-0.parquet` ([`pipeline::dataset`]), so that one table of a whole network reads
 /// as one dataset (pyarrow, DuckDB, polars).  Every event is attempted; each
 /// one's result is returned, in the order given.  On a terminal each event

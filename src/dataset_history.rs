@@ -201,7 +201,7 @@ pub fn structures(root: &Path) -> Result<BTreeMap<String, Vec<EventSource>>> {
     if events.is_empty() {
         return Err(Error::input(
             loc(),
-            "the dataset holds no event (no table published under <table>/structure=…/event=…/part-0.parquet)",
+            "the dataset holds no event (no table published under tables/<table>/structure=…/event=…/part-0.parquet)",
         ));
     }
     let sources: Vec<EventSource> = events
@@ -361,7 +361,11 @@ fn check_out(opts: &HistoryOptions) -> Result<()> {
         .and_then(|rel| rel.components().next())
         .is_some_and(|c| {
             let name = c.as_os_str().to_string_lossy();
-            tables::by_name(&name).is_some() || name == dataset::RUNS_DIR
+            // The table tree, the run folders (and a table folder of the
+            // layout before issue 34, `DIR/<table>/`).
+            tables::by_name(&name).is_some()
+                || name == dataset::RUNS_DIR
+                || name == dataset::TABLES_DIR
         });
     if out == root || inside_table {
         return Err(Error::usage(format!(

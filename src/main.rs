@@ -401,7 +401,7 @@ enum Command {
     },
     /// Run a pipeline file on an event folder; several events (or a folder of
     /// event folders) run in parallel into a table-first Hive dataset:
-    /// DIR/<table>/structure=…/event=…/part-0.parquet, each event's run
+    /// DIR/tables/<table>/structure=…/event=…/part-0.parquet, each event's run
     /// (run.json, event.json, report.html) in DIR/runs/structure=…/event=…/.
     #[command(after_help = "Examples:
   quaketwin run pipelines/post-earthquake.toml sample-records/synthetic-4storey-quake --out out/quake

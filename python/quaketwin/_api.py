@@ -73,7 +73,7 @@ def run(
     The output directory rules of the command line apply: a lock, the run
     manifest ``run.json``, re-runs skip the stages that are up to date.
     Several events, or a folder of event folders, give the many-event
-    layout: a Hive dataset ``out/<table>/structure=…/event=…/part-0.parquet``
+    layout: a Hive dataset ``out/tables/<table>/structure=…/event=…/part-0.parquet``
     that DuckDB, pyarrow and polars read as one table (docs/cli.md).
 
     Parameters

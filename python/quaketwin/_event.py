@@ -147,8 +147,11 @@ class Event:
         One ``Trace`` per channel.  Channels read from MiniSEED or SAC keep
         their SEED codes; the others get the quaketwin channel id as station
         code.  ``trace.stats.quaketwin`` holds the channel's quaketwin id,
-        level, direction, role and units.  The start time is the record's
-        when known (``trace.stats.quaketwin.start_known``), else 1970-01-01.
+        level, direction, role and units.  The start time is the first
+        sample's ``time`` (the record's start; for a record without one, the
+        event's origin time); 1970-01-01 when neither is known.
+        ``trace.stats.quaketwin.start_known`` is true only when the record
+        states its own start.
 
         Returns
         -------
@@ -181,7 +184,7 @@ class Event:
                     "direction": _direction(c.get("direction")),
                     "role": c.get("role"),
                     "units": "m/s^2",
-                    "start_known": first is not None or start_ns is not None,
+                    "start_known": start_ns is not None,
                 },
             }
             data = np.ascontiguousarray(rows.column("acc_m_s2").to_numpy(), dtype=np.float64)

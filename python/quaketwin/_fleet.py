@@ -30,15 +30,24 @@ from ._optional import need
 fsspec = need("fsspec", "quaketwin.fleet")
 
 PART_FILE = "part-0.parquet"
+# The table tree (`OUT/tables/<table>/…`), a sibling of the run folders
+# (`OUT/runs/…`): no glob under it meets a run's copy (issue 34).
+TABLES_DIR = "tables"
 RUN_FILES = ("run.json", "event.json", "report.html", "twin_updated.toml")
+def _field(name: str, type_: pa.DataType, unit: str, description: str) -> pa.Field:
+    """A field with its unit and meaning in its metadata, as every table of
+    the Rust library carries them (docs/formats.md)."""
+    return pa.field(name, type_, metadata={"unit": unit, "description": description})
+
+
 FLEET_RUNS_SCHEMA = pa.schema(
     [
-        ("event", pa.string()),
-        ("partition", pa.string()),
-        ("status", pa.string()),  # ok, skipped, failed
-        ("error", pa.string()),
-        ("seconds", pa.float64()),
-        ("worker", pa.string()),
+        _field("event", pa.string(), "", "the event as given"),
+        _field("partition", pa.string(), "", "structure=…/event=… in the dataset; null when the event could not be read"),
+        _field("status", pa.string(), "", "ok, skipped (committed before with the same pipeline and event) or failed"),
+        _field("error", pa.string(), "", "the exception and its message when failed"),
+        _field("seconds", pa.float64(), "s", "wall time of the task"),
+        _field("worker", pa.string(), "", "host name of the worker"),
     ]
 )
 
@@ -184,7 +193,7 @@ def process_event(
             produced = sorted(t for _, t in tables)
             for file, table in tables:
                 _put_atomically(
-                    fs, os.path.join(run_dir, file), _join(root, table, partition, PART_FILE)
+                    fs, os.path.join(run_dir, file), _join(root, TABLES_DIR, table, partition, PART_FILE)
                 )
             # Withdraw the tables an earlier commit of this event published
             # and this run did not produce.
@@ -192,7 +201,7 @@ def process_event(
                 with fs.open(commit, "r") as f:
                     earlier = json.load(f).get("tables", [])
                 for table in sorted(set(earlier) - set(produced)):
-                    stale = _join(root, table, partition, PART_FILE)
+                    stale = _join(root, TABLES_DIR, table, partition, PART_FILE)
                     if fs.exists(stale):
                         fs.rm(stale)
             for file in RUN_FILES:

@@ -6,7 +6,7 @@ Each event is one task.  A worker copies the event to its local disk when
 it is a URL, runs the pipeline into a run directory of its own (the Rust
 library, as ``quaketwin run``), then publishes: every table file is written
 under a temporary name and moved to
-``OUT/<table>/structure=…/event=…/part-0.parquet`` (when ``OUT`` is a local
+``OUT/tables/<table>/structure=…/event=…/part-0.parquet`` (when ``OUT`` is a local
 path the run directory is made inside it, under ``OUT/_fleet/work/``, so that
 publishing is one rename per file, never a copy)
 (a table the event's new run no longer has is withdrawn), the run's JSON and

@@ -49,7 +49,7 @@ def cli(*args):
 def modes_by_event(root):
     """(event, mode, frequency_hz) of every row of the modes dataset at root."""
     return duckdb.sql(
-        f"select event, mode, frequency_hz from read_parquet('{root}/modes/**/*.parquet', "
+        f"select event, mode, frequency_hz from read_parquet('{root}/tables/modes/**/*.parquet', "
         "hive_partitioning=true) order by event, mode"
     ).fetchall()
 
@@ -141,10 +141,11 @@ class Fleet(unittest.TestCase):
             runs = quaketwin.fleet.run(PIPELINE, EVENTS, out, client=client, progress=False)
             self.assertEqual(runs.column("status").to_pylist(), ["ok"] * len(EVENTS), runs.to_pylist())
             self.assertEqual(modes_by_event(out), self.expected)
-            # The dataset holds one part file per table and event, nothing else.
-            for part in pathlib.Path(out).glob("*/structure=*/event=*/*"):
-                if part.parts[-4] not in ("runs", "_fleet"):
-                    self.assertEqual(part.name, "part-0.parquet", part)
+            # The table tree holds one part file per table and event, nothing else.
+            parts = list(pathlib.Path(out).glob("tables/*/structure=*/event=*/*"))
+            self.assertTrue(parts)
+            for part in parts:
+                self.assertEqual(part.name, "part-0.parquet", part)
             again = quaketwin.fleet.run(PIPELINE, EVENTS, out, client=client, progress=False)
             self.assertEqual(again.column("status").to_pylist(), ["skipped"] * len(EVENTS))
             self.assertEqual(

@@ -106,7 +106,10 @@ pub fn scan(root: &Path) -> Result<Vec<StructureView>> {
         )));
     }
     let mut keys: Vec<(String, String)> = dataset::partitions_under(&root.join(RUNS_DIR))?;
-    keys.extend(dataset::partitions_under(&root.join(t::ASSESSMENT.name))?);
+    keys.extend(dataset::partitions_under(&dataset::table_dir(
+        root,
+        t::ASSESSMENT.name,
+    ))?);
     keys.sort();
     keys.dedup();
     let mut by_structure: BTreeMap<String, Vec<EventView>> = BTreeMap::new();
@@ -126,7 +129,11 @@ pub fn scan(root: &Path) -> Result<Vec<StructureView>> {
 fn read_event(root: &Path, structure: &str, event: &str) -> EventView {
     let partition = dataset::partition(structure, event);
     let run_dir = dataset::run_dir(root, &partition);
-    let table_file = |name: &str| root.join(name).join(&partition).join(PART_FILE);
+    let table_file = |name: &str| {
+        dataset::table_dir(root, name)
+            .join(&partition)
+            .join(PART_FILE)
+    };
     let mut v = EventView {
         structure: structure.to_string(),
         event: event.to_string(),

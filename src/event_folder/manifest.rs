@@ -67,6 +67,9 @@ pub struct Manifest {
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EventSection {
+    /// A stable id of the event (a network's event id): its `event=`
+    /// partition in a many-event dataset, instead of the folder's name.
+    pub id: Option<String>,
     pub name: Option<String>,
     /// ISO-8601 UTC origin time.
     pub origin_time: Option<String>,
@@ -78,6 +81,9 @@ pub struct EventSection {
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StructureSection {
+    /// A stable id of the structure (a station code, an asset number): its
+    /// `structure=` partition in a many-event dataset, instead of its name.
+    pub id: Option<String>,
     pub name: Option<String>,
     #[serde(default)]
     pub storey_heights_m: Vec<f64>,

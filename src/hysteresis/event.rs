@@ -77,7 +77,7 @@ pub struct MeasuredResponse {
     /// Time of the first sample from the record's start, s (as
     /// `DirectionIdentification::start_s`).
     pub start_s: f64,
-    /// Segment of each DoF (`L0–L4`…).
+    /// Segment of each DoF (`L0-L4`…).
     pub segments: Vec<String>,
     /// Inter-storey (segment) drift u_d − u_{d−1}, m, per DoF.
     pub storey_drift: Vec<Vec<f64>>,
@@ -412,7 +412,7 @@ fn identify_spec(
         mass.segments()
     } else {
         (1..=kin.dofs() as i32)
-            .map(|l| format!("L{}–L{l}", l - 1))
+            .map(|l| format!("L{}-L{l}", l - 1))
             .collect()
     };
     match identify_kinematics_outcome(&kin, &spec.direction, settings) {

@@ -53,8 +53,8 @@ pub struct DirectionIdentification {
     /// Full K0∘δ (antisymmetric off the diagonal).
     pub k0_delta_matrix: Vec<Vec<f64>>,
     pub masses: Vec<f64>,
-    /// Segment of each DoF (`L0–L1`, `L1–L3`…: from the instrumented level
-    /// below to the DoF's own); `L<d−1>–L<d>` unless the caller knows the levels.
+    /// Segment of each DoF (`L0-L1`, `L1-L3`…: from the instrumented level
+    /// below to the DoF's own); `L<d−1>-L<d>` unless the caller knows the levels.
     pub segments: Vec<String>,
     pub damage: DamageSeries,
     /// Declared processing plus this stage's steps and settings.

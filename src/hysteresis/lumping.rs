@@ -3,7 +3,7 @@
 //!
 //! The identified chain has one DoF per instrumented floor level
 //! l_1 < … < l_D (the base l_0 = 0 is always instrumented); its "storeys" are
-//! the *segments* between consecutive instrumented levels, named `L<a>–L<b>`.
+//! the *segments* between consecutive instrumented levels, named `L<a>-L<b>`.
 //! The mass m_i of every level i is lumped onto the instrumented levels by
 //! the **tributary (linear) rule** — the row sums of the consistent mass of a
 //! displacement field interpolated linearly in elevation between the
@@ -46,10 +46,10 @@ pub struct LumpedMasses {
     pub elevation_source: String,
 }
 
-/// "L0–L4": the segment below DoF `d` (0-based) of a chain on `levels`.
+/// "L0-L4": the segment below DoF `d` (0-based) of a chain on `levels`.
 pub fn segment_label(levels: &[i32], d: usize) -> String {
     let lower = if d == 0 { 0 } else { levels[d - 1] };
-    format!("L{lower}–L{}", levels[d])
+    format!("L{lower}-L{}", levels[d])
 }
 
 /// Tributary lumping (module doc) of `level_masses` (levels 1..n, kg) onto

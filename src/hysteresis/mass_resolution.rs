@@ -75,7 +75,7 @@ pub enum MassLumping {
 }
 
 impl MassResolution {
-    /// Segment names of the DoFs: `L0–L1`, `L1–L3`, … (DoF d spans from the
+    /// Segment names of the DoFs: `L0-L1`, `L1-L3`, … (DoF d spans from the
     /// level below it to its own).
     pub fn segments(&self) -> Vec<String> {
         (0..self.levels.len())

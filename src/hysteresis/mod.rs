@@ -15,7 +15,7 @@
 //! - [`damage`]: ι(t), ω_s(t), c_s(t) (Eq. 32–34).
 //! - [`reduced_mass`]: reduced lumped masses (Eq. 35–36).
 //! - [`lumping`]: Eq. 35–36 generalised to any instrumented levels
-//!   (tributary lumping, segments `L<a>–L<b>`).
+//!   (tributary lumping, segments `L<a>-L<b>`).
 //! - [`storey_masses`]: storey masses and Eq. 35–36 targets from the twin.
 //! - [`window`]: the part of a record identified (the strong motion of a
 //!   long record, with margins; a triggered record whole).

@@ -10,29 +10,48 @@ use super::{run_showing, Pipeline, Progress, StageOutcome};
 use crate::error::Result;
 use crate::sinks::dataset;
 
-/// The Hive partition of one event, `structure=<S>/event=<E>`, relative to
-/// the dataset root.  `S`: the structure's name from the manifest; without
-/// one (a network's zip as published), the recording station
-/// `NETWORK.STATION` most of the channels' headers give, so that the events
-/// of one instrumented structure share a partition; `unknown` when neither
-/// is known.  `E`: the event folder's name, or the zip's without its
-/// extension.
-pub fn event_partition(event: &Path) -> Result<PathBuf> {
+/// The ids of one event in a many-event dataset, (structure, event), in the
+/// canonical form of [`dataset::partition_value`]: the manifest's
+/// `structure.id`, else its `structure.name`, else (a network's zip as
+/// published, no manifest) the recording station `NETWORK.STATION` most of
+/// the records' headers give, so that the events of one instrumented
+/// structure share a partition, else `unknown`; the manifest's `event.id`,
+/// else the event folder's name (the zip's without its extension).  The
+/// free-text names are columns of `event.parquet`.
+pub fn event_ids(event: &Path) -> Result<(String, String)> {
     let manifest = crate::event_folder::read_manifest(event)?;
     let folder = event
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let structure = match manifest.and_then(|m| m.structure).and_then(|s| s.name) {
-        Some(name) => name,
-        None => recording_station(event).unwrap_or_else(|| dataset::UNKNOWN_STRUCTURE.into()),
-    };
-    Ok(dataset::partition(&structure, &folder))
+    let stated = |s: &Option<String>| s.clone().filter(|v| !v.trim().is_empty());
+    let structure = manifest
+        .as_ref()
+        .and_then(|m| m.structure.as_ref())
+        .and_then(|s| stated(&s.id).or_else(|| stated(&s.name)))
+        .or_else(|| recording_station(event))
+        .unwrap_or_else(|| dataset::UNKNOWN_STRUCTURE.into());
+    let event_id = manifest
+        .as_ref()
+        .and_then(|m| stated(&m.event.id))
+        .unwrap_or(folder);
+    Ok((
+        dataset::partition_value(&structure),
+        dataset::partition_value(&event_id),
+    ))
 }
 
-/// The station of an event without a manifest, from its records' headers
-/// (samples are let go as they are read).  An event that cannot be read is
-/// `None` here: its run says why, under `structure=unknown`.
+/// The Hive partition of one event, `structure=<id>/event=<id>` ([`event_ids`]),
+/// relative to the dataset root.
+pub fn event_partition(event: &Path) -> Result<PathBuf> {
+    let (structure, event) = event_ids(event)?;
+    Ok(dataset::partition(&structure, &event))
+}
+
+/// The station of an event without a manifest's structure, from its
+/// records' headers (samples are let go as they are read).  An event that
+/// cannot be read is `None` here: its run says why, under
+/// `structure=unknown`.
 fn recording_station(event: &Path) -> Option<String> {
     let loaded = crate::event_folder::load_headers(event).ok()?;
     let channels = loaded.event.records.iter().map(|r| &r.channel);

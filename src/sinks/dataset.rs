@@ -1,14 +1,22 @@
 //! The many-event dataset layout (docs/cli.md, "Many events"): one folder per
-//! table, Hive-partitioned by structure and event, so that one table across
-//! a network's events is one query for pyarrow, DuckDB and polars:
+//! table under `tables/`, Hive-partitioned by structure id and event id, so
+//! that one table across a network's events is one query for pyarrow, DuckDB
+//! and polars, and a glob over the table tree meets each table once:
 //!
 //! ```text
-//! DIR/<table>/structure=<S>/event=<E>/part-0.parquet   one file per table and event
-//! DIR/runs/structure=<S>/event=<E>/                    the event's run: run.json, event.json,
-//!                                                      report.html, twin_updated.toml, tables
-//! DIR/history/structure=<S>/                           the structure's history (quaketwin history)
-//! DIR/_watch/                                          quaketwin watch's journal and outbox
+//! DIR/tables/<table>/structure=<S>/event=<E>/part-0.parquet   one file per table and event
+//! DIR/runs/structure=<S>/event=<E>/          the event's run: run.json, event.json,
+//!                                            report.html, twin_updated.toml, tables
+//! DIR/history/structure=<S>/                 the structure's history (quaketwin history)
+//! DIR/_watch/                                quaketwin watch's journal and outbox
 //! ```
+//!
+//! `<S>` and `<E>` are ids ([`partition_value`]): the manifest's
+//! `structure.id` / `event.id` when stated, else the structure's name / the
+//! event folder's name in a canonical form; the free text is in the
+//! `event` table (`structure_name`, `event_name`).  The run directories hold
+//! the same tables again under `runs/`, a sibling of `tables/`, so that no
+//! glob under `tables/` counts them twice (issue 34).
 //!
 //! Each event runs into its own run directory (locked, with its run manifest,
 //! re-run stage by stage like any single-event run); its tables are then
@@ -24,8 +32,10 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 use crate::vocab::tables;
 
-/// Folder of the per-event run directories, beside the table folders.
+/// Folder of the per-event run directories, beside the table tree.
 pub const RUNS_DIR: &str = "runs";
+/// Folder of the table folders (the table tree): `DIR/tables/<table>/…`.
+pub const TABLES_DIR: &str = "tables";
 /// The one file of a table in an event's partition.
 pub const PART_FILE: &str = "part-0.parquet";
 /// Folder of the structure histories (`quaketwin history`, refreshed by
@@ -40,21 +50,28 @@ pub fn history_dir(root: &Path, structure: &str) -> PathBuf {
         .join(format!("structure={}", partition_value(structure)))
 }
 
-/// A Hive partition value: ASCII letters, digits, `-`, `_` and `.` kept,
-/// anything else (`/`, `=`, spaces) replaced by `_`, so that a name can
-/// neither leave its folder nor break the `key=value` form.
+/// The folder of `table` in the dataset `root`: `root/tables/<table>`.
+pub fn table_dir(root: &Path, table: &str) -> PathBuf {
+    root.join(TABLES_DIR).join(table)
+}
+
+/// A Hive partition value: the id of a structure or an event in a canonical
+/// form — ASCII letters lower-cased, digits, `_` and `.` kept, every run of
+/// anything else (spaces, `/`, `=`, `-`, accents) one `-`, no `-` at either
+/// end — so that a name can neither leave its folder nor break the
+/// `key=value` form, two spellings of one name ("Building A", "building-a")
+/// are one partition, and the value is the same on a case-insensitive file
+/// system.  Idempotent: a value maps to itself.
 pub fn partition_value(s: &str) -> String {
-    let v: String = s
-        .trim()
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
+    let mut v = String::with_capacity(s.len());
+    for c in s.trim().chars() {
+        if c.is_ascii_alphanumeric() || c == '_' || c == '.' {
+            v.push(c.to_ascii_lowercase());
+        } else if !v.is_empty() && !v.ends_with('-') {
+            v.push('-');
+        }
+    }
+    let v = v.trim_end_matches('-').to_string();
     match v.as_str() {
         "" => "unnamed".into(),
         // `.` and `..` are path components, not names.
@@ -88,7 +105,7 @@ pub fn publish_tables(root: &Path, partition: &Path, run_dir: &Path) -> Result<V
     let mut published = Vec::with_capacity(produced.len());
     for name in &produced {
         let from = run_dir.join(format!("{name}.parquet"));
-        let dir = root.join(name).join(partition);
+        let dir = table_dir(root, name).join(partition);
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         let to = dir.join(PART_FILE);
         link_or_copy_atomically(&from, &to)?;
@@ -100,7 +117,7 @@ pub fn publish_tables(root: &Path, partition: &Path, run_dir: &Path) -> Result<V
         if produced.contains(&t.name) {
             continue;
         }
-        let dir = root.join(t.name).join(partition);
+        let dir = table_dir(root, t.name).join(partition);
         let stale = dir.join(PART_FILE);
         match std::fs::symlink_metadata(&stale) {
             Ok(m) if m.is_file() => {
@@ -148,7 +165,7 @@ fn produced_tables(run_dir: &Path) -> Result<Vec<&'static str>> {
 /// The tables of a run directory as (file, table) pairs, for a publisher
 /// other than [`publish_tables`] (the Python fleet writes them to any
 /// fsspec file system): the run's `DIR/<file>` goes to
-/// `ROOT/<table>/<partition>/part-0.parquet`.
+/// `ROOT/tables/<table>/<partition>/part-0.parquet`.
 pub fn run_tables(run_dir: &Path) -> Result<Vec<(String, String)>> {
     Ok(produced_tables(run_dir)?
         .into_iter()
@@ -249,7 +266,7 @@ pub fn partition_values(dir: &Path, key: &str) -> Result<Vec<String>> {
 }
 
 /// The (structure, event) partitions under `root` (`runs/` or a table
-/// folder), sorted.
+/// folder, [`table_dir`]), sorted.
 pub fn partitions_under(root: &Path) -> Result<Vec<(String, String)>> {
     let mut out = Vec::new();
     for s in partition_values(root, "structure")? {
@@ -277,7 +294,7 @@ pub struct DatasetEvent {
 impl DatasetEvent {
     /// The file of `table` for this event under `root`.
     pub fn table_file(&self, root: &Path, table: &str) -> PathBuf {
-        root.join(table).join(&self.partition).join(PART_FILE)
+        table_dir(root, table).join(&self.partition).join(PART_FILE)
     }
 
     /// The event's run directory under `root`.
@@ -290,7 +307,7 @@ impl DatasetEvent {
 /// at all (neither a table folder with `structure=` partitions nor a
 /// `runs/` folder), else its events, sorted by structure then event (an
 /// empty list for a dataset every event of which was withdrawn).  Read from
-/// the table folders (`<table>/structure=<S>/event=<E>/part-0.parquet`) of
+/// the table folders (`tables/<table>/structure=<S>/event=<E>/part-0.parquet`) of
 /// the declared tables only; an event that published no table (its run
 /// failed) is not listed.
 pub fn list_events(root: &Path) -> Result<Option<Vec<DatasetEvent>>> {
@@ -298,7 +315,7 @@ pub fn list_events(root: &Path) -> Result<Option<Vec<DatasetEvent>>> {
     let mut events: std::collections::BTreeMap<(String, String), Vec<&'static str>> =
         Default::default();
     for table in tables::ALL_TABLES {
-        let folder = root.join(table.name);
+        let folder = table_dir(root, table.name);
         if !partition_values(&folder, "structure")?.is_empty() {
             is_dataset = true;
         }

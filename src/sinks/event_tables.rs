@@ -14,7 +14,9 @@ use super::parquet::{write_parquet, write_parquet_stream, ReadTable, TableBuilde
 use crate::conditioning::Motion;
 use crate::error::{Error, Result};
 use crate::metrics::{DriftRow, DriftTable, ResidualDrift, StrongMotionMetrics};
-use crate::vocab::tables::{channels, drift, samples, spectra, CHANNELS, DRIFT, SAMPLES, SPECTRA};
+use crate::vocab::tables::{
+    channels, drift, event as ev, samples, spectra, CHANNELS, DRIFT, EVENT, SAMPLES, SPECTRA,
+};
 use crate::vocab::{Channel, Direction, Event, ProcessingHistory, Record, SampleStore, Samples};
 use std::sync::Arc;
 
@@ -33,9 +35,48 @@ fn azimuth(d: &Option<Direction>) -> Option<f64> {
     }
 }
 
+/// What the absolute times of a channel's samples count from (the `time`
+/// column of samples.parquet, `time_source` of channels.parquet): the
+/// record's own start, else the event's origin time (the first sample taken
+/// at the origin: late or early by the record's unknown trigger delay, as
+/// the MCAP writer does), else nothing.  The start in ns and its name.
+pub fn time_base(channel: &Channel, origin_ns: Option<i64>) -> (Option<i64>, &'static str) {
+    match (channel.start_ns, origin_ns) {
+        (Some(s), _) => (Some(s), "record_start"),
+        (None, Some(o)) => (Some(o), "origin_time"),
+        (None, None) => (None, "unknown"),
+    }
+}
+
 /// Event-level metadata stored in every table's key/value metadata.
 fn event_metadata(event: &Event) -> Vec<(String, String)> {
     super::provenance::Provenance::of_event(event).metadata()
+}
+
+/// `event.parquet`: one row, the event and its structure — the ids
+/// `(structure_id, event_id)` a many-event dataset partitions by
+/// (`pipeline::dataset::event_ids`) beside the free-text names.
+pub fn write_event(path: &Path, event: &Event, ids: (&str, &str)) -> Result<()> {
+    let s = event.structure.as_ref();
+    let record_start = event
+        .records
+        .iter()
+        .filter_map(|r| r.channel.start_ns)
+        .min();
+    let batch = TableBuilder::new(&EVENT)
+        .str(ev::STRUCTURE_ID, &[ids.0])
+        .opt_str(ev::STRUCTURE_NAME, &[s.and_then(|s| s.name.clone())])
+        .str(ev::EVENT_ID, &[ids.1])
+        .str(ev::EVENT_NAME, &[event.name.as_str()])
+        .opt_timestamp_ns(ev::ORIGIN_TIME, vec![event.origin_ns])
+        .opt_f64(ev::MAGNITUDE, vec![event.magnitude])
+        .opt_timestamp_ns(ev::RECORD_START, vec![record_start])
+        .u32(ev::CHANNELS, vec![event.records.len() as u32])
+        .opt_str(ev::STRUCTURE_KIND, &[s.and_then(|s| s.kind.clone())])
+        .opt_f64(ev::LATITUDE_DEG, vec![s.and_then(|s| s.latitude_deg)])
+        .opt_f64(ev::LONGITUDE_DEG, vec![s.and_then(|s| s.longitude_deg)])
+        .build()?;
+    write_parquet(path, &[batch], &event_metadata(event))
 }
 
 /// `channels.parquet`: one row per channel, metadata + QA + metrics.
@@ -131,6 +172,12 @@ pub fn write_channels(path: &Path, event: &Event, metrics: &[StrongMotionMetrics
             ch.iter().map(|c| c.start_ns).collect(),
         )
         .str(
+            channels::TIME_SOURCE,
+            &ch.iter()
+                .map(|c| time_base(c, event.origin_ns).1)
+                .collect::<Vec<_>>(),
+        )
+        .str(
             channels::SOURCE_FILE,
             &ch.iter().map(|c| c.source.file.clone()).collect::<Vec<_>>(),
         )
@@ -212,7 +259,7 @@ fn samples_batches<'a>(
     event.records.iter().flat_map(move |r| {
         let n = r.samples.len();
         (0..n.div_ceil(SAMPLES_BATCH_ROWS).max(1))
-            .map(move |k| samples_batch(r, motions, k * SAMPLES_BATCH_ROWS))
+            .map(move |k| samples_batch(r, motions, event.origin_ns, k * SAMPLES_BATCH_ROWS))
     })
 }
 
@@ -230,8 +277,14 @@ pub fn samples_table(event: &Event, motions: &[Motion]) -> Result<Vec<arrow_arra
 pub const SAMPLES_BATCH_ROWS: usize = 1 << 20;
 
 /// The rows of one channel of `samples.parquet`, from sample `from` on (at
-/// most [`SAMPLES_BATCH_ROWS`]).
-fn samples_batch(r: &Record, motions: &[Motion], from: usize) -> Result<arrow_array::RecordBatch> {
+/// most [`SAMPLES_BATCH_ROWS`]); absolute times from the channel's
+/// [`time_base`] (its start, else `origin_ns`).
+fn samples_batch(
+    r: &Record,
+    motions: &[Motion],
+    origin_ns: Option<i64>,
+    from: usize,
+) -> Result<arrow_array::RecordBatch> {
     let c = &r.channel;
     let total = r.samples.len();
     let motion = motions
@@ -241,7 +294,7 @@ fn samples_batch(r: &Record, motions: &[Motion], from: usize) -> Result<arrow_ar
     let rows = from..from + n;
     let dt = c.dt();
     let t: Vec<f64> = rows.clone().map(|i| i as f64 * dt).collect();
-    let abs_time: Option<Vec<i64>> = c.start_ns.map(|s| {
+    let abs_time: Option<Vec<i64>> = time_base(c, origin_ns).0.map(|s| {
         rows.clone()
             .map(|i| s + (i as f64 * dt * 1e9).round() as i64)
             .collect()

@@ -447,7 +447,7 @@ pub fn write_fit(
                     segments
                         .get(d)
                         .cloned()
-                        .unwrap_or_else(|| format!("L{d}–L{}", d + 1)),
+                        .unwrap_or_else(|| format!("L{d}-L{}", d + 1)),
                 );
                 t.push(start_s + i as f64 * dt);
                 drift.push(storey_drift[i]);

@@ -144,10 +144,11 @@ pub fn write_event_to<W: Write + Seek>(
                 ch.id
             )));
         }
-        let (t0_ns, time_base) = match (ch.start_ns, event.origin_ns) {
-            (Some(s), _) => (s, "record_start"),
-            (None, Some(o)) => (o, "origin_time"),
-            (None, None) => (0, "none"),
+        // The time base of samples.parquet's `time` (one home); 1970 and
+        // `none` (this file's contract) when neither start nor origin is known.
+        let (t0_ns, time_base) = match super::event_tables::time_base(ch, event.origin_ns) {
+            (Some(t0), base) => (t0, base),
+            (None, _) => (0, "none"),
         };
         let mut meta = BTreeMap::new();
         let json =

@@ -1,6 +1,8 @@
 //! Parquet tables of the modal stage (schemas in docs/formats.md):
 //! `stabilization.parquet` (every pole of every order), `modes.parquet`
-//! (selected modes with statistics and shapes), `modal_spectrum.parquet`
+//! (selected modes with statistics and shapes), `mode_shapes.parquet` (the
+//! same shapes in long form: one row per mode and channel),
+//! `modal_spectrum.parquet`
 //! (singular values of the PSD matrix, plotted beside the stabilisation
 //! diagram), `frequency_shifts.parquet` (pre/post comparison).
 
@@ -11,8 +13,8 @@ use super::provenance::Provenance;
 use crate::error::Result;
 use crate::modal::{Comparison, FrequencyShift, ModalResult, PairingSettings, SpectralOverlay};
 use crate::vocab::tables::{
-    frequency_shifts, modal_spectrum, modes, stabilization, FREQUENCY_SHIFTS, MODAL_SPECTRUM,
-    MODES, STABILIZATION,
+    frequency_shifts, modal_spectrum, mode_shapes, modes, stabilization, FREQUENCY_SHIFTS,
+    MODAL_SPECTRUM, MODES, MODE_SHAPES, STABILIZATION,
 };
 
 /// Metadata key holding the output channel ids (JSON list) the shapes refer to.
@@ -234,6 +236,64 @@ pub fn modes_batch(r: &ModalResult) -> Result<arrow_array::RecordBatch> {
             modes::SHAPE_STD,
             &m.iter().map(|x| x.shape_std.clone()).collect::<Vec<_>>(),
         )
+        .build()
+}
+
+/// `mode_shapes.parquet`: the shapes of `modes.parquet` in long form, one
+/// row per mode and output channel (in the order of
+/// `quaketwin.output_channels`), so that a query needs no metadata to know
+/// which channel a component belongs to.  `levels` gives each output
+/// channel's level (same order as `r.output_ids`; `None` = unknown).
+pub fn write_mode_shapes(
+    path: &Path,
+    r: &ModalResult,
+    levels: &[Option<i32>],
+    settings_json: &str,
+    provenance: &Provenance,
+) -> Result<()> {
+    let batch = mode_shapes_batch(r, levels)?;
+    write_parquet(
+        path,
+        &[batch],
+        &modal_metadata(r, settings_json, provenance),
+    )
+}
+
+/// The rows of `mode_shapes.parquet`.
+pub fn mode_shapes_batch(
+    r: &ModalResult,
+    levels: &[Option<i32>],
+) -> Result<arrow_array::RecordBatch> {
+    use mode_shapes as ms;
+    let (mut mode, mut freq, mut channel, mut level, mut direction) =
+        (vec![], vec![], vec![], vec![], vec![]);
+    let (mut re, mut im, mut sd) = (vec![], vec![], vec![]);
+    for (m, x) in r.modes.iter().enumerate() {
+        for (k, id) in r.output_ids.iter().enumerate() {
+            let c = x
+                .shape
+                .get(k)
+                .copied()
+                .unwrap_or(faer::c64::new(f64::NAN, f64::NAN));
+            mode.push(m as u32 + 1);
+            freq.push(x.frequency_hz);
+            channel.push(id.as_str());
+            level.push(levels.get(k).copied().flatten());
+            direction.push(r.output_directions.get(k).map_or("", String::as_str));
+            re.push(c.re);
+            im.push(c.im);
+            sd.push(x.shape_std.get(k).copied().unwrap_or(f64::NAN));
+        }
+    }
+    TableBuilder::new(&MODE_SHAPES)
+        .u32(ms::MODE, mode)
+        .f64(ms::FREQUENCY_HZ, freq)
+        .str(ms::CHANNEL_ID, &channel)
+        .opt_i32(ms::LEVEL, level)
+        .str(ms::DIRECTION, &direction)
+        .f64(ms::REAL, re)
+        .f64(ms::IMAG, im)
+        .f64(ms::MODULUS_STD, sd)
         .build()
 }
 

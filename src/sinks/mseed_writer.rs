@@ -2,9 +2,11 @@
 //! archives, `quaketwin synth-archive`; the big-input benchmark's files).
 //!
 //! Records of 4096 bytes, big-endian, one blockette 1000 (encoding, word
-//! order, record length) and a blockette 100 (exact sampling rate), data from
-//! byte 64: INT32 (encoding 3, counts) or FLOAT32 (encoding 4), 1 008 samples
-//! per full record.  The start time of each record is the stream's start
+//! order, record length, bytes 48–55) and a blockette 100 (exact sampling
+//! rate, bytes 56–67), data from byte 128 — the first 64-byte boundary after
+//! the blockette chain (a data offset inside the chain, as 64 was, makes
+//! ObsPy warn and other readers take blockette bytes for samples): INT32
+//! (encoding 3, counts) or FLOAT32 (encoding 4), 992 samples per full record.  The start time of each record is the stream's start
 //! plus the samples written before it divided by the rate, truncated to the
 //! 100 µs of BTIME (exact for every rate whose sample interval is a multiple
 //! of 100 µs: 1, 10, 20, 50, 100, 200 Hz…).  Read back by
@@ -16,7 +18,11 @@ use crate::vocab::ordinal_from_epoch_ns;
 
 /// Bytes of every record written.
 pub const RECORD_LEN: usize = 4096;
-const DATA_OFFSET: usize = 64;
+/// End of the blockette chain: the fixed header (48 bytes), blockette 1000
+/// (8) and blockette 100 (12).
+const BLOCKETTES_END: usize = 68;
+/// First byte of the data: the chain's end rounded up to 64 bytes.
+pub const DATA_OFFSET: usize = BLOCKETTES_END.div_ceil(64) * 64;
 /// Samples in a full record (4-byte samples).
 pub const SAMPLES_PER_RECORD: usize = (RECORD_LEN - DATA_OFFSET) / 4;
 
@@ -132,6 +138,7 @@ impl RecordEncoder {
         r[53] = 1; // big-endian
         r[54] = RECORD_LEN.trailing_zeros() as u8;
         // Blockette 100 at 56: exact sampling rate (float32), last in the chain.
+        // (bytes 64–67: flags and reserved, zero; the chain ends at BLOCKETTES_END).
         r[56..58].copy_from_slice(&100u16.to_be_bytes());
         r[60..64].copy_from_slice(&(self.rate_hz as f32).to_bits().to_be_bytes());
         for (k, v) in self.pending.drain(..count).enumerate() {

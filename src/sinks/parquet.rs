@@ -95,6 +95,25 @@ impl TableBuilder {
         self.columns.push(column);
         self
     }
+    /// The unit of the column added last, in place of the declared one: a
+    /// member of a family declared with unit `varies` (`param_<name>` of
+    /// twin_update.parquet: each parameter its own unit).  Refused (at
+    /// `build`) for a column declared with one unit.
+    pub fn with_unit(mut self, unit: &str) -> Self {
+        use crate::vocab::schema::{UNIT_KEY, UNIT_VARIES};
+        let Some(field) = self.fields.pop() else {
+            return self;
+        };
+        let declared = self.schema.and_then(|s| s.column(field.name()));
+        if declared.is_some_and(|c| c.unit != UNIT_VARIES) {
+            self.error
+                .get_or_insert_with(|| format!("column {} has one declared unit", field.name()));
+        }
+        let mut metadata = field.metadata().clone();
+        metadata.insert(UNIT_KEY.to_string(), unit.to_string());
+        self.fields.push(field.with_metadata(metadata));
+        self
+    }
     /// Float64, not null.
     pub fn f64(self, name: impl AsRef<str>, values: Vec<f64>) -> Self {
         let a = Arc::new(Float64Array::from(values));

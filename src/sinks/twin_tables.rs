@@ -225,6 +225,22 @@ pub fn real_shape(re: &[f64], im: &[f64]) -> Vec<f64> {
     re.iter().zip(im).map(|(a, b)| a * c + b * s).collect()
 }
 
+/// Each parameter's unit (`Pa`, `kg/m^3`, `N/m`…), from the
+/// `quaketwin.parameter_bounds` entry of `metadata` (`name`, `unit`): the
+/// unit of its `param_<name>` column.
+fn parameter_units(metadata: &[(String, String)]) -> std::collections::HashMap<String, String> {
+    metadata
+        .iter()
+        .filter(|(k, _)| k == "quaketwin.parameter_bounds")
+        .filter_map(|(_, v)| serde_json::from_str::<Vec<serde_json::Value>>(v).ok())
+        .flatten()
+        .filter_map(|b| {
+            let name = b["name"].as_str()?.to_string();
+            Some((name, b["unit"].as_str()?.to_string()))
+        })
+        .collect()
+}
+
 /// Write `twin_update.parquet`: one row per round and candidate. `parameter_names` name the
 /// `param_<name>` columns (ensemble parameter order); `metadata` is appended to the file's
 /// key/value metadata (e.g. settings).
@@ -239,6 +255,7 @@ pub fn write_twin_update(
         .iter()
         .flat_map(|r| r.candidates.iter())
         .collect();
+    let units = parameter_units(metadata);
     let mut t = TableBuilder::new(&TWIN_UPDATE)
         .u32(
             twin_update::ROUND,
@@ -261,6 +278,11 @@ pub fn write_twin_update(
             values.push(v);
         }
         t = t.f64(twin_update::PARAM.member(name), values);
+        // Without bounds (a caller other than the update stage) the column
+        // keeps the family's `varies`.
+        if let Some(unit) = units.get(name.as_str()) {
+            t = t.with_unit(unit);
+        }
     }
     let batch = t
         .f64(

@@ -1,5 +1,6 @@
 //! `ingest`: read the event folder and write `event.json`, the inventory of
-//! what was read, inferred and missing.
+//! what was read, inferred and missing, and `event.parquet`, the event's
+//! ids and names as a table.
 
 use serde::{Deserialize, Serialize};
 
@@ -19,6 +20,8 @@ pub const KIND: StageKind = StageKind {
 
 /// The inventory file.
 pub const EVENT_JSON: &str = "event.json";
+/// The event's row (ids and names).
+pub const EVENT_TABLE: &str = crate::vocab::tables::EVENT.file;
 
 /// The stage takes no parameters: channel metadata belongs in event.toml.
 #[derive(Debug, Deserialize)]
@@ -38,7 +41,7 @@ struct Ingest;
 
 impl Stage for Ingest {
     fn outputs(&self) -> Vec<String> {
-        vec![EVENT_JSON.into()]
+        vec![EVENT_JSON.into(), EVENT_TABLE.into()]
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let path = ctx.out_dir.join(EVENT_JSON);
@@ -46,8 +49,12 @@ impl Stage for Ingest {
         if let Some(w) = &window {
             crate::console::note(format!("ingest: {}", w.describe()));
         }
+        let ids = crate::pipeline::dataset::event_ids(&ctx.event_path)?;
         let json = inventory_json_with(ctx.loaded_event()?, window.as_ref())?;
         crate::sinks::parquet::write_bytes_atomically(&path, &json)?;
+        let table = ctx.out_dir.join(EVENT_TABLE);
+        let event = &ctx.loaded_event()?.event;
+        crate::sinks::event_tables::write_event(&table, event, (&ids.0, &ids.1))?;
         Ok(None)
     }
 }

@@ -1,5 +1,6 @@
 //! `modal`: subspace identification of the conditioned records (METHODS §2)
-//! → `stabilization.parquet`, `modes.parquet`, `modal_spectrum.parquet`,
+//! → `stabilization.parquet`, `modes.parquet`, `mode_shapes.parquet`,
+//! `modal_spectrum.parquet`,
 //! and `frequency_shifts.parquet` against an earlier run's modes
 //! ([`super::prepost`]).
 
@@ -25,6 +26,7 @@ pub const KIND: StageKind = StageKind {
 
 pub const STABILIZATION_FILE: &str = crate::vocab::tables::STABILIZATION.file;
 pub const MODES_FILE: &str = crate::vocab::tables::MODES.file;
+pub const MODE_SHAPES_FILE: &str = crate::vocab::tables::MODE_SHAPES.file;
 pub const SPECTRUM_FILE: &str = crate::vocab::tables::MODAL_SPECTRUM.file;
 
 /// The product: where the identified modes are (a later stage reads the file).
@@ -51,6 +53,13 @@ pub fn identify_and_write(
     let (json, provenance) = (settings_json.as_str(), Provenance::of_event(event));
     tables::write_stabilization(&out.join(STABILIZATION_FILE), &result, json, &provenance)?;
     tables::write_modes(&out.join(MODES_FILE), &result, json, &provenance)?;
+    let level = |id: &String| {
+        let r = event.records.iter().find(|r| &r.channel.id == id);
+        r.and_then(|r| r.channel.level)
+    };
+    let levels: Vec<Option<i32>> = result.output_ids.iter().map(level).collect();
+    let shapes = out.join(MODE_SHAPES_FILE);
+    tables::write_mode_shapes(&shapes, &result, &levels, json, &provenance)?;
     let overlay = output_spectral_overlay(event, &result, p.psd_segment)?;
     let spectrum = out.join(SPECTRUM_FILE);
     tables::write_spectrum(&spectrum, &result, overlay.as_ref(), json, &provenance)?;
@@ -79,6 +88,7 @@ impl Stage for Modal {
         let mut v = vec![
             STABILIZATION_FILE.to_string(),
             MODES_FILE.into(),
+            MODE_SHAPES_FILE.into(),
             SPECTRUM_FILE.into(),
         ];
         if self.reference.is_some() {

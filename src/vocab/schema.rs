@@ -18,6 +18,17 @@ pub const VERSION_KEY: &str = "quaketwin.version";
 pub const DESCRIPTION_KEY: &str = "quaketwin.description";
 /// Arrow field metadata key of a column's unit.
 pub const UNIT_KEY: &str = "unit";
+/// Arrow field metadata key of a column's meaning (the declaration's doc):
+/// pyarrow shows it as `schema.field(name).metadata[b"description"]`.
+pub const FIELD_DESCRIPTION_KEY: &str = "description";
+/// Unit of a numeric column whose unit differs from row to row or entry to
+/// entry; the column's description says where each one's unit is stated
+/// (a `unit` column, a metadata entry, or the field of each family member).
+pub const UNIT_VARIES: &str = "varies";
+/// Unit of a numeric column on a scale of its own (a cost, a singular
+/// value of a scaled matrix): comparable within the column, not a
+/// physical quantity.
+pub const UNIT_ARBITRARY: &str = "arbitrary";
 
 /// The Arrow types quaketwin tables use (plain types only: no extension
 /// types, so pyarrow, DuckDB and polars read them without adapters).
@@ -79,8 +90,10 @@ pub struct ColumnSpec {
     pub name: &'static str,
     pub ty: ColumnType,
     pub nullable: bool,
-    /// SI unit (`m/s^2`, `Hz`…), `1` for a dimensionless quantity, empty for
-    /// a value that is not a physical quantity (ids, labels, indices, flags).
+    /// SI unit (`m/s^2`, `Hz`…), `1` for a dimensionless quantity,
+    /// [`UNIT_VARIES`] or [`UNIT_ARBITRARY`] for a number without one unit,
+    /// empty for a value that is not a physical quantity (ids, labels,
+    /// indices, counts, flags, times — a timestamp's type carries its unit).
     pub unit: &'static str,
     pub doc: &'static str,
 }
@@ -112,12 +125,13 @@ impl ColumnSpec {
     }
 
     /// The Arrow field of this column (named `name`, a member of a family
-    /// having its own name), the unit in its metadata.
+    /// having its own name), its unit and meaning in its metadata (so a
+    /// user reading the file alone learns what each column is).
     pub fn field(&self, name: &str) -> Field {
-        Field::new(name, self.ty.data_type(), self.nullable).with_metadata(HashMap::from([(
-            UNIT_KEY.to_string(),
-            self.unit.to_string(),
-        )]))
+        Field::new(name, self.ty.data_type(), self.nullable).with_metadata(HashMap::from([
+            (UNIT_KEY.to_string(), self.unit.to_string()),
+            (FIELD_DESCRIPTION_KEY.to_string(), self.doc.to_string()),
+        ]))
     }
 
     /// Type and nullability, as messages name them (`float64, nullable`).

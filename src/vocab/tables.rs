@@ -4,9 +4,11 @@
 //! refuses a table that does not match), the readers of our own outputs look
 //! columns up through them, and docs/formats.md is checked against them
 //! (`tests/it/schemas.rs`).  Units: SI, `1` for a dimensionless quantity
-//! (`%` where a column says percent),
+//! (`%` where a column says percent), `varies` / `arbitrary` for a number
+//! without one physical unit (`schema::UNIT_VARIES`, `schema::UNIT_ARBITRARY`),
 //! empty for what is not a physical quantity (ids, labels, indices, counts,
-//! flags).
+//! flags, timestamps).  Every column's unit and meaning travel in its Arrow
+//! field metadata (`unit`, `description`).
 //!
 //! Each table has a constant (`MODES`) and a module of its columns
 //! (`modes::FREQUENCY_HZ`), so code names a column without a string literal.
@@ -48,6 +50,21 @@ macro_rules! declare {
     (@null nullable) => { true };
 }
 
+declare!(EVENT, event, "event", "event.parquet",
+    "one row: the event and its structure, their ids (the partitions of a many-event dataset) beside the free-text names the manifest or the records give", {
+    STRUCTURE_ID: "structure_id", Utf8, required, "", "the structure's id: `structure.id` of event.toml, else its `structure.name`, else `unknown`, in canonical form (lower case, runs of other characters one `-`): the `structure=` partition of a many-event dataset";
+    STRUCTURE_NAME: "structure_name", Utf8, nullable, "", "the structure's name as given (free text; `structure.name`, else from the records' headers); null when none";
+    EVENT_ID: "event_id", Utf8, required, "", "the event's id: `event.id` of event.toml, else the event folder's (zip's) name, in canonical form: the `event=` partition of a many-event dataset";
+    EVENT_NAME: "event_name", Utf8, required, "", "the event's name as given (free text; `event.name`, else from the headers or the folder)";
+    ORIGIN_TIME: "origin_time", TimestampNsUtc, nullable, "", "origin time (UTC), when stated";
+    MAGNITUDE: "magnitude", F64, nullable, "1", "magnitude, when stated";
+    RECORD_START: "record_start", TimestampNsUtc, nullable, "", "earliest start time of the records (UTC); null when no record states one";
+    CHANNELS: "channels", U32, required, "", "channels read";
+    STRUCTURE_KIND: "structure_kind", Utf8, nullable, "", "`building`, `bridge`, … when stated or inferred";
+    LATITUDE_DEG: "latitude_deg", F64, nullable, "deg", "the structure's latitude (WGS 84, north positive), when stated";
+    LONGITUDE_DEG: "longitude_deg", F64, nullable, "deg", "the structure's longitude (WGS 84, east positive), when stated";
+});
+
 declare!(CHANNELS, channels, "channels", "channels.parquet",
     "one row per channel: metadata, QA and strong-motion metrics", {
     CHANNEL_ID: "channel_id", Utf8, required, "", "unique id within the event";
@@ -66,7 +83,8 @@ declare!(CHANNELS, channels, "channels", "channels.parquet",
     UNITS: "units", Utf8, required, "", "units after conditioning (`m/s2`)";
     SAMPLING_RATE_HZ: "sampling_rate_hz", F64, required, "Hz", "after resampling, when configured";
     NPTS: "npts", I64, required, "", "number of samples";
-    START_TIME: "start_time", TimestampNsUtc, nullable, "", "time of the first sample";
+    START_TIME: "start_time", TimestampNsUtc, nullable, "", "time of the first sample, as the record states it (null when the record has none)";
+    TIME_SOURCE: "time_source", Utf8, required, "", "what the `time` column of samples.parquet counts from: `record_start` (`start_time`), `origin_time` (the record has no start time: its first sample is taken at the event's origin time, so the times are late or early by the unknown trigger delay) or `unknown` (neither: `time` is null)";
     SOURCE_FILE: "source_file", Utf8, required, "", "file the samples came from; `(rigid-floor combination)` for a floor motion formed by the rigid-floor combination (its sensors are listed in `inferred`, and in `event.json` / the `quaketwin.channels` metadata as `combines`; each sensor's `combined_into` names the floor)";
     SOURCE_MEMBER: "source_member", Utf8, nullable, "", "zip member the samples came from";
     SOURCE_COLUMN: "source_column", Utf8, nullable, "", "column of the file the samples came from";
@@ -89,7 +107,7 @@ declare!(series SAMPLES, samples, "samples", "samples.parquet",
     CHANNEL_ID: "channel_id", Utf8, required, "", "channel id (`channel_id` of channels.parquet)";
     SAMPLE: "sample", I64, required, "", "index from 0";
     T_S: "t_s", F64, required, "s", "time from the channel's first sample";
-    TIME: "time", TimestampNsUtc, nullable, "", "absolute time, when the start time is known";
+    TIME: "time", TimestampNsUtc, nullable, "", "absolute time (UTC) of the sample: the record's start time + `t_s`; for a record without a start time of its own, the event's origin time + `t_s` (`time_source` of channels.parquet says which); null when neither is known";
     ACC_M_S2: "acc_m_s2", F64, required, "m/s^2", "conditioned acceleration";
     VEL_M_S: "vel_m_s", F64, nullable, "m/s", "velocity (integration with drift control)";
     DISP_M: "disp_m", F64, nullable, "m", "displacement";
@@ -160,12 +178,24 @@ declare!(MODES, modes, "modes", "modes.parquet",
     SHAPE_STD: "shape_std", ListF64, required, "1", "standard deviation of each component's modulus";
 });
 
+declare!(MODE_SHAPES, mode_shapes, "mode_shapes", "mode_shapes.parquet",
+    "one row per selected mode and output channel: the mode shapes of modes.parquet in long form, each component beside its channel, level and direction", {
+    MODE: "mode", U32, required, "", "mode (`mode` of modes.parquet)";
+    FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "the mode's frequency (`frequency_hz` of modes.parquet)";
+    CHANNEL_ID: "channel_id", Utf8, required, "", "output channel of this component (`channel_id` of channels.parquet; the k-th entry of `quaketwin.output_channels`)";
+    LEVEL: "level", I32, nullable, "", "the channel's level (0 = base/ground); null when unknown";
+    DIRECTION: "direction", Utf8, required, "", "the channel's direction label (`X`, `Y`, `Z`, an azimuth `<deg>deg`; empty when unknown)";
+    REAL: "real", F64, required, "1", "real part of the shape component (`shape_re[k]` of modes.parquet; largest component of the mode 1)";
+    IMAG: "imag", F64, required, "1", "imaginary part (`shape_im[k]`)";
+    MODULUS_STD: "modulus_std", F64, required, "1", "standard deviation of the component's modulus over the cluster (`shape_std[k]`)";
+});
+
 declare!(MODAL_SPECTRUM, modal_spectrum, "modal_spectrum", "modal_spectrum.parquet",
     "singular values of the factorisation and of the PSD matrix (long format)", {
     KIND: "kind", Utf8, required, "", "`subspace` (singular values of the factorised matrix) or `psd` (singular values of the Welch PSD matrix)";
     INDEX: "index", I32, required, "", "singular value number (1 = largest)";
     FREQUENCY_HZ: "frequency_hz", F64, nullable, "Hz", "PSD bin (null for `subspace`)";
-    VALUE: "value", F64, required, "", "singular value (units of the factorised matrix)";
+    VALUE: "value", F64, required, "arbitrary", "singular value, on the scale of the factorised matrix (compare values of one `kind` with each other)";
 });
 
 declare!(FREQUENCY_SHIFTS, frequency_shifts, "frequency_shifts", "frequency_shifts.parquet",
@@ -192,14 +222,14 @@ declare!(BOUC_WEN, bouc_wen, "bouc_wen", "bouc_wen.parquet",
     "one row per direction, DoF and Bouc-Wen parameter", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
     DOF: "dof", I32, required, "", "DoF (instrumented floor) from the base up, 1-based; −1 on a not-identifiable row";
-    SEGMENT: "segment", Utf8, nullable, "", "levels the DoF's storey spans, `L<a>–L<b>` (a segment of several storeys where levels between are not instrumented); null on a not-identifiable row";
+    SEGMENT: "segment", Utf8, nullable, "", "levels the DoF's storey spans, `L<a>-L<b>` (ASCII hyphen; a segment of several storeys where levels between are not instrumented); null on a not-identifiable row";
     PARAMETER: "parameter", Utf8, required, "", "`K0`, `K0_delta`, `delta`, `beta`, `gamma`, `N` (`none` on a not-identifiable row)";
     COUPLED_DOF: "coupled_dof", I32, nullable, "", "r of K0_dr-type rows";
-    VALUE: "value", F64, required, "", "parameter value, in the row's `unit`";
+    VALUE: "value", F64, required, "varies", "parameter value, in the row's `unit`";
     UNIT: "unit", Utf8, required, "", "unit of `value`: `N/m`, `1/J`, `N^(1-N)/m`, `-`";
     STABILITY_STD: "stability_std", F64, nullable, "1", "relative std over the informative instantaneous estimates (N: absolute)";
     STABLE: "stable", Bool, required, "", "parameter stability over time (model-adequacy indicator)";
-    COST_J: "cost_j", F64, required, "", "J(N) at the optimum (Eq. 31; a weighted STFT residual)";
+    COST_J: "cost_j", F64, required, "arbitrary", "J(N) at the optimum (Eq. 31; a weighted STFT residual on the scale of the basis form: compare the rows of one direction; `cost_relative` is the dimensionless figure)";
     COST_RELATIVE: "cost_relative", F64, required, "1", "J(N) relative to the target";
     HYSTERETIC_SHARE: "hysteretic_share", F64, required, "1", "share of the record explained by the hysteretic terms";
     STATUS: "status", Utf8, required, "", "`identified` (hysteretic terms significant at this DoF), `identified_unstable` (significant, estimates unstable over time), `no_significant_hysteresis` (this DoF's hysteretic terms failed the share, F-test, N-range or J(N)-contrast check: its rows are the nested model's K0, K0_delta, delta, with beta = gamma = 0 and N NaN; the DoFs below were still identified), `not_identifiable` (one row per direction: `dof` −1, `parameter` `none`, `value` NaN)";
@@ -219,7 +249,7 @@ declare!(BOUC_WEN_INSTANTANEOUS, bouc_wen_instantaneous, "bouc_wen_instantaneous
     T_S: "t_s", F64, required, "s", "end of the cumulative window";
     INFORMATIVE: "informative", Bool, required, "", "after the hysteretic onset";
     N_EXPONENT: "n_exponent", F64, required, "1", "exponent N";
-    COST_J: "cost_j", F64, required, "", "J(N) over the window";
+    COST_J: "cost_j", F64, required, "arbitrary", "J(N) over the window (Eq. 31, on the scale of the basis form: compare the rows of one DoF)";
     K0_OWN_N_M: "k0_own_n_m", F64, required, "N/m", "K0_dd (own storey)";
     BETA: "beta", F64, required, "N^(1-N)/m", "β";
     GAMMA: "gamma", F64, required, "N^(1-N)/m", "γ";
@@ -229,7 +259,7 @@ declare!(series HYSTERESIS_FIT, hysteresis_fit, "hysteresis_fit", "hysteresis_fi
     "recorded vs model storey shear and drift per storey (segment): the force–drift loops", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
     DOF: "dof", I32, required, "", "DoF (instrumented floor), 1-based";
-    SEGMENT: "segment", Utf8, required, "", "levels the storey spans, `L<a>–L<b>`";
+    SEGMENT: "segment", Utf8, required, "", "levels the storey spans, `L<a>-L<b>` (ASCII hyphen)";
     T_S: "t_s", F64, required, "s", "time";
     DRIFT_M: "drift_m", F64, required, "m", "storey (segment) drift u_d − u_{d−1}, from the stage's own integration of the as-recorded accelerations (no band-pass: permanent drift kept)";
     FORCE_RECORD_N: "force_record_n", F64, required, "N", "storey shear from the records, V_d = Σ_{r ≥ d} f_r, f_r = −m_r (a + ü_r) (Eq. 46)";
@@ -253,9 +283,9 @@ declare!(TWIN_UPDATE, twin_update, "twin_update", "twin_update.parquet",
     ROUND: "round", U32, required, "", "0-based ensemble round (thesis Table 1)";
     CANDIDATE: "candidate", U32, required, "", "0-based candidate index (order of the `solvers` setting)";
     SOLVER: "solver", Utf8, required, "", "`GA`, `PSO`, `SA`, `PS`, `QN`";
-    PARAM: "param_<name>", F64, required, "", "one column per twin parameter (twin file order): the candidate's value, in the parameter's own unit";
-    OBJECTIVE_J: "objective_j", F64, required, "", "J at the candidate (Eq. 5; mixes squared frequency and MAC terms)";
-    Z: "z", ListF64, required, "", "model quantities per voter (paired frequencies in Hz, then MAC values)";
+    PARAM: "param_<name>", F64, required, "varies", "one column per twin parameter (twin file order): the candidate's value, in the parameter's own unit (the `unit` of each column's field metadata: `Pa`, `kg/m^3`, `N/m`…, as in `quaketwin.parameter_bounds`)";
+    OBJECTIVE_J: "objective_j", F64, required, "arbitrary", "J at the candidate (Eq. 5; mixes squared frequency differences in Hz² and squared MAC differences: compare the rows of one update)";
+    Z: "z", ListF64, required, "varies", "model quantities per voter (`quaketwin.voters`): paired frequencies in Hz, then MAC values (1)";
     SCATTER: "scatter", ListF64, required, "1", "normalised scatter β per voter (Eq. 3)";
     SCORE: "score", ListF64, required, "1", "score w per voter (Eq. 4)";
     RANK: "rank", U32, required, "", "1-based position in the round's most likely Plackett–Luce ranking";
@@ -474,7 +504,7 @@ declare!(HISTORY_EVENTS, history_events, "history_events", "history_events.parqu
     STRUCTURE: "structure", Utf8, required, "", "structure id (as in history_modes.parquet)";
     STRUCTURE_NAME: "structure_name", Utf8, nullable, "", "the structure's name as the event's manifest or headers give it (`structure.name` of event.json)";
     EVENT: "event", Utf8, required, "", "event (the dataset's `event=` partition)";
-    PARTITION: "partition", Utf8, required, "", "the event's partition `structure=<S>/event=<E>`: its tables are `DATASET/<table>/<partition>/part-0.parquet`, its run directory (report.html) `DATASET/runs/<partition>/`";
+    PARTITION: "partition", Utf8, required, "", "the event's partition `structure=<S>/event=<E>`: its tables are `DATASET/tables/<table>/<partition>/part-0.parquet`, its run directory (report.html) `DATASET/runs/<partition>/`";
     EVENT_TIME: "event_time", TimestampNsUtc, nullable, "", "origin time (event.json), else the earliest start of its channels";
     TIME_SOURCE: "time_source", Utf8, required, "", "`origin_time`, `record_start` or `unknown`";
     PEAK_BASE_M_S2: "peak_base_m_s2", F64, nullable, "m/s^2", "largest horizontal peak acceleration of the input (base, ground) channels (`pga_m_s2` of channels.parquet)";
@@ -494,12 +524,14 @@ declare!(HISTORY_EVENTS, history_events, "history_events", "history_events.parqu
 
 /// Every table quaketwin writes, in pipeline order.
 pub const ALL_TABLES: &[&TableSchema] = &[
+    &EVENT,
     &SAMPLES,
     &CHANNELS,
     &SPECTRA,
     &DRIFT,
     &STABILIZATION,
     &MODES,
+    &MODE_SHAPES,
     &MODAL_SPECTRUM,
     &FREQUENCY_SHIFTS,
     &BOUC_WEN,

@@ -63,7 +63,7 @@ fn check_links(html: &str, page: &Path) -> usize {
 fn truth(dataset: &Path) -> (BTreeMap<String, String>, BTreeMap<String, String>) {
     let mut rating = BTreeMap::new();
     let mut latest: BTreeMap<String, (String, String)> = BTreeMap::new();
-    for s in std::fs::read_dir(dataset.join("assessment"))
+    for s in std::fs::read_dir(dataset.join("tables/assessment"))
         .unwrap()
         .flatten()
     {
@@ -146,7 +146,7 @@ fn dashboard_lists_every_structure_with_its_colour_and_links_that_resolve() {
     run_into_dataset(&pipeline, &evs, &dataset);
     // A history for one structure (what `quaketwin history` will write):
     // its page is copied into the site, its tables shown.
-    let history = dataset.join("history/structure=Sample_4-storey_frame");
+    let history = dataset.join("history/structure=sample-4-storey-frame");
     std::fs::create_dir_all(&history).unwrap();
     std::fs::write(
         history.join("history.html"),
@@ -154,7 +154,9 @@ fn dashboard_lists_every_structure_with_its_colour_and_links_that_resolve() {
     )
     .unwrap();
     std::fs::copy(
-        dataset.join("assessment/structure=Sample_4-storey_frame/event=quake-2026/part-0.parquet"),
+        dataset.join(
+            "tables/assessment/structure=sample-4-storey-frame/event=quake-2026/part-0.parquet",
+        ),
         history.join("history_events.parquet"),
     )
     .unwrap();
@@ -179,7 +181,7 @@ fn dashboard_lists_every_structure_with_its_colour_and_links_that_resolve() {
     let (rating, latest) = truth(&dataset);
     let structures: BTreeSet<String> = latest.keys().cloned().collect();
     assert_eq!(structures.len(), 3, "{structures:?}");
-    assert_eq!(latest["Sample_4-storey_frame"], "quake-2027");
+    assert_eq!(latest["sample-4-storey-frame"], "quake-2027");
 
     // site.json says what the pages show.
     let doc: serde_json::Value =
@@ -209,9 +211,9 @@ fn dashboard_lists_every_structure_with_its_colour_and_links_that_resolve() {
     // index: 3 structures + 2 map dots; pages: back link + reports (4) + history (1).
     assert_eq!(links, 5 + 3 + 4 + 1, "links");
     let structure_page =
-        std::fs::read_to_string(site.join("structures/Sample_4-storey_frame.html")).unwrap();
+        std::fs::read_to_string(site.join("structures/sample-4-storey-frame.html")).unwrap();
     assert!(structure_page.contains("history_events.parquet"));
-    assert!(site.join("history/Sample_4-storey_frame.html").is_file());
+    assert!(site.join("history/sample-4-storey-frame.html").is_file());
 
     if !Path::new(CHROMIUM).exists() {
         eprintln!("SKIPPED (browser part): {CHROMIUM} not installed (apt-get install -y chromium; .ci/run installs it)");
@@ -306,7 +308,7 @@ fn dashboard_lists_every_structure_with_its_colour_and_links_that_resolve() {
     }
 
     // An event leaves the dataset: the next generation drops its report.
-    let gone = "structure=Sample_4-storey_frame/event=quake-2026";
+    let gone = "structure=sample-4-storey-frame/event=quake-2026";
     for d in [
         "runs",
         "assessment",
@@ -335,9 +337,9 @@ fn dashboard_lists_every_structure_with_its_colour_and_links_that_resolve() {
         String::from_utf8_lossy(&again.stderr)
     );
     assert!(!site
-        .join("reports/Sample_4-storey_frame/quake-2026.html")
+        .join("reports/sample-4-storey-frame/quake-2026.html")
         .exists());
     assert!(site
-        .join("reports/Sample_4-storey_frame/quake-2027.html")
+        .join("reports/sample-4-storey-frame/quake-2027.html")
         .is_file());
 }

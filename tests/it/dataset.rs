@@ -1,5 +1,5 @@
 //! Many events → one table-first, Hive-partitioned Parquet dataset
-//! (`DIR/<table>/structure=…/event=…/part-0.parquet`), read back with
+//! (`DIR/tables/<table>/structure=…/event=…/part-0.parquet`), read back with
 //! pyarrow.dataset, DuckDB and polars when python3 has them (CI installs them).
 
 use std::path::{Path, PathBuf};
@@ -55,10 +55,13 @@ fn files_under(dir: &Path) -> Vec<PathBuf> {
 }
 
 /// Issue 15 item 3: a many-event run is a table-first Hive dataset —
-/// `DIR/<table>/structure=…/event=…/part-0.parquet`, runs (JSON, HTML, TOML)
-/// under `DIR/runs/` — and pyarrow.dataset, DuckDB and polars each query
-/// `modes` across the events, with the row count per event that each run's
-/// own modes.parquet holds.
+/// `DIR/tables/<table>/structure=…/event=…/part-0.parquet`, runs (JSON,
+/// HTML, TOML) under `DIR/runs/` — and pyarrow.dataset, DuckDB and polars
+/// each query `modes` across the events, with the row count per event that
+/// each run's own modes.parquet holds.  Issue 34: the partitions are ids
+/// (the structure's name in canonical form here) with the free text in the
+/// `event` table, and a glob over the whole table tree counts every table
+/// file once (the runs' copies are outside it).
 #[test]
 fn events_run_in_parallel_into_a_table_first_dataset_that_pyarrow_duckdb_and_polars_query() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
@@ -99,19 +102,24 @@ fn events_run_in_parallel_into_a_table_first_dataset_that_pyarrow_duckdb_and_pol
     .unwrap();
     assert!(rerun.iter().all(|r| r.result.is_ok()));
     assert_eq!(temps(out.path()), Vec::<PathBuf>::new());
-    let quake = Path::new("structure=Sample_4-storey_frame/event=synthetic-4storey-quake");
+    let quake = Path::new("structure=sample-4-storey-frame/event=synthetic-4storey-quake");
     let run = out.path().join("runs").join(quake);
     for f in ["event.json", "run.json", "report.html", "modes.parquet"] {
         assert!(run.join(f).is_file(), "missing {f} in {}", run.display());
     }
+    // The dataset root holds the table tree and the runs, nothing else.
+    let mut top: Vec<String> = std::fs::read_dir(out.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    top.sort();
+    assert_eq!(top, ["runs", "tables"]);
     // Table folders hold only part files, one per event that has the table.
     let mut expected = String::new();
-    for entry in std::fs::read_dir(out.path()).unwrap() {
+    let mut part_rows = 0;
+    for entry in std::fs::read_dir(out.path().join("tables")).unwrap() {
         let dir = entry.unwrap().path();
         let name = dir.file_name().unwrap().to_string_lossy().into_owned();
-        if name == "runs" {
-            continue;
-        }
         assert!(
             quaketwin::vocab::tables::by_name(&name).is_some(),
             "{name}: not a table folder"
@@ -123,6 +131,7 @@ fn events_run_in_parallel_into_a_table_first_dataset_that_pyarrow_duckdb_and_pol
                 "{name}/{}",
                 f.display()
             );
+            part_rows += rows(&dir.join(&f));
             let partition = f.parent().unwrap();
             let own = out
                 .path()
@@ -137,7 +146,7 @@ fn events_run_in_parallel_into_a_table_first_dataset_that_pyarrow_duckdb_and_pol
             );
         }
     }
-    let modes = out.path().join("modes");
+    let modes = out.path().join("tables/modes");
     let mut per_event: Vec<(String, i64)> = files_under(&modes)
         .iter()
         .map(|f| {
@@ -155,7 +164,7 @@ fn events_run_in_parallel_into_a_table_first_dataset_that_pyarrow_duckdb_and_pol
     }
     // Issue 32: every event has one assessment row, the same as its run's
     // assessment.parquet, and its report opens with that rating.
-    let assessments = out.path().join("assessment");
+    let assessments = out.path().join("tables/assessment");
     let mut ratings: Vec<(String, String)> = Vec::new();
     for f in files_under(&assessments) {
         let event = f.parent().unwrap().file_name().unwrap().to_string_lossy();
@@ -193,19 +202,26 @@ import duckdb, polars as pl, pyarrow.dataset as ds
 root = sys.argv[1]
 def line(pairs):
     return " ".join(f"{e}:{n}" for e, n in sorted(pairs))
-t = ds.dataset(root + "/modes", format="parquet", partitioning="hive").to_table(columns=["frequency_hz", "event"])
+t = ds.dataset(root + "/tables/modes", format="parquet", partitioning="hive").to_table(columns=["frequency_hz", "event"])
 counts = {}
 for e in t.column("event").to_pylist():
     counts[e] = counts.get(e, 0) + 1
 print("pyarrow", line(counts.items()))
-rows = duckdb.sql(f"select event, count(*) from read_parquet('{root}/modes/**/*.parquet', hive_partitioning=true) group by event").fetchall()
+rows = duckdb.sql(f"select event, count(*) from read_parquet('{root}/tables/modes/**/*.parquet', hive_partitioning=true) group by event").fetchall()
 print("duckdb", line(rows))
-df = pl.scan_parquet(root + "/modes/**/*.parquet", hive_partitioning=True).group_by("event").len().collect()
+df = pl.scan_parquet(root + "/tables/modes/**/*.parquet", hive_partitioning=True).group_by("event").len().collect()
 print("polars", line(zip(df["event"].to_list(), df["len"].to_list())))
-a = ds.dataset(root + "/assessment", format="parquet", partitioning="hive").to_table(columns=["event", "rating"])
+a = ds.dataset(root + "/tables/assessment", format="parquet", partitioning="hive").to_table(columns=["event", "rating"])
 print("pyarrow-assessment", line(zip(a.column("event").to_pylist(), a.column("rating").to_pylist())))
-rows = duckdb.sql(f"select event, rating from read_parquet('{root}/assessment/**/*.parquet', hive_partitioning=true)").fetchall()
+rows = duckdb.sql(f"select event, rating from read_parquet('{root}/tables/assessment/**/*.parquet', hive_partitioning=true)").fetchall()
 print("duckdb-assessment", line(rows))
+# Issue 34: the whole table tree in one glob: every file once (no run copy),
+# the tables' columns side by side (one type per column name).
+n, runs = duckdb.sql(f"select count(*), count(*) filter (where filename like '%/runs/%') from read_parquet('{root}/tables/**/*.parquet', union_by_name=true, hive_partitioning=true, filename=true)").fetchall()[0]
+print("duckdb-tree", n, runs)
+# The free text beside the ids: the structure's name for its partition.
+names = duckdb.sql(f"select distinct structure, structure_name from read_parquet('{root}/tables/event/**/*.parquet', hive_partitioning=true) where event = 'synthetic-4storey-quake'").fetchall()
+print("duckdb-names", names)
 "#;
     let Some(stdout) = python(script, out.path()) else {
         return;
@@ -214,7 +230,7 @@ print("duckdb-assessment", line(rows))
     assert_eq!(
         stdout.trim(),
         format!(
-            "pyarrow {expected}\nduckdb {expected}\npolars {expected}\npyarrow-assessment {expected_ratings}\nduckdb-assessment {expected_ratings}"
+            "pyarrow {expected}\nduckdb {expected}\npolars {expected}\npyarrow-assessment {expected_ratings}\nduckdb-assessment {expected_ratings}\nduckdb-tree {part_rows} 0\nduckdb-names [('sample-4-storey-frame', 'Sample 4-storey frame')]"
         )
     );
 }
@@ -230,7 +246,7 @@ fn republishing_an_event_withdraws_the_tables_its_run_no_longer_has() {
     let part = partition("Sample 4-storey frame", "synthetic-4storey-quake");
     assert_eq!(
         part,
-        Path::new("structure=Sample_4-storey_frame/event=synthetic-4storey-quake")
+        Path::new("structure=sample-4-storey-frame/event=synthetic-4storey-quake")
     );
     let run = out.path().join("runs").join(&part);
     quaketwin::commands::run_pipeline(
@@ -243,9 +259,13 @@ fn republishing_an_event_withdraws_the_tables_its_run_no_longer_has() {
     // A foreign file in the run directory is never published.
     std::fs::write(run.join("notes.parquet"), b"not a table").unwrap();
     let first = publish_tables(out.path(), &part, &run).unwrap();
-    let channels = out.path().join("channels").join(&part).join(PART_FILE);
+    let channels = out
+        .path()
+        .join("tables/channels")
+        .join(&part)
+        .join(PART_FILE);
     assert!(first.contains(&channels), "{first:?}");
-    assert!(!out.path().join("notes").exists());
+    assert!(!out.path().join("tables/notes").exists());
     std::fs::remove_file(run.join("channels.parquet")).unwrap();
     let second = publish_tables(out.path(), &part, &run).unwrap();
     assert_eq!(second.len(), first.len() - 1);
@@ -255,7 +275,7 @@ fn republishing_an_event_withdraws_the_tables_its_run_no_longer_has() {
     );
     assert!(out
         .path()
-        .join("samples")
+        .join("tables/samples")
         .join(&part)
         .join(PART_FILE)
         .is_file());
@@ -337,6 +357,51 @@ print(bad, first >= 1_000_000_000 * 10**9)
     assert_eq!(stdout.trim(), format!("{}\n0 True", expected.join(" ")));
 }
 
+/// Issue 34: partition values are ids in one canonical form (lower case,
+/// runs of other characters one `-`), the same for two spellings of one
+/// name and unchanged when applied again; `structure.id` and `event.id` of
+/// event.toml, when stated, are the ids instead of the name and the folder.
+#[test]
+fn partition_values_are_canonical_ids_and_the_manifest_may_state_them() {
+    use quaketwin::pipeline::dataset::{event_ids, event_partition};
+    use quaketwin::sinks::dataset::partition_value;
+    for (text, id) in [
+        ("Sample 4-storey frame", "sample-4-storey-frame"),
+        ("sample 4 storey  FRAME", "sample-4-storey-frame"),
+        ("  Building A / East wing ", "building-a-east-wing"),
+        ("CE.24386", "ce.24386"),
+        ("a=b/../c", "a-b-..-c"),
+        ("..", "__"),
+        ("Ünïcode", "n-code"),
+        ("", "unnamed"),
+    ] {
+        assert_eq!(partition_value(text), id, "{text:?}");
+        assert_eq!(partition_value(id), id, "{id:?} not a fixed point");
+        assert!(id.is_ascii() && !id.contains('/') && !id.contains('='));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let event = dir.path().join("Quake Folder");
+    std::fs::create_dir_all(&event).unwrap();
+    std::fs::write(
+        event.join("event.toml"),
+        "[event]\nname = \"M 6.4, 12 km S of Somewhere\"\n\n[structure]\nname = \"Hotel Somewhere (7 storeys)\"\n",
+    )
+    .unwrap();
+    assert_eq!(
+        event_ids(&event).unwrap(),
+        ("hotel-somewhere-7-storeys".into(), "quake-folder".into())
+    );
+    std::fs::write(
+        event.join("event.toml"),
+        "[event]\nid = \"us7000ABCD\"\nname = \"M 6.4\"\n\n[structure]\nid = \"CE.24386\"\nname = \"Hotel\"\n",
+    )
+    .unwrap();
+    assert_eq!(
+        event_partition(&event).unwrap(),
+        Path::new("structure=ce.24386/event=us7000abcd")
+    );
+}
+
 /// Network zips as published carry no `event.toml`: their events are
 /// partitioned by the recording station of their headers, so the events of
 /// one instrumented structure share a partition (1980s CSMIP V2 and
@@ -359,11 +424,14 @@ fn zips_without_a_manifest_are_partitioned_by_their_station() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let partitions = quaketwin::sinks::dataset::partitions_under(&out.path().join("runs")).unwrap();
+    let partitions = quaketwin::sinks::dataset::partitions_under(
+        &out.path().join(quaketwin::sinks::dataset::RUNS_DIR),
+    )
+    .unwrap();
     let expected: Vec<(String, String)> = [
-        ("CE.13795", "Inglewood_17May2009_CE13795P"),
-        ("CE.89324", "nc73201181_ce89324p"),
-        ("CE.89324", "riodell82_ce89324p"),
+        ("ce.13795", "inglewood_17may2009_ce13795p"),
+        ("ce.89324", "nc73201181_ce89324p"),
+        ("ce.89324", "riodell82_ce89324p"),
     ]
     .iter()
     .map(|(s, e)| (s.to_string(), e.to_string()))

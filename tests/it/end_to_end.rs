@@ -187,7 +187,7 @@ fn yielding_sample_bouc_wen_and_damage_match_the_truth() {
         let series: Vec<f64> = segment
             .iter()
             .zip(&loop_drift)
-            .filter(|(g, _)| **g == format!("L{s}–L{}", s + 1))
+            .filter(|(g, _)| **g == format!("L{s}-L{}", s + 1))
             .map(|(_, x)| *x)
             .collect();
         let tail = &series[series.len() - series.len() / 20..];

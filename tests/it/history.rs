@@ -395,7 +395,7 @@ fn history_command_on_a_synthetic_dataset() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(summary["ok"], true);
-    assert_eq!(summary["structures"][0]["structure"], "test_building");
+    assert_eq!(summary["structures"][0]["structure"], "test-building");
     let modes = read_modes(&out.join("history_modes.parquet")).unwrap();
     let rows = read_events(&out.join("history_events.parquet")).unwrap();
     assert_eq!(rows.len(), DATASET_EVENTS);
@@ -476,15 +476,19 @@ fn history_command_on_a_synthetic_dataset() {
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("nope") && err.contains("test_building"),
+        err.contains("nope") && err.contains("test-building"),
         "{err}"
     );
     let o = run(&[ds.as_os_str(), "--out".as_ref(), ds.as_os_str()]);
     assert_eq!(o.status.code(), Some(2));
-    let in_table = ds.join("modes").join("history");
-    let o = run(&[ds.as_os_str(), "--out".as_ref(), in_table.as_os_str()]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(!in_table.exists(), "nothing written into a table folder");
+    for in_table in [
+        ds.join("tables").join("history"),
+        ds.join("tables/modes/history"),
+    ] {
+        let o = run(&[ds.as_os_str(), "--out".as_ref(), in_table.as_os_str()]);
+        assert_eq!(o.status.code(), Some(2));
+        assert!(!in_table.exists(), "nothing written into the table tree");
+    }
     let missing = tmp.path().join("missing");
     let o = run(&[
         missing.as_os_str(),
@@ -550,7 +554,7 @@ fn shared_history_follows_the_painter_street_transverse_mode_across_recorders() 
     ];
     let tmp = tempfile::tempdir().unwrap();
     let (modes, rows) = real_history(&events, tmp.path());
-    assert!(rows.iter().all(|r| r.structure == "CE.89324"), "{rows:?}");
+    assert!(rows.iter().all(|r| r.structure == "ce.89324"), "{rows:?}");
     let names: Vec<&str> = rows.iter().map(|r| r.event.as_str()).collect();
     assert_eq!(
         names,
@@ -612,10 +616,10 @@ fn shared_history_of_the_bridge_corpus() {
     let (modes, rows) = real_history(&events, tmp.path());
     let mut structures: Vec<&str> = rows.iter().map(|r| r.structure.as_str()).collect();
     structures.dedup();
-    assert_eq!(structures, ["CE.13795", "CE.33742", "CE.54730", "CE.89324"]);
+    assert_eq!(structures, ["ce.13795", "ce.33742", "ce.54730", "ce.89324"]);
     let painter: Vec<_> = modes
         .iter()
-        .filter(|r| r.structure == "CE.89324" && r.mode == 1)
+        .filter(|r| r.structure == "ce.89324" && r.mode == 1)
         .collect();
     assert_eq!(painter.len(), 12, "{painter:#?}");
     for r in &painter {
@@ -628,7 +632,7 @@ fn shared_history_of_the_bridge_corpus() {
             assert_eq!(r.status, "in_band", "{r:?}");
         }
     }
-    for id in ["CE.13795", "CE.33742", "CE.54730"] {
+    for id in ["ce.13795", "ce.33742", "ce.54730"] {
         assert!(modes
             .iter()
             .filter(|r| r.structure == id && r.mode == 1)

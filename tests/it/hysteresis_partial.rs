@@ -247,7 +247,7 @@ fn check_segments(levels: &[i32], masses: &[f64], segments: &[String], k_id: &[f
 }
 
 /// Base + L4 + roof of the yielding 7-storey chain: the stage forms the
-/// segments L0–L4 and L4–L7 with the lumped masses and reaches a reasoned
+/// segments L0-L4 and L4-L7 with the lumped masses and reaches a reasoned
 /// outcome. Measured: the reduced chain is *not identifiable* — the F-test
 /// of the hysteretic terms fails at DoF 2 (PGA 3.5 m/s²: F = 6.26 on
 /// (3, 49), p = 1.1e-3 ≥ 1e-3; other layouts p ≥ 0.03): one Bouc-Wen
@@ -264,7 +264,7 @@ fn base_fourth_floor_and_roof_form_two_segments_with_lumped_masses() {
     let m = &masses[0];
     eprintln!("{}", m.message());
     assert!(m.source.starts_with("tributary lumping"), "{}", m.source);
-    assert_eq!(m.segments(), vec!["L0–L4", "L4–L7"]);
+    assert_eq!(m.segments(), vec!["L0-L4", "L4-L7"]);
     let hand = lumped_by_hand(&levels);
     for (a, b) in m.masses_kg.iter().zip(&hand) {
         assert!((a - b).abs() <= 1e-9 * b, "{:?} vs {hand:?}", m.masses_kg);
@@ -278,7 +278,7 @@ fn base_fourth_floor_and_roof_form_two_segments_with_lumped_masses() {
 fn check_outcome(outcome: &DirectionOutcome, levels: &[i32], masses: &[f64]) {
     match outcome {
         DirectionOutcome::Identified(id) => {
-            assert_eq!(id.segments, vec!["L0–L4", "L4–L7"]);
+            assert_eq!(id.segments, vec!["L0-L4", "L4-L7"]);
             let k = segment_stiffness(&id.k0_matrix);
             check_segments(levels, masses, &id.segments, &k, 0.15);
         }
@@ -288,7 +288,7 @@ fn check_outcome(outcome: &DirectionOutcome, levels: &[i32], masses: &[f64]) {
             eprintln!("reduced chain: {reason}");
             assert!(reason.contains("DoF"), "{reason}");
             let measured = measured.as_ref().expect("measured loops");
-            assert_eq!(measured.segments, vec!["L0–L4", "L4–L7"]);
+            assert_eq!(measured.segments, vec!["L0-L4", "L4-L7"]);
         }
     }
 }
@@ -455,7 +455,7 @@ fn cli_exits_0_and_writes_measured_loops_of_a_not_identifiable_direction() {
     let reason = crate::common::column_str(&out.join("bouc_wen.parquet"), "reason");
     assert!(!reason[0].is_empty());
     let segments = crate::common::column_str(&out.join("hysteresis_fit.parquet"), "segment");
-    assert!(segments.iter().any(|s| s == "L0–L4") && segments.iter().any(|s| s == "L4–L7"));
+    assert!(segments.iter().any(|s| s == "L0-L4") && segments.iter().any(|s| s == "L4-L7"));
 }
 
 /// The report draws the measured loop of a direction that is not identified,
@@ -529,8 +529,8 @@ fn seven_levels_on_base_four_and_roof() {
     assert!((r.dropped_to_base_kg - (0.75 + 1.0 + 0.75)).abs() < 1e-12);
     let total: f64 = m.iter().sum();
     assert!((r.masses_kg.iter().sum::<f64>() + r.dropped_to_base_kg - total).abs() < 1e-12);
-    assert_eq!(segment_label(&[4, 7], 0), "L0–L4");
-    assert_eq!(segment_label(&[4, 7], 1), "L4–L7");
+    assert_eq!(segment_label(&[4, 7], 0), "L0-L4");
+    assert_eq!(segment_label(&[4, 7], 1), "L4-L7");
 }
 
 #[test]

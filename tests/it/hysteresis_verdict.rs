@@ -6,18 +6,18 @@
 //! (F_y = 3.6 MN, yield drift 9.0 mm) that reaches 84.6 mm of drift and keeps
 //! 7.0 mm of it; f1 drops 1.127 → 0.810 Hz and does not recover. Storeys 2–6
 //! stay elastic. Only levels 0, 2 and 6 are recorded (100 Hz): the chain is
-//! two segments, L0–L2 (the yielding storey and an elastic one, level 1
-//! lumped) and L2–L6.
+//! two segments, L0-L2 (the yielding storey and an elastic one, level 1
+//! lumped) and L2-L6.
 //!
-//! Measured (2026, masses from truth.toml): L2–L6 fails the F-test (X:
+//! Measured (2026, masses from truth.toml): L2-L6 fails the F-test (X:
 //! F = 0.033 on (3, 27), p = 0.99) — right, it is elastic — and used to end
 //! the identification there, the direction reported "not identifiable"
-//! without L0–L2 ever being tested. Now the top segment carries its nested
-//! model and L0–L2 is tested: F = 1.12 on (3, 29), p = 0.36 — the hysteretic
+//! without L0-L2 ever being tested. Now the top segment carries its nested
+//! model and L0-L2 is tested: F = 1.12 on (3, 29), p = 0.36 — the hysteretic
 //! terms lower J by 10 % only (J/‖n_e‖² 8.0 % vs 8.9 % of the nested model).
 //! The verdict is `no_significant_hysteresis` with a reason that says what
-//! the test cannot see; the measured loops of L0–L2 enclose 2.14 MJ against
-//! 0.17 MJ for L2–L6.
+//! the test cannot see; the measured loops of L0-L2 enclose 2.14 MJ against
+//! 0.17 MJ for L2-L6.
 
 use std::path::Path;
 
@@ -65,7 +65,7 @@ fn six_storey_with_masses() -> tempfile::TempDir {
 /// The storey yields (truth): the outcome is not "no hysteresis / linear".
 /// Either the hysteretic terms are identified at the yielding segment, or
 /// the verdict is `no_significant_hysteresis` after the yielding segment
-/// L0–L2 (DoF 1) was itself tested, with the reason saying that this is not
+/// L0-L2 (DoF 1) was itself tested, with the reason saying that this is not
 /// a finding of a linear response; and the measured loop energy of the
 /// yielding segment is what the truth implies.
 #[test]
@@ -82,8 +82,8 @@ fn yielding_six_storey_is_never_called_linear() {
     let x = outcomes.iter().find(|o| o.direction() == "X").unwrap();
     match x {
         DirectionOutcome::Identified(id) => {
-            // The yielding segment (DoF 1, L0–L2) carries the hysteresis.
-            assert_eq!(id.segments[0], "L0–L2");
+            // The yielding segment (DoF 1, L0-L2) carries the hysteresis.
+            assert_eq!(id.segments[0], "L0-L2");
             assert!(
                 id.dofs[0].hysteresis.significant(),
                 "{:?}",
@@ -110,8 +110,8 @@ fn yielding_six_storey_is_never_called_linear() {
                 reason.contains("not a finding of a linear, undamaged response"),
                 "{reason}"
             );
-            // The tabled test is the most significant DoF's: L0–L2 (p = 0.36
-            // measured, against 0.99 for L2–L6).
+            // The tabled test is the most significant DoF's: L0-L2 (p = 0.36
+            // measured, against 0.99 for L2-L6).
             let (f, p) = f_test.expect("F-test tabled");
             assert!(f.is_finite() && p < 0.9, "F {f}, p {p}");
             // Loop energy, model-free (E_rec = ∫ V dΔu): the yielding storey's
@@ -119,10 +119,10 @@ fn yielding_six_storey_is_never_called_linear() {
             // F_y (u_max − u_y)(1 − hardening) = 3.6e6 × 0.0756 × 0.9 ≈ 0.245 MJ
             // (truth.toml); the elastic segment only its viscous share.
             let m = measured.as_ref().expect("measured loops");
-            assert_eq!(m.segments, vec!["L0–L2", "L2–L6"]);
+            assert_eq!(m.segments, vec!["L0-L2", "L2-L6"]);
             let e = m.segment_work();
             eprintln!("E_rec X: {e:?} J");
-            assert!(e[0] > 0.245e6, "E_rec(L0–L2) = {} J", e[0]);
+            assert!(e[0] > 0.245e6, "E_rec(L0-L2) = {} J", e[0]);
             assert!(e[0] > 5.0 * e[1].abs(), "E_rec {e:?}");
         }
     }

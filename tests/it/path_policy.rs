@@ -480,7 +480,7 @@ fn a_rerun_of_a_dataset_leaves_no_temporary_file() {
         assert!(left.is_empty(), "pass {pass}: {left:?}");
     }
     // The tables are still published (part files of both events).
-    let channels = out.join("channels");
+    let channels = out.join("tables/channels");
     let parts: Vec<PathBuf> = {
         let mut v = Vec::new();
         let mut stack = vec![channels];

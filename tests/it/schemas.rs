@@ -11,7 +11,10 @@ use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use quaketwin::error::Error;
 use quaketwin::sinks::parquet::{write_parquet, TableBuilder};
 use quaketwin::sinks::provenance::{EVENT_KEY, HISTORY_KEY};
-use quaketwin::vocab::schema::{DESCRIPTION_KEY, SCHEMA_KEY, UNIT_KEY, VERSION_KEY};
+use quaketwin::vocab::schema::{
+    ColumnType, DESCRIPTION_KEY, FIELD_DESCRIPTION_KEY, SCHEMA_KEY, UNIT_ARBITRARY, UNIT_KEY,
+    UNIT_VARIES, VERSION_KEY,
+};
 use quaketwin::vocab::tables::{self, drift, ALL_TABLES, DRIFT};
 
 fn root() -> PathBuf {
@@ -36,6 +39,8 @@ fn declarations_are_well_formed() {
         "N^(1-N)/m",
         "J",
         "%",
+        UNIT_VARIES,
+        UNIT_ARBITRARY,
     ];
     let mut names = BTreeSet::new();
     let mut files = BTreeSet::new();
@@ -56,6 +61,49 @@ fn declarations_are_well_formed() {
                 c.unit
             );
             assert!(!c.doc.is_empty(), "{}.{} has no doc", t.name, c.name);
+            // Issue 34: every number that is a quantity says its unit (a
+            // unit, `1`, `varies` or `arbitrary`); integers are ids, indices
+            // and counts, timestamps carry their unit in their type.
+            if matches!(c.ty, ColumnType::F64 | ColumnType::ListF64) {
+                assert!(
+                    !c.unit.is_empty(),
+                    "{}.{}: a float without unit",
+                    t.name,
+                    c.name
+                );
+            }
+            if !matches!(c.ty, ColumnType::F64 | ColumnType::ListF64) {
+                assert!(
+                    c.unit.is_empty() || c.unit == UNIT_VARIES,
+                    "{}.{}: unit {:?} on a non-float column",
+                    t.name,
+                    c.name,
+                    c.unit
+                );
+            }
+        }
+    }
+}
+
+/// Issue 34: `read_parquet('out/*.parquet', union_by_name = true)` over a
+/// run's directory works (docs/formats.md, "One file, one table"): a column
+/// name means one type in every table, integers of different widths aside
+/// (DuckDB widens them).
+#[test]
+fn a_column_name_has_one_type_across_the_tables() {
+    let integer = |t: ColumnType| matches!(t, ColumnType::I32 | ColumnType::I64 | ColumnType::U32);
+    let mut seen: std::collections::BTreeMap<&str, (ColumnType, &str)> = Default::default();
+    for t in ALL_TABLES {
+        for c in t.columns {
+            let (ty, first) = *seen.entry(c.name).or_insert((c.ty, t.name));
+            assert!(
+                ty == c.ty || (integer(ty) && integer(c.ty)),
+                "{}.{} is {:?}, {first}.{} is {ty:?}",
+                t.name,
+                c.name,
+                c.ty,
+                c.name
+            );
         }
     }
 }
@@ -156,10 +204,23 @@ fn check_outputs(dir: &Path, seen: &mut BTreeSet<String>) {
         }
         for f in &fields {
             let spec = declared.column(f.name()).unwrap();
+            let unit = f.metadata().get(UNIT_KEY).map(String::as_str);
+            if spec.family_prefix().is_some() && spec.unit == UNIT_VARIES {
+                // Each member its own unit (twin_update's `param_<name>`: the
+                // parameter's, from the twin).
+                assert!(
+                    unit.is_some_and(|u| !u.is_empty() && u != UNIT_VARIES),
+                    "{p}: unit of {}: {unit:?}",
+                    f.name()
+                );
+            } else {
+                assert_eq!(unit, Some(spec.unit), "{p}: unit of {}", f.name());
+            }
+            // Issue 34: the meaning travels with the field.
             assert_eq!(
-                f.metadata().get(UNIT_KEY).map(String::as_str),
-                Some(spec.unit),
-                "{p}: unit of {}",
+                f.metadata().get(FIELD_DESCRIPTION_KEY).map(String::as_str),
+                Some(spec.doc),
+                "{p}: description of {}",
                 f.name()
             );
         }
@@ -190,8 +251,10 @@ fn check_outputs(dir: &Path, seen: &mut BTreeSet<String>) {
             let steps = history["steps"]
                 .as_array()
                 .unwrap_or_else(|| panic!("{p}: {history}"));
+            // event.parquet is written as the records are read, before
+            // any processing: its history is the reading's.
             assert!(
-                steps.iter().any(|s| s["step"] == "units_to_si"),
+                name == "event" || steps.iter().any(|s| s["step"] == "units_to_si"),
                 "{p}: the history does not start from the records: {history}"
             );
         }
@@ -258,6 +321,10 @@ fn every_table_of_the_sample_runs_matches_its_declaration() {
             .metadata(HISTORY_KEY)
             .is_some_and(|h| h.contains("\"history\"")));
     }
+
+    check_mode_shapes(quake.path());
+    check_samples_time(quake.path());
+    check_ascii_segments(quake.path());
 
     let mut seen = BTreeSet::new();
     for dir in [quake.path(), design.path(), &out, &track, &history] {
@@ -385,4 +452,183 @@ fn a_quaketwin_file_of_the_wrong_type_is_an_input_error_naming_file_and_column()
         msg.contains("samples.parquet") && msg.contains("acc_m_s2") && msg.contains("float64"),
         "{msg}"
     );
+}
+
+/// The rows of a Parquet file (all batches).
+fn read_batches(path: &Path) -> Vec<arrow_array::RecordBatch> {
+    quaketwin::sinks::parquet::ReadTable::open(path)
+        .unwrap()
+        .batches
+}
+
+/// Issue 34: `mode_shapes.parquet` is `modes.parquet`'s shapes in long
+/// form — one row per mode and output channel, the same numbers bit for
+/// bit, the channel named on the row with its level (channels.parquet) and
+/// direction (`quaketwin.output_directions`).
+fn check_mode_shapes(out: &Path) {
+    use arrow_array::{Array, Float64Array, Int32Array, StringArray, UInt32Array};
+    let (modes, channels) =
+        quaketwin::sinks::modal_tables::read_modes(&out.join("modes.parquet")).unwrap();
+    assert!(
+        !modes.is_empty() && channels.len() >= 4,
+        "{} modes",
+        modes.len()
+    );
+    let directions: Vec<String> = serde_json::from_str(
+        quaketwin::sinks::parquet::ReadTable::open(&out.join("modes.parquet"))
+            .unwrap()
+            .metadata("quaketwin.output_directions")
+            .unwrap(),
+    )
+    .unwrap();
+    let ch = out.join("channels.parquet");
+    let level_of: std::collections::HashMap<String, i64> =
+        crate::common::column_str(&ch, "channel_id")
+            .into_iter()
+            .zip(crate::common::column_i64(&ch, "level"))
+            .collect();
+    let batches = read_batches(&out.join("mode_shapes.parquet"));
+    let rows: usize = batches.iter().map(|b| b.num_rows()).sum();
+    assert_eq!(rows, modes.len() * channels.len());
+    let mut row = 0;
+    for b in &batches {
+        let col = |n: &str| b.column_by_name(n).unwrap().clone();
+        let mode = col("mode");
+        let mode = mode.as_any().downcast_ref::<UInt32Array>().unwrap();
+        let id = col("channel_id");
+        let id = id.as_any().downcast_ref::<StringArray>().unwrap();
+        let level = col("level");
+        let level = level.as_any().downcast_ref::<Int32Array>().unwrap();
+        let dir = col("direction");
+        let dir = dir.as_any().downcast_ref::<StringArray>().unwrap();
+        let f = |n: &str| {
+            col(n)
+                .as_any()
+                .downcast_ref::<Float64Array>()
+                .unwrap()
+                .clone()
+        };
+        let (freq, re, im, sd) = (f("frequency_hz"), f("real"), f("imag"), f("modulus_std"));
+        for i in 0..b.num_rows() {
+            let (m, k) = (row / channels.len(), row % channels.len());
+            let x = &modes[m];
+            assert_eq!(mode.value(i) as usize, m + 1);
+            assert_eq!(id.value(i), channels[k]);
+            assert_eq!(freq.value(i).to_bits(), x.frequency_hz.to_bits());
+            assert_eq!(
+                re.value(i).to_bits(),
+                x.shape[k].re.to_bits(),
+                "mode {m} {k}"
+            );
+            assert_eq!(
+                im.value(i).to_bits(),
+                x.shape[k].im.to_bits(),
+                "mode {m} {k}"
+            );
+            assert_eq!(
+                sd.value(i).to_bits(),
+                x.shape_std[k].to_bits(),
+                "mode {m} {k}"
+            );
+            assert_eq!(dir.value(i), directions[k]);
+            assert!(!level.is_null(i), "{}: no level", channels[k]);
+            assert_eq!(level.value(i) as i64, level_of[&channels[k]]);
+            row += 1;
+        }
+    }
+}
+
+/// Issue 34: samples.parquet's `time` is filled where the event's origin is
+/// known.  The sample event's records (AT2, CSV) have no start time of their
+/// own, its manifest an origin time (2026-01-15T10:20:30Z): every row's time
+/// is that origin + `t_s`, and channels.parquet says so in `time_source`.
+fn check_samples_time(out: &Path) {
+    use arrow_array::{Array, Float64Array, TimestampNanosecondArray};
+    let origin_ns = 1_768_472_430_000_000_000i64; // 2026-01-15T10:20:30Z
+    let sources = crate::common::column_str(&out.join("channels.parquet"), "time_source");
+    assert!(
+        !sources.is_empty() && sources.iter().all(|s| s == "origin_time"),
+        "{sources:?}"
+    );
+    let mut rows = 0;
+    for b in read_batches(&out.join("samples.parquet")) {
+        let t = b.column_by_name("t_s").unwrap();
+        let t = t.as_any().downcast_ref::<Float64Array>().unwrap();
+        let time = b.column_by_name("time").unwrap();
+        let time = time
+            .as_any()
+            .downcast_ref::<TimestampNanosecondArray>()
+            .unwrap();
+        assert_eq!(time.timezone(), Some("UTC"));
+        assert_eq!(
+            time.null_count(),
+            0,
+            "time null although the origin is known"
+        );
+        for i in 0..b.num_rows() {
+            let expected = origin_ns + (t.value(i) * 1e9).round() as i64;
+            assert!((time.value(i) - expected).abs() <= 1, "row {i}");
+        }
+        rows += b.num_rows();
+    }
+    assert!(rows > 1000, "{rows} rows");
+}
+
+/// Issue 34: segment labels are ASCII (`L0-L1`: `WHERE segment = 'L0-L1'`
+/// matches), in both tables that carry them.
+fn check_ascii_segments(out: &Path) {
+    let mut seen = 0;
+    for file in ["bouc_wen.parquet", "hysteresis_fit.parquet"] {
+        for s in crate::common::column_str(&out.join(file), "segment") {
+            assert!(s.is_empty() || s.is_ascii(), "{file}: segment {s:?}");
+            if !s.is_empty() {
+                assert!(
+                    s.starts_with('L') && s.contains("-L"),
+                    "{file}: segment {s:?}"
+                );
+                seen += 1;
+            }
+        }
+    }
+    assert!(seen > 0, "no segment label to check");
+}
+
+/// Issue 34: with neither a record start nor an origin time, `time` is
+/// null (never a made-up 1970 date) and `time_source` says `unknown`.
+#[test]
+fn samples_time_is_null_only_when_neither_start_nor_origin_is_known() {
+    use arrow_array::Array;
+    let dir = root().join("sample-records/synthetic-4storey-quake");
+    let mut event = quaketwin::event_folder::load(&dir).unwrap().event;
+    let record_start = 1_700_000_000_000_000_000i64;
+    event.records[0].channel.start_ns = Some(record_start);
+    let (start, source) =
+        quaketwin::sinks::event_tables::time_base(&event.records[0].channel, event.origin_ns);
+    assert_eq!((start, source), (Some(record_start), "record_start"));
+    let (_, source) =
+        quaketwin::sinks::event_tables::time_base(&event.records[1].channel, event.origin_ns);
+    assert_eq!(source, "origin_time");
+    event.origin_ns = None;
+    let batches = quaketwin::sinks::event_tables::samples_table(&event, &[]).unwrap();
+    let first_id = event.records[0].channel.id.clone();
+    for b in &batches {
+        let id = b.column_by_name("channel_id").unwrap();
+        let id = id
+            .as_any()
+            .downcast_ref::<arrow_array::StringArray>()
+            .unwrap();
+        let time = b.column_by_name("time").unwrap();
+        if id.value(0) == first_id {
+            let time = time
+                .as_any()
+                .downcast_ref::<arrow_array::TimestampNanosecondArray>()
+                .unwrap();
+            assert_eq!(time.null_count(), 0);
+            assert_eq!(time.value(0), record_start);
+        } else {
+            assert_eq!(time.null_count(), b.num_rows(), "{}", id.value(0));
+        }
+    }
+    let (none, source) = quaketwin::sinks::event_tables::time_base(&event.records[1].channel, None);
+    assert_eq!((none, source), (None, "unknown"));
 }

@@ -132,7 +132,7 @@ fn damaged_records_cost_only_the_windows_they_overlap() {
     let at = record_at(130.0);
     flip_bit(&file(2), at + 54, 0);
     expected.push((file(2), at, "2026-01-01T02:00:00"));
-    // 4. A flipped bit in a sample count (1008 → 33 776) (3:10).
+    // 4. A flipped bit in a sample count (992 → 33 760) (3:10).
     let at = record_at(190.0);
     flip_bit(&file(3), at + 30, 7);
     expected.push((file(3), at, "2026-01-01T03:00:00"));
@@ -202,7 +202,7 @@ fn damaged_records_cost_only_the_windows_they_overlap() {
     );
     says(
         by_offset(&expected[3].0, expected[3].1),
-        "announces 33776 samples",
+        "announces 33760 samples",
     );
     says(
         by_offset(&expected[4].0, expected[4].1),
@@ -212,7 +212,7 @@ fn damaged_records_cost_only_the_windows_they_overlap() {
         by_offset(&expected[5].0, expected[5].1),
         "still being written",
     );
-    // The span of the flipped record: one record of samples, 20.16 s.
+    // The span of the flipped record: one record of samples, 19.84 s.
     says(
         by_offset(&expected[2].0, expected[2].1),
         "no samples from 2026-01-01T02:09:",

@@ -13,7 +13,7 @@ use std::process::Command;
 use quaketwin::monitor::Tracking;
 use quaketwin::readers::mseed::StreamCodes;
 use quaketwin::readers::sds::{day_file, SdsArchive, StreamPattern};
-use quaketwin::sinks::mseed_writer::{RecordEncoder, SampleEncoding};
+use quaketwin::sinks::mseed_writer::{RecordEncoder, SampleEncoding, SAMPLES_PER_RECORD};
 use quaketwin::synth::archive::{true_modes, write_archive, ArchiveSettings};
 use quaketwin::track::{run, TrackOptions};
 
@@ -159,14 +159,17 @@ fn sds_damaged_record_names_file_and_offset() {
         )) && note.contains("exponent 40")
             && note.contains("(byte 4144)")
             && note.contains(
-                "no samples from 2026-01-01T00:01:40.800000000Z to 2026-01-01T00:03:21.600000000Z"
+                "no samples from 2026-01-01T00:01:39.200000000Z to 2026-01-01T00:03:18.400000000Z"
             ),
         "{note}"
     );
-    // One record (1008 samples) missing of 20 000, the rest as written.
-    assert!((w.present_fraction - (20_000 - 1008) as f64 / 20_000.0).abs() < 1e-12);
-    assert_eq!(w.signals[0][..1008], x[..1008]);
-    assert_eq!(w.signals[0][2016..], x[2016..]);
+    // One record (SAMPLES_PER_RECORD = 992 samples: 99.2 s at 10 Hz, the
+    // span of the note above) missing of 20 000, the rest as written.
+    let n = SAMPLES_PER_RECORD;
+    assert_eq!(n, 992);
+    assert!((w.present_fraction - (20_000 - n) as f64 / 20_000.0).abs() < 1e-12);
+    assert_eq!(w.signals[0][..n], x[..n]);
+    assert_eq!(w.signals[0][2 * n..], x[2 * n..]);
     assert_eq!(w.signals[1], x);
 }
 

@@ -429,10 +429,15 @@ fn w_log(dir: &Path, run: usize) -> PathBuf {
     dir.join(format!("watch-{run}.log"))
 }
 
-/// The `structure=…/event=…` partitions of a dataset's table `table`.
+/// The `structure=…/event=…` partitions of a dataset's table `table` (or
+/// of its run folders, `runs`).
 fn partitions(dataset: &Path, table: &str) -> BTreeSet<String> {
     let mut out = BTreeSet::new();
-    let Ok(structures) = std::fs::read_dir(dataset.join(table)) else {
+    let folder = match table {
+        "runs" => dataset.join("runs"),
+        _ => quaketwin::sinks::dataset::table_dir(dataset, table),
+    };
+    let Ok(structures) = std::fs::read_dir(folder) else {
         return out;
     };
     for s in structures.flatten() {
@@ -447,22 +452,20 @@ fn partitions(dataset: &Path, table: &str) -> BTreeSet<String> {
     out
 }
 
-/// The table files of a dataset (`<table>/structure=…/event=…/part-0.parquet`),
+/// The table files of a dataset (`tables/<table>/structure=…/event=…/part-0.parquet`),
 /// relative, with their bytes.
 fn table_files(dataset: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
     let mut out = BTreeMap::new();
-    for t in std::fs::read_dir(dataset).unwrap().flatten() {
+    for t in std::fs::read_dir(dataset.join("tables")).unwrap().flatten() {
         let name = t.file_name().to_string_lossy().into_owned();
-        if name == "runs"
-            || name.starts_with('_')
-            || name == "dashboard"
-            || name == quaketwin::sinks::dataset::HISTORY_DIR
-            || !t.path().is_dir()
-        {
+        if !t.path().is_dir() {
             continue;
         }
         for p in partitions(dataset, &name) {
-            let rel = PathBuf::from(&name).join(&p).join("part-0.parquet");
+            let rel = PathBuf::from("tables")
+                .join(&name)
+                .join(&p)
+                .join("part-0.parquet");
             out.insert(rel.clone(), std::fs::read(dataset.join(&rel)).unwrap());
         }
     }
@@ -545,7 +548,7 @@ fn check_each_event_once(o: &Outcome) {
         );
         let rating = column_str(
             &o.dataset
-                .join("assessment")
+                .join("tables/assessment")
                 .join(partition)
                 .join("part-0.parquet"),
             "rating",

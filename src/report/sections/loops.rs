@@ -32,7 +32,7 @@ pub fn peak_and_end(drift: &[f64]) -> Option<(f64, f64)> {
     Some((peak, end.iter().sum::<f64>() / end.len() as f64))
 }
 
-/// Residual drift of drift.parquet per (direction, segment `L<s−1>–L<s>`).
+/// Residual drift of drift.parquet per (direction, segment `L<s−1>-L<s>`).
 fn corrected_residuals(drift_table: &Loaded) -> BTreeMap<(String, String), Residual> {
     let mut out = BTreeMap::new();
     let Loaded::Ok(t) = drift_table else {
@@ -52,7 +52,7 @@ fn corrected_residuals(drift_table: &Loaded) -> BTreeMap<(String, String), Resid
             .and_then(|s| s.parse::<i32>().ok())
             .unwrap_or(storey - 1);
         if let Some(res) = residual(t, r) {
-            out.insert((dir, format!("L{lower}–L{storey}")), res);
+            out.insert((dir, format!("L{lower}-L{storey}")), res);
         }
     }
     out
