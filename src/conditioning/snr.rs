@@ -257,14 +257,19 @@ pub fn log_frequencies(lo: f64, hi: f64) -> Vec<f64> {
 /// Σ W(f_k/f_c)·A_k / Σ W(f_k/f_c), the window cut at |b·log₁₀(f/f_c)| = 3π.
 pub fn konno_ohmachi(amplitude: &[f64], df: f64, centres: &[f64], b: f64) -> Vec<f64> {
     let reach = 10f64.powf(KO_HALF_WIDTH / b);
+    // log₁₀ of every bin's frequency, once (not once per centre and bin).
+    let log_f: Vec<f64> = (1..=amplitude.len())
+        .map(|k| (k as f64 * df).log10())
+        .collect();
     centres
         .iter()
         .map(|&fc| {
+            let log_fc = fc.log10();
             let lo = ((fc / reach / df).ceil() as usize).max(1);
             let hi = ((fc * reach / df).floor() as usize).min(amplitude.len());
             let (mut num, mut den) = (0.0, 0.0);
             for k in lo..=hi {
-                let x = b * (k as f64 * df / fc).log10();
+                let x = b * (log_f[k - 1] - log_fc);
                 let w = if x.abs() < 1e-12 {
                     1.0
                 } else {
@@ -453,7 +458,8 @@ fn walk(spectra: &FourierSpectra, from: f64, to: f64) -> Vec<f64> {
     pts
 }
 
-fn fmt_hz(f: f64) -> String {
+/// A frequency in words: 3 decimals below 1 Hz, 2 to 10 Hz, 1 above.
+pub fn hz_text(f: f64) -> String {
     if f >= 10.0 {
         format!("{f:.1} Hz")
     } else if f >= 1.0 {
@@ -475,7 +481,7 @@ fn high_pass(
             hz: lo,
             why: format!(
                 "the pipeline's corner: it is also the highest high-pass allowed ({})",
-                fmt_hz(hi)
+                hz_text(hi)
             ),
         };
     }
@@ -494,7 +500,7 @@ fn high_pass(
                 hz: lo,
                 why: format!(
                     "the pipeline's corner: the noise window resolves frequencies above {} only",
-                    fmt_hz(resolved.min(1e9))
+                    hz_text(resolved.min(1e9))
                 ),
             }
         }
@@ -517,7 +523,7 @@ fn high_pass(
                     hz: lo,
                     why: format!(
                         "the pipeline's corner: the signal-to-noise ratio is at least {theta} down to {}, the lowest frequency the windows resolve",
-                        fmt_hz(a)
+                        hz_text(a)
                     ),
                 }
             }
@@ -543,7 +549,7 @@ fn low_pass(
             hz: hi,
             why: format!(
                 "the pipeline's corner: it is also the lowest low-pass allowed ({})",
-                fmt_hz(lo)
+                hz_text(lo)
             ),
         };
     }

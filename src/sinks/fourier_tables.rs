@@ -13,7 +13,7 @@ use crate::vocab::Event;
 
 /// The note of a channel: why each corner is where it is.
 fn note(r: &RecordFourier) -> String {
-    let hz = |f: f64| format!("{f:.3} Hz");
+    let hz = crate::conditioning::snr::hz_text;
     let mut parts = Vec::new();
     if let Some(h) = &r.choice.high_pass {
         parts.push(format!("high-pass {}: {}", hz(h.hz), h.why));

@@ -19,10 +19,10 @@ use crate::common::{shared_record, x_record};
 /// Sampling interval of the synthetic records, s (50 Hz).
 const DT: f64 = 0.02;
 /// Pre-event noise, strong motion and tail, s.
-const NOISE_S: f64 = 100.0;
-const BURST_S: f64 = 200.0;
+const NOISE_S: f64 = 400.0;
+const BURST_S: f64 = 600.0;
 const TAIL_S: f64 = 20.0;
-/// The signal's amplitude shape G(f): ∝ (f/F1)² below F1, flat to F2, ∝ (F2/f)² above.
+/// The signal's amplitude shape G(f): ∝ (f/F1)⁴ below F1, flat to F2, ∝ (F2/f)⁴ above.
 const F1: f64 = 1.0;
 /// The frequencies where SNR = 3 by construction (see [`Synthetic`]).
 const HP_TRUE: f64 = 0.3;
@@ -34,8 +34,8 @@ const THETA: f64 = 3.0;
 /// frequency domain by G(f).  Its amplitude density (|X|·Δt/√T) is
 /// σ_w·√Δt·G(f) and the noise's σ_n·√Δt, so in the signal window (burst plus
 /// noise) SNR(f) = √(R²·G(f)² + 1): it crosses θ = 3 where G(f) = √8/R.
-/// R and F2 are set so that happens at [`HP_TRUE`] (on the f² flank) and
-/// [`LP_TRUE`] (on the f⁻² flank).
+/// R and F2 are set so that happens at [`HP_TRUE`] (on the f⁴ flank) and
+/// [`LP_TRUE`] (on the f⁻⁴ flank).
 struct Synthetic {
     r: f64,
     f2: f64,
@@ -43,19 +43,19 @@ struct Synthetic {
 
 impl Synthetic {
     fn new() -> Self {
-        let g_cross = (HP_TRUE / F1).powi(2);
+        let g_cross = (HP_TRUE / F1).powi(4);
         let r = 8f64.sqrt() / g_cross;
-        // (F2/LP)² = g_cross.
-        let f2 = LP_TRUE * g_cross.sqrt();
+        // (F2/LP)⁴ = g_cross.
+        let f2 = LP_TRUE * g_cross.powf(0.25);
         Synthetic { r, f2 }
     }
     fn gain(&self, f: f64) -> f64 {
         if f < F1 {
-            (f / F1).powi(2)
+            (f / F1).powi(4)
         } else if f <= self.f2 {
             1.0
         } else {
-            (self.f2 / f).powi(2)
+            (self.f2 / f).powi(4)
         }
     }
     fn record(&self, seed: u64, onset_s: f64, r: f64) -> Vec<f64> {
@@ -93,10 +93,12 @@ fn bounds(hp: [f64; 2], lp: [f64; 2]) -> CornerBounds {
 #[test]
 fn the_corners_fall_where_the_ratio_crosses_the_threshold() {
     let s = Synthetic::new();
-    // Tolerance: 12 % in frequency.  The smoothed ratio of a record this
-    // long scatters by about ±10 % in amplitude at 0.3 Hz (≈ 20 periodogram
-    // bins in the Konno–Ohmachi window), and SNR ∝ f² there (f⁻² at 14 Hz):
-    // ±5 % in frequency; the smoothing of the curved ratio adds a few %.
+    // Tolerance: 12 % in frequency.  A periodogram amplitude scatters by 52 %
+    // (Rayleigh); the Konno–Ohmachi window (b = 20) averages about 0.24·f of
+    // independent bins 1/T apart: at 0.3 Hz ≈ 29 of the 400-s noise window
+    // and 41 of the 570-s signal window, so the ratio scatters by ≈ 13 %
+    // (1σ); SNR ∝ f⁴ there (f⁻⁴ at 14 Hz): ≈ 3 % in frequency; the smoothing
+    // of the curved ratio biases it by ≈ 2 %.
     const TOL: f64 = 0.12;
     for seed in [1, 2, 3] {
         let x = s.record(seed, NOISE_S, s.r);
@@ -109,10 +111,10 @@ fn the_corners_fall_where_the_ratio_crosses_the_threshold() {
         assert_eq!(s0, n1);
         // 95 % of the energy: the burst dominates, 95 % of its length in.
         assert!(
-            (s1 - (NOISE_S + 0.95 * BURST_S)).abs() < 5.0,
+            (s1 - (NOISE_S + 0.95 * BURST_S)).abs() < 10.0,
             "signal window ends at {s1} s"
         );
-        // The ratio in the flat band is R (√(R²+1)) within 10 %.
+        // The ratio in the flat band is √(R²+1) within 20 % (≈ 5 % scatter at 2 Hz).
         let ratio = spectra.snr();
         let at = |f: f64| {
             let i = spectra.frequencies_hz.iter().position(|&c| c >= f).unwrap();
@@ -121,7 +123,7 @@ fn the_corners_fall_where_the_ratio_crosses_the_threshold() {
         let flat = at(2.0);
         let expected = (s.r * s.r + 1.0).sqrt();
         assert!(
-            (flat / expected - 1.0).abs() < 0.10,
+            (flat / expected - 1.0).abs() < 0.20,
             "seed {seed}: SNR at 2 Hz {flat}, expected {expected}"
         );
         let choice = snr::choose_corners(&spectra, &bounds([0.1, 0.5], [10.0, 20.0]), THETA);

@@ -6,7 +6,7 @@
 use std::cmp::Ordering;
 use std::path::Path;
 
-use super::{figure, load, require};
+use super::{figure, listed, load, require};
 use crate::report::html::note;
 use crate::report::plot::{self, Chart, Mark, RefLine, Series};
 use crate::report::table::Table;
@@ -133,6 +133,13 @@ fn channel_figure(t: &Table, id: &str, rows: &[usize]) -> String {
 
 pub(super) fn fourier_section(dir: &Path) -> String {
     let mut body = String::new();
+    // Conditioned with stated corners: nothing is missing, say so plainly.
+    if !listed(dir, tables::FOURIER.file) && listed(dir, tables::SAMPLES.file) {
+        body.push_str(&note(
+            "The conditioning filtered every record with the corners the pipeline states; it did not choose them per record from the signal-to-noise ratio, so no spectra were kept.",
+        ));
+        return body;
+    }
     let loaded = load(dir, &tables::FOURIER, None);
     let Some(t) = require(&loaded, &tables::FOURIER, &mut body) else {
         return body;
