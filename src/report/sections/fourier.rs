@@ -119,14 +119,24 @@ fn channel_figure(t: &Table, id: &str, rows: &[usize]) -> String {
             corners.join(", ")
         },
         if from_snr {
-            ", chosen from the signal-to-noise ratio"
+            " (chosen from the signal-to-noise ratio)"
         } else {
-            ", the pipeline's corners"
+            " (the pipeline's corners: no usable noise window)"
         }
     );
     let mut out = figure(plot::render(&chart), &caption, &legend);
     if let Some(why) = first_text(t, rows, fourier::NOTE.name) {
-        out.push_str(&note(&format!("{}.", why.replace("; ", ". "))));
+        // One sentence per corner, each starting with a capital.
+        let sentences: Vec<String> = why
+            .split("; ")
+            .map(|s| {
+                let mut c = s.chars();
+                c.next()
+                    .map(|f| f.to_uppercase().chain(c).collect())
+                    .unwrap_or_default()
+            })
+            .collect();
+        out.push_str(&note(&format!("{}.", sentences.join(". "))));
     }
     format!("<div>{out}</div>")
 }
