@@ -575,17 +575,26 @@ pub struct RecordFourier {
     pub channel_id: String,
     /// None when the record has no signal window to analyse.
     pub spectra: Option<snr::FourierSpectra>,
+    /// The corners of this record's own spectra.
+    pub own: snr::CornerChoice,
+    /// The corners applied: common to the event's records of its group
+    /// (`snr::common_corners`).
     pub choice: snr::CornerChoice,
 }
 
-/// The spectra and corners of record `r` (SI units, before any step) for
-/// filter `f`.
-fn fourier_of(r: &Record, f: &FilterSettings) -> Result<RecordFourier> {
+/// The spectra and corners of record `r` (before any step; the spectra in SI
+/// units: the file's values times `factor` — windows and ratios do not
+/// depend on the scale) for filter `f`.
+fn fourier_of(r: &Record, f: &FilterSettings, factor: f64) -> Result<RecordFourier> {
     let bounds = f.corner_bounds();
     let x = r.samples.get()?;
-    let spectra =
-        snr::fourier_spectra(&x, r.channel.dt(), f.noise_min_s).map_err(|e| in_record(r, e))?;
-    let choice = match &spectra {
+    let dt = r.channel.dt();
+    let mut spectra = snr::fourier_spectra(&x, dt, f.noise_min_s).map_err(|e| in_record(r, e))?;
+    if let Some(s) = spectra.as_mut() {
+        s.signal.iter_mut().for_each(|v| *v *= factor);
+        s.noise.iter_mut().flatten().for_each(|v| *v *= factor);
+    }
+    let own = match &spectra {
         Some(s) => snr::choose_corners(s, &bounds, f.snr_min),
         None => snr::CornerChoice::stated(
             &bounds,
@@ -595,25 +604,55 @@ fn fourier_of(r: &Record, f: &FilterSettings) -> Result<RecordFourier> {
     Ok(RecordFourier {
         channel_id: r.channel.id.clone(),
         spectra,
-        choice,
+        choice: own.clone(),
+        own,
     })
 }
 
-/// The SNR analysis of one record when the settings choose corners from it
-/// (acceleration records only): a failure in the phase of that filter step.
-fn analyse_snr(
-    r: &Record,
+/// With a filter whose corners come from the SNR: every acceleration
+/// record's spectra and own corners (before any step: records in counts
+/// without a sensitivity, or with non-finite samples, are left to the checks
+/// that refuse them), then the corners common to the event's horizontal
+/// records and to its vertical ones (`snr::common_corners`).  In record
+/// order; `None` for a record not analysed.
+fn analyse_event(
+    records: &[Record],
     settings: &ConditioningSettings,
-    trace: &mut Trace,
-) -> std::result::Result<(), Failure> {
-    let Some((index, f)) = settings.snr_filter_step() else {
-        return Ok(());
+) -> Result<Vec<Option<RecordFourier>>> {
+    let Some(f) = settings.snr_filter() else {
+        return Ok(vec![None; records.len()]);
     };
-    if !is_acceleration(r) {
-        return Ok(());
+    let one = |r: &Record| -> Result<Option<RecordFourier>> {
+        match r.channel.units.to_si_factor() {
+            Some(factor) if is_acceleration(r) => fourier_of(r, f, factor).map(Some),
+            _ => Ok(None),
+        }
+    };
+    // Long channels one at a time (as their conditioning).
+    let mut list: Vec<Option<RecordFourier>> =
+        if records.iter().any(|r| r.samples.len() > LONG_CHANNEL) {
+            records.iter().map(one).collect::<Result<_>>()?
+        } else {
+            records.par_iter().map(one).collect::<Result<_>>()?
+        };
+    let bounds = f.corner_bounds();
+    let vertical = |r: &Record| r.channel.direction.is_some_and(|d| d.is_vertical());
+    for (is_vertical, group) in [(false, "horizontal"), (true, "vertical")] {
+        let members: Vec<usize> = (0..records.len())
+            .filter(|&i| list[i].is_some() && vertical(&records[i]) == is_vertical)
+            .collect();
+        let own: Vec<(&str, &snr::CornerChoice)> = members
+            .iter()
+            .filter_map(|&i| list[i].as_ref().map(|c| (c.channel_id.as_str(), &c.own)))
+            .collect();
+        let common = snr::common_corners(&own, &bounds, group);
+        for (&i, c) in members.iter().zip(common) {
+            if let Some(rf) = list[i].as_mut() {
+                rf.choice = c;
+            }
+        }
     }
-    trace.fourier = Some(fourier_of(r, f).map_err(|e| (2 + index, e))?);
-    Ok(())
+    Ok(list)
 }
 
 /// What `done` receives: a conditioned record and, for an acceleration
@@ -642,15 +681,16 @@ pub fn condition_event_each(
     park: Option<&ParkSeries<'_>>,
     done: &ChannelDone<'_>,
 ) -> Result<ConditioningOutput> {
+    let analyses = analyse_event(&event.records, settings)?;
     let channels = if settings.step("align").is_some() {
-        condition_step_by_step(&mut event.records, settings, park, done)?
+        condition_step_by_step(&mut event.records, settings, analyses, park, done)?
     } else {
         let records = std::mem::take(&mut event.records);
         // Channels of more than LONG_CHANNEL samples (a day at 200 Hz) are
         // conditioned one at a time: two in flight would double the memory.
         let long = records.iter().any(|r| r.samples.len() > LONG_CHANNEL);
-        let one = |r: Record| -> std::result::Result<Channel1, Failed> {
-            let mut c = condition_channel(r, settings, park)?;
+        let one = |(r, fourier): (Record, Option<RecordFourier>)| -> std::result::Result<Channel1, Failed> {
+            let mut c = condition_channel(r, fourier, settings, park)?;
             if let Err(e) = done(&mut c.record, c.motion.as_mut()) {
                 return Err((usize::MAX, e, c.record));
             }
@@ -658,9 +698,9 @@ pub fn condition_event_each(
             Ok(c)
         };
         let results: Vec<std::result::Result<Channel1, Failed>> = if long {
-            records.into_iter().map(one).collect()
+            records.into_iter().zip(analyses).map(one).collect()
         } else {
-            records.into_par_iter().map(one).collect()
+            records.into_par_iter().zip(analyses).map(one).collect()
         };
         match earliest_failure(results) {
             Ok(c) => c,
@@ -764,6 +804,7 @@ fn earliest_failure(
 /// Every step of one channel (no `align`: see [`condition_event_each`]).
 fn condition_channel(
     mut record: Record,
+    fourier: Option<RecordFourier>,
     settings: &ConditioningSettings,
     park: Option<&ParkSeries<'_>>,
 ) -> std::result::Result<Channel1, Failed> {
@@ -771,9 +812,7 @@ fn condition_channel(
         Ok(t) => t,
         Err((phase, e)) => return Err((phase, e, record)),
     };
-    if let Err((phase, e)) = analyse_snr(&record, settings, &mut trace) {
-        return Err((phase, e, record));
-    }
+    trace.fourier = fourier;
     let mut motion = None;
     for (i, step) in settings.steps.iter().enumerate() {
         match apply_step(&mut record, i, step, &mut trace, park) {
@@ -793,6 +832,7 @@ fn condition_channel(
 fn condition_step_by_step(
     records: &mut Vec<Record>,
     settings: &ConditioningSettings,
+    analyses: Vec<Option<RecordFourier>>,
     park: Option<&ParkSeries<'_>>,
     done: &ChannelDone<'_>,
 ) -> Result<Conditioned1> {
@@ -812,14 +852,8 @@ fn condition_step_by_step(
     if let Some((_, e)) = first {
         return Err(e);
     }
-    // The records' spectra before any step (the first failure, as above).
-    let analysed: Vec<std::result::Result<(), Failure>> = records
-        .par_iter()
-        .zip(traces.par_iter_mut())
-        .map(|(r, t)| analyse_snr(r, settings, t))
-        .collect();
-    if let Some((_, e)) = analysed.into_iter().filter_map(|r| r.err()).next() {
-        return Err(e);
+    for (t, fourier) in traces.iter_mut().zip(analyses) {
+        t.fourier = fourier;
     }
     let mut motions: Vec<Option<Motion>> = (0..records.len()).map(|_| None).collect();
     let mut alignment = None;
@@ -1011,6 +1045,7 @@ fn snr_history(
             json!({
                 "corners_hz": f.corners_for(Some(&c.choice)),
                 "from": if c.choice.from_snr { "snr" } else { "stated" },
+                "own_corners_hz": f.corners_for(Some(&c.own)),
                 "high_pass": c.choice.high_pass.as_ref().map(|h| &h.why),
                 "low_pass": c.choice.low_pass.as_ref().map(|l| &l.why),
                 "noise_window_s": spectra.and_then(|s| s.noise_window_s),
@@ -1026,7 +1061,7 @@ fn snr_history(
     params["snr_min"] = json!(f.snr_min);
     params["bounds_hz"] = json!({ "high_pass": b.high_pass, "low_pass": b.low_pass });
     params["noise_min_s"] = json!(f.noise_min_s);
-    params["method"] = json!("noise window before the AIC onset (Maeda 1985), signal window to 95 % of the energy; Hann-tapered windows, Konno-Ohmachi (b = 20) smoothed |FFT|·dt divided by sqrt(window duration); high-pass: lowest frequency above which SNR >= snr_min up to its upper bound; low-pass: highest frequency below which SNR >= snr_min from its lower bound (docs/pipelines.md)");
+    params["method"] = json!("noise window before the AIC onset (Maeda 1985), signal window to 95 % of the energy; Hann-tapered windows, Konno-Ohmachi (b = 20) smoothed |FFT|·dt divided by sqrt(window duration); high-pass: lowest frequency above which SNR >= snr_min up to its upper bound; low-pass: highest frequency below which SNR >= snr_min from its lower bound; applied: the highest high-pass and lowest low-pass of the event's horizontal (vertical) records with a noise window, to all of them; the pipeline's corners when half or more have none (docs/pipelines.md)");
     params["per_channel"] = serde_json::Value::Object(per_channel);
 }
 

@@ -19,6 +19,9 @@
 //!   window holding the P wave rarely is.
 //!
 //! Otherwise the record keeps the pipeline's corners and the history says why.
+//! The records of an event combined by later stages are filtered alike
+//! ([`common_corners`]: the highest high-pass and lowest low-pass of its
+//! horizontal records, and of its vertical ones).
 //!
 //! **Spectra.**  Each window is demeaned and tapered (Hann, 5 % at each end, as
 //! gmprocess), both are transformed with the same FFT length (the next power of
@@ -615,4 +618,80 @@ pub fn choose_corners(
         low_pass: bounds.low_pass.map(|b| low_pass(spectra, &snr, b, snr_min)),
         from_snr: true,
     }
+}
+
+/// The corners applied to a group of an event's records (its horizontal or
+/// its vertical ones), from each record's own choice (`own`, with its
+/// channel id), in the same order.
+///
+/// Records combined by later stages — inter-storey drift subtracts two
+/// levels' displacements, modal identification fits one model to every
+/// channel — must be filtered alike: a base record high-passed at 0.1 Hz and
+/// a roof record at 0.3 Hz would leave the ground's 0.1–0.3 Hz displacement,
+/// common to both, in their difference.  So, as gmprocess makes the two
+/// horizontal components of a station share their corners (`same_horiz`):
+/// the highest high-pass and the lowest low-pass of the records that have a
+/// noise window, applied to all of them — every record's ratio is then at
+/// least θ inside the pass band.  When half or more of the group has no noise
+/// window, the event's recorders are taken to start on the shaking (a film
+/// recorder triggers on the P wave; a lone "noise window" among them holds it)
+/// and the whole group keeps the pipeline's corners.
+pub fn common_corners(
+    own: &[(&str, &CornerChoice)],
+    bounds: &CornerBounds,
+    group: &str,
+) -> Vec<CornerChoice> {
+    let n = own.len();
+    let with_noise: Vec<&(&str, &CornerChoice)> = own.iter().filter(|(_, c)| c.from_snr).collect();
+    let k = with_noise.len();
+    if n <= 1 || k == 0 {
+        return own.iter().map(|(_, c)| (*c).clone()).collect();
+    }
+    if 2 * k <= n {
+        let why = format!(
+            "the pipeline's corner: only {k} of the event's {n} {group} records have a quiet pre-event, so its recorders are taken to start on the shaking (such a window may hold the P wave)"
+        );
+        return vec![CornerChoice::stated(bounds, &why); n];
+    }
+    let alike = format!("applied to all {n} {group} records so that they are filtered alike");
+    let pick = |corner: fn(&CornerChoice) -> Option<&Corner>, highest: bool| -> Option<Corner> {
+        let (id, c) = with_noise
+            .iter()
+            .filter_map(|(id, c)| corner(c).map(|c| (*id, c)))
+            .reduce(|a, b| {
+                let better = if highest {
+                    b.1.hz > a.1.hz
+                } else {
+                    b.1.hz < a.1.hz
+                };
+                if better {
+                    b
+                } else {
+                    a
+                }
+            })?;
+        let all_same = with_noise
+            .iter()
+            .filter_map(|(_, c)| corner(c))
+            .all(|x| x.hz == c.hz);
+        let why = if all_same {
+            format!(
+                "{} on each of the {k} {group} records with a noise window; {alike}",
+                c.why
+            )
+        } else {
+            format!(
+                "{} on {id}, the {} of the {k} {group} records with a noise window; {alike}",
+                c.why,
+                if highest { "highest" } else { "lowest" }
+            )
+        };
+        Some(Corner { hz: c.hz, why })
+    };
+    let common = CornerChoice {
+        high_pass: pick(|c| c.high_pass.as_ref(), true),
+        low_pass: pick(|c| c.low_pass.as_ref(), false),
+        from_snr: true,
+    };
+    vec![common; n]
 }

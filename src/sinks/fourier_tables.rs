@@ -21,6 +21,26 @@ fn note(r: &RecordFourier) -> String {
     if let Some(l) = &r.choice.low_pass {
         parts.push(format!("low-pass {}: {}", hz(l.hz), l.why));
     }
+    // This record's own corners, when the event's differ from them.
+    let own = |c: &crate::conditioning::CornerChoice| {
+        (
+            c.high_pass.as_ref().map(|h| h.hz),
+            c.low_pass.as_ref().map(|l| l.hz),
+        )
+    };
+    if r.own.from_snr && own(&r.own) != own(&r.choice) {
+        let mut mine = Vec::new();
+        if let Some(h) = &r.own.high_pass {
+            mine.push(format!("high-pass {}", hz(h.hz)));
+        }
+        if let Some(l) = &r.own.low_pass {
+            mine.push(format!("low-pass {}", hz(l.hz)));
+        }
+        parts.push(format!(
+            "this record's own spectra alone give {}",
+            mine.join(" and ")
+        ));
+    }
     parts.join("; ")
 }
 

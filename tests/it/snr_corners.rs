@@ -11,7 +11,7 @@ use quaketwin::conditioning::{
     butter_sos, condition_event_each, sosfiltfilt, BandType, ConditioningSettings,
 };
 use quaketwin::rng::Rng;
-use quaketwin::vocab::Event;
+use quaketwin::vocab::{Axis, Direction, Event};
 use realfft::RealFftPlanner;
 
 use crate::common::{shared_record, x_record};
@@ -222,22 +222,32 @@ fn snr_settings(extra: &str) -> ConditioningSettings {
     settings
 }
 
+fn corners_of(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
 #[test]
-fn the_filter_applies_the_chosen_corners_and_the_history_says_why() {
+fn the_filter_applies_the_event_corners_and_the_history_says_why() {
     let s = Synthetic::new();
     let quiet = s.record(11, NOISE_S, s.r);
+    let quiet2 = s.record(13, NOISE_S, s.r);
     let short = s.record(12, 1.0, s.r);
     let mut event = Event {
         name: "snr".into(),
         records: vec![
             x_record("A1", 0, 1.0 / DT, "a.csv", quiet.clone()),
             x_record("A2", 1, 1.0 / DT, "a.csv", short.clone()),
+            x_record("A3", 2, 1.0 / DT, "a.csv", quiet2.clone()),
         ],
         ..Default::default()
     };
     let settings = snr_settings("");
     let out = condition_event_each(&mut event, &settings, None, &|_, _| Ok(())).unwrap();
-    assert_eq!(out.fourier.len(), 2);
+    assert_eq!(out.fourier.len(), 3);
     let step = event
         .history
         .steps
@@ -251,37 +261,89 @@ fn the_filter_applies_the_chosen_corners_and_the_history_says_why() {
         serde_json::json!([0.1, 0.5])
     );
     let per = &step.params["per_channel"];
-    assert_eq!(per["A1"]["from"], "snr");
-    assert_eq!(per["A2"]["from"], "stated");
-    assert!(per["A2"]["high_pass"]
-        .as_str()
-        .unwrap()
-        .contains("no noise window"));
+    // Each record's own corners: from its ratio (A1, A3), the pipeline's (A2).
+    let own1 = corners_of(&per["A1"]["own_corners_hz"]);
+    let own3 = corners_of(&per["A3"]["own_corners_hz"]);
+    assert_eq!(corners_of(&per["A2"]["own_corners_hz"]), [0.1, 20.0]);
+    for own in [&own1, &own3] {
+        assert!((own[0] / HP_TRUE - 1.0).abs() < 0.12, "{own:?}");
+        assert!((own[1] / LP_TRUE - 1.0).abs() < 0.12, "{own:?}");
+    }
+    // Applied to all three alike: the highest high-pass, the lowest low-pass
+    // of the two records with a noise window (two of three: a majority).
+    let common = [own1[0].max(own3[0]), own1[1].min(own3[1])];
+    for id in ["A1", "A2", "A3"] {
+        assert_eq!(corners_of(&per[id]["corners_hz"]), common, "{id}");
+        assert_eq!(per[id]["from"], "snr", "{id}");
+        let why = per[id]["high_pass"].as_str().unwrap();
+        assert!(why.contains("filtered alike"), "{id}: {why}");
+    }
     assert!(per["A1"]["noise_window_s"].is_array());
     assert!(per["A2"]["noise_window_s"].is_null());
-    // Each record filtered with its own corners (as the history states).
-    for (id, raw) in [("A1", &quiet), ("A2", &short)] {
-        let corners: Vec<f64> = per[id]["corners_hz"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
-        let sos = butter_sos(4, BandType::Bandpass, &corners, 1.0 / DT).unwrap();
+    // Each record filtered with the corners the history states.
+    for (id, raw) in [("A1", &quiet), ("A2", &short), ("A3", &quiet2)] {
+        let sos = butter_sos(4, BandType::Bandpass, &common, 1.0 / DT).unwrap();
         let expected = sosfiltfilt(&sos, raw).unwrap();
         let got = event.record(id).unwrap().samples.get().unwrap();
         assert_eq!(got.as_ref(), expected.as_slice(), "{id}");
     }
-    let a1: Vec<f64> = per["A1"]["corners_hz"]
-        .as_array()
+}
+
+#[test]
+fn an_event_without_a_majority_of_noise_windows_keeps_the_pipeline_corners() {
+    use quaketwin::conditioning::snr::{common_corners, Corner, CornerChoice};
+    let b = bounds([0.1, 0.5], [10.0, 20.0]);
+    let snr = |hp: f64, lp: f64| CornerChoice {
+        high_pass: Some(Corner {
+            hz: hp,
+            why: "where the signal-to-noise ratio rises above 3".into(),
+        }),
+        low_pass: Some(Corner {
+            hz: lp,
+            why: "where the signal-to-noise ratio falls below 3".into(),
+        }),
+        from_snr: true,
+    };
+    let stated = CornerChoice::stated(&b, "the pipeline's corner: no noise window");
+    let (a, c, d) = (snr(0.2, 15.0), snr(0.3, 18.0), stated.clone());
+    let common = common_corners(&[("a", &a), ("c", &c), ("d", &d)], &b, "horizontal");
+    for x in &common {
+        assert_eq!(x.high_pass.as_ref().unwrap().hz, 0.3);
+        assert_eq!(x.low_pass.as_ref().unwrap().hz, 15.0);
+        assert!(x.from_snr);
+    }
+    assert!(common[0]
+        .high_pass
+        .as_ref()
         .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
-    assert!((a1[0] / HP_TRUE - 1.0).abs() < 0.12, "{a1:?}");
-    assert!((a1[1] / LP_TRUE - 1.0).abs() < 0.12, "{a1:?}");
-    let a2 = &per["A2"]["corners_hz"];
-    assert_eq!(a2, &serde_json::json!([0.1, 20.0]));
+        .why
+        .contains("on c, the highest"));
+    assert!(common[0]
+        .low_pass
+        .as_ref()
+        .unwrap()
+        .why
+        .contains("on a, the lowest"));
+    // One of three with a noise window (a film recorder whose P wave passed
+    // for noise on one channel): the pipeline's corners for all.
+    let (e, f) = (stated.clone(), stated.clone());
+    let common = common_corners(&[("a", &a), ("e", &e), ("f", &f)], &b, "horizontal");
+    for x in &common {
+        assert!(!x.from_snr);
+        assert_eq!(x.high_pass.as_ref().unwrap().hz, 0.1);
+        assert_eq!(x.low_pass.as_ref().unwrap().hz, 20.0);
+        assert!(x
+            .high_pass
+            .as_ref()
+            .unwrap()
+            .why
+            .contains("only 1 of the event's 3"));
+    }
+    // A record alone keeps its own.
+    assert_eq!(
+        common_corners(&[("a", &a)], &b, "vertical"),
+        vec![a.clone()]
+    );
 }
 
 #[test]
@@ -364,6 +426,11 @@ fn shared_digital_record_with_pre_event_memory_gets_snr_corners() {
         assert!(*hp <= 0.2, "{id}: high-pass {hp} Hz ({why})");
         assert!(*lp >= 15.0, "{id}: low-pass {lp} Hz ({why})");
     }
+    // The six horizontal records filtered alike (three vertical ones among the nine).
+    let mut pairs: Vec<(f64, f64)> = corners.iter().map(|c| (c.2, c.3)).collect();
+    pairs.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    pairs.dedup();
+    assert!(pairs.len() <= 2, "{pairs:?}");
 }
 
 #[test]
@@ -385,7 +452,12 @@ fn fourier_table_and_report_section() {
         name: "snr".into(),
         records: vec![
             x_record("CH10", 1, 1.0 / DT, "a.csv", s.record(21, NOISE_S, s.r)),
-            x_record("CH2", 0, 1.0 / DT, "a.csv", s.record(22, 1.0, s.r)),
+            {
+                // A vertical record (its own group) without a noise window.
+                let mut r = x_record("CH2", 0, 1.0 / DT, "a.csv", s.record(22, 1.0, s.r));
+                r.channel.direction = Some(Direction::Axis(Axis::Z));
+                r
+            },
         ],
         ..Default::default()
     };
