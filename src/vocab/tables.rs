@@ -113,10 +113,10 @@ declare!(FOURIER, fourier, "fourier", "fourier.parquet",
     SIGNAL_FAS: "signal_fas", F64, required, "m/s^2/Hz^0.5", "Fourier amplitude |X(f)|·Δt of the signal window (demeaned, Hann taper 5 % at each end), Konno–Ohmachi smoothed (b = 20) and divided by √(window duration)";
     NOISE_FAS: "noise_fas", F64, nullable, "m/s^2/Hz^0.5", "the same for the noise window; null without a noise window and below 1/(noise window duration), which the window does not resolve";
     SNR: "snr", F64, nullable, "1", "signal_fas / noise_fas; null where noise_fas is null or zero";
-    HIGH_PASS_HZ: "high_pass_hz", F64, nullable, "Hz", "the channel's high-pass corner as applied (the same on every row of the channel); null for a filter without one";
+    HIGH_PASS_HZ: "high_pass_hz", F64, nullable, "Hz", "the channel's high-pass corner as applied (the same on every row of the channel): common to the event's horizontal records, or vertical ones (docs/pipelines.md); null for a filter without one";
     LOW_PASS_HZ: "low_pass_hz", F64, nullable, "Hz", "the channel's low-pass corner as applied; null for a filter without one";
-    CORNERS_FROM: "corners_from", Utf8, required, "", "`snr` (chosen from this channel's ratio) or `stated` (the pipeline's corners: no usable noise window, `note` says why)";
-    NOTE: "note", Utf8, required, "", "why each corner is where it is, in words";
+    CORNERS_FROM: "corners_from", Utf8, required, "", "`snr` (chosen from the ratios of the event's records of the channel's group) or `stated` (the pipeline's corners: no usable noise window, `note` says why)";
+    NOTE: "note", Utf8, required, "", "why each corner is where it is, in words, and this record's own corners when they differ";
     SIGNAL_START_S: "signal_start_s", F64, required, "s", "signal window start (the onset when found), from the channel's first sample";
     SIGNAL_END_S: "signal_end_s", F64, required, "s", "signal window end (95 % of the record's energy Σa²)";
     NOISE_START_S: "noise_start_s", F64, nullable, "s", "noise window start (the first sample); null without a noise window";
