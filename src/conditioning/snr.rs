@@ -10,8 +10,8 @@
 //! explain best.  The AIC needs no threshold and no pre-event length (gmprocess
 //! splits at a P pick from travel times or its AR picker; a building's records
 //! come without the event's location).  The **noise window** is the record
-//! before the onset, the **signal window** from the onset to 95 % of the
-//! record's energy.  A noise window is used only when it is
+//! before the onset (at most its last 30 minutes), the **signal window** from
+//! the onset to 95 % of the record's energy.  A noise window is used only when it is
 //! - at least `noise_min_s` long (4 s by default): a triggered film record has
 //!   no pre-event memory — it starts on the P wave, and its first seconds are
 //!   shaking, not noise; and
@@ -186,7 +186,14 @@ pub fn windows(x: &[f64], dt: f64, noise_min_s: f64) -> Option<Windows> {
             )),
         ),
         Some(k) => {
-            let (rn, rs) = (rms_about_mean(&x[..k]), rms_about_mean(&x[signal.clone()]));
+            // At most the last MAX_SIGNAL_S before the onset: a longer
+            // window adds nothing (the lowest frequency the corners look at
+            // is 1/30 min) and would size the FFT of hours.
+            let noise = k.saturating_sub((MAX_SIGNAL_S / dt) as usize)..k;
+            let (rn, rs) = (
+                rms_about_mean(&x[noise.clone()]),
+                rms_about_mean(&x[signal.clone()]),
+            );
             if rn > QUIET_FRACTION * rs {
                 (
                     None,
@@ -198,7 +205,7 @@ pub fn windows(x: &[f64], dt: f64, noise_min_s: f64) -> Option<Windows> {
                     )),
                 )
             } else {
-                (Some(0..k), None)
+                (Some(noise), None)
             }
         }
     };

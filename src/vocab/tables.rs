@@ -119,7 +119,7 @@ declare!(FOURIER, fourier, "fourier", "fourier.parquet",
     NOTE: "note", Utf8, required, "", "why each corner is where it is, in words, and this record's own corners when they differ";
     SIGNAL_START_S: "signal_start_s", F64, required, "s", "signal window start (the onset when found), from the channel's first sample";
     SIGNAL_END_S: "signal_end_s", F64, required, "s", "signal window end (95 % of the record's energy Σa²)";
-    NOISE_START_S: "noise_start_s", F64, nullable, "s", "noise window start (the first sample); null without a noise window";
+    NOISE_START_S: "noise_start_s", F64, nullable, "s", "noise window start (the first sample, or 30 minutes before the onset in a longer record); null without a noise window";
     NOISE_END_S: "noise_end_s", F64, nullable, "s", "noise window end (the onset); null without a noise window";
 });
 

@@ -497,3 +497,13 @@ fn fourier_table_and_report_section() {
     assert!(section.contains("the pipeline&#39;s corners"));
     assert!(!section.contains("fourier.parquet") && !section.contains("noise_fas"));
 }
+
+#[test]
+fn a_long_pre_event_gives_a_noise_window_of_its_last_30_minutes() {
+    let s = Synthetic::new();
+    let x = s.record(31, 2400.0, s.r);
+    let spectra = snr::fourier_spectra(&x, DT, 4.0).unwrap().unwrap();
+    let [n0, n1] = spectra.noise_window_s.unwrap();
+    assert!((n1 - 2400.0).abs() < 0.5, "onset at {n1} s");
+    assert!((n1 - n0 - snr::MAX_SIGNAL_S).abs() < 2.0 * DT, "{n0}–{n1}");
+}
