@@ -11,6 +11,7 @@ pub mod event_window;
 pub mod integrate;
 pub mod qa;
 pub mod resample;
+pub mod snr;
 pub mod sosfilt;
 
 pub use baseline::{cosine_taper, remove_linear_trend, remove_mean, remove_polynomial};
@@ -20,6 +21,7 @@ pub use integrate::{
 };
 pub use qa::{quality_flags, QaSettings};
 pub use resample::{align_records, resample_to_rate, Alignment};
+pub use snr::{CornerBounds, CornerChoice, FourierSpectra};
 pub use sosfilt::{sosfilt, sosfilt_zi, sosfiltfilt, sosfiltfilt_channels, sosfiltfilt_padlen};
 
 use rayon::prelude::*;
@@ -50,10 +52,69 @@ pub struct FilterSettings {
     /// Forward–backward (`sosfiltfilt`) when true, causal `sosfilt` otherwise.
     #[serde(default = "yes")]
     pub zero_phase: bool,
+    /// `"stated"`: `corners_hz` as written; `"snr"`: chosen per record from
+    /// its signal-to-noise ratio (`snr`), `corners_hz` then the bounds — the
+    /// lowest high-pass and the highest low-pass.
+    #[serde(default, skip_serializing_if = "CornersFrom::is_stated")]
+    pub corners_from: CornersFrom,
+    /// `"snr"`: the SNR the pass band must reach (gmprocess's 3).
+    #[serde(default = "default_snr_min")]
+    pub snr_min: f64,
+    /// `"snr"`: the highest high-pass corner (METHODS §1's 0.5 Hz; the larger
+    /// of it and the stated corner; lowered to the band of interest by the
+    /// condition stage's `high_pass = "auto"`).
+    #[serde(default = "default_high_pass_max_hz")]
+    pub high_pass_max_hz: f64,
+    /// `"snr"`: the lowest low-pass corner (the smaller of it and the stated corner).
+    #[serde(default = "default_low_pass_min_hz")]
+    pub low_pass_min_hz: f64,
+    /// `"snr"`: the shortest pre-event noise window, s.
+    #[serde(default = "default_noise_min_s")]
+    pub noise_min_s: f64,
 }
 
 fn yes() -> bool {
     true
+}
+
+/// Where a filter's corners come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CornersFrom {
+    /// `corners_hz` as written.
+    #[default]
+    Stated,
+    /// Per record from its signal-to-noise ratio (`conditioning::snr`).
+    Snr,
+}
+
+impl CornersFrom {
+    fn is_stated(&self) -> bool {
+        *self == CornersFrom::Stated
+    }
+}
+
+/// gmprocess's threshold (`snr_check`, `get_corner_frequencies`).
+pub const DEFAULT_SNR_MIN: f64 = 3.0;
+/// METHODS §1's high-pass corner, the highest the SNR may choose by default.
+pub const DEFAULT_HIGH_PASS_MAX_HZ: f64 = 0.5;
+/// The lowest low-pass the SNR may choose by default: a structure's modes and
+/// its peak acceleration lie below 10 Hz.
+pub const DEFAULT_LOW_PASS_MIN_HZ: f64 = 10.0;
+/// The shortest noise window by default, s (see `snr`).
+pub const DEFAULT_NOISE_MIN_S: f64 = 4.0;
+
+fn default_snr_min() -> f64 {
+    DEFAULT_SNR_MIN
+}
+fn default_high_pass_max_hz() -> f64 {
+    DEFAULT_HIGH_PASS_MAX_HZ
+}
+fn default_low_pass_min_hz() -> f64 {
+    DEFAULT_LOW_PASS_MIN_HZ
+}
+fn default_noise_min_s() -> f64 {
+    DEFAULT_NOISE_MIN_S
 }
 
 impl FilterSettings {
@@ -93,7 +154,93 @@ impl FilterSettings {
                 self.corners_hz
             )));
         }
+        if self.corners_from == CornersFrom::Snr {
+            self.validate_snr()?;
+        }
         Ok(())
+    }
+
+    fn validate_snr(&self) -> Result<()> {
+        if self.band == BandType::Bandstop {
+            return Err(Error::usage(
+                "filter corners_from = \"snr\" chooses a high-pass and a low-pass corner: not for a bandstop filter",
+            ));
+        }
+        if !(self.snr_min.is_finite() && self.snr_min >= 1.0) {
+            return Err(Error::usage(format!(
+                "filter snr_min = {}: must be a ratio of at least 1 (noise alone gives 1)",
+                self.snr_min
+            )));
+        }
+        for (key, v) in [
+            ("high_pass_max_hz", self.high_pass_max_hz),
+            ("low_pass_min_hz", self.low_pass_min_hz),
+            ("noise_min_s", self.noise_min_s),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::usage(format!(
+                    "filter {key} = {v}: must be positive and finite"
+                )));
+            }
+        }
+        let b = self.corner_bounds();
+        if let (Some([_, hp]), Some([lp, _])) = (b.high_pass, b.low_pass) {
+            if hp >= lp {
+                return Err(Error::usage(format!(
+                    "filter corners_from = \"snr\": the highest high-pass ({hp} Hz, high_pass_max_hz or the stated corner) must lie below the lowest low-pass ({lp} Hz, low_pass_min_hz or the stated corner)"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The range each corner may take when chosen from the SNR: the
+    /// high-pass from the stated corner up to `high_pass_max_hz` (or the
+    /// stated corner when higher), the low-pass from `low_pass_min_hz` (or
+    /// the stated corner when lower) up to the stated corner.
+    pub fn corner_bounds(&self) -> snr::CornerBounds {
+        let c = &self.corners_hz;
+        let (hp, lp) = match (self.band, c.len()) {
+            (BandType::Highpass, 1) => (Some(c[0]), None),
+            (BandType::Lowpass, 1) => (None, Some(c[0])),
+            (BandType::Bandpass, 2) => (Some(c[0]), Some(c[1])),
+            _ => (None, None),
+        };
+        snr::CornerBounds {
+            high_pass: hp.map(|f| [f, f.max(self.high_pass_max_hz)]),
+            low_pass: lp.map(|f| [f.min(self.low_pass_min_hz), f]),
+        }
+    }
+
+    /// The corners to design the filter with: `corners_hz`, or the chosen
+    /// ones of a record (in the same layout).
+    fn corners_for(&self, chosen: Option<&snr::CornerChoice>) -> Vec<f64> {
+        let Some(c) = chosen else {
+            return self.corners_hz.clone();
+        };
+        let mut out = self.corners_hz.clone();
+        match self.band {
+            BandType::Highpass => {
+                if let Some(h) = &c.high_pass {
+                    out[0] = h.hz;
+                }
+            }
+            BandType::Lowpass => {
+                if let Some(l) = &c.low_pass {
+                    out[0] = l.hz;
+                }
+            }
+            BandType::Bandpass => {
+                if let Some(h) = &c.high_pass {
+                    out[0] = h.hz;
+                }
+                if let Some(l) = &c.low_pass {
+                    out[1] = l.hz;
+                }
+            }
+            BandType::Bandstop => {}
+        }
+        out
     }
 }
 
@@ -248,6 +395,11 @@ impl Default for ConditioningSettings {
                     band: BandType::Bandpass,
                     corners_hz: vec![0.5, 20.0],
                     zero_phase: true,
+                    corners_from: CornersFrom::Stated,
+                    snr_min: DEFAULT_SNR_MIN,
+                    high_pass_max_hz: DEFAULT_HIGH_PASS_MAX_HZ,
+                    low_pass_min_hz: DEFAULT_LOW_PASS_MIN_HZ,
+                    noise_min_s: DEFAULT_NOISE_MIN_S,
                 }),
                 Step::Integrate(IntegrationSettings::default()),
             ],
@@ -268,6 +420,16 @@ impl ConditioningSettings {
             )));
         }
         let last = self.steps.len().saturating_sub(1);
+        let snr_filters = self
+            .steps
+            .iter()
+            .filter(|s| matches!(s, Step::Filter(f) if f.corners_from == CornersFrom::Snr))
+            .count();
+        if snr_filters > 1 {
+            return Err(Error::usage(format!(
+                "{snr_filters} filter steps choose their corners from the signal-to-noise ratio (corners_from = \"snr\"): at most one may (its spectra are the stage's fourier table)"
+            )));
+        }
         for (i, step) in self.steps.iter().enumerate() {
             let at = |m: String| {
                 Error::usage(format!(
@@ -327,6 +489,19 @@ impl ConditioningSettings {
     pub fn step(&self, name: &str) -> Option<&Step> {
         self.steps.iter().find(|s| s.name() == name)
     }
+
+    /// The filter step whose corners come from the SNR, if any.
+    pub fn snr_filter(&self) -> Option<&FilterSettings> {
+        self.snr_filter_step().map(|(_, f)| f)
+    }
+
+    /// [`Self::snr_filter`] with its index in `steps`.
+    fn snr_filter_step(&self) -> Option<(usize, &FilterSettings)> {
+        self.steps.iter().enumerate().find_map(|(i, s)| match s {
+            Step::Filter(f) if f.corners_from == CornersFrom::Snr => Some((i, f)),
+            _ => None,
+        })
+    }
 }
 
 /// Location naming a record's file, member and channel for error messages.
@@ -379,7 +554,105 @@ pub fn condition_event_with_motion(
     event: &mut Event,
     settings: &ConditioningSettings,
 ) -> Result<Vec<Motion>> {
-    condition_event_each(event, settings, None, &|_, _| Ok(()))
+    condition_event_each(event, settings, None, &|_, _| Ok(())).map(|o| o.motions)
+}
+
+/// What conditioning an event gives besides the records it changes in place.
+#[derive(Debug, Default)]
+pub struct ConditioningOutput {
+    /// Acceleration, velocity and displacement of every acceleration channel
+    /// when integration is configured (empty otherwise).
+    pub motions: Vec<Motion>,
+    /// With a filter whose corners come from the SNR: each acceleration
+    /// record's spectra and chosen corners, in record order (empty otherwise).
+    pub fourier: Vec<RecordFourier>,
+}
+
+/// One record's Fourier spectra (signal and noise windows) and the corners
+/// chosen from them for the filter step with `corners_from = "snr"`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordFourier {
+    pub channel_id: String,
+    /// None when the record has no signal window to analyse.
+    pub spectra: Option<snr::FourierSpectra>,
+    /// The corners of this record's own spectra.
+    pub own: snr::CornerChoice,
+    /// The corners applied: common to the event's records of its group
+    /// (`snr::common_corners`).
+    pub choice: snr::CornerChoice,
+}
+
+/// The spectra and corners of record `r` (before any step; the spectra in SI
+/// units: the file's values times `factor` — windows and ratios do not
+/// depend on the scale) for filter `f`.
+fn fourier_of(r: &Record, f: &FilterSettings, factor: f64) -> Result<RecordFourier> {
+    let bounds = f.corner_bounds();
+    let x = r.samples.get()?;
+    let dt = r.channel.dt();
+    let mut spectra = snr::fourier_spectra(&x, dt, f.noise_min_s).map_err(|e| in_record(r, e))?;
+    if let Some(s) = spectra.as_mut() {
+        s.signal.iter_mut().for_each(|v| *v *= factor);
+        s.noise.iter_mut().flatten().for_each(|v| *v *= factor);
+    }
+    let own = match &spectra {
+        Some(s) => snr::choose_corners(s, &bounds, f.snr_min),
+        None => snr::CornerChoice::stated(
+            &bounds,
+            "the pipeline's corner: the record has no signal window to analyse (too short or silent, or a continuous record of more than 30 min without an event window)",
+        ),
+    };
+    Ok(RecordFourier {
+        channel_id: r.channel.id.clone(),
+        spectra,
+        choice: own.clone(),
+        own,
+    })
+}
+
+/// With a filter whose corners come from the SNR: every acceleration
+/// record's spectra and own corners (before any step: records in counts
+/// without a sensitivity, or with non-finite samples, are left to the checks
+/// that refuse them), then the corners common to the event's horizontal
+/// records and to its vertical ones (`snr::common_corners`).  In record
+/// order; `None` for a record not analysed.
+fn analyse_event(
+    records: &[Record],
+    settings: &ConditioningSettings,
+) -> Result<Vec<Option<RecordFourier>>> {
+    let Some(f) = settings.snr_filter() else {
+        return Ok(vec![None; records.len()]);
+    };
+    let one = |r: &Record| -> Result<Option<RecordFourier>> {
+        match r.channel.units.to_si_factor() {
+            Some(factor) if is_acceleration(r) => fourier_of(r, f, factor).map(Some),
+            _ => Ok(None),
+        }
+    };
+    // Long channels one at a time (as their conditioning).
+    let mut list: Vec<Option<RecordFourier>> =
+        if records.iter().any(|r| r.samples.len() > LONG_CHANNEL) {
+            records.iter().map(one).collect::<Result<_>>()?
+        } else {
+            records.par_iter().map(one).collect::<Result<_>>()?
+        };
+    let bounds = f.corner_bounds();
+    let vertical = |r: &Record| r.channel.direction.is_some_and(|d| d.is_vertical());
+    for (is_vertical, group) in [(false, "horizontal"), (true, "vertical")] {
+        let members: Vec<usize> = (0..records.len())
+            .filter(|&i| list[i].is_some() && vertical(&records[i]) == is_vertical)
+            .collect();
+        let own: Vec<(&str, &snr::CornerChoice)> = members
+            .iter()
+            .filter_map(|&i| list[i].as_ref().map(|c| (c.channel_id.as_str(), &c.own)))
+            .collect();
+        let common = snr::common_corners(&own, &bounds, group);
+        for (&i, c) in members.iter().zip(common) {
+            if let Some(rf) = list[i].as_mut() {
+                rf.choice = c;
+            }
+        }
+    }
+    Ok(list)
 }
 
 /// What `done` receives: a conditioned record and, for an acceleration
@@ -407,16 +680,17 @@ pub fn condition_event_each(
     settings: &ConditioningSettings,
     park: Option<&ParkSeries<'_>>,
     done: &ChannelDone<'_>,
-) -> Result<Vec<Motion>> {
+) -> Result<ConditioningOutput> {
+    let analyses = analyse_event(&event.records, settings)?;
     let channels = if settings.step("align").is_some() {
-        condition_step_by_step(&mut event.records, settings, park, done)?
+        condition_step_by_step(&mut event.records, settings, analyses, park, done)?
     } else {
         let records = std::mem::take(&mut event.records);
         // Channels of more than LONG_CHANNEL samples (a day at 200 Hz) are
         // conditioned one at a time: two in flight would double the memory.
         let long = records.iter().any(|r| r.samples.len() > LONG_CHANNEL);
-        let one = |r: Record| -> std::result::Result<Channel1, Failed> {
-            let mut c = condition_channel(r, settings, park)?;
+        let one = |(r, fourier): (Record, Option<RecordFourier>)| -> std::result::Result<Channel1, Failed> {
+            let mut c = condition_channel(r, fourier, settings, park)?;
             if let Err(e) = done(&mut c.record, c.motion.as_mut()) {
                 return Err((usize::MAX, e, c.record));
             }
@@ -424,9 +698,9 @@ pub fn condition_event_each(
             Ok(c)
         };
         let results: Vec<std::result::Result<Channel1, Failed>> = if long {
-            records.into_iter().map(one).collect()
+            records.into_iter().zip(analyses).map(one).collect()
         } else {
-            records.into_par_iter().map(one).collect()
+            records.into_par_iter().zip(analyses).map(one).collect()
         };
         match earliest_failure(results) {
             Ok(c) => c,
@@ -446,7 +720,8 @@ pub fn condition_event_each(
         traces.push(c.trace);
     }
     push_history(event, settings, &traces, alignment);
-    Ok(motions)
+    let fourier = traces.into_iter().filter_map(|t| t.fourier).collect();
+    Ok(ConditioningOutput { motions, fourier })
 }
 
 /// Channels longer than this (samples) are conditioned one at a time: 2²³,
@@ -485,6 +760,8 @@ struct Trace {
     factor: f64,
     /// Indices of the resample steps that changed the record.
     resampled: Vec<usize>,
+    /// The spectra and corners of a filter with `corners_from = "snr"`.
+    fourier: Option<RecordFourier>,
 }
 
 /// The conditioned channels, in record order, and the alignment when there was one.
@@ -527,6 +804,7 @@ fn earliest_failure(
 /// Every step of one channel (no `align`: see [`condition_event_each`]).
 fn condition_channel(
     mut record: Record,
+    fourier: Option<RecordFourier>,
     settings: &ConditioningSettings,
     park: Option<&ParkSeries<'_>>,
 ) -> std::result::Result<Channel1, Failed> {
@@ -534,6 +812,7 @@ fn condition_channel(
         Ok(t) => t,
         Err((phase, e)) => return Err((phase, e, record)),
     };
+    trace.fourier = fourier;
     let mut motion = None;
     for (i, step) in settings.steps.iter().enumerate() {
         match apply_step(&mut record, i, step, &mut trace, park) {
@@ -553,6 +832,7 @@ fn condition_channel(
 fn condition_step_by_step(
     records: &mut Vec<Record>,
     settings: &ConditioningSettings,
+    analyses: Vec<Option<RecordFourier>>,
     park: Option<&ParkSeries<'_>>,
     done: &ChannelDone<'_>,
 ) -> Result<Conditioned1> {
@@ -571,6 +851,9 @@ fn condition_step_by_step(
     }
     if let Some((_, e)) = first {
         return Err(e);
+    }
+    for (t, fourier) in traces.iter_mut().zip(analyses) {
+        t.fourier = fourier;
     }
     let mut motions: Vec<Option<Motion>> = (0..records.len()).map(|_| None).collect();
     let mut alignment = None;
@@ -658,6 +941,7 @@ fn check_qa_units(
         units_from,
         factor,
         resampled: Vec::new(),
+        fourier: None,
     })
 }
 
@@ -705,7 +989,11 @@ fn apply_step(
             cosine_taper(&mut r.samples, *fraction)?;
         }
         Step::Filter(f) => {
-            let sos = butter_sos(f.order, f.band, &f.corners_hz, r.channel.sampling_rate_hz)
+            let corners = match f.corners_from {
+                CornersFrom::Stated => f.corners_hz.clone(),
+                CornersFrom::Snr => f.corners_for(trace.fourier.as_ref().map(|c| &c.choice)),
+            };
+            let sos = butter_sos(f.order, f.band, &corners, r.channel.sampling_rate_hz)
                 .map_err(|e| in_record(r, e))?;
             r.samples = if f.zero_phase {
                 sosfiltfilt(&sos, &r.samples)
@@ -737,6 +1025,44 @@ fn apply_step(
 
 fn is_acceleration(r: &Record) -> bool {
     r.channel.units.is_acceleration()
+}
+
+/// The corners of a filter with `corners_from = "snr"` in its history
+/// entry: the method, the bounds and, per channel, the corners applied and why.
+fn snr_history(
+    params: &mut serde_json::Value,
+    f: &FilterSettings,
+    records: &[Record],
+    traces: &[Trace],
+) {
+    let b = f.corner_bounds();
+    let mut per_channel = serde_json::Map::new();
+    for (r, t) in records.iter().zip(traces) {
+        let Some(c) = &t.fourier else { continue };
+        let spectra = c.spectra.as_ref();
+        per_channel.insert(
+            r.channel.id.clone(),
+            json!({
+                "corners_hz": f.corners_for(Some(&c.choice)),
+                "from": if c.choice.from_snr { "snr" } else { "stated" },
+                "own_corners_hz": f.corners_for(Some(&c.own)),
+                "high_pass": c.choice.high_pass.as_ref().map(|h| &h.why),
+                "low_pass": c.choice.low_pass.as_ref().map(|l| &l.why),
+                "noise_window_s": spectra.and_then(|s| s.noise_window_s),
+                "signal_window_s": spectra.map(|s| s.signal_window_s),
+            }),
+        );
+    }
+    // The stated corners are bounds here; each channel's applied corners follow.
+    if let Some(o) = params.as_object_mut() {
+        o.remove("corners_hz");
+    }
+    params["corners_from"] = json!("snr");
+    params["snr_min"] = json!(f.snr_min);
+    params["bounds_hz"] = json!({ "high_pass": b.high_pass, "low_pass": b.low_pass });
+    params["noise_min_s"] = json!(f.noise_min_s);
+    params["method"] = json!("noise window before the AIC onset (Maeda 1985), signal window to 95 % of the energy; Hann-tapered windows, Konno-Ohmachi (b = 20) smoothed |FFT|·dt divided by sqrt(window duration); high-pass: lowest frequency above which SNR >= snr_min up to its upper bound; low-pass: highest frequency below which SNR >= snr_min from its lower bound; applied: the highest high-pass and lowest low-pass of the event's horizontal (vertical) records with a noise window, to all of them; the pipeline's corners when half or more have none (docs/pipelines.md)");
+    params["per_channel"] = serde_json::Value::Object(per_channel);
 }
 
 /// The history of the conditioning: QA, units, then each declared step.
@@ -800,18 +1126,20 @@ fn push_history(
                 ids.clone(),
                 json!({ "window": "cosine (Tukey)", "fraction_each_end": fraction }),
             ),
-            Step::Filter(f) => event.history.push_for(
-                "filter",
-                ids.clone(),
-                json!({
+            Step::Filter(f) => {
+                let mut params = json!({
                     "design": "butterworth (scipy.signal.butter, output='sos')",
                     "order": f.order,
                     "band": f.band,
                     "corners_hz": f.corners_hz,
                     "zero_phase": f.zero_phase,
                     "edge_handling": if f.zero_phase { "odd extension, padlen = 3*(2*n_sections+1), sosfilt_zi initial conditions (scipy sosfiltfilt)" } else { "causal, zero initial state" },
-                }),
-            ),
+                });
+                if f.corners_from == CornersFrom::Snr {
+                    snr_history(&mut params, f, &event.records, traces);
+                }
+                event.history.push_for("filter", ids.clone(), params)
+            }
             Step::Integrate(integration) => event.history.push_for(
                 "integrate",
                 ids.clone(),

@@ -6,6 +6,7 @@ pub mod atomic;
 pub mod dataset;
 pub mod design_tables;
 pub mod event_tables;
+pub mod fourier_tables;
 pub mod history_tables;
 pub mod hysteresis_tables;
 pub mod matrix_market;

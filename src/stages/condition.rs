@@ -1,10 +1,11 @@
 //! `condition`: QA and units, then the declared conditioning steps
 //! (resampling/alignment, detrend, taper, zero-phase band-pass, integration;
-//! METHODS §1) → `samples.parquet`.
+//! METHODS §1) → `samples.parquet`; with a filter whose corners come from the
+//! signal-to-noise ratio (`conditioning::snr`), also `fourier.parquet`.
 
 use crate::conditioning::event_window::EventWindow;
 use crate::conditioning::{
-    condition_event_each, BandType, ConditioningSettings, Motion, ParkSeries, Step,
+    condition_event_each, BandType, ConditioningSettings, CornersFrom, Motion, ParkSeries, Step,
 };
 use crate::pipeline::context::park;
 use serde::Deserialize;
@@ -26,6 +27,9 @@ pub const KIND: StageKind = StageKind {
 /// that two condition stages — e.g. the band-passed records for modal
 /// identification and the records as recorded for Bouc-Wen — can coexist).
 pub const SAMPLES_FILE: &str = crate::vocab::tables::SAMPLES.file;
+/// The records' Fourier spectra and chosen corners (a filter with
+/// `corners_from = "snr"`).
+pub const FOURIER_FILE: &str = crate::vocab::tables::FOURIER.file;
 
 /// The stage's own params beside the conditioning settings.
 #[derive(Deserialize)]
@@ -82,7 +86,9 @@ struct Condition {
 
 /// `settings` with the high-pass corner of its filter lowered to the low
 /// edge of `event`'s band of interest when that lies below it (`high_pass =
-/// "auto"`); a note says so.
+/// "auto"`); a note says so.  A filter choosing its corners from the SNR
+/// also has its highest high-pass (`high_pass_max_hz`) lowered to that edge:
+/// a noisy record never loses the band identification uses.
 #[doc(hidden)] // public for tests/it/modal_buildings.rs
 pub fn with_auto_high_pass(
     settings: &ConditioningSettings,
@@ -106,6 +112,9 @@ pub fn with_auto_high_pass(
                     event.name, f.corners_hz[0]
                 ));
                 f.corners_hz[0] = edge;
+            }
+            if f.corners_from == CornersFrom::Snr && edge < f.high_pass_max_hz {
+                f.high_pass_max_hz = edge;
             }
         }
     }
@@ -133,7 +142,11 @@ fn whole_records(loaded: &Event, conditioned: &Event) -> Result<Event> {
 
 impl Stage for Condition {
     fn outputs(&self) -> Vec<String> {
-        vec![self.samples_file.clone()]
+        let mut files = vec![self.samples_file.clone()];
+        if self.settings.snr_filter().is_some() {
+            files.push(FOURIER_FILE.into());
+        }
+        files
     }
     /// A channel at a time: a parked event's channels are read back, conditioned
     /// and parked again one by one (issue 14 item 5).
@@ -160,7 +173,7 @@ impl Stage for Condition {
         } else {
             self.settings.clone()
         };
-        let motions = condition_event_each(&mut event, &settings, parking, &|record, motion| {
+        let output = condition_event_each(&mut event, &settings, parking, &|record, motion| {
             let Some(spill) = &spill else {
                 return Ok(());
             };
@@ -173,6 +186,11 @@ impl Stage for Condition {
             }
             park(&mut record.samples, spill)
         })?;
+        let motions = output.motions;
+        if settings.snr_filter().is_some() {
+            let path = ctx.out_dir.join(FOURIER_FILE);
+            crate::sinks::fourier_tables::write_fourier(&path, &event, &output.fourier)?;
+        }
         let path = ctx.out_dir.join(&self.samples_file);
         match ctx.event_window()? {
             // The records as recorded of a continuous event are written

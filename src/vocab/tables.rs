@@ -124,6 +124,23 @@ declare!(SPECTRA, spectra, "spectra", "spectra.parquet",
     SA_ABS_M_S2: "sa_abs_m_s2", F64, required, "m/s^2", "peak absolute acceleration of the oscillator";
 });
 
+declare!(FOURIER, fourier, "fourier", "fourier.parquet",
+    "one row per channel and frequency: smoothed Fourier amplitude spectra of the signal and pre-event noise windows, their ratio, and the filter corners chosen from it (a `condition` stage whose filter has `corners_from = \"snr\"`)", {
+    CHANNEL_ID: "channel_id", Utf8, required, "", "channel id (`channel_id` of channels.parquet)";
+    FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "centre frequency 10^(k/50), from 1/(signal window duration) to the Nyquist frequency";
+    SIGNAL_FAS: "signal_fas", F64, required, "m/s^2/Hz^0.5", "Fourier amplitude |X(f)|·Δt of the signal window (demeaned, Hann taper 5 % at each end), Konno–Ohmachi smoothed (b = 20) and divided by √(window duration)";
+    NOISE_FAS: "noise_fas", F64, nullable, "m/s^2/Hz^0.5", "the same for the noise window; null without a noise window and below 1/(noise window duration), which the window does not resolve";
+    SNR: "snr", F64, nullable, "1", "signal_fas / noise_fas; null where noise_fas is null or zero";
+    HIGH_PASS_HZ: "high_pass_hz", F64, nullable, "Hz", "the channel's high-pass corner as applied (the same on every row of the channel): common to the event's horizontal records, or vertical ones (docs/pipelines.md); null for a filter without one";
+    LOW_PASS_HZ: "low_pass_hz", F64, nullable, "Hz", "the channel's low-pass corner as applied; null for a filter without one";
+    CORNERS_FROM: "corners_from", Utf8, required, "", "`snr` (chosen from the ratios of the event's records of the channel's group) or `stated` (the pipeline's corners: no usable noise window, `note` says why)";
+    NOTE: "note", Utf8, required, "", "why each corner is where it is, in words, and this record's own corners when they differ";
+    SIGNAL_START_S: "signal_start_s", F64, required, "s", "signal window start (the onset when found), from the channel's first sample";
+    SIGNAL_END_S: "signal_end_s", F64, required, "s", "signal window end (95 % of the record's energy Σa²)";
+    NOISE_START_S: "noise_start_s", F64, nullable, "s", "noise window start (the first sample, or 30 minutes before the onset in a longer record); null without a noise window";
+    NOISE_END_S: "noise_end_s", F64, nullable, "s", "noise window end (the onset); null without a noise window";
+});
+
 declare!(DRIFT, drift, "drift", "drift.parquet",
     "one row per storey or instrumented segment and direction: peak drift ratios (measured, segment average, or per-storey estimate: `kind`)", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y` or an azimuth";
@@ -528,6 +545,7 @@ pub const ALL_TABLES: &[&TableSchema] = &[
     &SAMPLES,
     &CHANNELS,
     &SPECTRA,
+    &FOURIER,
     &DRIFT,
     &STABILIZATION,
     &MODES,

@@ -61,6 +61,7 @@ mod rehearse_gravity;
 mod report;
 mod report_browser;
 mod schemas;
+mod snr_corners;
 mod stage_params;
 mod structure_inference;
 mod synth;

@@ -17,11 +17,12 @@ use quaketwin::report::{
 use quaketwin::sinks::parquet::{write_parquet, TableBuilder};
 use quaketwin::Error;
 
-const SECTION_IDS: [&str; 13] = [
+const SECTION_IDS: [&str; 14] = [
     "rating",
     "summary",
     "event",
     "channels",
+    "fourier",
     "spectra",
     "time-histories",
     "drift",

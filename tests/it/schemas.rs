@@ -29,6 +29,8 @@ fn declarations_are_well_formed() {
         "m",
         "m/s",
         "m/s^2",
+        // Amplitude spectral density (fourier.parquet).
+        "m/s^2/Hz^0.5",
         "s",
         "Hz",
         "deg",

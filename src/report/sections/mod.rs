@@ -9,6 +9,7 @@ mod damage;
 mod design;
 mod drift;
 mod event;
+mod fourier;
 mod hysteresis;
 mod loops;
 mod modal;
@@ -34,9 +35,10 @@ pub(crate) use assessment::read_assessment;
 
 /// Output files the report reads, with the stage that writes each (every
 /// table of `vocab::tables`, the run's JSON/TOML files and the page itself).
-const OUTPUTS: [(&str, &str); 27] = [
+const OUTPUTS: [(&str, &str); 28] = [
     ("event.json", "ingest"),
     (tables::SAMPLES.file, "condition"),
+    (tables::FOURIER.file, "condition"),
     (tables::CHANNELS.file, "metrics"),
     (tables::SPECTRA.file, "metrics"),
     (tables::DRIFT.file, "metrics"),
@@ -248,11 +250,12 @@ fn known_columns_first(t: &Table, known: &[&str]) -> Vec<String> {
 
 /// The section ids and titles, in page order: the rating first, then the
 /// one-screen summary, the evidence section by section, and the appendix.
-pub const SECTIONS: [(&str, &str); 13] = [
+pub const SECTIONS: [(&str, &str); 14] = [
     ("rating", "Overall rating"),
     ("summary", "Summary"),
     ("event", "Event and structure"),
     ("channels", "Channels: QA and strong-motion metrics"),
+    ("fourier", "Fourier spectra and filter corners"),
     ("spectra", "Response spectra"),
     ("time-histories", "Acceleration time histories"),
     ("drift", "Inter-storey drift"),
@@ -316,6 +319,7 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
     let mut assessments: Vec<Assessment> = Vec::new();
     let event_html = event::event_section(&event);
     let channel_table = channels::channel_section(&o.channels);
+    let fourier_html = fourier::fourier_section(dir);
     let spectra = spectra::spectra_section(dir, &o.channels);
     let histories = time_histories::time_history_section(dir, &o, settings);
     let drift_html = drift::drift_section(&o.drift, settings, &mut assessments);
@@ -355,6 +359,7 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
         summary,
         event_html,
         channel_table,
+        fourier_html,
         spectra,
         histories,
         drift_html,
