@@ -345,6 +345,9 @@ fn read_channel(
     if contents.event.station_name.is_none() {
         contents.event.station_name = th.station_name.clone();
     }
+    if contents.event.station_position.is_none() {
+        contents.event.station_position = th.latitude.zip(th.longitude);
+    }
 
     match volume {
         Volume::V3 => {
