@@ -13,7 +13,7 @@ mod time;
 mod units;
 
 pub use channel::{Axis, Channel, Direction, QaFlag, Role, SourceRef};
-pub use event::{great_circle_km, Event, Hypocentre, Record, Structure, EARTH_RADIUS_KM};
+pub use event::{Event, Hypocentre, Record, Structure};
 pub use history::{ProcessingHistory, ProcessingStep};
 pub use samples::{SampleStore, Samples};
 pub use time::{
