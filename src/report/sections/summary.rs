@@ -71,6 +71,10 @@ pub(super) fn summary_section(
             format!("M {}", magnitude_text(ev.get("magnitude"))),
         ];
         facts.extend(structure.map(|s| format!("structure: {s}")));
+        facts.extend(
+            super::title::epicentral_distance_km(ev)
+                .map(|d| format!("epicentral distance {d:.1} km")),
+        );
         body.push_str(&format!(
             "<p class=\"lead\">{}</p>",
             escape(&facts.join(" · "))
@@ -113,7 +117,7 @@ fn shaking(loaded: &Loaded) -> String {
         };
         let dir = t
             .key(channels::DIRECTION.name, r)
-            .unwrap_or_else(|| "?".into());
+            .unwrap_or_else(|| "direction unknown".into());
         let id = t.key(channels::CHANNEL_ID.name, r).unwrap_or_default();
         let ground = t.key(channels::LEVEL.name, r).as_deref() == Some("0")
             || t.key(channels::ROLE.name, r).as_deref() == Some("input");
