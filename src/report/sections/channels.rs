@@ -71,7 +71,8 @@ pub(super) fn channel_section(channels: &Loaded, event: &Result<Value, String>) 
         })
         .collect();
     body.push_str(&note(
-        "Units: m/s² (pga), m/s (pgv, arias, cav), m (pgd), s (d5_95), dB (snr). \
+        "Peak ground or floor acceleration (PGA), velocity (PGV) and displacement (PGD), Arias intensity, significant duration \
+         D5–95, cumulative absolute velocity (CAV) and signal-to-noise ratio (SNR) of the conditioned records. \
          Channels in natural order of their ids; level: the level of the structure (0 = the base), else the sensor location the \
          record header names. QA flags, missing metadata and what was inferred (and how) as tags; — = not available. \
          Directions: X, Y, Z are the building axes every stage works in (applied once at ingest); \

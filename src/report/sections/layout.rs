@@ -79,10 +79,13 @@ pub(super) fn sensors(ev: &Value) -> Vec<Sensor> {
 
 /// Storey count of the structure (event.json), when known.
 pub(super) fn storeys(ev: &Value) -> Option<i32> {
-    ev.get("structure")?
-        .get("storeys")?
-        .as_i64()
-        .map(|n| n as i32)
+    let s = ev.get("structure")?;
+    if let Some(n) = s.get("storeys").and_then(Value::as_i64) {
+        return Some(n as i32);
+    }
+    // Stated storey heights: one per storey.
+    let heights = s.get("storey_heights_m")?.as_array()?;
+    (!heights.is_empty()).then_some(heights.len() as i32)
 }
 
 /// Height of each level above the base, m (level 0 = 0), when the structure
@@ -180,12 +183,13 @@ fn rows(ev: &Value, sensors: &[Sensor]) -> Vec<(String, Vec<Sensor>)> {
     out
 }
 
-/// Channels drawn per line of a row.
+/// Channels drawn per line of a row, and the width of each.
 const PER_LINE: usize = 3;
-const WIDTH: f64 = 780.0;
-const LABEL_W: f64 = 230.0;
+const COLUMN_W: f64 = 200.0;
 const LINE_H: f64 = 20.0;
 const PAD: f64 = 8.0;
+/// Width of a label character at 12 px (sans-serif, generous).
+const CHAR_W: f64 = 7.0;
 
 /// The sketch as an inline SVG figure with its caption; empty without channels.
 pub(super) fn layout_figure(ev: &Value) -> String {
@@ -200,17 +204,25 @@ pub(super) fn layout_figure(ev: &Value) -> String {
         .map(|(_, l)| l.len().div_ceil(PER_LINE).max(1) as f64 * LINE_H + 2.0 * PAD)
         .collect();
     let total: f64 = heights.iter().sum::<f64>() + 2.0 * PAD;
+    // The label column as wide as the longest label (a bridge's locations).
+    let longest = rows
+        .iter()
+        .map(|(l, _)| l.chars().count())
+        .max()
+        .unwrap_or(0);
+    let label_w = (longest as f64 * CHAR_W + 20.0).clamp(140.0, 420.0);
+    let width = label_w + 84.0 + PER_LINE as f64 * COLUMN_W;
     let mut svg = format!(
-        "<svg class=\"plot layout\" viewBox=\"0 0 {WIDTH} {total:.0}\" width=\"{WIDTH}\" height=\"{total:.0}\" role=\"img\" aria-label=\"sensor layout\">",
+        "<svg class=\"plot layout\" viewBox=\"0 0 {width:.0} {total:.0}\" width=\"{width:.0}\" height=\"{total:.0}\" role=\"img\" aria-label=\"sensor layout\">",
     );
-    let (bx0, bx1) = (LABEL_W, LABEL_W + 70.0);
+    let (bx0, bx1) = (label_w, label_w + 70.0);
     let mut y = PAD;
     let mut slab_ys = Vec::new();
     for ((label, list), h) in rows.iter().zip(&heights) {
         let mid = y + h / 2.0;
         svg.push_str(&format!(
             "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\" font-size=\"12\" fill=\"#1b1b1b\">{}</text>",
-            LABEL_W - 10.0,
+            label_w - 10.0,
             mid + 4.0,
             escape(label)
         ));
@@ -230,7 +242,7 @@ pub(super) fn layout_figure(ev: &Value) -> String {
         }
         for (i, s) in list.iter().enumerate() {
             let (line, col) = (i / PER_LINE, i % PER_LINE);
-            let x = bx1 + 14.0 + col as f64 * ((WIDTH - bx1 - 20.0) / PER_LINE as f64);
+            let x = bx1 + 14.0 + col as f64 * COLUMN_W;
             let ty = y + PAD + line as f64 * LINE_H + 14.0;
             let (g, dir) = glyph(&s.direction);
             let colour = if s.input { "#d55e00" } else { "#0072b2" };

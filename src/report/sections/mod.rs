@@ -29,7 +29,7 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use super::html::{absent, escape, note, unreadable, whole_table, Cell};
+use super::html::{absent, escape, note, unreadable, Cell};
 use super::table::{self, Table};
 use super::{Assessment, Rating, ReportSettings};
 use crate::vocab::schema::{ColumnSpec, TableSchema};
@@ -502,20 +502,6 @@ fn rating_cell(r: Option<Rating>) -> Cell {
     match r {
         Some(r) => Cell::raw(r.badge()),
         None => Cell::text("not rated"),
-    }
-}
-
-fn generic(dir: &Path, declared: &TableSchema, settings: &ReportSettings, body: &mut String) {
-    let label = label_of(declared.file);
-    let mut chars = label.chars();
-    let heading: String = chars
-        .next()
-        .map(|c| c.to_uppercase().chain(chars).collect())
-        .unwrap_or_default();
-    body.push_str(&format!("<h3>{}</h3>", escape(&heading)));
-    let loaded = load(dir, declared, None);
-    if let Some(t) = require(&loaded, declared, body) {
-        body.push_str(&whole_table(t, settings.max_table_rows));
     }
 }
 

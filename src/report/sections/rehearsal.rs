@@ -14,6 +14,33 @@ use crate::report::table::{Column, Table};
 use crate::report::ReportSettings;
 use crate::vocab::tables::{self, rehearsal_summary as rs};
 
+/// A JSON object of settings as "key value; key value" (keys' underscores as
+/// spaces, numbers to 4 significant digits, units from the key's suffix); other
+/// text as it is.
+fn in_words(json: &str) -> String {
+    let Ok(Value::Object(m)) = serde_json::from_str::<Value>(json) else {
+        return json.to_string();
+    };
+    m.iter()
+        .map(|(k, v)| {
+            let key = crate::report::html::column_heading(k);
+            let value = match v {
+                Value::Number(n) => n
+                    .as_f64()
+                    .map(crate::report::format_number)
+                    .unwrap_or_else(|| n.to_string()),
+                Value::Bool(true) => "yes".into(),
+                Value::Bool(false) => "no".into(),
+                Value::String(s) => s.clone(),
+                Value::Null => "—".into(),
+                other => other.to_string(),
+            };
+            format!("{} {value}", key.replace('_', " "))
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
 fn bools(t: &Table, name: &str) -> Vec<bool> {
     match t.columns.get(name) {
         Some(Column::Bool(v)) => v.iter().map(|b| b.unwrap_or(false)).collect(),
@@ -70,10 +97,10 @@ pub(super) fn rehearsal_body(dir: &Path, _settings: &ReportSettings) -> String {
         ),
     ));
     if let Some(a) = t.metadata.get("quaketwin.actuator") {
-        facts.push(("Actuator model".into(), a.clone()));
+        facts.push(("Actuator model".into(), in_words(a)));
     }
     if let Some(g) = t.metadata.get("quaketwin.gravity") {
-        facts.push(("Gravity".into(), g.clone()));
+        facts.push(("Gravity".into(), in_words(g)));
     }
     body.push_str(&facts_list(&facts));
 

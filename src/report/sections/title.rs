@@ -65,13 +65,11 @@ fn station_codes(ev: &Value) -> Vec<String> {
         .map(|a| {
             a.iter()
                 .filter_map(|c| {
-                    let sta = c.get("station")?.as_str()?.trim().to_string();
-                    let net = c
-                        .get("network")
-                        .and_then(Value::as_str)
-                        .map(str::trim)
-                        .unwrap_or("");
-                    (!sta.is_empty()).then(|| format!("{net} {sta}").trim().to_string())
+                    // A station code comes with its network (a CSV or AT2
+                    // file's "station" is free text, not a code).
+                    let sta = c.get("station")?.as_str()?.trim();
+                    let net = c.get("network")?.as_str()?.trim();
+                    (!sta.is_empty() && !net.is_empty()).then(|| format!("{net} {sta}"))
                 })
                 .collect()
         })
