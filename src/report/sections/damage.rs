@@ -120,8 +120,17 @@ pub(super) fn damage_section(
         figures.push_str(&ratio_figure(&dir, ratios, o.time_axis, settings));
     }
     if let Some(steps) = t.metadata.get("quaketwin.indefinite_steps") {
+        // {"X": 0, "Y": 3}: per direction, in words.
+        let text = match serde_json::from_str::<serde_json::Value>(steps) {
+            Ok(serde_json::Value::Object(m)) => m
+                .iter()
+                .map(|(d, n)| format!("direction {d}: {n}"))
+                .collect::<Vec<_>>()
+                .join("; "),
+            _ => steps.clone(),
+        };
         body.push_str(&note(&format!(
-            "Time steps where K(t) lost positive definiteness (recorded with the damage index): {steps}."
+            "Time steps where the stiffness K(t) lost positive definiteness: {text}."
         )));
     }
     body.push_str(&table(

@@ -53,6 +53,8 @@ pub(super) fn modal_section(dir: &Path, o: &Outputs, settings: &ReportSettings) 
             stabilization::ORDER.name,
             stabilization::FREQUENCY_HZ.name,
             stabilization::DAMPING_RATIO.name,
+            stabilization::MPC.name,
+            stabilization::MPD_DEG.name,
             stabilization::STABLE_FREQUENCY.name,
             stabilization::STABLE_DAMPING.name,
             stabilization::STABLE_SHAPE.name,

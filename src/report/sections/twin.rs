@@ -101,8 +101,8 @@ fn parameters_table(t: &Table) -> String {
         .map(|c| if c { "converged" } else { "not converged" })
         .unwrap_or("convergence not recorded");
     let mut html = note(&format!(
-        "Calibrated values from the ensemble update ({converged}; metadata quaketwin.result); start values and bounds as the \
-         update used them (quaketwin.parameter_bounds). A value at a bound means the data pull it further than the bounds allow."
+        "Calibrated values from the ensemble update ({converged}); start values and bounds as the \
+         update used them. A value at a bound means the data pull it further than the bounds allow."
     ));
     let rows: Vec<Vec<Cell>> = changes
         .iter()
