@@ -951,3 +951,61 @@ fn epicentral_distance_is_the_great_circle_distance() {
     assert!((d - 559.1).abs() < 0.005 * 559.1, "{d}");
     assert_eq!(great_circle_km(10.0, 20.0, 10.0, 20.0), 0.0);
 }
+
+/// A real CSMIP bridge record (Painter Street Overpass, Cape Mendocino
+/// 1986, ../shared/records) through the shipped pipeline: the title block
+/// names the structure (without the header's agency column), its station,
+/// the epicentre of the header and the epicentral distance — the haversine
+/// from the header's hypocentre (40.364 N, 124.433 W) to the station
+/// (40.503 N, 124.100 W), 32.1 km —; channels in natural order; each time
+/// history names its sensor location (no level on a bridge), never "level ?".
+#[test]
+fn real_record_cesmd_bridge_report_has_its_title_block_and_natural_channel_order() {
+    let zip = crate::common::shared_record(
+        "cesmd-bridges-corpus/painter-st-ce89324/capemendocino_21nov1986_ce89324p.zip",
+    );
+    let out = tempfile::tempdir().unwrap();
+    quaketwin::commands::run_pipeline(
+        &manifest().join("pipelines/post-earthquake.toml"),
+        &zip,
+        out.path(),
+        true,
+    )
+    .expect("pipeline on the bridge record");
+    let html = std::fs::read_to_string(out.path().join("report.html")).unwrap();
+    let doc = parse(&html);
+    let title = section_text(&doc, "title-block");
+    let expected = {
+        let (p1, p2) = (40.364f64.to_radians(), 40.503f64.to_radians());
+        let dl = (-124.100f64 + 124.433).to_radians();
+        let a = ((p2 - p1) / 2.0).sin().powi(2) + p1.cos() * p2.cos() * (dl / 2.0).sin().powi(2);
+        2.0 * 6371.0088 * a.sqrt().asin()
+    };
+    for fact in [
+        "RIO DELL - 101/PAINTER ST. OVERPASS (bridge)".to_string(),
+        "station CE 89324".into(),
+        "40.364° N, 124.433° W, depth 17 km".into(),
+        format!("{expected:.1} km (great circle"),
+        "origin 1986-11-21 23:33:01.8 UTC, M 5.1".into(),
+    ] {
+        assert!(title.contains(&fact), "{fact} not in {title}");
+    }
+    assert!(!title.contains("CGS"), "{title}");
+    assert!(by_id(&doc, "review-block").is_some());
+    // Natural order: …02 before …10; every channel placed in words.
+    let (headers, rows) = table_cells(&doc, "channel-table");
+    let id_col = headers.iter().position(|h| h == "channel_id").unwrap();
+    let ids: Vec<String> = rows.iter().map(|r| node_text(r[id_col])).collect();
+    let mut natural = ids.clone();
+    natural.sort_by(|a, b| report::natural_cmp(a, b));
+    assert_eq!(ids, natural);
+    assert!(ids.len() >= 10, "{ids:?}");
+    let at = |s: &str| ids.iter().position(|i| i.ends_with(s)).unwrap();
+    assert!(at(".02") < at(".10"), "{ids:?}");
+    let histories = section_text(&doc, "time-histories");
+    assert!(!histories.contains("level ?") && !histories.contains("level unknown"));
+    assert!(histories.contains("FREE FIELD"), "{histories}");
+    // The sensor layout: one row per location, the inputs marked.
+    let layout = by_id(&doc, "sensor-layout").expect("sensor layout");
+    assert!(svg_count(layout) == 1 && node_text(layout).contains("input"));
+}
