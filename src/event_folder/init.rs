@@ -71,6 +71,19 @@ pub fn manifest_text(loaded: &LoadedEvent, source: &str, zip_event: bool) -> Str
     if let Some(m) = e.magnitude {
         let _ = writeln!(s, "magnitude = {m}");
     }
+    match &e.hypocentre {
+        Some(h) => {
+            let _ = writeln!(
+                s,
+                "latitude_deg = {}\nlongitude_deg = {}",
+                h.latitude_deg, h.longitude_deg
+            );
+            if let Some(d) = h.depth_km {
+                let _ = writeln!(s, "depth_km = {d:?}");
+            }
+        }
+        None => s.push_str("# latitude_deg = 34.21  # unknown: epicentre (WGS 84), for the report's epicentral distance\n# longitude_deg = -118.54\n"),
+    }
     let st = e.structure.clone().unwrap_or_default();
     s.push_str("\n[structure]\n");
     for i in &st.inferred {
@@ -131,7 +144,16 @@ pub fn manifest_text(loaded: &LoadedEvent, source: &str, zip_event: bool) -> Str
         (Some(lat), Some(lon)) => {
             let _ = writeln!(s, "latitude_deg = {lat}\nlongitude_deg = {lon}");
         }
-        _ => s.push_str("# latitude_deg = 34.05  # unknown: position (WGS 84, north and east positive), for the fleet dashboard's map\n# longitude_deg = -118.25\n"),
+        _ => match e.station_position {
+            // The station is usually at the structure: offered, not stated.
+            Some([lat, lon]) => {
+                let _ = writeln!(
+                    s,
+                    "# latitude_deg = {lat}  # the recording station's position (record headers): state the structure's\n# longitude_deg = {lon}"
+                );
+            }
+            None => s.push_str("# latitude_deg = 34.05  # unknown: position (WGS 84, north and east positive), for the fleet dashboard's map\n# longitude_deg = -118.25\n"),
+        },
     }
     if let Some(t) = &st.twin {
         let _ = writeln!(s, "twin = {}", quoted(t));

@@ -76,15 +76,24 @@ pub struct EventSection {
     pub magnitude: Option<f64>,
     /// Free text.
     pub description: Option<String>,
+    /// Epicentre (WGS 84 degrees, north and east positive): with the
+    /// structure's position, the report's epicentral distance.
+    pub latitude_deg: Option<f64>,
+    pub longitude_deg: Option<f64>,
+    /// Depth of the hypocentre, km.
+    pub depth_km: Option<f64>,
 }
 
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StructureSection {
-    /// A stable id of the structure (a station code, an asset number): its
-    /// `structure=` partition in a many-event dataset, instead of its name.
+    /// A stable id of the structure (the owner's asset number, a station
+    /// code): its `structure=` partition in a many-event dataset instead of
+    /// its name, and the report's title block.
     pub id: Option<String>,
     pub name: Option<String>,
+    /// Postal address or place: the report's title block.
+    pub address: Option<String>,
     #[serde(default)]
     pub storey_heights_m: Vec<f64>,
     #[serde(default)]
@@ -118,6 +127,8 @@ impl StructureSection {
     pub fn to_structure(&self) -> Structure {
         Structure {
             name: self.name.clone(),
+            id: self.id.clone(),
+            address: self.address.clone(),
             storey_heights_m: self.storey_heights_m.clone(),
             masses_kg: self.masses_kg.clone(),
             twin: self.twin.clone(),
@@ -349,6 +360,31 @@ impl Manifest {
                         MAGNITUDE.start(),
                         MAGNITUDE.end()
                     ),
+                ));
+            }
+        }
+        match (self.event.latitude_deg, self.event.longitude_deg) {
+            (None, None) => {}
+            (Some(lat), Some(lon))
+                if (-90.0..=90.0).contains(&lat) && (-180.0..=180.0).contains(&lon) => {}
+            (Some(_), Some(_)) => {
+                return Err(Error::input(
+                    loc(),
+                    "event.latitude_deg must be within ±90 and event.longitude_deg within ±180 degrees",
+                ))
+            }
+            _ => {
+                return Err(Error::input(
+                    loc(),
+                    "event.latitude_deg and event.longitude_deg (the epicentre) go together: state both or neither",
+                ))
+            }
+        }
+        if let Some(d) = self.event.depth_km {
+            if !(-10.0..=800.0).contains(&d) {
+                return Err(Error::input(
+                    loc(),
+                    format!("event.depth_km = {d}: not a hypocentre depth (−10 to 800 km)"),
                 ));
             }
         }

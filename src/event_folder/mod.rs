@@ -407,6 +407,15 @@ fn load_as_stated(
             event.origin_ns = Some(crate::vocab::parse_iso8601_ns(t).ok_or_else(bad)?);
         }
         event.magnitude = m.event.magnitude;
+        event.hypocentre = m
+            .event
+            .latitude_deg
+            .zip(m.event.longitude_deg)
+            .map(|(lat, lon)| crate::vocab::Hypocentre {
+                latitude_deg: lat,
+                longitude_deg: lon,
+                depth_km: m.event.depth_km,
+            });
         event.structure = m.structure.as_ref().map(|s| s.to_structure());
     }
     if manifest
@@ -447,6 +456,7 @@ fn load_as_stated(
         }
     }
     let structure_notes = structure::infer_structure(&mut event, &facts, !listed_channels);
+    header_positions(&mut event, &hints);
     make_ids_unique(&mut event.records);
     event.notes.extend(trim_notes);
     event.notes.extend(structure_notes);
@@ -464,6 +474,28 @@ fn load_as_stated(
         manifest,
         geometry: Default::default(),
     })
+}
+
+/// The epicentre from the headers where the manifest states none, and the
+/// recording station's position the headers state (the structure's own
+/// position stays what the manifest states).
+fn header_positions(event: &mut Event, hints: &[crate::readers::EventHints]) {
+    if event.hypocentre.is_none() {
+        event.hypocentre = hints.iter().find_map(|h| {
+            let (lat, lon, depth) = h.hypocenter?;
+            ((-90.0..=90.0).contains(&lat) && (-180.0..=180.0).contains(&lon)).then_some(
+                crate::vocab::Hypocentre {
+                    latitude_deg: lat,
+                    longitude_deg: lon,
+                    depth_km: Some(depth).filter(|d| d.is_finite()),
+                },
+            )
+        });
+    }
+    event.station_position = hints
+        .iter()
+        .find_map(|h| h.station_position)
+        .map(|(lat, lon)| [lat, lon]);
 }
 
 fn parse_manifest(f: &EventFile) -> Result<Manifest> {

@@ -326,3 +326,18 @@ fn vertical_action(channel: &str, action: &str, from: &str) -> OrientationAction
         partner: None,
     }
 }
+
+/// Mean Earth radius (IUGG), km: the sphere the epicentral distance is
+/// measured on.
+pub const EARTH_RADIUS_KM: f64 = 6371.0088;
+
+/// Great-circle distance between two points (degrees), km: the haversine
+/// formula on a sphere of [`EARTH_RADIUS_KM`] (within 0.5 % of the WGS 84
+/// geodesic — a report figure, not a survey).
+pub fn great_circle_km(lat1: f64, lon1: f64, lat2: f64, lon2: f64) -> f64 {
+    let (p1, p2) = (lat1.to_radians(), lat2.to_radians());
+    let dp = p2 - p1;
+    let dl = (lon2 - lon1).to_radians();
+    let a = (dp / 2.0).sin().powi(2) + p1.cos() * p2.cos() * (dl / 2.0).sin().powi(2);
+    2.0 * EARTH_RADIUS_KM * a.sqrt().min(1.0).asin()
+}

@@ -763,6 +763,11 @@ fn fill_event<'a>(
     {
         event.hypocenter = Some((lat, lon, depth_km));
     }
+    // Reals 0 and 1: the station's latitude and longitude.
+    event.station_position = header
+        .real_at(0)
+        .zip(header.real_at(1))
+        .filter(|(lat, lon)| lat.abs() <= 90.0 && lon.abs() <= 180.0);
 }
 
 /// `Origin: 2018/11/30 17:29:29    UTC` → epoch ns (UTC only).

@@ -163,7 +163,10 @@ fn parse_text_header(lines: &Lines, from: usize, to: usize) -> TextHeader {
                     && !next_upper.starts_with("CHAN")
                     && next.chars().any(|c| c.is_ascii_alphabetic())
                 {
-                    h.station_name.get_or_insert_with(|| next.to_string());
+                    // "Ridgecrest - Hwy 395/Brown Road Bridge    CGS   Data: Acceleration":
+                    // the name ends where the agency column starts (a run of spaces).
+                    let name = next.split("   ").next().unwrap_or(next).trim();
+                    h.station_name.get_or_insert_with(|| name.to_string());
                 }
                 let mut it = line[p + 11..].split_whitespace();
                 h.station = it
@@ -344,6 +347,9 @@ fn read_channel(
     }
     if contents.event.station_name.is_none() {
         contents.event.station_name = th.station_name.clone();
+    }
+    if contents.event.station_position.is_none() {
+        contents.event.station_position = th.latitude.zip(th.longitude);
     }
 
     match volume {

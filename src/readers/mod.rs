@@ -46,6 +46,10 @@ pub struct EventHints {
     pub origin_ns: Option<i64>,
     pub magnitude: Option<f64>,
     pub hypocenter: Option<(f64, f64, f64)>,
+    /// The recording station's position (latitude, longitude, degrees),
+    /// when the header states it: the structure's, for the report's
+    /// epicentral distance.
+    pub station_position: Option<(f64, f64)>,
     /// The station's name as the header gives it ("Van Nuys - 7-story
     /// Hotel", SMC `station = …`): the event folder reads the storey count
     /// and the kind of structure from it.

@@ -384,6 +384,10 @@ pub fn read(bytes: &[u8], source: &SourceRef, _opts: &ReadOptions) -> Result<Fil
     if let (Some(lat), Some(lon), Some(depth_km)) = (real_at(2), real_at(3), real_at(4)) {
         contents.event.hypocenter = Some((lat, lon, depth_km));
     }
+    // Reals 10 and 11: the station's latitude and longitude.
+    contents.event.station_position = real_at(10)
+        .zip(real_at(11))
+        .filter(|(lat, lon)| lat.abs() <= 90.0 && lon.abs() <= 180.0);
     contents.records.push(Record::new(channel, samples));
     Ok(contents)
 }

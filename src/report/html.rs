@@ -81,6 +81,56 @@ pub fn time_text(iso: &str) -> String {
     format!("{date} {time} UTC")
 }
 
+/// A table column's heading in words: a column name of our tables
+/// (`pga_m_s2`, `peak_drift_ratio`) becomes "PGA (m/s²)", "peak drift
+/// ratio"; a heading already in words (no underscore) is kept.
+pub fn column_heading(name: &str) -> String {
+    const SPECIAL: [(&str, &str); 15] = [
+        ("omega_rad_s", "ω (rad/s)"),
+        ("channel_id", "channel"),
+        ("pga_m_s2", "PGA (m/s²)"),
+        ("pgv_m_s", "PGV (m/s)"),
+        ("pgd_m", "PGD (m)"),
+        ("arias_m_s", "Arias intensity (m/s)"),
+        ("d5_95_s", "duration D5–95 (s)"),
+        ("cav_m_s", "CAV (m/s)"),
+        ("snr_db", "SNR (dB)"),
+        ("qa_flags", "QA flags"),
+        ("npts", "samples"),
+        ("sampling_rate_hz", "sampling rate (Hz)"),
+        ("storey_height_m", "height (m)"),
+        ("height_source", "height from"),
+        ("mpd_deg", "MPD (°)"),
+    ];
+    if let Some((_, w)) = SPECIAL.iter().find(|(n, _)| *n == name) {
+        return w.to_string();
+    }
+    if !name.contains('_') || name.contains(' ') {
+        return name.to_string();
+    }
+    const UNITS: [(&str, &str); 10] = [
+        ("_m_s2", "m/s²"),
+        ("_m_s", "m/s"),
+        ("_n_m", "N/m"),
+        ("_hz", "Hz"),
+        ("_deg", "°"),
+        ("_db", "dB"),
+        ("_m", "m"),
+        ("_s", "s"),
+        ("_n", "N"),
+        ("_j", "J"),
+    ];
+    let (stem, unit) = UNITS
+        .iter()
+        .find_map(|(suffix, unit)| name.strip_suffix(suffix).map(|s| (s, Some(*unit))))
+        .unwrap_or((name, None));
+    let words = stem.replace('_', " ");
+    match unit {
+        Some(u) => format!("{words} ({u})"),
+        None => words,
+    }
+}
+
 /// One table cell.
 #[derive(Debug, Clone, Default)]
 pub struct Cell {
@@ -189,7 +239,17 @@ pub fn table(id: Option<&str>, headers: &[String], rows: &[Vec<Cell>]) -> String
     }
     s.push_str("<thead><tr>");
     for h in headers {
-        s.push_str(&format!("<th>{}</th>", escape(h)));
+        let words = column_heading(h);
+        if words == *h {
+            s.push_str(&format!("<th>{}</th>", escape(h)));
+        } else {
+            // The column's name stays on the element (for tools and tests).
+            s.push_str(&format!(
+                "<th data-column=\"{}\">{}</th>",
+                escape(h),
+                escape(&words)
+            ));
+        }
     }
     s.push_str("</tr></thead><tbody>");
     for row in rows {
@@ -221,11 +281,7 @@ pub fn whole_table(t: &Table, max_rows: usize) -> String {
         table(None, &headers, &rows)
     );
     if t.rows > max_rows {
-        s.push_str(&note(&format!(
-            "Showing {max_rows} of {} rows of {}.",
-            t.rows,
-            t.file_name()
-        )));
+        s.push_str(&note(&format!("Showing {max_rows} of {} rows.", t.rows)));
     }
     s
 }
@@ -241,48 +297,113 @@ pub fn note(text: &str) -> String {
     format!("<p class=\"note\">{}</p>", escape(text))
 }
 
-/// The message a section shows when its stage's output is absent.
-pub fn absent(file: &str, stage: &str) -> String {
+/// The message a section shows when its stage's output is absent: the
+/// output named in words (`label`), the stage that writes it.
+pub fn absent(label: &str, stage: &str) -> String {
     format!(
-        "<p class=\"absent\">Stage not run / output absent: <code>{}</code> (stage <code>{}</code>).</p>",
-        escape(file),
+        "<p class=\"absent\">Stage not run / output absent: {} (stage <i>{}</i>).</p>",
+        escape(label),
         escape(stage)
     )
 }
 
-/// The message a section shows when a file exists but cannot be read.
-pub fn unreadable(file: &str, error: &str) -> String {
+/// The message a section shows when a file exists but cannot be read: the
+/// output in words; the file and the reason go to the appendix's table
+/// checks ([`diagnostic`]).
+pub fn unreadable(label: &str, file: &str, error: &str) -> String {
+    diagnostic(&format!("{file}: unreadable — {error}"));
     format!(
-        "<p class=\"absent\">Output unreadable: <code>{}</code> — {}</p>",
-        escape(file),
-        escape(error)
+        "<p class=\"absent\">Output unreadable: {} — the file could not be read (appendix, table checks).</p>",
+        escape(label)
     )
 }
 
-/// The note "<file>: expected column(s) not present: …", or nothing when every
-/// `expected` column is there.
-pub fn missing_columns_note(t: &Table, expected: &[&str]) -> String {
-    let missing = t.missing(expected);
-    if missing.is_empty() {
-        return String::new();
-    }
-    note(&format!(
-        "{}: expected column(s) not present: {}.",
-        t.file_name(),
-        missing.join(", ")
-    ))
+thread_local! {
+    /// Notes for whoever maintains the outputs (columns missing or unknown,
+    /// types not the declared ones, unreadable files), gathered while a page
+    /// is drawn and listed in its appendix — not in the sections a reader
+    /// decides on.
+    static DIAGNOSTICS: std::cell::RefCell<Vec<String>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
-/// Lists expected-but-missing and unknown columns of a table, if any.
+/// Records a note for the appendix's table checks (once per text).
+pub fn diagnostic(text: &str) {
+    DIAGNOSTICS.with(|d| {
+        let mut d = d.borrow_mut();
+        if !d.iter().any(|x| x == text) {
+            d.push(text.to_string());
+        }
+    });
+}
+
+/// The table checks gathered since the last call (emptied).
+pub fn take_diagnostics() -> Vec<String> {
+    DIAGNOSTICS.with(|d| std::mem::take(&mut *d.borrow_mut()))
+}
+
+/// Records "<file>: expected column(s) not present: …" for the appendix
+/// when an `expected` column is missing; nothing on the page.
+pub fn missing_columns_note(t: &Table, expected: &[&str]) -> String {
+    let missing = t.missing(expected);
+    if !missing.is_empty() {
+        diagnostic(&format!(
+            "{}: expected column(s) not present: {}.",
+            t.file_name(),
+            missing.join(", ")
+        ));
+    }
+    String::new()
+}
+
+/// Records expected-but-missing and unknown columns of a table for the
+/// appendix's table checks; nothing on the page.
 pub fn column_notes(t: &Table, expected: &[&str]) -> String {
     let unknown = t.unknown(expected);
-    let mut s = missing_columns_note(t, expected);
+    missing_columns_note(t, expected);
     if !unknown.is_empty() {
-        s.push_str(&note(&format!(
+        diagnostic(&format!(
             "{}: further column(s): {}.",
             t.file_name(),
             unknown.join(", ")
-        )));
+        ));
     }
-    s
+    String::new()
+}
+
+/// Numeric-aware ordering of names (channel ids): runs of digits compare as
+/// numbers, so `CE24386.02` comes before `CE24386.10`, and `F2` before `F10`;
+/// ties (`01` vs `1`) and everything else by the text.
+pub fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
+    use std::cmp::Ordering;
+    let (mut x, mut y) = (a.as_bytes(), b.as_bytes());
+    loop {
+        match (x.first(), y.first()) {
+            (None, None) => return a.cmp(b),
+            (None, Some(_)) => return Ordering::Less,
+            (Some(_), None) => return Ordering::Greater,
+            (Some(c), Some(d)) if c.is_ascii_digit() && d.is_ascii_digit() => {
+                let run = |s: &[u8]| s.iter().take_while(|c| c.is_ascii_digit()).count();
+                let (n, m) = (run(x), run(y));
+                let strip = |s: &[u8]| {
+                    let z = s.iter().take_while(|c| **c == b'0').count();
+                    s[z.min(s.len().saturating_sub(1))..].to_vec()
+                };
+                let (p, q) = (strip(&x[..n]), strip(&y[..m]));
+                let ord = p.len().cmp(&q.len()).then_with(|| p.cmp(&q));
+                if ord != Ordering::Equal {
+                    return ord;
+                }
+                x = &x[n..];
+                y = &y[m..];
+            }
+            (Some(c), Some(d)) => {
+                let ord = c.to_ascii_lowercase().cmp(&d.to_ascii_lowercase());
+                if ord != Ordering::Equal {
+                    return ord;
+                }
+                x = &x[1..];
+                y = &y[1..];
+            }
+        }
+    }
 }

@@ -33,7 +33,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-pub use html::{escape, format_number, whole_table};
+pub use html::{column_heading, escape, format_number, natural_cmp, whole_table};
+/// Public only for its test (tests/it/report.rs): the levels of a loop's
+/// segment label, either dash.
+#[doc(hidden)]
+pub use sections::segment_levels;
 
 /// Green/yellow/red limits of one criterion: value < `yellow` is green,
 /// `yellow` ≤ value < `red` is yellow, value ≥ `red` is red.
@@ -86,6 +90,9 @@ impl IotaStatistic {
 pub struct ReportSettings {
     /// Page title; default: "quaketwin report — <event name>".
     pub title: Option<String>,
+    /// Report date the title block states (free text, e.g. "2026-12-01");
+    /// default: `SOURCE_DATE_EPOCH` when set, else today (UTC).
+    pub date: Option<String>,
     /// Damage index ι: green < 0.02 ≤ yellow < 0.05 ≤ red.
     pub iota: Thresholds,
     /// Which value of ι(t) is rated (default: final).
@@ -107,6 +114,7 @@ impl Default for ReportSettings {
     fn default() -> Self {
         ReportSettings {
             title: None,
+            date: None,
             iota: Thresholds {
                 yellow: 0.02,
                 red: 0.05,
@@ -156,6 +164,13 @@ impl ReportSettings {
                 return Err(Error::usage(format!(
                     "report settings: {key} = {v}: must be 10..={MAX_POINTS}"
                 )));
+            }
+        }
+        if let Some(d) = &self.date {
+            if d.trim().is_empty() || d.chars().count() > 64 {
+                return Err(Error::usage(
+                    "report settings: date must be a short non-empty text (e.g. \"2026-12-01\")",
+                ));
             }
         }
         if !(1..=MAX_ROWS).contains(&self.max_table_rows) {

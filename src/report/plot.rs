@@ -286,6 +286,14 @@ where
             .y_label_area_size(y_area)
             .build_cartesian_2d(x_spec, y_spec)
             .map_err(|e| e.to_string())?;
+        // Tick labels: short decimals on linear axes, powers of ten on log
+        // axes (plotters' own float formatting writes 9.999999999e-6).
+        // A tick at zero computed as a rounding residue (3.5e-18 on an
+        // axis of centimetres) is written 0.
+        let (xs, ys) = (ctx.x_range(), ctx.y_range());
+        let (x_span, y_span) = ((xs.end - xs.start).abs(), (ys.end - ys.start).abs());
+        let y_tick = |v: &f64| tick(if v.abs() < 1e-9 * y_span { 0.0 } else { *v });
+        let x_tick = |v: &f64| tick(if v.abs() < 1e-9 * x_span { 0.0 } else { *v });
         let mut mesh = ctx.configure_mesh();
         mesh.x_desc(chart.x_label.as_str())
             .y_desc(chart.y_label.as_str())
@@ -295,15 +303,13 @@ where
             .bold_line_style(RGBColor(215, 215, 215))
             .axis_desc_style(("sans-serif", 13))
             .label_style(("sans-serif", 12));
-        // Tick labels: short decimals on linear axes, powers of ten on log
-        // axes (plotters' own float formatting writes 9.999999999e-6).
         if chart.log_y {
             mesh.y_label_formatter(&|v| log_tick(*v));
         } else {
-            mesh.y_label_formatter(&|v| tick(*v));
+            mesh.y_label_formatter(&y_tick);
         }
         if !chart.log_x {
-            mesh.x_label_formatter(&|v| tick(*v));
+            mesh.x_label_formatter(&x_tick);
         }
         mesh.draw().map_err(|e| e.to_string())?;
         let x_lim = ctx.x_range();

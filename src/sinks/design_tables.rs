@@ -80,9 +80,43 @@ fn dof_of(model: &Model, d: &TestDesign, p: usize) -> (i64, String) {
     )
 }
 
+/// Metadata key of the node coordinates a drawing of the actuator layout needs.
+pub const NODES_KEY: &str = "quaketwin.nodes";
+
+/// Most twin nodes listed under [`NODES_KEY`]; a larger twin lists its PS nodes only.
+const MAX_LISTED_NODES: usize = 20_000;
+
+/// The twin's nodes `[id, x, y, z]` (all, or the PS's beyond
+/// [`MAX_LISTED_NODES`]) and the ids of the PS nodes, as JSON: what the
+/// report draws the actuator layout on.
+fn nodes_json(model: &Model, d: &TestDesign) -> String {
+    let mut ps: Vec<usize> = d.partition.ps_dofs.iter().map(|&(n, _)| n).collect();
+    ps.sort_unstable();
+    ps.dedup();
+    let listed: Vec<usize> = if model.nodes.len() <= MAX_LISTED_NODES {
+        (0..model.nodes.len()).collect()
+    } else {
+        ps.clone()
+    };
+    let node = |i: usize| {
+        let n = &model.nodes[i];
+        serde_json::json!([n.id, n.coords[0], n.coords[1], n.coords[2]])
+    };
+    serde_json::json!({
+        "nodes": listed.iter().filter(|&&i| i < model.nodes.len()).map(|&i| node(i)).collect::<Vec<_>>(),
+        "ps_nodes": ps.iter().filter_map(|&i| model.nodes.get(i).map(|n| n.id)).collect::<Vec<_>>(),
+    })
+    .to_string()
+}
+
 /// `actuator_layout.parquet`: one row per actuator; `pom_1` … `pom_k` hold each retained
-/// POM's component at the actuated DoF.
-pub fn write_actuator_layout(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()> {
+/// POM's component at the actuated DoF; the node coordinates in [`NODES_KEY`].
+pub fn write_actuator_layout(
+    path: &Path,
+    model: &Model,
+    d: &TestDesign,
+    p: &DesignProvenance,
+) -> Result<()> {
     let a = &d.actuators;
     let k = a.iter().map(|x| x.participation.len()).max().unwrap_or(0);
     let mut t = TableBuilder::new(&ACTUATOR_LAYOUT)
@@ -116,6 +150,7 @@ pub fn write_actuator_layout(path: &Path, d: &TestDesign, p: &DesignProvenance) 
     }
     let mut m = meta(p);
     m.push(("quaketwin.retained_poms".into(), k.to_string()));
+    m.push((NODES_KEY.into(), nodes_json(model, d)));
     write_parquet(path, &[t.build()?], &m)
 }
 
@@ -282,7 +317,7 @@ pub fn write_design(
     p: &DesignProvenance,
 ) -> Result<Vec<PathBuf>> {
     let path = |name: &str| out_dir.join(name);
-    write_actuator_layout(&path(ACTUATOR_LAYOUT_FILE), d, p)?;
+    write_actuator_layout(&path(ACTUATOR_LAYOUT_FILE), model, d, p)?;
     write_pod(&path(POD_FILE), d, p)?;
     write_reduction_validation(&path(REDUCTION_VALIDATION_FILE), model, d, p)?;
     write_interface_refinement(&path(INTERFACE_REFINEMENT_FILE), d, p)?;

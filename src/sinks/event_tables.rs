@@ -540,6 +540,14 @@ fn samples_from(
             .and_then(|v| v.as_str())
             .and_then(crate::vocab::parse_iso8601_ns),
         magnitude: ev.get("magnitude").and_then(|v| v.as_f64()),
+        hypocentre: ev
+            .get("hypocentre")
+            .cloned()
+            .and_then(|h| serde_json::from_value(h).ok()),
+        station_position: ev
+            .get("station_position")
+            .cloned()
+            .and_then(|p| serde_json::from_value(p).ok()),
         structure: ev
             .get("structure")
             .cloned()

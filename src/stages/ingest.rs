@@ -80,6 +80,12 @@ struct EventJson<'a> {
     name: &'a str,
     origin_time: Option<String>,
     magnitude: Option<f64>,
+    /// Epicentre and depth, when stated or given by a header.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hypocentre: Option<&'a crate::vocab::Hypocentre>,
+    /// The recording station's [latitude, longitude] from the headers.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    station_position: Option<[f64; 2]>,
     structure: Option<&'a Structure>,
     notes: &'a [String],
     files: Vec<FileJson<'a>>,
@@ -106,6 +112,8 @@ fn inventory_json_with(loaded: &LoadedEvent, window: Option<&EventWindow>) -> Re
         name: &e.name,
         origin_time: e.origin_ns.map(format_epoch_ns),
         magnitude: e.magnitude,
+        hypocentre: e.hypocentre.as_ref(),
+        station_position: e.station_position,
         structure: e.structure.as_ref(),
         notes: &notes,
         files: loaded

@@ -33,6 +33,13 @@ impl Record {
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct Structure {
     pub name: Option<String>,
+    /// The owner's identifier of the structure (an asset number, a
+    /// station code), when stated (`structure.id`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub id: Option<String>,
+    /// Postal address or place description, when stated (`structure.address`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub address: Option<String>,
     /// Storey heights in metres, level 1..n above the base.
     #[serde(default)]
     pub storey_heights_m: Vec<f64>,
@@ -82,6 +89,16 @@ pub struct Structure {
     pub inferred: Vec<String>,
 }
 
+/// Where the earthquake started: the epicentre (WGS 84 degrees, north and
+/// east positive) and, when known, the depth of the hypocentre.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Hypocentre {
+    pub latitude_deg: f64,
+    pub longitude_deg: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_km: Option<f64>,
+}
+
 /// An earthquake (or ambient) event as ingested: records of every channel,
 /// event and structure metadata, and what was done to the data.
 #[derive(Debug, Clone, Default)]
@@ -90,6 +107,13 @@ pub struct Event {
     /// Event origin time, ns since the Unix epoch, when known.
     pub origin_ns: Option<i64>,
     pub magnitude: Option<f64>,
+    /// Epicentre (and depth), when stated (`event.latitude_deg`, …) or
+    /// given by a record header.
+    pub hypocentre: Option<Hypocentre>,
+    /// The recording station's position [latitude, longitude] (degrees) as
+    /// the record headers state it; the structure's stated position
+    /// (`structure.latitude_deg`) takes precedence where both are known.
+    pub station_position: Option<[f64; 2]>,
     pub structure: Option<Structure>,
     pub records: Vec<Record>,
     pub history: ProcessingHistory,

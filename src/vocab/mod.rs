@@ -13,7 +13,7 @@ mod time;
 mod units;
 
 pub use channel::{most_common_station, Axis, Channel, Direction, QaFlag, Role, SourceRef};
-pub use event::{Event, Record, Structure};
+pub use event::{Event, Hypocentre, Record, Structure};
 pub use history::{ProcessingHistory, ProcessingStep};
 pub use samples::{SampleStore, Samples};
 pub use time::{

@@ -675,9 +675,11 @@ fn test_design_pipeline_runs_and_tracks_the_design_file() {
     );
     assert!(section.contains("Reduced vs full twin at the PS (WNRMSE)"));
     assert!(section.contains("MAC of recorded vs twin POMs 1–3"));
-    // Interface refinement, POD energies and the rehearsal sweep.
+    // The actuator layout drawn on the twin, the interface refinement and
+    // the POD energies; the rehearsal in its own section of the test-design page.
     assert_eq!(section.matches("<svg").count(), 3);
-    assert!(section.contains("Rehearsal of the hybrid test"));
+    assert!(section.contains("id=\"actuator-layout\""));
+    assert!(html.contains("Rehearsal of the hybrid test"));
     let again = pipeline::run(&p, &event, &out, true).unwrap();
     assert_eq!(stage(&again, "design"), &StageOutcome::Skipped);
 

@@ -148,7 +148,7 @@ fn the_report_shows_only_files_the_run_manifest_lists() {
     let html = std::fs::read_to_string(d.join("report.html")).unwrap();
     let channels = section(&html, "channels");
     assert!(
-        channels.contains("Stage not run / output absent: <code>channels.parquet</code>"),
+        channels.contains("Stage not run / output absent: channel QA and strong-motion metrics"),
         "{channels}"
     );
     assert!(!channels.contains("<table"), "{channels}");

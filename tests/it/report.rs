@@ -106,7 +106,8 @@ fn by_id<'a, 'i>(doc: &'a roxmltree::Document<'i>, id: &str) -> Option<roxmltree
     doc.descendants().find(|n| n.attribute("id") == Some(id))
 }
 
-/// Header names and rows (cells) of the table with `id`.
+/// Header names (the column name a heading in words carries as
+/// `data-column`, else its text) and rows (cells) of the table with `id`.
 fn table_cells<'a, 'i>(
     doc: &'a roxmltree::Document<'i>,
     id: &str,
@@ -115,7 +116,11 @@ fn table_cells<'a, 'i>(
     let headers = t
         .descendants()
         .filter(|n| n.has_tag_name("th"))
-        .map(node_text)
+        .map(|n| {
+            n.attribute("data-column")
+                .map(str::to_string)
+                .unwrap_or_else(|| node_text(n))
+        })
         .collect();
     let rows = t
         .descendants()
@@ -235,9 +240,16 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
         );
     }
     let col_of = |name: &str| headers.iter().position(|h| h == name).unwrap();
-    for (r, row) in rows.iter().enumerate() {
-        assert_eq!(node_text(row[col_of("channel_id")]), ids[r]);
-    }
+    // Natural order of the ids (…2 before …10); each row's numbers are its
+    // channel's in the file.
+    let shown: Vec<String> = rows
+        .iter()
+        .map(|row| node_text(row[col_of("channel_id")]))
+        .collect();
+    let mut natural = ids.clone();
+    natural.sort_by(|a, b| report::natural_cmp(a, b));
+    assert_eq!(shown, natural);
+    let file_row = |r: usize| ids.iter().position(|i| *i == shown[r]).unwrap();
     let mut compared = 0;
     for name in [
         "sampling_rate_hz",
@@ -254,19 +266,19 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
         let c = col_of(name);
         for (r, row) in rows.iter().enumerate() {
             let cell = row[c];
-            match truth[r] {
+            let id = &shown[r];
+            match truth[file_row(r)] {
                 Some(v) => {
                     let exact: f64 = cell.attribute("data-value").unwrap().parse().unwrap();
-                    assert_eq!(exact, v, "{name} of {}", ids[r]);
-                    let shown: f64 = node_text(cell).parse().unwrap();
+                    assert_eq!(exact, v, "{name} of {id}");
+                    let text: f64 = node_text(cell).parse().unwrap();
                     assert!(
-                        (shown - v).abs() <= 5e-4 * v.abs(),
-                        "{name} of {}: shown {shown}, value {v}",
-                        ids[r]
+                        (text - v).abs() <= 5e-4 * v.abs(),
+                        "{name} of {id}: shown {text}, value {v}"
                     );
                     compared += 1;
                 }
-                None => assert_eq!(node_text(cell), "—", "{name} of {}", ids[r]),
+                None => assert_eq!(node_text(cell), "—", "{name} of {id}"),
             }
         }
     }
@@ -305,15 +317,28 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
         assert!(rating.contains(&report::format_number(worst)), "{rating}");
     }
 
-    // Residual drift: each row's value is drift.parquet's.
+    // Residual drift: a resolved row shows drift.parquet's value; an
+    // unresolved one (or an artefact) says so, without a number.
     let residual = parquet_numbers(&drift_path, "residual_drift_m");
+    let status = parquet_strings(&drift_path, "residual_status");
     let rc = dh
         .iter()
         .position(|h| h == "residual drift ± σ")
         .expect("residual drift column");
-    for (row, v) in drows.iter().zip(&residual) {
-        let shown = row[rc].attribute("data-value").map(|x| x.parse().unwrap());
-        assert_eq!(shown, *v);
+    for ((row, v), st) in drows.iter().zip(&residual).zip(&status) {
+        let shown: Option<f64> = row[rc].attribute("data-value").map(|x| x.parse().unwrap());
+        let text = node_text(row[rc]);
+        match (v, st.as_str()) {
+            (Some(_), "resolved") => assert_eq!(shown, *v),
+            (Some(_), _) => {
+                assert!(
+                    shown.is_none() && text.starts_with("not resolved"),
+                    "{text}"
+                );
+                assert!(!text.chars().any(|c| c.is_ascii_digit()), "{text}");
+            }
+            (None, _) => assert!(shown.is_none()),
+        }
     }
 
     // Event facts from event.json, in the summary's first line and in full.
@@ -326,16 +351,16 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
     assert!(!event.contains("6.000"), "magnitude with 4 digits: {event}");
 
     // Stages that did not run say so; those that ran show no such message.
-    for (id, file) in [
-        ("modal", "stabilization.parquet"),
-        ("modal", "modes.parquet"),
-        ("hysteresis", "hysteresis_fit.parquet"),
-        ("hysteresis", "bouc_wen.parquet"),
-        ("damage", "damage.parquet"),
-        ("twin", "twin_update.parquet"),
+    for (id, file, words) in [
+        ("modal", "stabilization.parquet", "stabilisation diagram"),
+        ("modal", "modes.parquet", "identified modes"),
+        ("hysteresis", "hysteresis_fit.parquet", "force–drift loops"),
+        ("hysteresis", "bouc_wen.parquet", "Bouc-Wen parameters"),
+        ("damage", "damage.parquet", "damage index ι(t)"),
+        ("twin", "twin_update.parquet", "twin-update candidates"),
     ] {
         let text = section_text(&doc, id);
-        let message = format!("Stage not run / output absent: {file}");
+        let message = format!("Stage not run / output absent: {words}");
         if out.path().join(file).exists() {
             assert!(
                 !text.contains(&message),
@@ -363,11 +388,11 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
         assert!(svg_count(by_id(&doc, "damage").unwrap()) >= 1);
     } else if out.path().join("damage.parquet").exists() {
         // Written but empty (no direction identifiable): said, not rated.
-        assert!(section_text(&doc, "rating").contains("damage.parquet holds no rows"));
+        assert!(section_text(&doc, "rating").contains("No damage index ι(t)"));
         assert!(section_text(&doc, "damage")
             .contains("ι needs a direction whose Bouc-Wen model is identified"));
     } else {
-        assert!(section_text(&doc, "rating").contains("damage.parquet absent"));
+        assert!(section_text(&doc, "rating").contains("no damage index ι(t): stage damage not run"));
     }
 }
 
@@ -545,22 +570,26 @@ fn later_stage_sections_render_fixture_tables_and_rate_damage() {
     assert_eq!(srows[1][4].attribute("data-value"), Some("-1"));
     let fc = mh.iter().position(|h| h == "frequency_hz").unwrap();
     assert_eq!(mrows[1][fc].attribute("data-value"), Some("4.405"));
-    assert!(modal_text.contains("frequency_shifts.parquet"));
+    assert!(modal_text.contains("Not computed: no earlier event"));
 
     // Hysteresis: a loop per (direction, dof); unknown and missing columns named.
     let hyst = by_id(&doc, "hysteresis").unwrap();
     assert_eq!(svg_count(hyst), 2);
     let hyst_text = node_text(hyst);
+    // Missing and unknown columns: for the maintainer, in the appendix only.
+    assert!(!hyst_text.contains("column(s)"), "{hyst_text}");
+    let checks = section_text(&doc, "appendix");
     assert!(
-        hyst_text
-            .contains("expected column(s) not present: segment, coupled_dof, stability_std, stable, reason, cost_j"),
-        "{hyst_text}"
+        checks.contains(
+            "bouc_wen.parquet: expected column(s) not present: segment, coupled_dof, stability_std, stable, reason, cost_j"
+        ),
+        "{checks}"
     );
     let (bh, brows) = table_cells(&doc, "bouc-wen-table");
     assert!(bh.iter().any(|h| h == "extra_figure"));
     let kc = bh.iter().position(|h| h == "value").unwrap();
     assert_eq!(brows[2][kc].attribute("data-value"), Some("225000000"));
-    assert!(hyst_text.contains("Stage not run / output absent: bouc_wen_instantaneous.parquet"));
+    assert!(hyst_text.contains("Stage not run / output absent: instantaneous Bouc-Wen estimates"));
 
     // Damage: final ι rated by default (X 0.03 → YELLOW, Y 0.06 → RED).
     let (_, drows) = table_cells(&doc, "damage-table");
@@ -579,11 +608,10 @@ fn later_stage_sections_render_fixture_tables_and_rate_damage() {
         overall.contains("damage index ι (final) = 0.06000 at direction Y"),
         "{overall}"
     );
-    assert!(section_text(&doc, "rating").contains("drift.parquet absent"));
+    assert!(section_text(&doc, "rating").contains("no inter-storey drift: stage metrics not run"));
     // Absent base outputs are still announced.
-    assert!(
-        section_text(&doc, "channels").contains("Stage not run / output absent: channels.parquet")
-    );
+    assert!(section_text(&doc, "channels")
+        .contains("Stage not run / output absent: channel QA and strong-motion metrics"));
 
     // Peak statistic and custom thresholds: X peak 0.045 < 0.05 → GREEN.
     let settings = ReportSettings {
@@ -612,8 +640,10 @@ fn unreadable_outputs_and_bad_arguments_are_reported() {
     std::fs::write(out.path().join("event.json"), b"{ broken").unwrap();
     let html = report::render_report(out.path(), &ReportSettings::default()).unwrap();
     let doc = parse(&html);
-    assert!(section_text(&doc, "drift").contains("Output unreadable: drift.parquet"));
-    assert!(section_text(&doc, "event").contains("Output unreadable: event.json"));
+    assert!(section_text(&doc, "drift").contains("Output unreadable: inter-storey drift"));
+    assert!(section_text(&doc, "event").contains("Output unreadable: event inventory"));
+    // The file and the reason: in the appendix's table checks.
+    assert!(section_text(&doc, "appendix").contains("drift.parquet: unreadable"));
     assert!(section_text(&doc, "overall-rating").contains("NOT RATED"));
 
     let missing = out.path().join("no-such-dir");
@@ -782,4 +812,201 @@ fn curve_decimation_keeps_segments_short_within_its_budget() {
     }
     // A small budget holds; the step widens instead.
     assert!(decimate_curve(&pts, 300).len() <= 300);
+}
+
+/// One drift on the page (issue 34): in every sample event with drift and
+/// force–drift loops, run through the shipped post-earthquake pipeline, each
+/// loop's largest drawn drift is its drift-table row's peak drift (ratio ×
+/// height, read from drift.parquet here) within 1 %.
+#[test]
+fn loops_are_drawn_from_the_drift_the_drift_table_reports_on_every_sample() {
+    use crate::common::{column_f64, column_i64, column_str, run_sample_pipeline};
+    let samples = manifest().join("sample-records");
+    let mut events: Vec<String> = std::fs::read_dir(&samples)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().is_dir())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        // The facade is the test-design sample: no drift, no loops.
+        .filter(|n| n != "synthetic-facade")
+        .collect();
+    events.sort();
+    assert!(events.len() >= 5, "{events:?}");
+    let work = tempfile::tempdir().unwrap();
+    std::thread::scope(|s| {
+        for e in &events {
+            let out = work.path().join(e);
+            s.spawn(move || run_sample_pipeline("post-earthquake.toml", e, &out, &[]));
+        }
+    });
+    let mut with_both = Vec::new();
+    for e in &events {
+        let out = work.path().join(e);
+        let (drift, fit) = (
+            out.join("drift.parquet"),
+            out.join("hysteresis_fit.parquet"),
+        );
+        if !has_rows(&drift) || !has_rows(&fit) {
+            eprintln!("{e}: no drift or no loops");
+            continue;
+        }
+        let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+        let doc = parse(&html);
+        let (headers, rows) = table_cells(&doc, "loop-drift-table");
+        let col = |name: &str| headers.iter().position(|h| h == name).unwrap();
+        let (dir_c, lev_c, drawn_c) = (
+            col("direction"),
+            col("levels"),
+            col("largest drift drawn (m)"),
+        );
+        let (d_dir, d_kind) = (column_str(&drift, "direction"), column_str(&drift, "kind"));
+        let (d_lo, d_up) = (
+            column_i64(&drift, "lower_level"),
+            column_i64(&drift, "upper_level"),
+        );
+        let (ratio, height) = (
+            column_f64(&drift, "peak_drift_ratio"),
+            column_f64(&drift, "storey_height_m"),
+        );
+        assert!(!rows.is_empty(), "{e}: no loop rows");
+        for row in &rows {
+            let direction = node_text(row[dir_c]);
+            let levels = node_text(row[lev_c]);
+            let (a, b) = levels.split_once('–').expect("levels a–b");
+            let (a, b): (i64, i64) = (a.parse().unwrap(), b.parse().unwrap());
+            let r = (0..d_dir.len())
+                .find(|&r| {
+                    d_dir[r] == direction && d_kind[r] != "estimate" && d_lo[r] == a && d_up[r] == b
+                })
+                .unwrap_or_else(|| panic!("{e}: no drift row for {direction} {levels}"));
+            let table_peak = ratio[r] * height[r];
+            let drawn: f64 = row[drawn_c]
+                .attribute("data-value")
+                .unwrap_or_else(|| panic!("{e} {direction} {levels}: nothing drawn"))
+                .parse()
+                .unwrap();
+            eprintln!(
+                "{e} {direction} levels {levels}: drawn {drawn:.5e} m, drift table {table_peak:.5e} m"
+            );
+            assert!(
+                (drawn / table_peak - 1.0).abs() <= 0.01,
+                "{e} {direction} levels {levels}: largest drift drawn {drawn} m, drift table's peak {table_peak} m"
+            );
+        }
+        with_both.push(e.clone());
+    }
+    // The yielding frame and the 4-storey quake building have both (the
+    // zipped network samples name no masses: no loops).
+    for e in ["synthetic-2storey-yielding", "synthetic-4storey-quake"] {
+        assert!(with_both.iter().any(|w| w == e), "{e}: {with_both:?}");
+    }
+}
+
+#[test]
+fn channel_names_sort_naturally_and_columns_read_as_words() {
+    let mut ids = vec![
+        "CE24386.10",
+        "CE24386.02",
+        "CE24386.19",
+        "CE24386.01",
+        "CE24386.20",
+        "F10-X",
+        "F2-X",
+        "base_X",
+    ];
+    ids.sort_by(|a, b| report::natural_cmp(a, b));
+    assert_eq!(
+        ids,
+        [
+            "base_X",
+            "CE24386.01",
+            "CE24386.02",
+            "CE24386.10",
+            "CE24386.19",
+            "CE24386.20",
+            "F2-X",
+            "F10-X"
+        ]
+    );
+    use quaketwin::report::column_heading;
+    assert_eq!(column_heading("pga_m_s2"), "PGA (m/s²)");
+    assert_eq!(column_heading("peak_drift_ratio"), "peak drift ratio");
+    assert_eq!(column_heading("frequency_hz"), "frequency (Hz)");
+    assert_eq!(column_heading("peak |drift| (m)"), "peak |drift| (m)");
+    // Segment labels: the en dash of earlier tables and the ASCII hyphen.
+    assert_eq!(report::segment_levels("L0–L1"), Some((0, 1)));
+    assert_eq!(report::segment_levels("L2-L6"), Some((2, 6)));
+    assert_eq!(report::segment_levels("dof 1"), None);
+}
+
+/// The epicentral distance: the haversine on the mean Earth sphere against
+/// known great-circle distances.
+#[test]
+fn epicentral_distance_is_the_great_circle_distance() {
+    use quaketwin::geometry::great_circle_km;
+    // One degree of latitude on the 6371.0088 km sphere: 111.195 km.
+    assert!((great_circle_km(34.0, -118.0, 35.0, -118.0) - 111.195).abs() < 0.01);
+    // Los Angeles City Hall to San Francisco City Hall: 559 km (geodesic
+    // 559.1 km on WGS 84; the sphere is within 0.5 %).
+    let d = great_circle_km(34.0537, -118.2428, 37.7793, -122.4193);
+    assert!((d - 559.1).abs() < 0.005 * 559.1, "{d}");
+    assert_eq!(great_circle_km(10.0, 20.0, 10.0, 20.0), 0.0);
+}
+
+/// A real CSMIP bridge record (Painter Street Overpass, Cape Mendocino
+/// 1986, ../shared/records) through the shipped pipeline: the title block
+/// names the structure (without the header's agency column), its station,
+/// the epicentre of the header and the epicentral distance — the haversine
+/// from the header's hypocentre (40.364 N, 124.433 W) to the station
+/// (40.503 N, 124.100 W), 32.1 km —; channels in natural order; each time
+/// history names its sensor location (no level on a bridge), never "level ?".
+#[test]
+fn real_record_cesmd_bridge_report_has_its_title_block_and_natural_channel_order() {
+    let zip = crate::common::shared_record(
+        "cesmd-bridges-corpus/painter-st-ce89324/capemendocino_21nov1986_ce89324p.zip",
+    );
+    let out = tempfile::tempdir().unwrap();
+    quaketwin::commands::run_pipeline(
+        &manifest().join("pipelines/post-earthquake.toml"),
+        &zip,
+        out.path(),
+        true,
+    )
+    .expect("pipeline on the bridge record");
+    let html = std::fs::read_to_string(out.path().join("report.html")).unwrap();
+    let doc = parse(&html);
+    let title = section_text(&doc, "title-block");
+    let expected = {
+        let (p1, p2) = (40.364f64.to_radians(), 40.503f64.to_radians());
+        let dl = (-124.100f64 + 124.433).to_radians();
+        let a = ((p2 - p1) / 2.0).sin().powi(2) + p1.cos() * p2.cos() * (dl / 2.0).sin().powi(2);
+        2.0 * 6371.0088 * a.sqrt().asin()
+    };
+    for fact in [
+        "RIO DELL - 101/PAINTER ST. OVERPASS (bridge)".to_string(),
+        "station CE 89324".into(),
+        "40.364° N, 124.433° W, depth 17 km".into(),
+        format!("{expected:.1} km (great circle"),
+        "origin 1986-11-21 23:33:01.8 UTC, M 5.1".into(),
+    ] {
+        assert!(title.contains(&fact), "{fact} not in {title}");
+    }
+    assert!(!title.contains("CGS"), "{title}");
+    assert!(by_id(&doc, "review-block").is_some());
+    // Natural order: …02 before …10; every channel placed in words.
+    let (headers, rows) = table_cells(&doc, "channel-table");
+    let id_col = headers.iter().position(|h| h == "channel_id").unwrap();
+    let ids: Vec<String> = rows.iter().map(|r| node_text(r[id_col])).collect();
+    let mut natural = ids.clone();
+    natural.sort_by(|a, b| report::natural_cmp(a, b));
+    assert_eq!(ids, natural);
+    assert!(ids.len() >= 10, "{ids:?}");
+    let at = |s: &str| ids.iter().position(|i| i.ends_with(s)).unwrap();
+    assert!(at(".02") < at(".10"), "{ids:?}");
+    let histories = section_text(&doc, "time-histories");
+    assert!(!histories.contains("level ?") && !histories.contains("level unknown"));
+    assert!(histories.contains("FREE FIELD"), "{histories}");
+    // The sensor layout: one row per location, the inputs marked.
+    let layout = by_id(&doc, "sensor-layout").expect("sensor layout");
+    assert!(svg_count(layout) == 1 && node_text(layout).contains("input"));
 }

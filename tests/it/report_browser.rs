@@ -142,6 +142,21 @@ fn section_ids(dom: &str) -> Vec<String> {
         .collect()
 }
 
+/// Pages of a PDF: its `/Type /Page` objects (not the `/Pages` tree nodes).
+fn pdf_pages(pdf: &[u8]) -> usize {
+    let mut n = 0;
+    let mut at = 0;
+    while let Some(i) = pdf[at..].windows(5).position(|w| w == b"/Type") {
+        let rest = &pdf[at + i + 5..];
+        let rest = &rest[rest.iter().take_while(|c| c.is_ascii_whitespace()).count()..];
+        if rest.starts_with(b"/Page") && !rest.starts_with(b"/Pages") {
+            n += 1;
+        }
+        at += i + 5;
+    }
+    n
+}
+
 /// Rows of a Parquet file (0 when absent).
 fn parquet_rows(path: &Path) -> usize {
     let Ok(f) = std::fs::File::open(path) else {
@@ -218,19 +233,75 @@ fn sample_reports_render_and_print_in_headless_chromium() {
     });
     let artefacts = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/test-artifacts");
     std::fs::create_dir_all(&artefacts).unwrap();
-    for ((_, event), out) in SAMPLES.iter().zip(&outs) {
+    for ((pipeline, event), out) in SAMPLES.iter().zip(&outs) {
         let page = out.join("report.html");
         let dom = rendered_dom(&page);
 
-        // The rating opens the page, and the page has every section after it.
+        // The post-earthquake report opens with the rating and has every
+        // section after it; the test-design report is its own template,
+        // the design first.
         let ids = section_ids(&dom);
-        assert_eq!(
-            ids.first().map(String::as_str),
-            Some("rating"),
-            "{event}: {ids:?}"
+        let test_design = *pipeline == "test-design.toml";
+        if test_design {
+            assert_eq!(
+                ids,
+                ["test-design", "rehearsal", "event", "appendix"],
+                "{event}"
+            );
+            assert!(
+                !dom.contains("NOT RATED") && !dom.contains("Stage not run"),
+                "{event}"
+            );
+        } else {
+            assert_eq!(
+                ids.first().map(String::as_str),
+                Some("rating"),
+                "{event}: {ids:?}"
+            );
+            assert!(ids.len() >= 12, "{event}: {ids:?}");
+            assert!(dom.contains("id=\"overall-rating\""), "{event}");
+        }
+
+        // Words, not file names, before the appendix.
+        let appendix = dom.find("<section id=\"appendix\"").expect("appendix");
+        if let Some(at) = dom[..appendix].find(".parquet") {
+            panic!(
+                "{event}: a file name before the appendix: …{}…",
+                &dom[at.saturating_sub(200)..at + 20]
+            );
+        }
+        // The title block, the review block to sign, the sensor layout.
+        for id in ["title-block", "review-block", "sensor-layout"] {
+            assert!(dom.contains(&format!("id=\"{id}\"")), "{event}: no {id}");
+        }
+        let title = &dom[dom.find("id=\"title-block\"").unwrap()..];
+        for fact in [
+            "Structure",
+            "Event",
+            "Epicentral distance",
+            "Report date",
+            "Software",
+        ] {
+            assert!(
+                title[..title.find("</dl>").unwrap()].contains(&format!("<dt>{fact}</dt>")),
+                "{event}: title block without {fact}"
+            );
+        }
+        assert!(
+            figures(&dom, "id=\"sensor-layout\"")
+                .first()
+                .is_some_and(|f| f.contains("<svg")),
+            "{event}: sensor layout without its drawing"
         );
-        assert!(ids.len() >= 12, "{event}: {ids:?}");
-        assert!(dom.contains("id=\"overall-rating\""), "{event}");
+        if test_design {
+            assert!(
+                figures(&dom, "id=\"actuator-layout\"")
+                    .first()
+                    .is_some_and(|f| f.contains("<svg")),
+                "{event}: no actuator layout drawing"
+            );
+            assert!(dom.contains("id=\"rehearsal-sweep\""), "{event}");
+        }
 
         // One mode-shape figure with its SVG per identified mode.
         let modes = parquet_rows(&out.join("modes.parquet"));
@@ -268,6 +339,15 @@ fn sample_reports_render_and_print_in_headless_chromium() {
             "{event}: PDF of {} bytes",
             bytes.len()
         );
+        let pages = pdf_pages(&bytes);
+        eprintln!("{event}: {pages} PDF pages");
+        assert!(pages >= 1, "{event}: no page in the PDF");
+        if test_design {
+            assert!(
+                pages <= 6,
+                "{event}: the test-design report prints on {pages} pages"
+            );
+        }
         std::fs::copy(&page, artefacts.join(format!("report-{event}.html"))).unwrap();
     }
 }

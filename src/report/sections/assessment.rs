@@ -294,11 +294,11 @@ pub(super) fn assessment_html(
 /// before / after levels of the driving direction.
 fn track_figure(track: &Loaded, v: &AssessmentView, settings: &ReportSettings) -> String {
     let Loaded::Ok(t) = track else {
-        return note("No apparent-frequency track (frequency_track.parquet absent).");
+        return note("No apparent-frequency track (not computed in this run).");
     };
     let (Some(time), Some(freq)) = (t.number(ft::TIME_S.name), t.number(ft::FREQUENCY_HZ.name))
     else {
-        return note("frequency_track.parquet lacks time_s or frequency_hz.");
+        return note("The apparent-frequency track lacks its times or frequencies: not drawn.");
     };
     let mut chart = Chart::new(640, 280, "t (s)", "apparent frequency (Hz)");
     let truth = t.number(ft::TRUE_FREQUENCY_HZ.name);

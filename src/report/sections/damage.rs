@@ -56,7 +56,7 @@ fn final_and_peak(pts: &[(f64, f64)]) -> (Option<f64>, Option<f64>) {
 
 /// Why damage.parquet is empty (the damage stage writes no row when no
 /// direction was identified).
-pub(super) const NO_ROWS: &str = "damage.parquet holds no rows: ι needs a direction whose Bouc-Wen model is identified (see the Bouc-Wen section)";
+pub(super) const NO_ROWS: &str = "No damage index ι(t): ι needs a direction whose Bouc-Wen model is identified (see the Bouc-Wen section)";
 
 pub(super) fn damage_section(
     o: &Outputs,
@@ -120,8 +120,17 @@ pub(super) fn damage_section(
         figures.push_str(&ratio_figure(&dir, ratios, o.time_axis, settings));
     }
     if let Some(steps) = t.metadata.get("quaketwin.indefinite_steps") {
+        // {"X": 0, "Y": 3}: per direction, in words.
+        let text = match serde_json::from_str::<serde_json::Value>(steps) {
+            Ok(serde_json::Value::Object(m)) => m
+                .iter()
+                .map(|(d, n)| format!("direction {d}: {n}"))
+                .collect::<Vec<_>>()
+                .join("; "),
+            _ => steps.clone(),
+        };
         body.push_str(&note(&format!(
-            "Time steps where K(t) lost positive definiteness (damage.parquet metadata): {steps}."
+            "Time steps where the stiffness K(t) lost positive definiteness: {text}."
         )));
     }
     body.push_str(&table(
@@ -222,7 +231,7 @@ fn iota_figure(
     let mut html = String::new();
     if !pts.iter().any(|p| p.1.is_finite()) {
         html.push_str(&note(&format!(
-            "ι(t), direction {dir}: no finite value in damage.parquet — not rated."
+            "ι(t), direction {dir}: no finite value — not rated."
         )));
     }
     let mut chart = Chart::new(560, 280, "t (s)", "ι");

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use super::{figure, generic, load, Loaded};
+use super::{figure, load, Loaded};
 use crate::report::html::escape;
 use crate::report::plot::{self, Chart, Mark, Series};
 use crate::report::ReportSettings;
@@ -108,32 +108,51 @@ pub(super) fn facts_list(facts: &[(String, String)]) -> String {
     dl
 }
 
-pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
-    let mut body = String::new();
-    // A run without any design output (a post-earthquake run): one line,
-    // not one "absent" line per design table.
-    let design_tables = [
+/// Whether the run has any design output (listed: a pipeline with a design stage).
+pub(super) fn has_design(dir: &Path) -> bool {
+    [
         &tables::POD,
         &tables::ACTUATOR_LAYOUT,
         &tables::REDUCTION_VALIDATION,
         &tables::INTERFACE_REFINEMENT,
         &tables::HYBRID_PROTOTYPE,
-    ];
-    if design_tables
-        .iter()
-        .all(|t| matches!(load(dir, t, Some(&[])), Loaded::Absent(None)))
-    {
+    ]
+    .iter()
+    .any(|t| !matches!(load(dir, t, Some(&[])), Loaded::Absent(None)))
+}
+
+pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
+    // A run without any design output (a post-earthquake run): one line,
+    // not one "absent" line per design table.
+    if !has_design(dir) {
         return crate::report::html::note(
             "No hybrid-test design in this run: its pipeline has no design stage (pipelines/test-design.toml or \
              `quaketwin design` make one; docs/test-design.md).",
         );
     }
+    let mut body = design_body(dir);
+    body.push_str(&super::rehearsal::rehearsal_section(dir, settings));
+    body
+}
+
+/// The design: its facts, the actuator layout drawn on the twin, the
+/// interface refinement, the Craig–Bampton prototype's frequencies and the
+/// POD energies — compact, no table dumped.
+pub(super) fn design_body(dir: &Path) -> String {
+    let mut body = String::new();
     let facts = design_facts(dir);
     if !facts.is_empty() {
         body.push_str(&facts_list(&facts));
     }
-    let pod = load(dir, &tables::POD, None);
+    let layout = load(dir, &tables::ACTUATOR_LAYOUT, None);
+    body.push_str("<h3>Actuator layout</h3>");
+    if let Some(t) = super::require(&layout, &tables::ACTUATOR_LAYOUT, &mut body) {
+        body.push_str(&super::actuators::actuator_figure(t));
+        body.push_str(&super::actuators::actuator_list(t));
+    }
     let refinement = load(dir, &tables::INTERFACE_REFINEMENT, None);
+    let pod = load(dir, &tables::POD, None);
+    body.push_str("<h3>Reduction and interface</h3><div class=\"grid2\">");
     // The trade-off of the interface refinement: accuracy against actuators.
     if let Loaded::Ok(t) = &refinement {
         if let (Some(act), Some(def), Some(tot)) = (
@@ -147,7 +166,7 @@ pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
                     .filter_map(|(a, y)| Some((((*a)?), (*y)?)))
                     .collect()
             };
-            let mut chart = Chart::new(520, 260, interface_refinement::ACTUATORS.name, "WNRMSE");
+            let mut chart = Chart::new(460, 240, "actuators", "WNRMSE");
             chart
                 .series
                 .push(Series::new("deformation", pts(def), 0, Mark::LinePoints));
@@ -160,7 +179,7 @@ pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
             let legend = plot::legend(&chart.series);
             body.push_str(&figure(
                 plot::render(&chart),
-                "Interface refinement: reduced-twin WNRMSE against the number of actuators (interface_refinement.parquet)",
+                "Interface refinement: the reduced twin's error (WNRMSE at the physical substructure) against the number of actuators, step by step",
                 &legend,
             ));
         }
@@ -173,20 +192,77 @@ pub(super) fn design_section(dir: &Path, settings: &ReportSettings) -> String {
                 .enumerate()
                 .filter_map(|(i, x)| x.map(|x| ((i + 1) as f64, x)))
                 .collect();
-            let mut chart = Chart::new(520, 260, "POM", "energy fraction");
+            let mut chart = Chart::new(460, 240, "POM", "energy fraction");
+            chart.log_y = pts.iter().all(|p| p.1 > 0.0);
             chart
                 .series
                 .push(Series::new("energy fraction", pts, 0, Mark::LinePoints));
             body.push_str(&figure(
                 plot::render(&chart),
-                "POD: energy fraction per POM (pod.parquet)",
+                "Proper orthogonal decomposition: energy fraction per POM",
                 "",
             ));
         }
     }
-    generic(dir, &tables::ACTUATOR_LAYOUT, settings, &mut body);
-    generic(dir, &tables::HYBRID_PROTOTYPE, settings, &mut body);
-    generic(dir, &tables::POD, settings, &mut body);
-    body.push_str(&super::rehearsal::rehearsal_section(dir, settings));
+    body.push_str("</div>");
+    body.push_str("<h3>Craig–Bampton prototype</h3>");
+    let hybrid = load(dir, &tables::HYBRID_PROTOTYPE, None);
+    if let Some(t) = super::require(&hybrid, &tables::HYBRID_PROTOTYPE, &mut body) {
+        body.push_str(&prototype_table(t));
+    }
     body
+}
+
+/// The prototype's frequencies against the full twin's, in band or not,
+/// and in laboratory time.
+fn prototype_table(t: &crate::report::table::Table) -> String {
+    use crate::report::html::{table, Cell};
+    let num = |c: &str, r: usize| t.number(c).and_then(|v| v.get(r).copied().flatten());
+    let in_band = |r: usize| {
+        t.boolean(hybrid_prototype::IN_BAND.name)
+            .and_then(|v| v.get(r).copied().flatten())
+    };
+    // In-band modes and the first ones beyond: the table stays short.
+    let shown: Vec<usize> = (0..t.rows)
+        .filter(|&r| in_band(r) != Some(false) || r < 6)
+        .take(12)
+        .collect();
+    let rows: Vec<Vec<Cell>> = shown
+        .iter()
+        .map(|&r| {
+            vec![
+                Cell::integer(num(hybrid_prototype::MODE.name, r)),
+                Cell::number(num(hybrid_prototype::PROTOTYPE_FREQUENCY_HZ.name, r)),
+                Cell::number(num(hybrid_prototype::FULL_FREQUENCY_HZ.name, r)),
+                Cell::number(num(hybrid_prototype::RELATIVE_ERROR.name, r).map(|e| 100.0 * e)),
+                Cell::text(match in_band(r) {
+                    Some(true) => "yes",
+                    Some(false) => "no",
+                    None => "—",
+                }),
+                Cell::number(num(hybrid_prototype::TEST_FREQUENCY_HZ.name, r)),
+            ]
+        })
+        .collect();
+    let mut html = table(
+        Some("prototype-table"),
+        &[
+            "mode",
+            "prototype f (Hz)",
+            "full twin f (Hz)",
+            "error (%)",
+            "in band",
+            "laboratory f (Hz)",
+        ]
+        .map(String::from),
+        &rows,
+    );
+    if shown.len() < t.rows {
+        html.push_str(&crate::report::html::note(&format!(
+            "{} of {} prototype frequencies shown (those in the band of interest and the first beyond).",
+            shown.len(),
+            t.rows
+        )));
+    }
+    html
 }

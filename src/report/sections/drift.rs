@@ -146,8 +146,8 @@ fn notes_html(notes: &[String]) -> String {
     format!("<ul id=\"drift-notes\">{}</ul>", items.join(""))
 }
 
-/// "−12.3 ± 4.5 mm" (or without σ); in metres when either reaches 1 m (an
-/// unresolved estimate of a noisy record).
+/// "−12.3 ± 4.5 mm" (or without σ); in metres when either reaches 1 m.
+/// Shown only for a resolved residual ([`residual_shown`]).
 pub(super) fn residual_text(res: &Residual) -> String {
     let big = res.drift_m.abs().max(res.std_m.unwrap_or(0.0)) >= 1.0;
     let (scale, unit) = if big { (1.0, "m") } else { (1000.0, "mm") };
@@ -158,6 +158,23 @@ pub(super) fn residual_text(res: &Residual) -> String {
             format_number(scale * s)
         ),
         None => format!("{} {unit}", format_number(scale * res.drift_m)),
+    }
+}
+
+/// The residual drift as the page shows it: a resolved one with its value
+/// and σ; an unresolved one or an artefact as words, without a number (it
+/// says nothing either way).
+pub(super) fn residual_shown(res: &Residual) -> Cell {
+    if res.resolved() && !res.artefact() {
+        Cell {
+            value: Some(res.drift_m),
+            class: Some("num"),
+            ..Cell::text(&residual_text(res))
+        }
+    } else if res.artefact() {
+        Cell::text("not resolved (baseline artefact)")
+    } else {
+        Cell::text("not resolved")
     }
 }
 
@@ -189,8 +206,7 @@ pub(super) fn drift_section(
     if let Loaded::Ok(t) = loaded {
         if t.rows == 0 {
             body.push_str(&note(&format!(
-                "{} holds no rows: no drift could be formed{}",
-                tables::DRIFT.file,
+                "No drift could be formed{}",
                 if notes_of(t).is_empty() { "." } else { ":" }
             )));
             body.push_str(&notes_html(&notes_of(t)));
@@ -297,12 +313,12 @@ pub(super) fn drift_section(
                 row.push(Cell::text("not available"));
             }
             Some(res) => {
-                row.push(Cell {
-                    value: Some(res.drift_m),
-                    class: Some("num"),
-                    ..Cell::text(&residual_text(&res))
+                row.push(residual_shown(&res));
+                row.push(if res.resolved() && !res.artefact() {
+                    percent_cell(res.ratio)
+                } else {
+                    Cell::number(None)
                 });
-                row.push(percent_cell(res.ratio));
                 let rated = res
                     .ratio
                     .filter(|_| res.resolved() && kind.rated())

@@ -48,8 +48,8 @@ pub(super) fn magnitude_text(v: Option<&Value>) -> String {
 pub(super) fn event_section(event: &Result<Value, String>) -> String {
     let mut body = String::new();
     match event {
-        Err(e) if e.is_empty() => body.push_str(&absent("event.json", "ingest")),
-        Err(e) => body.push_str(&unreadable("event.json", e)),
+        Err(e) if e.is_empty() => body.push_str(&absent(super::label_of("event.json"), "ingest")),
+        Err(e) => body.push_str(&unreadable(super::label_of("event.json"), "event.json", e)),
         Ok(ev) => {
             let structure = ev.get("structure");
             let s = |k: &str| structure.and_then(|s| s.get(k));
@@ -81,7 +81,7 @@ pub(super) fn event_section(event: &Result<Value, String>) -> String {
                 .unwrap_or_default();
             body.push_str("<h3>Notes</h3>");
             if notes.is_empty() {
-                body.push_str(&note("No notes in event.json."));
+                body.push_str(&note("No notes with the event."));
             } else {
                 body.push_str("<ul>");
                 for n in notes {
@@ -110,7 +110,7 @@ pub(super) fn event_section(event: &Result<Value, String>) -> String {
                         &rows,
                     ));
                 }
-                _ => body.push_str(&note("event.json lists no files.")),
+                _ => body.push_str(&note("The event inventory lists no files.")),
             }
         }
     }

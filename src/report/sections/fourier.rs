@@ -3,43 +3,13 @@
 //! pipeline's when the record has no usable noise window): one chart per
 //! channel, channels in their natural order (numbers compared as numbers).
 
-use std::cmp::Ordering;
 use std::path::Path;
 
 use super::{figure, listed, load, require};
-use crate::report::html::note;
+use crate::report::html::{natural_cmp, note};
 use crate::report::plot::{self, Chart, Mark, RefLine, Series};
 use crate::report::table::Table;
 use crate::vocab::tables::{self, fourier};
-
-/// Text then number runs compared by kind: "CH2" before "CH10".
-fn natural_order(a: &str, b: &str) -> Ordering {
-    fn runs(s: &str) -> Vec<(bool, String)> {
-        let mut out: Vec<(bool, String)> = Vec::new();
-        for c in s.chars() {
-            let digit = c.is_ascii_digit();
-            match out.last_mut() {
-                Some((d, run)) if *d == digit => run.push(c),
-                _ => out.push((digit, c.to_string())),
-            }
-        }
-        out
-    }
-    let (ra, rb) = (runs(a), runs(b));
-    for ((da, sa), (db, sb)) in ra.iter().zip(&rb) {
-        let o = match (da, db) {
-            (true, true) => {
-                let (ta, tb) = (sa.trim_start_matches('0'), sb.trim_start_matches('0'));
-                ta.len().cmp(&tb.len()).then_with(|| ta.cmp(tb))
-            }
-            _ => sa.to_lowercase().cmp(&sb.to_lowercase()),
-        };
-        if o != Ordering::Equal {
-            return o;
-        }
-    }
-    ra.len().cmp(&rb.len()).then_with(|| a.cmp(b))
-}
 
 /// The first value of column `name` over `rows`.
 fn first_number(t: &Table, rows: &[usize], name: &str) -> Option<f64> {
@@ -161,7 +131,7 @@ pub(super) fn fourier_section(dir: &Path) -> String {
         return body;
     }
     let mut groups = t.groups(&[fourier::CHANNEL_ID.name]);
-    groups.sort_by(|a, b| natural_order(&a.0.join(""), &b.0.join("")));
+    groups.sort_by(|a, b| natural_cmp(&a.0.join(""), &b.0.join("")));
     let from_snr = groups
         .iter()
         .filter(|(_, rows)| {

@@ -63,10 +63,13 @@ pub(super) fn hysteresis_section(dir: &Path, o: &Outputs, settings: &ReportSetti
                 .and_then(|v| v.get("velocity_drift")?.as_str().map(str::to_string)),
             _ => None,
         };
+        let samples =
+            super::listed(dir, tables::SAMPLES.file).then(|| dir.join(tables::SAMPLES.file));
         body.push_str(&super::loops::loops_section(
             t,
             velocity_drift.as_deref(),
             &o.drift,
+            samples.as_deref(),
             settings,
         ));
     }
@@ -204,9 +207,7 @@ fn instantaneous(t: &Table, time_axis: Option<(f64, f64)>, settings: &ReportSett
     if t.number(bouc_wen_instantaneous::T_S.name).is_none()
         || t.number(bouc_wen_instantaneous::N_EXPONENT.name).is_none()
     {
-        return note(
-            "bouc_wen_instantaneous.parquet: columns t_s and n_exponent needed for the plot.",
-        );
+        return note("The instantaneous estimates lack their times or exponents: not drawn.");
     }
     let series = t
         .groups(&keys)

@@ -2,6 +2,7 @@
 //! what its files hold and says plainly when a file is absent or unreadable.
 //! This file holds the page and the helpers the sections share.
 
+mod actuators;
 mod appendix;
 pub(crate) mod assessment;
 mod channels;
@@ -11,6 +12,7 @@ mod drift;
 mod event;
 mod fourier;
 mod hysteresis;
+mod layout;
 mod loops;
 mod modal;
 mod mode_shapes;
@@ -18,7 +20,9 @@ mod rating;
 mod rehearsal;
 mod spectra;
 mod summary;
+mod test_design;
 mod time_histories;
+mod title;
 mod twin;
 
 use std::collections::BTreeMap;
@@ -26,54 +30,102 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use super::html::{absent, escape, note, unreadable, whole_table, Cell};
+use super::html::{absent, escape, note, unreadable, Cell};
 use super::table::{self, Table};
 use super::{Assessment, Rating, ReportSettings};
 use crate::vocab::schema::{ColumnSpec, TableSchema};
 use crate::vocab::tables;
 pub(crate) use assessment::read_assessment;
+pub use loops::segment_levels;
 
-/// Output files the report reads, with the stage that writes each (every
-/// table of `vocab::tables`, the run's JSON/TOML files and the page itself).
-const OUTPUTS: [(&str, &str); 28] = [
-    ("event.json", "ingest"),
-    (tables::SAMPLES.file, "condition"),
-    (tables::FOURIER.file, "condition"),
-    (tables::CHANNELS.file, "metrics"),
-    (tables::SPECTRA.file, "metrics"),
-    (tables::DRIFT.file, "metrics"),
-    (tables::STABILIZATION.file, "modal"),
-    (tables::MODES.file, "modal"),
-    (tables::MODAL_SPECTRUM.file, "modal"),
+/// Output files the report reads, with the stage that writes each and what
+/// the page calls it (every table of `vocab::tables`, the run's JSON/TOML
+/// files and the page itself).  File names appear on the page only in the
+/// appendix; sections name an output in words.
+const OUTPUTS: [(&str, &str, &str); 28] = [
+    ("event.json", "ingest", "event inventory"),
+    (tables::SAMPLES.file, "condition", "conditioned records"),
+    (
+        tables::FOURIER.file,
+        "condition",
+        "Fourier spectra and filter corners",
+    ),
+    (
+        tables::CHANNELS.file,
+        "metrics",
+        "channel QA and strong-motion metrics",
+    ),
+    (tables::SPECTRA.file, "metrics", "response spectra"),
+    (tables::DRIFT.file, "metrics", "inter-storey drift"),
+    (tables::STABILIZATION.file, "modal", "stabilisation diagram"),
+    (tables::MODES.file, "modal", "identified modes"),
+    (tables::MODAL_SPECTRUM.file, "modal", "modal spectrum"),
     (
         tables::FREQUENCY_SHIFTS.file,
         "modal (with a reference event)",
+        "frequency shifts against a reference event",
     ),
-    (tables::HYSTERESIS_FIT.file, "hysteresis"),
-    (tables::BOUC_WEN.file, "hysteresis"),
-    (tables::BOUC_WEN_INSTANTANEOUS.file, "hysteresis"),
-    (tables::DAMAGE.file, "damage"),
-    (tables::TWIN_UPDATE.file, "update"),
-    (tables::TWIN_MODES.file, "update"),
-    ("twin_updated.toml", "update"),
-    (tables::ASSESSMENT.file, "assess"),
-    (tables::FREQUENCY_TRACK.file, "assess"),
-    (tables::POD.file, "design"),
-    (tables::ACTUATOR_LAYOUT.file, "design"),
-    (tables::REDUCTION_VALIDATION.file, "design"),
-    (tables::INTERFACE_REFINEMENT.file, "design"),
-    (tables::HYBRID_PROTOTYPE.file, "design"),
-    ("rehearsal_model.json", "design"),
-    (tables::REHEARSAL_SUMMARY.file, "rehearse"),
-    (tables::REHEARSAL.file, "rehearse"),
-    ("report.html", "report"),
+    (
+        tables::HYSTERESIS_FIT.file,
+        "hysteresis",
+        "force–drift loops",
+    ),
+    (tables::BOUC_WEN.file, "hysteresis", "Bouc-Wen parameters"),
+    (
+        tables::BOUC_WEN_INSTANTANEOUS.file,
+        "hysteresis",
+        "instantaneous Bouc-Wen estimates",
+    ),
+    (tables::DAMAGE.file, "damage", "damage index ι(t)"),
+    (tables::TWIN_UPDATE.file, "update", "twin-update candidates"),
+    (
+        tables::TWIN_MODES.file,
+        "update",
+        "twin modes before and after the update",
+    ),
+    ("twin_updated.toml", "update", "updated twin"),
+    (tables::ASSESSMENT.file, "assess", "assessment"),
+    (
+        tables::FREQUENCY_TRACK.file,
+        "assess",
+        "apparent-frequency track",
+    ),
+    (tables::POD.file, "design", "proper orthogonal modes (POD)"),
+    (tables::ACTUATOR_LAYOUT.file, "design", "actuator layout"),
+    (
+        tables::REDUCTION_VALIDATION.file,
+        "design",
+        "reduction validation",
+    ),
+    (
+        tables::INTERFACE_REFINEMENT.file,
+        "design",
+        "interface refinement",
+    ),
+    (
+        tables::HYBRID_PROTOTYPE.file,
+        "design",
+        "Craig–Bampton prototype",
+    ),
+    ("rehearsal_model.json", "design", "rehearsal model"),
+    (
+        tables::REHEARSAL_SUMMARY.file,
+        "rehearse",
+        "rehearsal sweep",
+    ),
+    (
+        tables::REHEARSAL.file,
+        "rehearse",
+        "rehearsal time histories",
+    ),
+    ("report.html", "report", "this report"),
 ];
 
 /// The files the report reads (all of [`OUTPUTS`] but the page itself).
 pub(super) fn files_read() -> Vec<&'static str> {
     OUTPUTS
         .iter()
-        .map(|(f, _)| *f)
+        .map(|(f, _, _)| *f)
         .filter(|f| *f != "report.html")
         .collect()
 }
@@ -83,9 +135,18 @@ pub(super) fn files_read() -> Vec<&'static str> {
 fn stage_of(file: &str) -> &'static str {
     OUTPUTS
         .iter()
-        .find(|(f, _)| *f == file)
-        .map(|(_, s)| *s)
+        .find(|(f, _, _)| *f == file)
+        .map(|(_, s, _)| *s)
         .unwrap_or("the stage that writes it")
+}
+
+/// What the page calls `file` (its words, never the file name).
+pub(super) fn label_of(file: &str) -> &'static str {
+    OUTPUTS
+        .iter()
+        .find(|(f, _, _)| *f == file)
+        .map(|(_, _, l)| *l)
+        .unwrap_or("output")
 }
 
 /// A file as the report found it.
@@ -138,28 +199,37 @@ fn require<'a>(loaded: &'a Loaded, declared: &TableSchema, body: &mut String) ->
             None
         }
         Loaded::Absent(None) => {
-            body.push_str(&absent(file, stage_of(file)));
+            body.push_str(&absent(label_of(file), stage_of(file)));
             None
         }
         Loaded::Unreadable(e) => {
-            body.push_str(&unreadable(file, e));
+            body.push_str(&unreadable(label_of(file), file, e));
             None
         }
         Loaded::Ok(t) if t.rows == 0 => {
-            body.push_str(&note(&format!("{file} holds no rows.")));
+            body.push_str(&note(&empty_text(file)));
             None
         }
         Loaded::Ok(t) => {
             let mismatches = t.type_mismatches(declared);
             if !mismatches.is_empty() {
-                body.push_str(&note(&format!(
+                super::html::diagnostic(&format!(
                     "{file}: {} (shown as found).",
                     mismatches.join("; ")
-                )));
+                ));
             }
             Some(t)
         }
     }
+}
+
+/// "No <label>: the stage ran and its table is empty." — an empty output in words.
+pub(super) fn empty_text(file: &str) -> String {
+    format!(
+        "No {}: the {} stage ran and found nothing to tabulate.",
+        label_of(file),
+        stage_of(file)
+    )
 }
 
 fn section(id: &str, number: usize, title: &str, body: &str) -> String {
@@ -297,12 +367,20 @@ pub fn assessments(dir: &Path, settings: &ReportSettings) -> Vec<Assessment> {
         time_axis: None,
     };
     damage::damage_section(&o, settings, &mut out);
+    // Table checks are a page's (its appendix): none kept from here.
+    let _ = super::html::take_diagnostics();
     out
 }
 
-/// The whole page.
+/// The whole page: the test-design report for a run of the test-design
+/// pipeline (`test_design::applies`), else the post-earthquake report.
 pub fn page(dir: &Path, settings: &ReportSettings) -> String {
+    // Table checks of an earlier page (or of `assessments`) are not this one's.
+    let _ = super::html::take_diagnostics();
     let event = event::read_event(dir);
+    if test_design::applies(dir) {
+        return test_design::page(dir, &event, settings);
+    }
     let channels = load(dir, &tables::CHANNELS, None);
     let time_axis = time_axis(&channels);
     let o = Outputs {
@@ -317,11 +395,15 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
     };
 
     let mut assessments: Vec<Assessment> = Vec::new();
-    let event_html = event::event_section(&event);
-    let channel_table = channels::channel_section(&o.channels);
+    let mut event_html = String::new();
+    if let Ok(ev) = &event {
+        event_html.push_str(&layout::layout_figure(ev));
+    }
+    event_html.push_str(&event::event_section(&event));
+    let channel_table = channels::channel_section(&o.channels, &event);
     let fourier_html = fourier::fourier_section(dir);
     let spectra = spectra::spectra_section(dir, &o.channels);
-    let histories = time_histories::time_history_section(dir, &o, settings);
+    let histories = time_histories::time_history_section(dir, &o, &event, settings);
     let drift_html = drift::drift_section(&o.drift, settings, &mut assessments);
     let modal = modal::modal_section(dir, &o, settings);
     let hysteresis = hysteresis::hysteresis_section(dir, &o, settings);
@@ -337,23 +419,12 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
         Err(_) => None,
     };
     let title = settings.title.clone().unwrap_or_else(|| match &event_name {
-        Some(n) => format!("quaketwin report — {n}"),
-        None => "quaketwin report".to_string(),
+        Some(n) => format!("Post-earthquake report — {n}"),
+        None => "Post-earthquake report".to_string(),
     });
-    let toc = SECTIONS
-        .iter()
-        .enumerate()
-        .map(|(i, (id, t))| format!("<a href=\"#{id}\">{}. {}</a>", i + 1, escape(t)))
-        .collect::<Vec<_>>()
-        .join(" ");
     let mut page = String::with_capacity(1 << 20);
     page.push_str(&page_head(&title));
-    page.push_str(&format!(
-        "<header><h1>{}</h1><p class=\"meta\">Output directory: <code>{}</code> · quaketwin {}</p><nav>{toc}</nav></header>\n<main>\n",
-        escape(&title),
-        escape(&dir.display().to_string()),
-        env!("CARGO_PKG_VERSION")
-    ));
+    page.push_str(&page_header(dir, &event, &title, settings, &SECTIONS));
     let bodies = [
         rating,
         summary,
@@ -373,8 +444,33 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
     for (i, ((id, title), body)) in SECTIONS.iter().zip(bodies).enumerate() {
         page.push_str(&section(id, i + 1, title, &body));
     }
-    page.push_str("</main>\n<footer><p>Every number on this page is read from the Parquet/JSON outputs in the directory above. Ratings: see docs/report.md.</p></footer>\n</body>\n</html>\n");
+    page.push_str("</main>\n<footer><p>Every number on this page is read from the outputs of the run in the directory above (the appendix lists them). Ratings: see docs/report.md.</p></footer>\n</body>\n</html>\n");
     page
+}
+
+/// The page's header: title, the title block (structure, event, date,
+/// software) beside the review block (to sign), the output directory and
+/// the table of contents; opens `<main>`.
+pub(super) fn page_header(
+    dir: &Path,
+    event: &Result<Value, String>,
+    title: &str,
+    settings: &ReportSettings,
+    sections: &[(&str, &str)],
+) -> String {
+    let toc = sections
+        .iter()
+        .enumerate()
+        .map(|(i, (id, t))| format!("<a href=\"#{id}\">{}. {}</a>", i + 1, escape(t)))
+        .collect::<Vec<_>>()
+        .join(" ");
+    format!(
+        "<header><h1>{}</h1><div class=\"title-grid\">{}{}</div><p class=\"meta\">Output directory: <code>{}</code></p><nav>{toc}</nav></header>\n<main>\n",
+        escape(title),
+        title::title_block(dir, event, settings),
+        title::review_block(),
+        escape(&dir.display().to_string()),
+    )
 }
 
 /// 0 to the longest record (npts / sampling rate of channels.parquet): every
@@ -415,14 +511,6 @@ fn rating_cell(r: Option<Rating>) -> Cell {
     match r {
         Some(r) => Cell::raw(r.badge()),
         None => Cell::text("not rated"),
-    }
-}
-
-fn generic(dir: &Path, declared: &TableSchema, settings: &ReportSettings, body: &mut String) {
-    body.push_str(&format!("<h3><code>{}</code></h3>", escape(declared.file)));
-    let loaded = load(dir, declared, None);
-    if let Some(t) = require(&loaded, declared, body) {
-        body.push_str(&whole_table(t, settings.max_table_rows));
     }
 }
 
@@ -492,6 +580,11 @@ ul.legend{list-style:none;padding:0;margin:2px 0;display:flex;flex-wrap:wrap;gap
 .rating-box.r-red{border-color:#d55e00}
 .rating-box .big{font-size:20px;margin:2px 0}
 .rating-box.r-none{border-color:#999;background:var(--bg2)}
+.title-grid{display:grid;grid-template-columns:minmax(0,1.5fr) minmax(0,1fr);gap:6px 24px;align-items:start;margin:4px 0}
+dl.title-block{grid-template-columns:max-content 1fr;font-size:13px}
+table.review-block{width:100%}
+table.review-block td.sign{height:26px;min-width:70px}
+svg.layout,svg.actuators{max-width:100%;height:auto;display:block}
 footer{margin-top:24px;border-top:1px solid var(--line);color:var(--muted);font-size:12px}
 .lead{font-size:15px;margin:4px 0 8px}
 .glance{display:grid;grid-template-columns:repeat(auto-fill,minmax(300px,1fr));gap:6px 18px;align-items:start}
@@ -510,6 +603,10 @@ h1{font-size:17px;margin:0 0 2px}
 h2{font-size:14px;margin:12px 0 6px;break-after:avoid;page-break-after:avoid}
 h3{font-size:12px;break-after:avoid;page-break-after:avoid}
 #event{break-before:page;page-break-before:always}
+.test-design-page #event{break-before:auto;page-break-before:auto}
+.title-grid{grid-template-columns:minmax(0,1.5fr) minmax(0,1fr)}
+dl.title-block{font-size:9.5px}
+table.review-block td.sign{height:22px}
 table{font-size:9px;break-inside:auto}
 thead{display:table-header-group}
 tr,figure,.card,.rating-box{break-inside:avoid;page-break-inside:avoid}

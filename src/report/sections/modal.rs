@@ -53,6 +53,8 @@ pub(super) fn modal_section(dir: &Path, o: &Outputs, settings: &ReportSettings) 
             stabilization::ORDER.name,
             stabilization::FREQUENCY_HZ.name,
             stabilization::DAMPING_RATIO.name,
+            stabilization::MPC.name,
+            stabilization::MPD_DEG.name,
             stabilization::STABLE_FREQUENCY.name,
             stabilization::STABLE_DAMPING.name,
             stabilization::STABLE_SHAPE.name,
@@ -128,12 +130,7 @@ pub(super) fn modal_section(dir: &Path, o: &Outputs, settings: &ReportSettings) 
             }
             let mut legend_series = chart.series.clone();
             if !mode_freqs.is_empty() {
-                legend_series.push(Series::new(
-                    "identified mode (modes.parquet)",
-                    vec![],
-                    1,
-                    Mark::Dashed,
-                ));
+                legend_series.push(Series::new("identified mode", vec![], 1, Mark::Dashed));
             }
             body.push_str(&figure(
                 plot::render(&chart),
@@ -253,7 +250,7 @@ fn spectrum_figure(t: &Table, f_axis: Option<(f64, f64)>, mode_freqs: &[f64]) ->
     let top = lines.iter().flatten().map(|p| p.1).fold(0.0f64, f64::max);
     if top <= 0.0 {
         html.push_str(&note(
-            "modal_spectrum.parquet holds no PSD singular values to plot.",
+            "The modal spectrum holds no PSD singular values to plot.",
         ));
         return html;
     }
@@ -279,7 +276,7 @@ fn spectrum_figure(t: &Table, f_axis: Option<(f64, f64)>, mode_freqs: &[f64]) ->
     let legend = plot::legend(&chart.series);
     html.push_str(&figure(
         plot::render(&chart),
-        "Modal spectrum: leading singular values of the Welch PSD matrix of the outputs (modal_spectrum.parquet, kind psd) on the \
+        "Modal spectrum: leading singular values of the Welch PSD matrix of the outputs on the \
          frequency axis of the stabilisation diagram above; dashed: identified modes. Peaks of σ1 mark modes; σ2 rising \
          to σ1 marks close modes.",
         &legend,
@@ -293,7 +290,7 @@ fn shifts_part(shifts: &Loaded, settings: &ReportSettings) -> String {
     use frequency_shifts as fs;
     let mut body = String::new();
     if let Loaded::Absent(None) = shifts {
-        body.push_str("<p class=\"absent\">Output absent: <code>frequency_shifts.parquet</code> (written by the modal stage only when an earlier run of the same structure is given: <code>--reference DIR</code> or the <code>reference_modes</code> param).</p>");
+        body.push_str("<p class=\"absent\">Not computed: no earlier event of the same structure was given to compare with (the modal stage compares with one given by <code>--reference DIR</code> or its <code>reference_modes</code> param).</p>");
         return body;
     }
     let Loaded::Ok(t) = shifts else {

@@ -48,13 +48,13 @@ const COMPLEX_MPC: f64 = 0.9;
 pub(super) fn mode_shapes(t: &Table, channels: &Loaded) -> String {
     let mut body = String::new();
     let Some(shapes) = shapes(t) else {
-        return note("modes.parquet has no shape_re column: no mode shapes to draw.");
+        return note("The identified modes carry no shapes: no mode shapes to draw.");
     };
     let mut names = output_channels(t);
     let width = shapes.iter().flatten().map(Vec::len).max().unwrap_or(0);
     if names.len() != width {
         body.push_str(&note(&format!(
-            "modes.parquet: {} output channel name(s) in quaketwin.output_channels for {width} shape component(s); components numbered instead.",
+            "{} output channel name(s) recorded for {width} shape component(s): components numbered instead.",
             names.len()
         )));
         names = (1..=width).map(|i| format!("#{i}")).collect();
@@ -70,10 +70,10 @@ pub(super) fn mode_shapes(t: &Table, channels: &Loaded) -> String {
         .collect();
     body.push_str(&note(&match &layout {
         Some(_) => "Mode shapes on the storey layout: level up, real part of the component across (largest component 1), one line \
-                    per direction; channel names beside the points. Levels and directions from channels.parquet."
+                    per direction; channel names beside the points. Levels and directions from the channel table."
             .to_string(),
         None => "Mode shapes: real part of each component (largest 1) against the channel's position; channel levels are not all \
-                 known (channels.parquet), so no storey profile is drawn."
+                 known (channel table), so no storey profile is drawn."
             .to_string(),
     }));
     body.push_str("<div class=\"multiples\">");

@@ -12,11 +12,15 @@ use crate::vocab::tables;
 /// Why a criterion's file gives no value (None when it does).
 fn file_gap(file: &str, loaded: &Loaded) -> Option<String> {
     match loaded {
-        Loaded::Ok(t) if t.rows == 0 => Some(format!("{file} holds no rows")),
+        Loaded::Ok(t) if t.rows == 0 => Some(super::empty_text(file)),
         Loaded::Ok(_) => None,
         Loaded::Absent(Some(why)) => Some(format!("not applicable: {why}")),
-        Loaded::Absent(None) => Some(format!("{file} absent (stage {} not run)", stage_of(file))),
-        Loaded::Unreadable(_) => Some(format!("{file} unreadable")),
+        Loaded::Absent(None) => Some(format!(
+            "no {}: stage {} not run",
+            super::label_of(file),
+            stage_of(file)
+        )),
+        Loaded::Unreadable(_) => Some(format!("the {} could not be read", super::label_of(file))),
     }
 }
 
@@ -29,7 +33,7 @@ fn residual_gap(drift: &Loaded) -> String {
         return String::new();
     };
     if !t.has(tables::drift::RESIDUAL_DRIFT_M.name) {
-        return "drift.parquet has no residual_drift_m column (written by an earlier quaketwin: remove it and run the pipeline again)"
+        return "the inter-storey drift table has no residual drift (written by an earlier quaketwin: run the pipeline again)"
             .into();
     }
     let values: Vec<_> = (0..t.rows).filter_map(|r| residual(t, r)).collect();
@@ -38,11 +42,6 @@ fn residual_gap(drift: &Loaded) -> String {
             .into();
     }
     let artefacts = values.iter().filter(|v| v.artefact()).count();
-    let widest = values
-        .iter()
-        .filter(|v| !v.artefact())
-        .filter_map(|v| v.std_m)
-        .fold(0.0f64, f64::max);
     let mut why = Vec::new();
     if artefacts > 0 {
         why.push(format!(
@@ -51,9 +50,8 @@ fn residual_gap(drift: &Loaded) -> String {
     }
     if artefacts < values.len() {
         why.push(format!(
-            "{} not resolved: |D| < 2σ (σ up to {} m: sensor noise integrated twice)",
-            values.len() - artefacts,
-            format_number(widest)
+            "{} not resolved: |D| < 2σ, the estimate does not stand out of the sensor noise that double integration turns into drift",
+            values.len() - artefacts
         ));
     }
     format!("no resolved residual drift: {}", why.join("; "))
@@ -67,13 +65,13 @@ fn peak_gap(drift: &Loaded) -> String {
             let lead = if t.rows == 0 {
                 "no drift could be formed"
             } else {
-                "drift.parquet holds no ratable value"
+                "the inter-storey drift table holds no ratable value"
             };
             return format!("{lead}: {}", notes.join("; "));
         }
     }
     file_gap(tables::DRIFT.file, drift)
-        .unwrap_or_else(|| "drift.parquet holds no ratable value".into())
+        .unwrap_or_else(|| "the inter-storey drift table holds no ratable value".into())
 }
 
 fn thresholds_text(t: &Thresholds) -> String {
@@ -119,7 +117,7 @@ pub(super) fn rating_section(
                         escape(&a.criterion),
                         format_number(a.value),
                         escape(&a.subject),
-                        escape(&a.source),
+                        escape(super::label_of(&a.source)),
                         if a.provisional { ": provisional" } else { "" }
                     )
                 })
@@ -165,7 +163,7 @@ pub(super) fn rating_section(
             match &o.damage {
                 Loaded::Ok(t) if t.rows == 0 => super::damage::NO_ROWS.to_string(),
                 other => file_gap(tables::DAMAGE.file, other)
-                    .unwrap_or_else(|| "damage.parquet: present but holds no ratable value".into()),
+                    .unwrap_or_else(|| "the damage index holds no ratable value".into()),
             },
         ),
     ];
@@ -183,7 +181,7 @@ pub(super) fn rating_section(
             Some(w) => rows.push(vec![
                 Cell::text(criterion),
                 Cell::text(&thresholds_text(th)),
-                Cell::raw(format!("<code>{}</code>", escape(file))),
+                Cell::text(super::label_of(file)),
                 Cell::text(&rated.len().to_string()),
                 Cell::text(&format!("{} at {}", format_number(w.value), w.subject)),
                 Cell::raw(w.rating.badge()),
@@ -225,7 +223,7 @@ pub(super) fn rating_section(
     }
     if assessed.is_none() {
         body.push_str(&note(
-            "Overall rating = worst of the available criteria (no assessment.parquet: the pipeline has no `assess` stage). Screening values, to be set per structure type; sources and rationale in docs/report.md.",
+            "Overall rating = worst of the available criteria (no assessment: the pipeline has no `assess` stage). Screening values, to be set per structure type; sources and rationale in docs/report.md.",
         ));
     }
     body

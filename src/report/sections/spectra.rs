@@ -46,7 +46,9 @@ pub(super) fn spectra_section(dir: &Path, channels: &Loaded) -> String {
         by_dir.entry(dir).or_default().push((id, rows));
     }
     body.push_str("<div class=\"grid2\">");
-    for (dir, list) in by_dir {
+    for (dir, mut list) in by_dir {
+        // Curves in natural order of the channel ids, as the channel table.
+        list.sort_by(|a, b| crate::report::html::natural_cmp(&a.0, &b.0));
         let mut chart = Chart::new(560, 320, "period T (s)", "PSA (m/s²)");
         chart.log_x = true;
         for (i, (id, rows)) in list.iter().enumerate() {

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use serde_json::Value;
 
-use super::drift::{notes_of, residual, residual_text, RowKind};
+use super::drift::{notes_of, residual, RowKind};
 use super::event::{json_text, magnitude_text};
 use super::{damage, rating_cell, stage_of, twin, Loaded, Outputs};
 use crate::report::format_number;
@@ -33,11 +33,15 @@ fn card_wide(title: &str, body: &str) -> String {
 /// One line saying why a card has nothing to show.
 fn gap(file: &str, loaded: &Loaded) -> String {
     let why = match loaded {
-        Loaded::Ok(t) if t.rows == 0 => format!("{file} holds no rows."),
+        Loaded::Ok(t) if t.rows == 0 => super::empty_text(file),
         Loaded::Ok(_) => String::new(),
         Loaded::Absent(Some(why)) => format!("Not applicable: {why}."),
-        Loaded::Absent(None) => format!("{file} absent (stage {} not run).", stage_of(file)),
-        Loaded::Unreadable(_) => format!("{file} unreadable."),
+        Loaded::Absent(None) => format!(
+            "No {}: stage {} not run.",
+            super::label_of(file),
+            stage_of(file)
+        ),
+        Loaded::Unreadable(_) => format!("The {} could not be read.", super::label_of(file)),
     };
     format!("<p class=\"note\">{}</p>", escape(&why))
 }
@@ -67,6 +71,10 @@ pub(super) fn summary_section(
             format!("M {}", magnitude_text(ev.get("magnitude"))),
         ];
         facts.extend(structure.map(|s| format!("structure: {s}")));
+        facts.extend(
+            super::title::epicentral_distance_km(ev)
+                .map(|d| format!("epicentral distance {d:.1} km")),
+        );
         body.push_str(&format!(
             "<p class=\"lead\">{}</p>",
             escape(&facts.join(" · "))
@@ -98,7 +106,7 @@ fn shaking(loaded: &Loaded) -> String {
         return gap(tables::CHANNELS.file, loaded);
     };
     let Some(pga) = t.number(channels::PGA_M_S2.name) else {
-        return "<p class=\"note\">channels.parquet has no pga_m_s2 column.</p>".into();
+        return "<p class=\"note\">The channel table has no PGA.</p>".into();
     };
     // direction → (ground peak, its channel), (floor peak, its channel)
     type Peak = Option<(f64, String)>;
@@ -109,7 +117,7 @@ fn shaking(loaded: &Loaded) -> String {
         };
         let dir = t
             .key(channels::DIRECTION.name, r)
-            .unwrap_or_else(|| "?".into());
+            .unwrap_or_else(|| "direction unknown".into());
         let id = t.key(channels::CHANNEL_ID.name, r).unwrap_or_default();
         let ground = t.key(channels::LEVEL.name, r).as_deref() == Some("0")
             || t.key(channels::ROLE.name, r).as_deref() == Some("input");
@@ -217,17 +225,12 @@ fn storeys(loaded: &Loaded, settings: &ReportSettings) -> String {
                     Cell::text("not rated")
                 },
                 match &res {
-                    Some(x) => Cell {
-                        value: Some(x.drift_m),
-                        class: Some("num"),
-                        ..Cell::text(&residual_text(x))
-                    },
+                    Some(x) => super::drift::residual_shown(x),
                     None => Cell::number(None),
                 },
                 match (res, residual_rating) {
                     (_, Some(g)) => rating_cell(Some(g)),
-                    (Some(x), None) if x.artefact() => Cell::text("artefact"),
-                    (Some(_), None) => Cell::text("not resolved"),
+                    (Some(_), None) => Cell::text("not rated"),
                     (None, None) => Cell::text("—"),
                 },
             ]

@@ -15,9 +15,10 @@ use arrow_array::cast::AsArray;
 use arrow_array::{Array, ArrayRef, RecordBatch};
 use arrow_schema::DataType;
 
+use super::layout::place_text;
 use super::{channel_info, figure, listed, not_loaded, require, Loaded, Outputs};
 use crate::report::format_number;
-use crate::report::html::note;
+use crate::report::html::{natural_cmp, note};
 use crate::report::plot::{self, Chart, Mark, MinMaxDecimator, Series};
 use crate::report::table::{self, Column};
 use crate::report::ReportSettings;
@@ -103,7 +104,12 @@ fn for_each_row(
     })
 }
 
-pub(super) fn time_history_section(dir: &Path, o: &Outputs, settings: &ReportSettings) -> String {
+pub(super) fn time_history_section(
+    dir: &Path,
+    o: &Outputs,
+    event: &Result<serde_json::Value, String>,
+    settings: &ReportSettings,
+) -> String {
     let channels = &o.channels;
     let mut body = String::new();
     let path = dir.join(tables::SAMPLES.file);
@@ -130,7 +136,7 @@ pub(super) fn time_history_section(dir: &Path, o: &Outputs, settings: &ReportSet
     ]);
     if !missing.is_empty() {
         body.push_str(&note(&format!(
-            "samples.parquet: column(s) needed for the plots not present: {}.",
+            "The conditioned records lack column(s) the plots need: {}.",
             missing.join(", ")
         )));
         return body;
@@ -150,14 +156,32 @@ pub(super) fn time_history_section(dir: &Path, o: &Outputs, settings: &ReportSet
             .collect(),
         _ => BTreeMap::new(),
     };
-    let traces = match decimated_traces(&path, settings.max_points_per_trace) {
+    let mut traces = match decimated_traces(&path, settings.max_points_per_trace) {
         Ok(t) => t,
         Err(e) => {
-            body.push_str(&note(&format!(
-                "samples.parquet: could not be read for the plots: {e}."
-            )));
+            crate::report::html::diagnostic(&format!(
+                "{}: not read for the plots: {e}",
+                tables::SAMPLES.file
+            ));
+            body.push_str(&note(
+                "The conditioned records could not be read for the plots (appendix, table checks).",
+            ));
             return body;
         }
+    };
+    // Natural order of the channel ids (…02 before …10), as the channel table.
+    traces.sort_by(|a, b| natural_cmp(&a.0, &b.0));
+    let storeys = event.as_ref().ok().and_then(super::layout::storeys);
+    let places: BTreeMap<String, String> = match channels {
+        Loaded::Ok(c) => (0..c.rows)
+            .filter_map(|r| {
+                Some((
+                    c.key(channels::CHANNEL_ID.name, r)?,
+                    c.key(channels::LOCATION_TEXT.name, r)?,
+                ))
+            })
+            .collect(),
+        _ => BTreeMap::new(),
     };
     // Common symmetric y-axis so amplitudes compare across the multiples.
     let peak = traces
@@ -167,7 +191,7 @@ pub(super) fn time_history_section(dir: &Path, o: &Outputs, settings: &ReportSet
         .fold(0.0f64, f64::max);
     let y = if peak > 0.0 { 1.05 * peak } else { 1.0 };
     body.push_str(&note(&format!(
-        "Conditioned acceleration, common vertical scale; time from each record's first sample (every time axis of this page starts there). Traces drawn with at most {} points (min–max decimation keeps the peaks); PGA values from channels.parquet.",
+        "Conditioned acceleration, common vertical scale; time from each record's first sample (every time axis of this page starts there). Traces drawn with at most {} points (min–max decimation keeps the peaks); PGA values from the channel table.",
         settings.max_points_per_trace
     )));
     body.push_str("<div class=\"multiples\">");
@@ -179,11 +203,12 @@ pub(super) fn time_history_section(dir: &Path, o: &Outputs, settings: &ReportSet
             .series
             .push(Series::new(id.clone(), pts, i % 7, Mark::Line));
         let (dir, level) = info.get(&id).cloned().unwrap_or((None, None));
+        let level = level.and_then(|l| l.parse::<i32>().ok());
         let caption = format!(
-            "{id} — level {}, direction {}{}",
-            level.unwrap_or_else(|| "?".into()),
-            dir.map(|d| crate::report::html::direction_text(&d))
-                .unwrap_or_else(|| "?".into()),
+            "{id} — {}, {}{}",
+            place_text(level, places.get(&id).map(String::as_str), storeys),
+            dir.map(|d| format!("direction {}", crate::report::html::direction_text(&d)))
+                .unwrap_or_else(|| "direction unknown".into()),
             pga.get(&id)
                 .map(|p| format!(", PGA {} m/s²", format_number(*p)))
                 .unwrap_or_default()
@@ -259,4 +284,49 @@ fn decimated_traces(
         .zip(decimators)
         .map(|(k, d)| (k, d.finish()))
         .collect())
+}
+
+/// Conditioned displacement (`disp_m`) of the channels `ids` of
+/// samples.parquet, as (t, u) in time order per channel, only the samples
+/// with t in `t_range` (inclusive): what the loops draw their drift from.
+/// Gone through a batch at a time, as the traces are.
+pub(super) fn displacements(
+    path: &Path,
+    ids: &std::collections::BTreeSet<String>,
+    t_range: (f64, f64),
+) -> crate::error::Result<BTreeMap<String, Vec<(f64, f64)>>> {
+    let cols = [
+        samples::CHANNEL_ID.name,
+        samples::T_S.name,
+        samples::DISP_M.name,
+    ];
+    let mut out: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
+    table::for_each_batch(path, Some(&cols), BATCH_ROWS, |batch: &RecordBatch| {
+        let column = |name: &str| batch.column_by_name(name);
+        let (Some(id), Some(t), Some(u)) = (column(cols[0]), column(cols[1]), column(cols[2]))
+        else {
+            return Ok(());
+        };
+        let keys = Keys::of(id);
+        let (t, u) = (
+            table::number_values(t).unwrap_or_default(),
+            table::number_values(u).unwrap_or_default(),
+        );
+        for row in 0..batch.num_rows() {
+            let key = keys.get(row);
+            if !ids.contains(key.as_ref()) {
+                continue;
+            }
+            if let (Some(&Some(x)), Some(&Some(y))) = (t.get(row), u.get(row)) {
+                if x >= t_range.0 && x <= t_range.1 {
+                    out.entry(key.into_owned()).or_default().push((x, y));
+                }
+            }
+        }
+        Ok(())
+    })?;
+    for v in out.values_mut() {
+        v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    Ok(out)
 }

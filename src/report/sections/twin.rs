@@ -94,15 +94,15 @@ pub(super) fn twin_section(o: &Outputs, settings: &ReportSettings) -> String {
 fn parameters_table(t: &Table) -> String {
     let changes = parameter_changes(t);
     if changes.is_empty() {
-        return note("twin_update.parquet names no parameters (metadata quaketwin.parameters).");
+        return note("The twin update names no parameters.");
     }
     let converged = meta_json(t, "quaketwin.result")
         .and_then(|r| r.get("converged")?.as_bool())
         .map(|c| if c { "converged" } else { "not converged" })
         .unwrap_or("convergence not recorded");
     let mut html = note(&format!(
-        "Calibrated values from the ensemble update ({converged}; metadata quaketwin.result); start values and bounds as the \
-         update used them (quaketwin.parameter_bounds). A value at a bound means the data pull it further than the bounds allow."
+        "Calibrated values from the ensemble update ({converged}); start values and bounds as the \
+         update used them. A value at a bound means the data pull it further than the bounds allow."
     ));
     let rows: Vec<Vec<Cell>> = changes
         .iter()
@@ -195,7 +195,7 @@ fn rounds_table(t: &Table, settings: &ReportSettings) -> String {
 fn modes_table(t: &Table) -> String {
     let mut by_mode: std::collections::BTreeMap<i64, [Option<usize>; 2]> = Default::default();
     let Some(modes) = t.number(twin_modes::MODE.name) else {
-        return note("twin_modes.parquet has no mode column.");
+        return note("The twin modes carry no mode numbers.");
     };
     for r in 0..t.rows {
         let Some(m) = modes.get(r).copied().flatten() else {
@@ -250,7 +250,7 @@ fn modes_table(t: &Table) -> String {
                 ));
             }
             html.push_str(&format!(
-                "<p id=\"twin-summary\">{} (twin_modes.parquet metadata; unpaired modes count 1).</p>",
+                "<p id=\"twin-summary\">{} (unpaired modes count 1).</p>",
                 escape(&text)
             ));
         }
