@@ -452,11 +452,15 @@ impl Manifest {
                 ));
             }
             if let Some(az) = s.x_axis_azimuth_deg {
-                if !az.is_finite() {
+                // Within one turn either way: beyond ±2⁵³ an f64 has no
+                // fraction of a degree left, and X − 90° would equal X
+                // (found by the structured fuzz run: 1e300 made the axes
+                // "not orthogonal", an error naming no file).
+                if !(az.is_finite() && az.abs() <= 360.0) {
                     return Err(Error::input(
                         loc(),
                         format!(
-                            "structure.x_axis_azimuth_deg {az} must be a finite angle in degrees"
+                            "structure.x_axis_azimuth_deg {az} must be an angle in degrees, from -360 to 360 (clockwise from north)"
                         ),
                     ));
                 }

@@ -191,7 +191,7 @@ pub fn apply_building_geometry(event: &mut Event) -> Result<GeometryReport> {
     let axes = match stated {
         Some(x) => Some(BuildingAxes {
             x_azimuth_deg: x.rem_euclid(360.0),
-            y_azimuth_deg: (x - 90.0).rem_euclid(360.0),
+            y_azimuth_deg: (x.rem_euclid(360.0) - 90.0).rem_euclid(360.0),
             source: AxesSource::Stated,
         }),
         // Channels already in structure axes (a bridge's Long/Tran, a

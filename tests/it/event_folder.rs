@@ -716,10 +716,21 @@ fn csmip_v1_beside_its_v2_is_a_duplicate_and_alone_is_read() {
 /// Issue 14 item 5: values that used to pass silently into nonsense.
 #[test]
 fn manifest_values_outside_their_physical_range_are_errors_naming_the_key() {
-    let cases: [(&str, &str); 4] = [
+    let cases: [(&str, &str); 6] = [
         (
             "[event]\norigin_time = \"99999-01-01T00:00:00Z\"\n",
             "event.origin_time",
+        ),
+        // The structured fuzz run, case 576448 of seed 33: an azimuth of
+        // ±1e300 reached the geometry as "axes must be orthogonal", naming
+        // no file.
+        (
+            "[structure]\nx_axis_azimuth_deg = -1e300\n",
+            "structure.x_axis_azimuth_deg",
+        ),
+        (
+            "[structure]\nx_axis_azimuth_deg = 361.0\n",
+            "structure.x_axis_azimuth_deg",
         ),
         (
             "[structure]\nstorey_heights_m = [1e-300, 3.0]\n",
