@@ -22,16 +22,6 @@ fn first_text(t: &Table, rows: &[usize], name: &str) -> Option<String> {
     rows.iter().find_map(|&r| col.get(r).cloned().flatten())
 }
 
-fn hz(f: f64) -> String {
-    if f >= 10.0 {
-        format!("{f:.1} Hz")
-    } else if f >= 1.0 {
-        format!("{f:.2} Hz")
-    } else {
-        format!("{f:.3} Hz")
-    }
-}
-
 /// One channel's chart and the words under it.
 fn channel_figure(t: &Table, id: &str, rows: &[usize]) -> String {
     let points = |y: &str| -> Vec<(f64, f64)> {
@@ -79,7 +69,9 @@ fn channel_figure(t: &Table, id: &str, rows: &[usize]) -> String {
     let from_snr = first_text(t, rows, fourier::CORNERS_FROM.name).as_deref() == Some("snr");
     let corners: Vec<String> = [("high-pass", high), ("low-pass", low)]
         .iter()
-        .filter_map(|(name, f)| f.map(|f| format!("{name} {}", hz(f))))
+        .filter_map(|(name, f)| {
+            f.map(|f| format!("{name} {}", crate::conditioning::snr::hz_text(f)))
+        })
         .collect();
     let caption = format!(
         "Channel {id}: {}{}",
