@@ -7,7 +7,9 @@
 //! settings the stage derives (`ModalParams::settings_for`: `auto` → io),
 //! with and without storey heights in the manifest (which set the band and
 //! so the decimation); identification alone and the whole stage (tables
-//! and PSD overlay written).
+//! and PSD overlay written).  Issue 36: each of the last two also without
+//! the data-driven σ (`uncertainty_blocks = 0`): the difference is what the
+//! uncertainty costs (target ≤ 50 % of the stage).
 //! Data generation is outside the timed loop.
 
 mod shared;
@@ -183,10 +185,39 @@ fn bench_modal_stage(c: &mut Criterion) {
                 r
             })
         });
+        // Issue 36: the same without the data-driven σ (uncertainty_blocks = 0),
+        // the cost of the uncertainty being the difference.
+        let without = ModalSettings {
+            uncertainty_blocks: Some(0),
+            ..settings.clone()
+        };
+        group.bench_function(
+            format!("14ch_41s_200Hz_identify_{label}_no_uncertainty"),
+            |b| {
+                b.iter(|| {
+                    let r = identify_event(black_box(&event), &without, &choice).unwrap();
+                    assert!(!r.modes.is_empty());
+                    r
+                })
+            },
+        );
         let out = tempfile::tempdir().unwrap();
         group.bench_function(format!("14ch_41s_200Hz_stage_{label}"), |b| {
             b.iter(|| identify_and_write(black_box(&event), &params, None, out.path()).unwrap())
         });
+        let params_without = ModalParams {
+            uncertainty_blocks: Some(0),
+            ..ModalParams::default()
+        };
+        group.bench_function(
+            format!("14ch_41s_200Hz_stage_{label}_no_uncertainty"),
+            |b| {
+                b.iter(|| {
+                    identify_and_write(black_box(&event), &params_without, None, out.path())
+                        .unwrap()
+                })
+            },
+        );
     }
     group.finish();
 }

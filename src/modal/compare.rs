@@ -22,12 +22,18 @@
 //! standard deviations σ, σ_ref (independent estimates), first-order
 //! propagation gives σ_s = √((σ/f_ref)² + (f σ_ref/f_ref²)²).  A shift is
 //! significant when |s| > 2 σ_s; unknown (None) when both σ are zero.
-//! Each σ is taken at least `frequency_std_floor` × f: `frequency_std_hz`
-//! of modes.parquet is the scatter of the poles over the model orders of
-//! one record, which understates the statistical error of the estimate
+//! Each σ is the mode's data-driven standard deviation
+//! (`frequency_std_data_hz` of modes.parquet, issue 36: the statistical
+//! error of that record's estimate, docs/statistics.md) when it was
+//! computed; otherwise the order spread `frequency_std_hz` taken at least
+//! `frequency_std_floor` × f: the scatter of the poles over the model
+//! orders of one record understates the statistical error of the estimate
 //! (the sample building identified from its quake and from its ambient
 //! record: order scatter 1e-5–0.2 %, the two records' frequencies 0.1–0.3 %
 //! apart; 20 synthetic 600-s ambient records: std of Δf/f 0.11–0.19 %).
+//! The two σ are combined as independent whatever their kind (two records,
+//! two estimates); `shift_std_basis` says which kind entered: `data`
+//! (both), `order_spread` (neither) or `mixed`.
 
 use super::poles::{mac, normalise_shape};
 use super::selection::Mode;
@@ -171,8 +177,14 @@ pub struct FrequencyShift {
     pub frequency_current_std_hz: f64,
     /// 100 (f − f_ref)/f_ref; a drop (negative) indicates stiffness loss.
     pub shift_percent: f64,
-    /// Its standard deviation (module doc, with the floor), %.
+    /// Its standard deviation (module doc: the data-driven σ of each state
+    /// when known, else its order spread with the floor), %.
     pub shift_std_percent: f64,
+    /// Data-driven σ of each frequency (`frequency_std_data_hz`), when known.
+    pub frequency_reference_std_data_hz: Option<f64>,
+    pub frequency_current_std_data_hz: Option<f64>,
+    /// Which σ entered `shift_std_percent`: `data`, `order_spread` or `mixed`.
+    pub shift_std_basis: &'static str,
     /// |shift| > 2σ; None when the uncertainty is unknown (both σ zero).
     pub significant: Option<bool>,
     pub damping_reference: f64,
@@ -596,11 +608,19 @@ fn shift(
     mac: Option<f64>,
     settings: &PairingSettings,
 ) -> FrequencyShift {
-    let floor = |m: &Mode| {
-        m.frequency_std_hz
-            .max(settings.frequency_std_floor * m.frequency_hz)
+    let data = |m: &Mode| m.data_std.as_ref().map(|d| d.frequency_hz);
+    let sigma = |m: &Mode| {
+        data(m).unwrap_or_else(|| {
+            m.frequency_std_hz
+                .max(settings.frequency_std_floor * m.frequency_hz)
+        })
     };
-    let (s, sd) = relative_shift(r.frequency_hz, floor(r), c.frequency_hz, floor(c));
+    let (s, sd) = relative_shift(r.frequency_hz, sigma(r), c.frequency_hz, sigma(c));
+    let basis = match (data(r).is_some(), data(c).is_some()) {
+        (true, true) => "data",
+        (false, false) => "order_spread",
+        _ => "mixed",
+    };
     FrequencyShift {
         reference_mode: i,
         current_mode: j,
@@ -612,6 +632,9 @@ fn shift(
         frequency_current_std_hz: c.frequency_std_hz,
         shift_percent: 100.0 * s,
         shift_std_percent: 100.0 * sd,
+        frequency_reference_std_data_hz: data(r),
+        frequency_current_std_data_hz: data(c),
+        shift_std_basis: basis,
         significant: (sd.is_finite() && sd > 0.0).then(|| s.abs() > 2.0 * sd),
         damping_reference: r.damping_ratio,
         damping_current: c.damping_ratio,

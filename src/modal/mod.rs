@@ -40,6 +40,7 @@ pub mod preprocess;
 pub mod selection;
 pub mod spectrum;
 pub mod ssi;
+pub mod uncertainty;
 
 pub use compare::{
     compare_events, mac_matrix, pair_modes, track_across_events, Comparison, FrequencyShift,
@@ -170,6 +171,11 @@ pub struct ModalSettings {
     pub manual_frequencies_hz: Option<Vec<f64>>,
     /// Relative half-width of the manual pick window (default 5 %).
     pub manual_band: f64,
+    /// Blocks the record is cut into for the data-driven σ of every mode
+    /// ([`uncertainty`]); `None` = automatic ([`uncertainty::auto_blocks`]),
+    /// `Some(0)` = not computed.
+    #[serde(default)]
+    pub uncertainty_blocks: Option<usize>,
 }
 
 impl Default for ModalSettings {
@@ -188,6 +194,7 @@ impl Default for ModalSettings {
             selection: SelectionSettings::default(),
             manual_frequencies_hz: None,
             manual_band: 0.05,
+            uncertainty_blocks: None,
         }
     }
 }
@@ -1125,6 +1132,28 @@ pub fn identify(input: &ModalInput, settings: &ModalSettings) -> Result<ModalRes
         warnings,
     };
     result.withdraw_modes(&screen);
+    if settings.uncertainty_blocks != Some(0) {
+        let identified = uncertainty::Identified {
+            method: settings.method,
+            outputs: &outputs,
+            inputs: &inputs,
+            refs: &refs,
+            block_rows,
+            subspace: &subspace,
+            dt,
+        };
+        let data = uncertainty::of_modes(
+            &identified,
+            &result.poles,
+            &result.modes,
+            settings.uncertainty_blocks,
+        );
+        for (mode, std) in result.modes.iter_mut().zip(data.modes) {
+            mode.data_std = std;
+        }
+        result.notes.extend(data.notes);
+        result.warnings.extend(data.warnings);
+    }
     Ok(result)
 }
 

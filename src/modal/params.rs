@@ -60,6 +60,10 @@ pub struct ModalParams {
     pub manual_frequencies_hz: Option<Vec<f64>>,
     /// Welch segment length for the PSD singular values.
     pub psd_segment: usize,
+    /// Blocks the record is cut into for the modes' data-driven σ
+    /// (`modal::uncertainty`): unset = automatic, 0 = not computed, else
+    /// `uncertainty::MIN_BLOCKS..=uncertainty::MAX_BLOCKS`.
+    pub uncertainty_blocks: Option<usize>,
 }
 
 impl Default for ModalParams {
@@ -79,6 +83,7 @@ impl Default for ModalParams {
             vertical_outputs: false,
             manual_frequencies_hz: None,
             psd_segment: 1024,
+            uncertainty_blocks: None,
         }
     }
 }
@@ -165,6 +170,16 @@ impl ModalParams {
                 ));
             }
         }
+        if let Some(b) = self.uncertainty_blocks.filter(|&b| {
+            b != 0
+                && !(super::uncertainty::MIN_BLOCKS..=super::uncertainty::MAX_BLOCKS).contains(&b)
+        }) {
+            return bad(format!(
+                "uncertainty_blocks = {b}: must be 0 (off) or {}..={}",
+                super::uncertainty::MIN_BLOCKS,
+                super::uncertainty::MAX_BLOCKS
+            ));
+        }
         if !(8..=MAX_PSD_SEGMENT).contains(&self.psd_segment) {
             return bad(format!(
                 "psd_segment = {}: must be 8..={MAX_PSD_SEGMENT} samples",
@@ -210,6 +225,7 @@ impl ModalParams {
         s.filters.frequency_max_hz = self.frequency_max_hz;
         s.preprocessing.decimation = self.decimation;
         s.manual_frequencies_hz = self.manual_frequencies_hz.clone();
+        s.uncertainty_blocks = self.uncertainty_blocks;
         Ok(s)
     }
 

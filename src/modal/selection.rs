@@ -213,8 +213,12 @@ impl Default for SelectionSettings {
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Mode {
     pub frequency_hz: f64,
+    /// Standard deviation of the frequency over the poles of the column's
+    /// converged part (the order spread: a quality figure of the column,
+    /// not the statistical error; that is `data_std`).
     pub frequency_std_hz: f64,
     pub damping_ratio: f64,
+    /// Standard deviation of the damping ratio over the same poles (order spread).
     pub damping_std: f64,
     /// Mean complex shape (poles phase-aligned to the column's central pole),
     /// largest-modulus component 1 + 0i.
@@ -237,6 +241,13 @@ pub struct Mode {
     /// `mixed`, an azimuth (`360deg`) for channels not on building axes, or
     /// empty when the channels' directions are unknown.
     pub direction: String,
+    /// Data-driven standard deviations of frequency, damping and shape
+    /// (issue 36, [`super::uncertainty`]): the statistical error of this
+    /// record's estimate, unlike `frequency_std_hz` / `damping_std` /
+    /// `shape_std` above, which are the spread over model orders.  `None`
+    /// when not computed (too short a record, ssi-data, switched off).
+    #[serde(default)]
+    pub data_std: Option<super::uncertainty::ModeStd>,
 }
 
 /// A column that looked like a mode but was not promoted, and why.
@@ -382,6 +393,7 @@ fn summarise(poles: &[Pole], members: &[usize], manual: bool) -> Mode {
         order_max: members.iter().map(|&i| poles[i].order).max().unwrap_or(0),
         manual,
         direction: String::new(),
+        data_std: None,
     }
 }
 

@@ -31,6 +31,10 @@ pub struct Subspace {
     pub u: Mat<f64>,
     /// Singular values, descending.
     pub singular_values: Vec<f64>,
+    /// Right singular vectors, (columns of the factorised matrix) × rank:
+    /// the data-driven uncertainty (`uncertainty.rs`) needs them for the
+    /// first-order perturbation of the left ones.
+    pub v: Mat<f64>,
     pub outputs: usize,
     pub block_rows: usize,
 }
@@ -96,7 +100,12 @@ pub fn eigen_structure(a: MatRef<'_, f64>, c: MatRef<'_, f64>) -> Result<Vec<(c6
     Ok(out)
 }
 
-fn thin_svd_subspace(m: MatRef<'_, f64>, outputs: usize, block_rows: usize) -> Result<Subspace> {
+/// The column space of Γ_p from a thin SVD of the factorised matrix `m`.
+pub fn thin_svd_subspace(
+    m: MatRef<'_, f64>,
+    outputs: usize,
+    block_rows: usize,
+) -> Result<Subspace> {
     let svd = m
         .thin_svd()
         .map_err(|e| Error::numerical(format!("SVD of the subspace matrix: {e:?}")))?;
@@ -104,6 +113,7 @@ fn thin_svd_subspace(m: MatRef<'_, f64>, outputs: usize, block_rows: usize) -> R
     Ok(Subspace {
         u: svd.U().to_owned(),
         singular_values: s,
+        v: svd.V().to_owned(),
         outputs,
         block_rows,
     })
@@ -111,7 +121,7 @@ fn thin_svd_subspace(m: MatRef<'_, f64>, outputs: usize, block_rows: usize) -> R
 
 /// Lower Cholesky factor of a symmetric positive (semi-)definite row-major
 /// matrix; adds a ridge of 1e-12·mean diagonal (then 1e-9) only if needed.
-fn cholesky_lower(gram: &[f64], n: usize) -> Result<Mat<f64>> {
+pub fn cholesky_lower(gram: &[f64], n: usize) -> Result<Mat<f64>> {
     let mean_diag = (0..n).map(|i| gram[i * n + i]).sum::<f64>() / n.max(1) as f64;
     for ridge in [0.0, 1e-12, 1e-9] {
         let g = Mat::<f64>::from_fn(n, n, |i, j| {
@@ -128,17 +138,24 @@ fn cholesky_lower(gram: &[f64], n: usize) -> Result<Mat<f64>> {
 
 /// SSI-COV: one SVD of the p·l × p·r block Toeplitz covariance matrix.
 pub fn ssi_cov(outputs: &[&[f64]], refs: &[usize], block_rows: usize) -> Result<Subspace> {
+    let t = covariance_toeplitz(outputs, refs, block_rows);
+    thin_svd_subspace(t.as_ref(), outputs.len(), block_rows)
+}
+
+/// The p·l × p·r block Toeplitz matrix of output-to-reference covariances
+/// SSI-COV factorises (T_{ij} = R_{p+i−j}); also formed per block of the
+/// record by the data-driven uncertainty (`uncertainty.rs`).
+pub fn covariance_toeplitz(outputs: &[&[f64]], refs: &[usize], block_rows: usize) -> Mat<f64> {
     let l = outputs.len();
     let r = refs.len();
     let p = block_rows;
     let ref_signals: Vec<&[f64]> = refs.iter().map(|&i| outputs[i]).collect();
     let cov = cross_covariances(outputs, &ref_signals, 2 * p - 1);
-    let t = Mat::<f64>::from_fn(p * l, p * r, |row, col| {
+    Mat::<f64>::from_fn(p * l, p * r, |row, col| {
         let (i, o) = (row / l, row % l);
         let (j, c) = (col / r, col % r);
         cov[p + i - j][o * r + c]
-    });
-    thin_svd_subspace(t.as_ref(), l, p)
+    })
 }
 
 /// SSI-DATA (unweighted principal components): Cholesky of the Gram matrix
@@ -182,6 +199,18 @@ pub fn po_moesp(outputs: &[&[f64]], inputs: &[&[f64]], block_rows: usize) -> Res
     let columns = n + 1 - 2 * p;
     // Signals: inputs first (0..m), then outputs (m..m+l).
     let signals: Vec<&[f64]> = inputs.iter().chain(outputs).copied().collect();
+    let rows = po_moesp_rows(m, l, p);
+    let g = hankel_gram(&signals, &rows, columns);
+    let big_l = cholesky_lower(&g, rows.len())?;
+    let l32 = big_l
+        .as_ref()
+        .submatrix(p * m + p * (m + l), p * m, p * l, p * (m + l));
+    thin_svd_subspace(l32, l, p)
+}
+
+/// Rows of PO-MOESP's block Hankel matrix [U_f; U_p; Y_p; Y_f] over the
+/// signals (inputs 0..m, then outputs m..m+l).
+pub fn po_moesp_rows(m: usize, l: usize, p: usize) -> Vec<HankelRow> {
     let mut rows = Vec::with_capacity(2 * p * (m + l));
     for shift in p..2 * p {
         for c in 0..m {
@@ -209,10 +238,5 @@ pub fn po_moesp(outputs: &[&[f64]], inputs: &[&[f64]], block_rows: usize) -> Res
             });
         }
     }
-    let g = hankel_gram(&signals, &rows, columns);
-    let big_l = cholesky_lower(&g, rows.len())?;
-    let l32 = big_l
-        .as_ref()
-        .submatrix(p * m + p * (m + l), p * m, p * l, p * (m + l));
-    thin_svd_subspace(l32, l, p)
+    rows
 }

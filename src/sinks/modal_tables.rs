@@ -200,6 +200,24 @@ pub fn modes_batch(r: &ModalResult) -> Result<arrow_array::RecordBatch> {
             modes::DAMPING_STD,
             m.iter().map(|x| x.damping_std).collect(),
         )
+        .opt_f64(
+            modes::FREQUENCY_STD_DATA_HZ,
+            m.iter()
+                .map(|x| x.data_std.as_ref().map(|d| d.frequency_hz))
+                .collect(),
+        )
+        .opt_f64(
+            modes::DAMPING_STD_DATA,
+            m.iter()
+                .map(|x| x.data_std.as_ref().map(|d| d.damping))
+                .collect(),
+        )
+        .opt_u32(
+            modes::UNCERTAINTY_BLOCKS,
+            m.iter()
+                .map(|x| x.data_std.as_ref().map(|d| d.blocks as u32))
+                .collect(),
+        )
         .f64(modes::MPC, m.iter().map(|x| x.mpc).collect())
         .f64(modes::MPD_DEG, m.iter().map(|x| x.mpd_deg).collect())
         .f64(modes::MEAN_MAC, m.iter().map(|x| x.mean_mac).collect())
@@ -267,7 +285,7 @@ pub fn mode_shapes_batch(
     use mode_shapes as ms;
     let (mut mode, mut freq, mut channel, mut level, mut direction) =
         (vec![], vec![], vec![], vec![], vec![]);
-    let (mut re, mut im, mut sd) = (vec![], vec![], vec![]);
+    let (mut re, mut im, mut sd, mut sd_data) = (vec![], vec![], vec![], vec![]);
     for (m, x) in r.modes.iter().enumerate() {
         for (k, id) in r.output_ids.iter().enumerate() {
             let c = x
@@ -283,6 +301,11 @@ pub fn mode_shapes_batch(
             re.push(c.re);
             im.push(c.im);
             sd.push(x.shape_std.get(k).copied().unwrap_or(f64::NAN));
+            sd_data.push(
+                x.data_std
+                    .as_ref()
+                    .and_then(|d| d.shape_modulus.get(k).copied()),
+            );
         }
     }
     TableBuilder::new(&MODE_SHAPES)
@@ -294,6 +317,7 @@ pub fn mode_shapes_batch(
         .f64(ms::REAL, re)
         .f64(ms::IMAG, im)
         .f64(ms::MODULUS_STD, sd)
+        .opt_f64(ms::MODULUS_STD_DATA, sd_data)
         .build()
 }
 
@@ -377,6 +401,20 @@ pub fn write_shifts(
         )
         .f64(fs::SHIFT_PERCENT, f(|x| x.shift_percent))
         .f64(fs::SHIFT_STD_PERCENT, f(|x| x.shift_std_percent))
+        .opt_f64(
+            fs::FREQUENCY_REFERENCE_STD_DATA_HZ,
+            s.iter()
+                .map(|x| x.frequency_reference_std_data_hz)
+                .collect(),
+        )
+        .opt_f64(
+            fs::FREQUENCY_CURRENT_STD_DATA_HZ,
+            s.iter().map(|x| x.frequency_current_std_data_hz).collect(),
+        )
+        .str(
+            fs::SHIFT_STD_BASIS,
+            &s.iter().map(|x| x.shift_std_basis).collect::<Vec<_>>(),
+        )
         .opt_bool(fs::SIGNIFICANT, s.iter().map(|x| x.significant).collect())
         .f64(fs::DAMPING_REFERENCE, f(|x| x.damping_reference))
         .f64(fs::DAMPING_CURRENT, f(|x| x.damping_current))
@@ -515,6 +553,23 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
             l(&modes::SHAPE_IM)?,
             l(&modes::SHAPE_STD)?,
         );
+        // Optional: files written before issue 36 have no data-driven σ.
+        let optional_f64 = |c: &ColumnSpec| {
+            b.column_by_name(c.name)
+                .and_then(|c| c.as_any().downcast_ref::<Float64Array>())
+                .cloned()
+        };
+        let (fs_data, zs_data) = (
+            optional_f64(&modes::FREQUENCY_STD_DATA_HZ),
+            optional_f64(&modes::DAMPING_STD_DATA),
+        );
+        let blocks = b
+            .column_by_name(modes::UNCERTAINTY_BLOCKS.name)
+            .and_then(|c| c.as_any().downcast_ref::<UInt32Array>())
+            .cloned();
+        let valid = |a: &Option<Float64Array>, i: usize| {
+            a.as_ref().filter(|a| a.is_valid(i)).map(|a| a.value(i))
+        };
         // Optional: files written before issue 13 have no direction column.
         let direction = b
             .column_by_name(modes::DIRECTION.name)
@@ -562,6 +617,18 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
                     .as_ref()
                     .map(|a| a.value(i).to_string())
                     .unwrap_or_default(),
+                // The shape's data-driven σ lives in mode_shapes.parquet.
+                data_std: valid(&fs_data, i).zip(valid(&zs_data, i)).map(|(f, z)| {
+                    crate::modal::uncertainty::ModeStd {
+                        frequency_hz: f,
+                        damping: z,
+                        shape_modulus: Vec::new(),
+                        blocks: blocks
+                            .as_ref()
+                            .filter(|a| a.is_valid(i))
+                            .map_or(0, |a| a.value(i) as usize),
+                    }
+                }),
             });
         }
     }

@@ -179,9 +179,12 @@ declare!(MODES, modes, "modes", "modes.parquet",
     "one row per selected mode, with statistics and shapes", {
     MODE: "mode", U32, required, "", "1-based, ascending frequency";
     FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "mean frequency over the best-converged part of the pole column (upper half of its orders, physical poles)";
-    FREQUENCY_STD_HZ: "frequency_std_hz", F64, required, "Hz", "standard deviation of the frequency over the cluster";
+    FREQUENCY_STD_HZ: "frequency_std_hz", F64, required, "Hz", "order spread: standard deviation of the frequency over the poles of the cluster (a quality figure of the pole column, not the statistical error of the estimate: that is `frequency_std_data_hz`)";
     DAMPING_RATIO: "damping_ratio", F64, required, "1", "mean damping ratio over the cluster";
-    DAMPING_STD: "damping_std", F64, required, "1", "standard deviation of the damping ratio";
+    DAMPING_STD: "damping_std", F64, required, "1", "order spread: standard deviation of the damping ratio over the poles of the cluster";
+    FREQUENCY_STD_DATA_HZ: "frequency_std_data_hz", F64, nullable, "Hz", "data-driven standard deviation of `frequency_hz`: first-order propagation of the covariance of the factorised matrix, estimated from `uncertainty_blocks` blocks of the record (docs/statistics.md); null when not computed (record too short for enough blocks, ssi-data, `uncertainty_blocks = 0`)";
+    DAMPING_STD_DATA: "damping_std_data", F64, nullable, "1", "data-driven standard deviation of `damping_ratio` (as `frequency_std_data_hz`); null when not computed";
+    UNCERTAINTY_BLOCKS: "uncertainty_blocks", U32, nullable, "", "blocks the record was cut into for the data-driven standard deviations; null when they were not computed";
     MPC: "mpc", F64, required, "1", "modal phase collinearity of the shape";
     MPD_DEG: "mpd_deg", F64, required, "deg", "mean phase deviation of the shape";
     MEAN_MAC: "mean_mac", F64, required, "1", "mean MAC of the cluster's poles to the mean shape";
@@ -204,7 +207,8 @@ declare!(MODE_SHAPES, mode_shapes, "mode_shapes", "mode_shapes.parquet",
     DIRECTION: "direction", Utf8, required, "", "the channel's direction label (`X`, `Y`, `Z`, an azimuth `<deg>deg`; empty when unknown)";
     REAL: "real", F64, required, "1", "real part of the shape component (`shape_re[k]` of modes.parquet; largest component of the mode 1)";
     IMAG: "imag", F64, required, "1", "imaginary part (`shape_im[k]`)";
-    MODULUS_STD: "modulus_std", F64, required, "1", "standard deviation of the component's modulus over the cluster (`shape_std[k]`)";
+    MODULUS_STD: "modulus_std", F64, required, "1", "order spread: standard deviation of the component's modulus over the cluster (`shape_std[k]`)";
+    MODULUS_STD_DATA: "modulus_std_data", F64, nullable, "1", "data-driven standard deviation of the component's modulus, the shape normalised to its largest component (0 there by construction; docs/statistics.md); null when not computed";
 });
 
 declare!(MODAL_SPECTRUM, modal_spectrum, "modal_spectrum", "modal_spectrum.parquet",
@@ -226,7 +230,10 @@ declare!(FREQUENCY_SHIFTS, frequency_shifts, "frequency_shifts", "frequency_shif
     FREQUENCY_CURRENT_HZ: "frequency_current_hz", F64, required, "Hz", "frequency of this event";
     FREQUENCY_CURRENT_STD_HZ: "frequency_current_std_hz", F64, required, "Hz", "its standard deviation";
     SHIFT_PERCENT: "shift_percent", F64, required, "%", "100 (f_current − f_reference)/f_reference: negative = softening";
-    SHIFT_STD_PERCENT: "shift_std_percent", F64, required, "%", "standard deviation of the shift from the two frequency standard deviations (independent, first order), each at least `reference_frequency_std_floor` × f (the std of modes.parquet is the scatter over model orders, which understates the error of one record): 100 √((σ_cur/f_ref)² + (f_cur σ_ref/f_ref²)²)";
+    SHIFT_STD_PERCENT: "shift_std_percent", F64, required, "%", "standard deviation of the shift from the two frequency standard deviations (independent, first order): 100 √((σ_cur/f_ref)² + (f_cur σ_ref/f_ref²)²), each σ the mode's data-driven `frequency_std_data_hz` when known, else its order spread `frequency_std_hz` taken at least `reference_frequency_std_floor` × f (the order spread understates the error of one record); `shift_std_basis` says which";
+    FREQUENCY_REFERENCE_STD_DATA_HZ: "frequency_reference_std_data_hz", F64, nullable, "Hz", "data-driven standard deviation of the reference frequency (`frequency_std_data_hz` of the reference); null when not computed";
+    FREQUENCY_CURRENT_STD_DATA_HZ: "frequency_current_std_data_hz", F64, nullable, "Hz", "data-driven standard deviation of this event's frequency; null when not computed";
+    SHIFT_STD_BASIS: "shift_std_basis", Utf8, required, "", "the σ behind `shift_std_percent`: `data` (both data-driven), `order_spread` (both from the order spread with the floor), `mixed` (one of each)";
     SIGNIFICANT: "significant", Bool, nullable, "", "|shift| > 2 `shift_std_percent`; null when that is zero (no uncertainty known)";
     DAMPING_REFERENCE: "damping_reference", F64, required, "1", "reference damping ratio";
     DAMPING_CURRENT: "damping_current", F64, required, "1", "damping ratio of this event";

@@ -245,5 +245,6 @@ pub fn test_mode(f: f64, sd: f64, direction: &str, shape: &[f64]) -> quaketwin::
         order_max: 40,
         manual: false,
         direction: direction.into(),
+        data_std: None,
     }
 }

@@ -70,5 +70,6 @@ mod track_damaged;
 mod tracking;
 mod twin;
 mod twin_update_io;
+mod uncertainty;
 mod vocab;
 mod watch;

@@ -146,6 +146,8 @@ fn modal_orders_and_block_rows_are_bounded() {
         ("block_rows = 481", "block_rows"),
         ("decimation = 1000000", "decimation"),
         ("psd_segment = 1000000000000", "psd_segment"),
+        ("uncertainty_blocks = 5", "uncertainty_blocks"),
+        ("uncertainty_blocks = 100000", "uncertainty_blocks"),
         ("damping_max = 1e300", "damping_max"),
         ("frequency_max_hz = inf", "frequency_max_hz"),
     ] {

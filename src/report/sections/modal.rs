@@ -132,6 +132,29 @@ pub(super) fn modal_section(dir: &Path, o: &Outputs, settings: &ReportSettings) 
             if !mode_freqs.is_empty() {
                 legend_series.push(Series::new("identified mode", vec![], 1, Mark::Dashed));
             }
+            let bars = error_bars(modes);
+            if !bars.is_empty() {
+                legend_series.push(Series::new(
+                    "95 % interval f ± 2σ (data-driven σ), above the mode's column",
+                    vec![],
+                    1,
+                    Mark::Line,
+                ));
+            }
+            let top = ocol.iter().flatten().fold(0.0f64, |a, b| a.max(*b));
+            for (f, sd, order) in &bars {
+                chart.series.push(Series::new(
+                    "",
+                    error_bar(
+                        *f,
+                        2.0 * sd,
+                        (order + 2.0).min(top + 1.0),
+                        0.01 * top.max(10.0),
+                    ),
+                    1,
+                    Mark::Line,
+                ));
+            }
             body.push_str(&figure(
                 plot::render(&chart),
                 &format!("Stabilisation diagram: {} poles", t.rows),
@@ -165,6 +188,9 @@ pub(super) fn modal_section(dir: &Path, o: &Outputs, settings: &ReportSettings) 
             modes::FREQUENCY_STD_HZ.name,
             modes::DAMPING_RATIO.name,
             modes::DAMPING_STD.name,
+            modes::FREQUENCY_STD_DATA_HZ.name,
+            modes::DAMPING_STD_DATA.name,
+            modes::UNCERTAINTY_BLOCKS.name,
             modes::DIRECTION.name,
             modes::MPC.name,
             modes::MPD_DEG.name,
@@ -212,6 +238,41 @@ pub(super) fn modal_section(dir: &Path, o: &Outputs, settings: &ReportSettings) 
     body.push_str("<h3>Frequency shift against a reference event</h3>");
     body.push_str(&shifts_part(shifts, settings));
     body
+}
+
+/// (f, σ_f, highest order of the column) of every mode of `modes` with a
+/// data-driven σ (`frequency_std_data_hz`).
+fn error_bars(modes: &Loaded) -> Vec<(f64, f64, f64)> {
+    let Loaded::Ok(t) = modes else {
+        return Vec::new();
+    };
+    let (Some(f), Some(sd), Some(order)) = (
+        t.number(modes::FREQUENCY_HZ.name),
+        t.number(modes::FREQUENCY_STD_DATA_HZ.name),
+        t.number(modes::ORDER_MAX.name),
+    ) else {
+        return Vec::new();
+    };
+    (0..t.rows)
+        .filter_map(|r| {
+            let v = |c: &[Option<f64>]| c.get(r).copied().flatten();
+            Some((v(f)?, v(sd)?, v(order)?))
+        })
+        .filter(|(f, sd, _)| f.is_finite() && sd.is_finite() && *sd >= 0.0)
+        .collect()
+}
+
+/// An error bar from f − half to f + half at height y, with end caps of
+/// height ±cap: one polyline.
+fn error_bar(f: f64, half: f64, y: f64, cap: f64) -> Vec<(f64, f64)> {
+    vec![
+        (f - half, y - cap),
+        (f - half, y + cap),
+        (f - half, y),
+        (f + half, y),
+        (f + half, y + cap),
+        (f + half, y - cap),
+    ]
 }
 
 /// The leading singular values of the PSD matrix against frequency (log
@@ -333,6 +394,7 @@ fn shifts_part(shifts: &Loaded, settings: &ReportSettings) -> String {
             fs::DIRECTION_CURRENT.name,
             fs::SHIFT_PERCENT.name,
             fs::SHIFT_STD_PERCENT.name,
+            fs::SHIFT_STD_BASIS.name,
             fs::MAC.name,
             fs::SIGNIFICANT.name,
             fs::DAMPING_REFERENCE.name,
@@ -347,6 +409,7 @@ fn shifts_part(shifts: &Loaded, settings: &ReportSettings) -> String {
             "f (Hz)",
             "direction",
             "shift ± σ (%)",
+            "σ from",
             "MAC",
             "significant (|shift| > 2σ)",
             "damping reference → this event",
@@ -377,12 +440,14 @@ fn shifts_part(shifts: &Loaded, settings: &ReportSettings) -> String {
                     Cell::of(t, fs::REFERENCE_MODE.name, r),
                     Cell::raw(pm(
                         num(fs::FREQUENCY_REFERENCE_HZ.name, r),
-                        num(fs::FREQUENCY_REFERENCE_STD_HZ.name, r),
+                        num(fs::FREQUENCY_REFERENCE_STD_DATA_HZ.name, r)
+                            .or(num(fs::FREQUENCY_REFERENCE_STD_HZ.name, r)),
                     )),
                     Cell::of(t, fs::CURRENT_MODE.name, r),
                     Cell::raw(pm(
                         num(fs::FREQUENCY_CURRENT_HZ.name, r),
-                        num(fs::FREQUENCY_CURRENT_STD_HZ.name, r),
+                        num(fs::FREQUENCY_CURRENT_STD_DATA_HZ.name, r)
+                            .or(num(fs::FREQUENCY_CURRENT_STD_HZ.name, r)),
                     )),
                     Cell::direction(t, fs::DIRECTION_CURRENT.name, r),
                     Cell {
@@ -390,6 +455,18 @@ fn shifts_part(shifts: &Loaded, settings: &ReportSettings) -> String {
                         class: Some("num"),
                         ..Cell::raw(pm(shift, num(fs::SHIFT_STD_PERCENT.name, r)))
                     },
+                    Cell::text(
+                        match t
+                            .text(fs::SHIFT_STD_BASIS.name)
+                            .and_then(|v| v.get(r).cloned().flatten())
+                            .as_deref()
+                        {
+                            Some("data") => "data (both records)",
+                            Some("mixed") => "data (one record), order spread (other)",
+                            Some("order_spread") => "order spread (floored)",
+                            _ => "—",
+                        },
+                    ),
                     Cell::of(t, fs::MAC.name, r),
                     Cell::text(significant),
                     Cell::raw(format!(

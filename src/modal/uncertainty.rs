@@ -1,0 +1,720 @@
+//! Data-driven uncertainty of the modal estimates (issue 36): the
+//! first-order propagation of the statistical error of the factorised
+//! matrix to frequency, damping ratio and mode shape (Reynders, Pintelon &
+//! De Roeck 2008, MSSP 22; in the fast form of Döhler & Mevel 2013, MSSP 38;
+//! the input–output case after Mellinger, Döhler & Mevel 2016, JSV 379).
+//! docs/statistics.md gives the equations and the validation.
+//!
+//! 1. **Covariance of the factorised matrix H** from the data: the record
+//!    is cut into n_b blocks, H_k formed from each block exactly as H from
+//!    the record (SSI-COV: the block Toeplitz matrix of output-to-reference
+//!    covariances; input–output: the Gram matrix of PO-MOESP's block Hankel
+//!    matrix, then L₃₂ through its Cholesky factor); Σ_H = T Tᵀ with
+//!    T = [vec(H_1 − H̄), …, vec(H_{n_b} − H̄)] / √(n_b (n_b − 1)), the
+//!    covariance of the mean of the blocks.  Σ_H is never formed: every
+//!    sensitivity is applied to the n_b columns of T (the "J·T column by
+//!    column" of Döhler & Mevel), and σ_θ² = Σ_t (J_θ T_t)².
+//! 2. **SVD → observability matrix.**  Γ = U₁ S₁^{1/2}.  A perturbation of
+//!    Γ inside its own column space, Γ → Γ(I + X), is a change of state
+//!    basis: A → (I + X)⁻¹ A (I + X), C → C (I + X), so the eigenvalues and
+//!    the shapes C ψ do not move.  Only the part of ΔU₁ outside span U₁
+//!    matters; first-order SVD perturbation gives it column by column
+//!    (i ≤ n < j):
+//!    ΔU₁_⊥ = U₂ K + (I − U Uᵀ) ΔH V₁ S₁⁻¹,
+//!    K_{ji} = (σ_i u_jᵀ ΔH v_i + σ_j u_iᵀ ΔH v_j) / (σ_i² − σ_j²),
+//!    and ΔΓ = ΔU₁_⊥ S₁^{1/2}.  This is the analytical Jacobian through
+//!    the SVD (Eq. S3 of docs/statistics.md); the same for both methods.
+//! 3. **(A, C)**: C = Γ↑ rows 1..l, A = Γ↑⁺ Γ↓ (least squares):
+//!    ΔA = (Γ↑ᵀΓ↑)⁻¹ [Γ↑ᵀ (ΔΓ↓ − ΔΓ↑ A) + ΔΓ↑ᵀ (Γ↓ − Γ↑ A)], ΔC = ΔΓ rows 1..l.
+//! 4. **Eigenstructure**, A = Ψ M Ψ⁻¹: Δμ_i = (Ψ⁻¹ ΔA ψ_i)_i,
+//!    Δψ_i = Σ_{j≠i} ψ_j (Ψ⁻¹ ΔA ψ_i)_j / (μ_i − μ_j) (the part along ψ_i
+//!    drops out of the normalised shape), Δφ = ΔC ψ + C Δψ.
+//! 5. **Modal parameters**: λ = ln μ / Δt, Δλ = Δμ / (μ Δt);
+//!    f = |λ|/2π, Δf = Re(λ̄ Δλ) / (2π |λ|);
+//!    ζ = −Re λ / |λ|, Δζ = −Re Δλ / |λ| + Re λ · Re(λ̄ Δλ) / |λ|³;
+//!    shape normalised at component c: φ̃ = φ / φ_c,
+//!    Δφ̃ = (Δφ − φ̃ Δφ_c) / φ_c, Δ|φ̃_j| = Re(φ̃_j* Δφ̃_j) / |φ̃_j|.
+//!
+//! A mode's estimate is the mean over the poles of the best-converged part
+//! of its column ([`super::selection`]); its sensitivity is the mean of the
+//! sensitivities of (up to [`MAX_POLES_PER_MODE`] of) those poles, so σ is
+//! that of the estimate reported, not of one order.
+//!
+//! Input–output: the factorised matrix L₃₂ is a smooth function of the Gram
+//! matrix G of [U_f; U_p; Y_p; Y_f] (G = L Lᵀ); with dG_t the centred block
+//! Grams, dL = L Φ(L⁻¹ dG L⁻ᵀ) (Φ: the lower triangle, diagonal halved;
+//! the derivative of the Cholesky factor), and dL₃₂ = L₃₂ Φ₂₂ + L₃₃ Φ₃₂.
+//! Analytical, like SSI-COV; [`finite_difference_pole`] checks both
+//! (tests/it/uncertainty.rs).
+//!
+//! Numerical code only; no I/O.
+
+use super::hankel::hankel_gram;
+use super::poles::Pole;
+use super::selection::Mode;
+use super::ssi::{
+    cholesky_lower, covariance_toeplitz, eigen_structure, po_moesp_rows, thin_svd_subspace,
+    Subspace,
+};
+use super::Method;
+use crate::error::{Error, Result};
+use faer::linalg::solvers::DenseSolveCore;
+use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+use faer::{c64, Mat, MatRef, Par};
+
+/// Fewest blocks for a data-driven σ: with n_b blocks the σ itself carries
+/// a relative error of about 1/√(2 (n_b − 1)) (24 % at 10).  Below, the
+/// σ is left null with a warning, never a number.
+pub const MIN_BLOCKS: usize = 10;
+/// Most blocks chosen automatically: 30 puts the σ's own error near 13 %
+/// and keeps the cost (linear in n_b) within half the modal stage's
+/// (docs/performance.md).
+pub const MAX_AUTO_BLOCKS: usize = 30;
+/// Most blocks a user may ask for (`uncertainty_blocks`).
+pub const MAX_BLOCKS: usize = 200;
+/// SSI-COV: each automatic block lasts at least this many periods of the
+/// lowest selected mode: the blocks' covariance estimates must be nearly
+/// independent, i.e. a block long against the memory of the ambient
+/// response (1/(2π ζ f): 5 periods at ζ = 3 %).
+pub const BLOCK_PERIODS: f64 = 10.0;
+/// Input–output: the measured input carries the dynamics, and what is
+/// random is the measurement noise, white: blocks need not outlast the
+/// response's memory, only hold a few cycles of the lowest mode (a 40-s
+/// earthquake record of a 1.3-Hz building gives 10 blocks).
+pub const BLOCK_PERIODS_IO: f64 = 3.0;
+/// … and at least this many times the Hankel matrix's span of 2p samples.
+pub const BLOCK_SPANS: usize = 4;
+/// Poles of a mode's column whose sensitivities are averaged (evenly
+/// spaced over its converged part): they are nearly collinear, and each
+/// costs an eigen-decomposition and products over the n_b columns.
+pub const MAX_POLES_PER_MODE: usize = 6;
+
+/// Data-driven standard deviations of one mode's estimates.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ModeStd {
+    /// σ of the frequency, Hz.
+    pub frequency_hz: f64,
+    /// σ of the damping ratio.
+    pub damping: f64,
+    /// σ of each shape component's modulus (shape normalised to its largest
+    /// component, whose σ is 0 by construction).
+    pub shape_modulus: Vec<f64>,
+    /// Blocks the covariance was estimated from.
+    pub blocks: usize,
+}
+
+/// The automatic number of blocks for `samples` samples at `dt`, block rows
+/// `p` and the lowest selected mode `lowest_hz`: as many as fit blocks of
+/// max([`BLOCK_PERIODS`] periods ([`BLOCK_PERIODS_IO`] for `io`),
+/// [`BLOCK_SPANS`] × 2p samples), at most
+/// [`MAX_AUTO_BLOCKS`].  May be below [`MIN_BLOCKS`] (the caller refuses).
+pub fn auto_blocks(
+    method: Method,
+    samples: usize,
+    dt: f64,
+    block_rows: usize,
+    lowest_hz: f64,
+) -> usize {
+    let cycles = match method {
+        Method::Io => BLOCK_PERIODS_IO,
+        _ => BLOCK_PERIODS,
+    };
+    let periods = (cycles / (lowest_hz * dt)).ceil();
+    let periods = if periods.is_finite() && periods > 0.0 {
+        periods as usize
+    } else {
+        samples
+    };
+    let least = periods.max(BLOCK_SPANS * 2 * block_rows).max(1);
+    (samples / least).min(MAX_AUTO_BLOCKS)
+}
+
+/// (H_k − H̄) / √(n_b (n_b − 1)) for each block matrix H_k, and H̄.
+fn centre(mats: Vec<Mat<f64>>) -> (Mat<f64>, Vec<Mat<f64>>) {
+    let nb = mats.len();
+    let (r, c) = (mats[0].nrows(), mats[0].ncols());
+    let mut mean = Mat::<f64>::zeros(r, c);
+    for m in &mats {
+        mean += m;
+    }
+    mean *= faer::Scale(1.0 / nb as f64);
+    let scale = 1.0 / ((nb * (nb - 1)) as f64).sqrt();
+    let deltas = mats
+        .into_iter()
+        .map(|m| {
+            let mut d = m - &mean;
+            d *= faer::Scale(scale);
+            d
+        })
+        .collect();
+    (mean, deltas)
+}
+
+/// SSI-COV: the block Toeplitz covariance matrix of each of `blocks`
+/// equal blocks of the record; returns H̄ and the columns of T.
+pub fn ssi_cov_blocks(
+    outputs: &[&[f64]],
+    refs: &[usize],
+    block_rows: usize,
+    blocks: usize,
+) -> (Mat<f64>, Vec<Mat<f64>>) {
+    let n = outputs.iter().map(|s| s.len()).min().unwrap_or(0);
+    let len = n / blocks;
+    let mats = (0..blocks)
+        .map(|k| {
+            let cut: Vec<&[f64]> = outputs.iter().map(|s| &s[k * len..(k + 1) * len]).collect();
+            covariance_toeplitz(&cut, refs, block_rows)
+        })
+        .collect();
+    centre(mats)
+}
+
+/// Input–output: the Gram matrix of PO-MOESP's block Hankel matrix over
+/// each of `blocks` equal runs of its columns; returns Ḡ and the columns
+/// of T (the centred block Grams).
+pub fn po_moesp_blocks(
+    outputs: &[&[f64]],
+    inputs: &[&[f64]],
+    block_rows: usize,
+    blocks: usize,
+) -> (Mat<f64>, Vec<Mat<f64>>) {
+    let (l, m, p) = (outputs.len(), inputs.len(), block_rows);
+    let signals: Vec<&[f64]> = inputs.iter().chain(outputs).copied().collect();
+    let n = signals.iter().map(|s| s.len()).min().unwrap_or(0);
+    let columns = n + 1 - 2 * p;
+    let per_block = columns / blocks;
+    let rows = po_moesp_rows(m, l, p);
+    let r = rows.len();
+    let mats = (0..blocks)
+        .map(|k| {
+            let start = k * per_block;
+            let cut: Vec<&[f64]> = signals
+                .iter()
+                .map(|s| &s[start..start + per_block + 2 * p - 1])
+                .collect();
+            let g = hankel_gram(&cut, &rows, per_block);
+            Mat::<f64>::from_fn(r, r, |i, j| g[i * r + j])
+        })
+        .collect();
+    centre(mats)
+}
+
+/// Row blocks of PO-MOESP's Gram matrix: U_f (p·m), past (p·(m+l)), Y_f (p·l).
+fn io_blocks(m: usize, l: usize, p: usize) -> (usize, usize, usize) {
+    (p * m, p * (m + l), p * l)
+}
+
+/// Lower Cholesky factor of a Gram matrix given as a matrix.
+fn cholesky_of(gram: MatRef<'_, f64>) -> Result<Mat<f64>> {
+    let r = gram.nrows();
+    let flat: Vec<f64> = (0..r * r).map(|k| gram[(k / r, k % r)]).collect();
+    cholesky_lower(&flat, r)
+}
+
+/// L₃₂ of the Cholesky factor of a PO-MOESP Gram matrix: the matrix
+/// `ssi::po_moesp` factorises.
+pub fn po_moesp_l32(gram: MatRef<'_, f64>, m: usize, l: usize, p: usize) -> Result<Mat<f64>> {
+    let big_l = cholesky_of(gram)?;
+    let (r1, r2, r3) = io_blocks(m, l, p);
+    Ok(big_l.as_ref().submatrix(r1 + r2, r1, r3, r2).to_owned())
+}
+
+/// dL₃₂ for each Gram perturbation dG_t (module doc): the derivative of
+/// the Cholesky factor, dL = L Φ(L⁻¹ dG L⁻ᵀ), restricted to the blocks L₃₂
+/// needs, dL₃₂ = L₃₂ Φ₂₂ + L₃₃ Φ₃₂ with M_{B,2} = L⁻¹[B, :] dG L⁻¹[2, ≤2]ᵀ.
+pub fn l32_perturbations(
+    gram: MatRef<'_, f64>,
+    deltas: &[Mat<f64>],
+    m: usize,
+    l: usize,
+    p: usize,
+) -> Result<Vec<Mat<f64>>> {
+    let big_l = cholesky_of(gram)?;
+    let r = big_l.nrows();
+    let (r1, r2, r3) = io_blocks(m, l, p);
+    let mut linv = Mat::<f64>::identity(r, r);
+    solve_lower_triangular_in_place(big_l.as_ref(), linv.as_mut(), Par::rayon(0));
+    // L⁻¹ is lower triangular: the rows of block 2 vanish beyond column r1 + r2.
+    let linv2t = linv
+        .as_ref()
+        .submatrix(r1, 0, r2, r1 + r2)
+        .transpose()
+        .to_owned();
+    let linv23 = linv.as_ref().submatrix(r1, 0, r2 + r3, r).to_owned();
+    let l32 = big_l.as_ref().submatrix(r1 + r2, r1, r3, r2);
+    let l33 = big_l.as_ref().submatrix(r1 + r2, r1 + r2, r3, r3);
+    Ok(deltas
+        .iter()
+        .map(|dg| {
+            let q = dg.as_ref().subcols(0, r1 + r2) * &linv2t;
+            let mm = &linv23 * &q;
+            let phi22 = Mat::<f64>::from_fn(r2, r2, |i, j| match i.cmp(&j) {
+                std::cmp::Ordering::Greater => mm[(i, j)],
+                std::cmp::Ordering::Equal => 0.5 * mm[(i, j)],
+                std::cmp::Ordering::Less => 0.0,
+            });
+            let phi32 = mm.as_ref().subrows(r2, r3);
+            l32 * &phi22 + l33 * phi32
+        })
+        .collect())
+}
+
+/// A pole's value and its first-order perturbation along each column of T.
+#[derive(Debug, Clone)]
+pub struct PoleSensitivity {
+    pub frequency_hz: f64,
+    pub damping_ratio: f64,
+    /// φ = C ψ, not normalised.
+    pub shape: Vec<c64>,
+    /// J_f T_t, Hz, per column t.
+    pub d_frequency: Vec<f64>,
+    /// J_ζ T_t per column t.
+    pub d_damping: Vec<f64>,
+    /// J_φ T_t per column t (not normalised; [`normalised_modulus_deltas`]).
+    pub d_shape: Vec<Vec<c64>>,
+}
+
+impl PoleSensitivity {
+    /// √Σ_t d_t² of the frequency and the damping.
+    pub fn std(&self) -> (f64, f64) {
+        let rss = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        (rss(&self.d_frequency), rss(&self.d_damping))
+    }
+}
+
+/// Continuous-time pole of a discrete eigenvalue: (λ, f, ζ) as
+/// `poles::poles_of_order` computes them.
+fn continuous(mu: c64, dt: f64) -> (c64, f64, f64) {
+    let lambda = c64::new(mu.norm().ln(), mu.arg()) / dt;
+    let omega = lambda.norm();
+    (lambda, omega / std::f64::consts::TAU, -lambda.re / omega)
+}
+
+/// The eigenvalue (Im μ > 0) of `eig` nearest the pole (f, ζ).
+fn matching_eigenvalue(eig: &[c64], frequency_hz: f64, damping: f64, dt: f64) -> Option<usize> {
+    (0..eig.len())
+        .filter(|&i| eig[i].im > 0.0)
+        .min_by(|&a, &b| {
+            let d = |i: usize| {
+                let (_, f, z) = continuous(eig[i], dt);
+                (f - frequency_hz).abs() / frequency_hz + (z - damping).abs()
+            };
+            d(a).total_cmp(&d(b))
+        })
+}
+
+/// (df, dζ) of a perturbation dμ of the eigenvalue μ (module doc, step 5).
+fn modal_deltas(mu: c64, d_mu: c64, dt: f64) -> (f64, f64) {
+    let (lambda, _, _) = continuous(mu, dt);
+    let d_lambda = d_mu / (mu * dt);
+    let modulus = lambda.norm();
+    let radial = (lambda.conj() * d_lambda).re;
+    (
+        radial / (modulus * std::f64::consts::TAU),
+        -d_lambda.re / modulus + lambda.re * radial / modulus.powi(3),
+    )
+}
+
+/// The SVD-level products of every column of T, shared by all poles of
+/// orders up to `n_max` (module doc, step 2): Y_t = Uᵀ ΔH_t V₁, Z_t =
+/// U₁ᵀ ΔH_t V, and (I − UUᵀ) ΔH_t V₁ when U is not square.
+pub struct Sensitivity<'a> {
+    subspace: &'a Subspace,
+    n_max: usize,
+    y: Vec<Mat<f64>>,
+    z: Vec<Mat<f64>>,
+    outside: Vec<Mat<f64>>,
+}
+
+impl<'a> Sensitivity<'a> {
+    /// `deltas`: the columns of T as matrices of the factorised matrix's shape.
+    pub fn new(subspace: &'a Subspace, deltas: &[Mat<f64>], n_max: usize) -> Sensitivity<'a> {
+        let k = subspace.singular_values.len();
+        let n_max = n_max.min(k);
+        let u = subspace.u.as_ref();
+        let v = subspace.v.as_ref();
+        let v1 = v.subcols(0, n_max);
+        let u1t = u.subcols(0, n_max).transpose();
+        let square = u.nrows() == k;
+        let (mut y, mut z, mut outside) = (Vec::new(), Vec::new(), Vec::new());
+        for d in deltas {
+            let x = d * v1;
+            let yt = u.transpose() * &x;
+            z.push((u1t * d) * v);
+            if !square {
+                outside.push(&x - u * &yt);
+            }
+            y.push(yt);
+        }
+        Sensitivity {
+            subspace,
+            n_max,
+            y,
+            z,
+            outside,
+        }
+    }
+
+    /// The pole of order `order` nearest (f, ζ), with its perturbation
+    /// along each column of T (module doc, steps 2–5).
+    pub fn pole(
+        &self,
+        order: usize,
+        frequency_hz: f64,
+        damping: f64,
+        dt: f64,
+    ) -> Result<PoleSensitivity> {
+        let sub = self.subspace;
+        let n = order;
+        if n == 0 || n > self.n_max {
+            return Err(Error::numerical(format!(
+                "uncertainty: order {n} above the prepared {}",
+                self.n_max
+            )));
+        }
+        let l = sub.outputs;
+        let a_rows = sub.u.nrows();
+        let k = sub.singular_values.len();
+        let s = &sub.singular_values;
+        let (a, c) = sub.realise(n)?;
+        let sh: Vec<f64> = s[..n].iter().map(|x| x.sqrt()).collect();
+        let gamma = Mat::<f64>::from_fn(a_rows, n, |i, j| sub.u[(i, j)] * sh[j]);
+        let up = gamma.as_ref().subrows(0, a_rows - l);
+        let down = gamma.as_ref().subrows(l, a_rows - l);
+        let residual = down - up * &a;
+        let gram_inv = (up.transpose() * up).partial_piv_lu().inverse();
+        let eig = a
+            .eigen()
+            .map_err(|e| Error::numerical(format!("eigenvalues of the state matrix: {e:?}")))?;
+        let mus: Vec<c64> = eig.S().column_vector().iter().copied().collect();
+        let psi_all = eig.U().to_owned();
+        let i = matching_eigenvalue(&mus, frequency_hz, damping, dt).ok_or_else(|| {
+            Error::numerical(format!("uncertainty: no oscillating pole at order {n}"))
+        })?;
+        let mu = mus[i];
+        let (_, f, z) = continuous(mu, dt);
+        let psi_inv = psi_all.partial_piv_lu().inverse();
+        let psi: Vec<c64> = (0..n).map(|j| psi_all[(j, i)]).collect();
+        let cplx = |m: MatRef<'_, f64>| {
+            Mat::<c64>::from_fn(m.nrows(), m.ncols(), |r, q| c64::new(m[(r, q)], 0.0))
+        };
+        let times = |m: MatRef<'_, f64>, x: &[c64]| -> Vec<c64> {
+            (0..m.nrows())
+                .map(|r| (0..m.ncols()).map(|q| x[q] * m[(r, q)]).sum())
+                .collect()
+        };
+        let times_t = |m: MatRef<'_, f64>, x: &[c64]| -> Vec<c64> {
+            (0..m.ncols())
+                .map(|q| (0..m.nrows()).map(|r| x[r] * m[(r, q)]).sum())
+                .collect()
+        };
+        let shape = times(c.as_ref(), &psi);
+        let rho = times(residual.as_ref(), &psi);
+        let u2 = sub.u.as_ref().subcols(n, k - n);
+        let u2_rho = times_t(u2.subrows(0, a_rows - l), &rho);
+        let s_psi: Vec<c64> = psi.iter().zip(&sh).map(|(x, h)| x * *h).collect();
+        let is_psi: Vec<c64> = psi.iter().zip(&sh).map(|(x, h)| x / *h).collect();
+        let nb = self.y.len();
+        // Column t of `ks`: K_t S^{1/2} ψ; of `kr`: S^{1/2} K_tᵀ U₂↑ᵀ ρ.
+        let mut ks = Mat::<c64>::zeros(k - n, nb);
+        let mut kr = Mat::<c64>::zeros(n, nb);
+        for t in 0..nb {
+            let (y, zt) = (&self.y[t], &self.z[t]);
+            for j in 0..k - n {
+                let sj = s[n + j];
+                let mut acc = c64::new(0.0, 0.0);
+                for q in 0..n {
+                    let den = s[q] * s[q] - sj * sj;
+                    let kv = (s[q] * y[(n + j, q)] + sj * zt[(q, n + j)]) / den;
+                    acc += s_psi[q] * kv;
+                    kr[(q, t)] += u2_rho[j] * (kv * sh[q]);
+                }
+                ks[(j, t)] = acc;
+            }
+        }
+        // ΔΓ ψ per column: U₂ K S^{1/2} ψ (+ the part outside span U).
+        let mut dgamma_psi = cplx(u2) * &ks;
+        if !self.outside.is_empty() {
+            for t in 0..nb {
+                let o = self.outside[t].as_ref().subcols(0, n);
+                let extra = times(o, &is_psi);
+                let extra_t = times_t(o.subrows(0, a_rows - l), &rho);
+                for r in 0..a_rows {
+                    dgamma_psi[(r, t)] += extra[r];
+                }
+                for q in 0..n {
+                    kr[(q, t)] += extra_t[q] / sh[q];
+                }
+            }
+        }
+        // Γ↑ᵀ (ΔΓ↓ψ − μ ΔΓ↑ψ) + ΔΓ↑ᵀ R ψ, then ΔA ψ.
+        let shifted = Mat::<c64>::from_fn(a_rows - l, nb, |r, t| {
+            dgamma_psi[(r + l, t)] - mu * dgamma_psi[(r, t)]
+        });
+        let rhs = cplx(up.transpose()) * &shifted + &kr;
+        let da_psi = cplx(gram_inv.as_ref()) * &rhs;
+        let e = &psi_inv * &da_psi;
+        let mut d_frequency = Vec::with_capacity(nb);
+        let mut d_damping = Vec::with_capacity(nb);
+        let mut d_shape = Vec::with_capacity(nb);
+        let c_c = cplx(c.as_ref());
+        for t in 0..nb {
+            let (df, dz) = modal_deltas(mu, e[(i, t)], dt);
+            d_frequency.push(df);
+            d_damping.push(dz);
+            let mut coeff = Mat::<c64>::zeros(n, 1);
+            for j in 0..n {
+                if j != i {
+                    coeff[(j, 0)] = e[(j, t)] / (mu - mus[j]);
+                }
+            }
+            let d_psi = &psi_all * &coeff;
+            let c_dpsi = &c_c * &d_psi;
+            d_shape.push(
+                (0..l)
+                    .map(|r| dgamma_psi[(r, t)] + c_dpsi[(r, 0)])
+                    .collect(),
+            );
+        }
+        Ok(PoleSensitivity {
+            frequency_hz: f,
+            damping_ratio: z,
+            shape,
+            d_frequency,
+            d_damping,
+            d_shape,
+        })
+    }
+}
+
+/// Δ|φ̃_j| per column of T of the shape normalised at component `c`
+/// (module doc, step 5).
+pub fn normalised_modulus_deltas(p: &PoleSensitivity, c: usize) -> Vec<Vec<f64>> {
+    let pc = p.shape[c];
+    let norm: Vec<c64> = p.shape.iter().map(|x| x / pc).collect();
+    p.d_shape
+        .iter()
+        .map(|d| {
+            norm.iter()
+                .zip(d)
+                .map(|(phi, dphi)| {
+                    let dn = (dphi - phi * d[c]) / pc;
+                    let modulus = phi.norm();
+                    if modulus > 0.0 {
+                        (phi.conj() * dn).re / modulus
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The σ of one mode: the mean sensitivity over (up to
+/// [`MAX_POLES_PER_MODE`] of) its member poles `members` (indices into
+/// `poles`), applied to the columns of T.
+pub fn mode_std(
+    sensitivity: &Sensitivity<'_>,
+    poles: &[Pole],
+    members: &[usize],
+    mode: &Mode,
+    dt: f64,
+) -> Result<ModeStd> {
+    let mut members = members.to_vec();
+    members.sort_by_key(|&i| poles[i].order);
+    let take = members.len().min(MAX_POLES_PER_MODE);
+    let chosen: Vec<usize> = (0..take)
+        .map(|j| members[j * (members.len() - 1) / (take - 1).max(1)])
+        .collect();
+    let c = (0..mode.shape.len())
+        .max_by(|&a, &b| mode.shape[a].norm().total_cmp(&mode.shape[b].norm()))
+        .unwrap_or(0);
+    let nb = sensitivity.y.len();
+    let l = mode.shape.len();
+    let (mut df, mut dz) = (vec![0.0; nb], vec![0.0; nb]);
+    let mut dm = vec![vec![0.0; l]; nb];
+    let w = 1.0 / chosen.len() as f64;
+    for &i in &chosen {
+        let p = &poles[i];
+        let s = sensitivity.pole(p.order, p.frequency_hz, p.damping_ratio, dt)?;
+        let moduli = normalised_modulus_deltas(&s, c);
+        for t in 0..nb {
+            df[t] += w * s.d_frequency[t];
+            dz[t] += w * s.d_damping[t];
+            for (acc, d) in dm[t].iter_mut().zip(&moduli[t]) {
+                *acc += w * d;
+            }
+        }
+    }
+    let rss = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
+    Ok(ModeStd {
+        frequency_hz: rss(&mut df.iter().copied()),
+        damping: rss(&mut dz.iter().copied()),
+        shape_modulus: (0..l).map(|j| rss(&mut dm.iter().map(|d| d[j]))).collect(),
+        blocks: nb,
+    })
+}
+
+/// Central finite differences of a pole along each column of T, for the
+/// validation of the analytical sensitivities (tests/it/uncertainty.rs):
+/// `factorised(t, ε)` returns the factorised matrix perturbed by ε along
+/// column t (ε = 0: unperturbed); the pole of order `order` nearest (f, ζ)
+/// is followed through ±`step`.  Returns (J_f T_t, J_ζ T_t) per column.
+pub fn finite_difference_pole(
+    factorised: impl Fn(usize, f64) -> Result<Mat<f64>>,
+    columns: usize,
+    outputs: usize,
+    block_rows: usize,
+    order: usize,
+    (frequency_hz, damping): (f64, f64),
+    dt: f64,
+    step: f64,
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    let pole_at = |t: usize, eps: f64| -> Result<(f64, f64)> {
+        let m = factorised(t, eps)?;
+        let sub = thin_svd_subspace(m.as_ref(), outputs, block_rows)?;
+        let (a, c) = sub.realise(order)?;
+        let eig: Vec<c64> = eigen_structure(a.as_ref(), c.as_ref())?
+            .into_iter()
+            .map(|(mu, _)| mu)
+            .collect();
+        let i = matching_eigenvalue(&eig, frequency_hz, damping, dt)
+            .ok_or_else(|| Error::numerical("finite difference: pole lost"))?;
+        let (_, f, z) = continuous(eig[i], dt);
+        Ok((f, z))
+    };
+    let (mut df, mut dz) = (Vec::new(), Vec::new());
+    for t in 0..columns {
+        let (fp, zp) = pole_at(t, step)?;
+        let (fm, zm) = pole_at(t, -step)?;
+        df.push((fp - fm) / (2.0 * step));
+        dz.push((zp - zm) / (2.0 * step));
+    }
+    Ok((df, dz))
+}
+
+/// What [`of_modes`] needs from the identification.
+pub struct Identified<'a> {
+    pub method: Method,
+    /// Pre-processed (decimated) outputs and, for `io`, inputs.
+    pub outputs: &'a [&'a [f64]],
+    pub inputs: &'a [&'a [f64]],
+    pub refs: &'a [usize],
+    pub block_rows: usize,
+    pub subspace: &'a Subspace,
+    pub dt: f64,
+}
+
+/// The data-driven σ of every mode, or why not.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DataUncertainty {
+    /// Per mode (same order as the modes); `None` = not computed.
+    pub modes: Vec<Option<ModeStd>>,
+    pub notes: Vec<String>,
+    pub warnings: Vec<String>,
+}
+
+/// The data-driven σ of `modes` (their member poles: `Pole::mode`), with
+/// `blocks` blocks (`None` = [`auto_blocks`]).  SSI-DATA is not covered
+/// (a note says so); too few blocks leave every σ null with a warning.
+pub fn of_modes(
+    id: &Identified<'_>,
+    poles: &[Pole],
+    modes: &[Mode],
+    blocks: Option<usize>,
+) -> DataUncertainty {
+    let mut out = DataUncertainty {
+        modes: vec![None; modes.len()],
+        ..Default::default()
+    };
+    if modes.is_empty() {
+        return out;
+    }
+    if id.method == Method::SsiData {
+        out.notes.push(
+            "data-driven σ (frequency_std_data_hz, damping_std_data): not computed for ssi-data (ssi-cov and io only)"
+                .into(),
+        );
+        return out;
+    }
+    let samples = id.outputs.iter().map(|s| s.len()).min().unwrap_or(0);
+    let lowest = modes
+        .iter()
+        .map(|m| m.frequency_hz)
+        .fold(f64::INFINITY, f64::min);
+    let (nb, rule) = match blocks {
+        Some(b) => (b, "stated (uncertainty_blocks)".to_string()),
+        None => (
+            auto_blocks(id.method, samples, id.dt, id.block_rows, lowest),
+            format!(
+                "automatic: blocks of at least {} periods of the lowest mode {lowest:.3} Hz and {BLOCK_SPANS} × 2p = {} samples, at most {MAX_AUTO_BLOCKS}",
+                if id.method == Method::Io { BLOCK_PERIODS_IO } else { BLOCK_PERIODS },
+                BLOCK_SPANS * 2 * id.block_rows
+            ),
+        ),
+    };
+    let span = 2 * id.block_rows;
+    if nb < MIN_BLOCKS || samples / nb.max(1) <= 2 * span {
+        out.warnings.push(format!(
+            "data-driven σ not computed: the record ({samples} samples after decimation, {:.1} s) gives {nb} block(s) ({rule}); at least {MIN_BLOCKS} blocks longer than 2 × the Hankel span of {span} samples are needed — frequency_std_data_hz and damping_std_data are null, the order-spread σ alone is reported",
+            samples as f64 * id.dt
+        ));
+        return out;
+    }
+    let deltas = match id.method {
+        Method::SsiCov => ssi_cov_blocks(id.outputs, id.refs, id.block_rows, nb).1,
+        _ => {
+            let (gram, dg) = po_moesp_blocks(id.outputs, id.inputs, id.block_rows, nb);
+            match l32_perturbations(
+                gram.as_ref(),
+                &dg,
+                id.inputs.len(),
+                id.outputs.len(),
+                id.block_rows,
+            ) {
+                Ok(d) => d,
+                Err(e) => {
+                    out.warnings
+                        .push(format!("data-driven σ not computed: {e}"));
+                    return out;
+                }
+            }
+        }
+    };
+    let members: Vec<Vec<usize>> = (0..modes.len())
+        .map(|m| {
+            (0..poles.len())
+                .filter(|&i| poles[i].mode == Some(m))
+                .collect()
+        })
+        .collect();
+    let n_max = members
+        .iter()
+        .flatten()
+        .map(|&i| poles[i].order)
+        .max()
+        .unwrap_or(0);
+    let sensitivity = Sensitivity::new(id.subspace, &deltas, n_max);
+    for (m, mode) in modes.iter().enumerate() {
+        if members[m].is_empty() {
+            continue;
+        }
+        match mode_std(&sensitivity, poles, &members[m], mode, id.dt) {
+            Ok(s) if s.frequency_hz.is_finite() && s.damping.is_finite() => out.modes[m] = Some(s),
+            Ok(_) => out.warnings.push(format!(
+                "data-driven σ of the {:.3} Hz mode not computed: not finite (coinciding singular values)",
+                mode.frequency_hz
+            )),
+            Err(e) => out.warnings.push(format!(
+                "data-driven σ of the {:.3} Hz mode not computed: {e}",
+                mode.frequency_hz
+            )),
+        }
+    }
+    out.notes.push(format!(
+        "data-driven σ from {nb} blocks of {} samples ({rule}); first-order propagation (Reynders et al. 2008, Döhler & Mevel 2013)",
+        samples / nb
+    ));
+    out
+}

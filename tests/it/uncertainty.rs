@@ -1,0 +1,294 @@
+//! Issue 36 item 1: the data-driven σ of frequency, damping and shape
+//! (`modal::uncertainty`).  CI tests: the analytical first-order
+//! sensitivities against central finite differences along the columns of
+//! T (SSI-COV and input–output), and the normalised errors of a few seeds
+//! of the 5-storey building.  The coverage study over 20 seeds is
+//! `#[ignore]`d (docs/statistics.md holds its table).
+
+use crate::modal::{ambient_input_seeded, earthquake_input_with_noise, five_storey};
+use quaketwin::modal::poles::poles_of_order;
+use quaketwin::modal::ssi::{covariance_toeplitz, eigen_structure, thin_svd_subspace};
+use quaketwin::modal::uncertainty::{
+    finite_difference_pole, l32_perturbations, po_moesp_blocks, po_moesp_l32, ssi_cov_blocks,
+    Sensitivity,
+};
+use quaketwin::modal::{identify, Method, ModalInput, ModalSettings, Mode};
+use quaketwin::synth::BuildingModes;
+
+/// Relative difference of two σ.
+fn relative(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(1e-300)
+}
+
+/// The poles of order `order` of a factorised matrix (ascending frequency).
+fn poles_of(
+    m: &faer::Mat<f64>,
+    outputs: usize,
+    p: usize,
+    order: usize,
+    dt: f64,
+) -> Vec<quaketwin::modal::Pole> {
+    let sub = thin_svd_subspace(m.as_ref(), outputs, p).unwrap();
+    let (a, c) = sub.realise(order).unwrap();
+    poles_of_order(order, eigen_structure(a.as_ref(), c.as_ref()).unwrap(), dt)
+}
+
+/// Compares, for every pole of `order` within 5 % of a true frequency, the
+/// analytical σ_f, σ_ζ with those of central finite differences.  The
+/// first-order sensitivity is the limit of the difference quotient; with
+/// a step of 1e-4 of T's columns the quotient's own error is O(step²):
+/// they agree to 1 % (measured: ≤ 0.1 %).
+fn check_against_finite_differences(
+    factorised: &dyn Fn(usize, f64) -> faer::Mat<f64>,
+    analytical_deltas: &[faer::Mat<f64>],
+    outputs: usize,
+    p: usize,
+    order: usize,
+    dt: f64,
+    truth: &BuildingModes,
+) -> usize {
+    let m0 = factorised(0, 0.0);
+    let sub = thin_svd_subspace(m0.as_ref(), outputs, p).unwrap();
+    let sensitivity = Sensitivity::new(&sub, analytical_deltas, order);
+    let mut checked = 0;
+    for pole in poles_of(&m0, outputs, p, order, dt) {
+        if !truth
+            .frequencies_hz
+            .iter()
+            .any(|f| (pole.frequency_hz / f - 1.0).abs() < 0.05)
+        {
+            continue;
+        }
+        let s = sensitivity
+            .pole(order, pole.frequency_hz, pole.damping_ratio, dt)
+            .unwrap();
+        let (sf, sz) = s.std();
+        let (df, dz) = finite_difference_pole(
+            |t, eps| Ok(factorised(t, eps)),
+            analytical_deltas.len(),
+            outputs,
+            p,
+            order,
+            (pole.frequency_hz, pole.damping_ratio),
+            dt,
+            1e-4,
+        )
+        .unwrap();
+        let rss = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let (ff, fz) = (rss(&df), rss(&dz));
+        eprintln!(
+            "{:.3} Hz: σ_f analytical {sf:.3e} finite-difference {ff:.3e}; σ_ζ {sz:.3e} {fz:.3e}",
+            pole.frequency_hz
+        );
+        assert!(
+            relative(sf, ff) < 0.01 && relative(sz, fz) < 0.01,
+            "{:.3} Hz: analytical σ_f {sf:.3e}, σ_ζ {sz:.3e} vs finite differences {ff:.3e}, {fz:.3e}",
+            pole.frequency_hz
+        );
+        // Column by column, not only in sum.
+        for (a, b) in s.d_frequency.iter().zip(&df) {
+            assert!((a - b).abs() <= 0.02 * ff, "J_f T_t {a:.3e} vs {b:.3e}");
+        }
+        checked += 1;
+    }
+    checked
+}
+
+/// SSI-COV on 120 s of the ambient 5-storey record (5 outputs, p = 20,
+/// order 10, 12 blocks): analytical = finite differences for the 5 modes.
+#[test]
+fn ssi_cov_sensitivity_matches_finite_differences() {
+    let input = ambient_input_seeded(3);
+    let outputs: Vec<&[f64]> = input.outputs.iter().map(|s| &s[..12_000]).collect();
+    let refs: Vec<usize> = (0..5).collect();
+    let p = 20;
+    let h = covariance_toeplitz(&outputs, &refs, p);
+    let (_, deltas) = ssi_cov_blocks(&outputs, &refs, p, 12);
+    let factorised = |t: usize, eps: f64| {
+        let mut m = h.clone();
+        if eps != 0.0 {
+            m += faer::Scale(eps) * &deltas[t];
+        }
+        m
+    };
+    let truth = five_storey().modes().unwrap();
+    let checked =
+        check_against_finite_differences(&factorised, &deltas, 5, p, 10, input.dt, &truth);
+    assert!(checked >= 4, "only {checked} poles near the true modes");
+}
+
+/// Input–output (PO-MOESP) on the 40-s earthquake: the Cholesky
+/// derivative and the SVD sensitivity together against finite
+/// differences of the Gram matrix.
+#[test]
+fn io_sensitivity_matches_finite_differences() {
+    let input = earthquake_input_with_noise(2, 30.0);
+    // Decimated by 2 as the modal stage does (200 → 100 Hz), by taking
+    // every other sample of the noisy signals: enough for the comparison.
+    let down = |s: &Vec<f64>| s.iter().step_by(2).copied().collect::<Vec<f64>>();
+    let outs: Vec<Vec<f64>> = input.outputs.iter().map(down).collect();
+    let ins: Vec<Vec<f64>> = input.inputs.iter().map(down).collect();
+    let dt = 2.0 * input.dt;
+    let outputs: Vec<&[f64]> = outs.iter().map(Vec::as_slice).collect();
+    let inputs: Vec<&[f64]> = ins.iter().map(Vec::as_slice).collect();
+    let p = 10;
+    let (gram, dg) = po_moesp_blocks(&outputs, &inputs, p, 10);
+    let deltas = l32_perturbations(gram.as_ref(), &dg, 1, 5, p).unwrap();
+    let factorised = |t: usize, eps: f64| {
+        let mut g = gram.clone();
+        if eps != 0.0 {
+            g += faer::Scale(eps) * &dg[t];
+        }
+        po_moesp_l32(g.as_ref(), 1, 5, p).unwrap()
+    };
+    let truth = five_storey().modes().unwrap();
+    let checked = check_against_finite_differences(&factorised, &deltas, 5, p, 10, dt, &truth);
+    assert!(checked >= 4, "only {checked} poles near the true modes");
+}
+
+/// Per true mode: the identified mode nearest in frequency (within 10 %).
+fn matched<'a>(truth: &BuildingModes, modes: &'a [Mode]) -> Vec<Option<&'a Mode>> {
+    truth
+        .frequencies_hz
+        .iter()
+        .map(|&f| {
+            modes
+                .iter()
+                .filter(|m| (m.frequency_hz / f - 1.0).abs() < 0.1)
+                .min_by(|a, b| {
+                    (a.frequency_hz - f)
+                        .abs()
+                        .total_cmp(&(b.frequency_hz - f).abs())
+                })
+        })
+        .collect()
+}
+
+/// Normalised errors (f̂ − f)/σ_f and (ζ̂ − ζ)/σ_ζ of one identification,
+/// per true mode (None: missed or no σ).
+fn normalised_errors(
+    truth: &BuildingModes,
+    input: &ModalInput,
+    method: Method,
+) -> Vec<Option<(f64, f64)>> {
+    let settings = ModalSettings {
+        method,
+        ..Default::default()
+    };
+    let result = identify(input, &settings).unwrap();
+    matched(truth, &result.modes)
+        .into_iter()
+        .enumerate()
+        .map(|(j, m)| {
+            let m = m?;
+            let d = m.data_std.as_ref()?;
+            Some((
+                (m.frequency_hz - truth.frequencies_hz[j]) / d.frequency_hz,
+                (m.damping_ratio - truth.damping_ratios[j]) / d.damping,
+            ))
+        })
+        .collect()
+}
+
+/// CI version of the coverage study: three seeds of the 600-s ambient
+/// record (SSI-COV), every mode found with a σ, and the normalised
+/// frequency errors of the 15 estimates have a root mean square in
+/// [0.4, 2.0] (1 for a correct σ; with 15 values the 95 % range of an
+/// exact σ is about 0.65–1.3).  Catches a σ wrong by a factor of 2.
+#[test]
+fn ambient_normalised_errors_have_a_sensible_spread() {
+    let truth = five_storey().modes().unwrap();
+    let mut zf = Vec::new();
+    for seed in [1, 2, 3] {
+        let errors = normalised_errors(&truth, &ambient_input_seeded(seed), Method::SsiCov);
+        eprintln!("seed {seed}: {errors:?}");
+        for (j, e) in errors.iter().enumerate() {
+            let (f, _) = e.unwrap_or_else(|| panic!("seed {seed}: mode {} without σ", j + 1));
+            zf.push(f);
+        }
+    }
+    let rms = (zf.iter().map(|z| z * z).sum::<f64>() / zf.len() as f64).sqrt();
+    eprintln!("rms of (f̂ − f)/σ_f over {} estimates: {rms:.2}", zf.len());
+    assert!((0.4..=2.0).contains(&rms), "rms {rms:.2}");
+}
+
+/// Coverage of the 95 % intervals f̂ ± 1.96 σ_f and ζ̂ ± 1.96 σ_ζ over
+/// `seeds`, per mode: (covered f, covered ζ, identified with σ).
+fn coverage(
+    seeds: &[u64],
+    method: Method,
+    input: impl Fn(u64) -> ModalInput,
+) -> Vec<(usize, usize, usize)> {
+    let truth = five_storey().modes().unwrap();
+    let mut out = vec![(0, 0, 0); 5];
+    for &seed in seeds {
+        let errors = normalised_errors(&truth, &input(seed), method);
+        eprintln!(
+            "  {} seed {seed:2}: normalised errors (f, ζ) {}",
+            method.name(),
+            errors
+                .iter()
+                .map(|e| e.map_or("—".into(), |(f, z)| format!("{f:+.2} {z:+.2}")))
+                .collect::<Vec<_>>()
+                .join(" | ")
+        );
+        for (j, e) in errors.iter().enumerate() {
+            if let Some((f, z)) = e {
+                out[j].2 += 1;
+                out[j].0 += (f.abs() <= 1.96) as usize;
+                out[j].1 += (z.abs() <= 1.96) as usize;
+            }
+        }
+    }
+    out
+}
+
+fn print_coverage(title: &str, seeds: usize, cov: &[(usize, usize, usize)]) {
+    let truth = five_storey().modes().unwrap();
+    eprintln!("{title} ({seeds} seeds)");
+    eprintln!("| mode | f (Hz) | ζ | identified with σ | f covered | ζ covered |");
+    for (j, (cf, cz, n)) in cov.iter().enumerate() {
+        eprintln!(
+            "| {} | {:.3} | {:.3} | {n}/{seeds} | {:.0} % | {:.0} % |",
+            j + 1,
+            truth.frequencies_hz[j],
+            truth.damping_ratios[j],
+            100.0 * *cf as f64 / (*n).max(1) as f64,
+            100.0 * *cz as f64 / (*n).max(1) as f64,
+        );
+    }
+}
+
+/// The issue-36 coverage study: 20 seeds each of the 600-s ambient record
+/// (SSI-COV) and of the 40-s earthquake with base input (io), default
+/// settings; the 95 % intervals must contain the truth in 90–99 % of the
+/// seeds for every mode's frequency and damping.
+/// Run: `cargo test --release --test it uncertainty::coverage_study -- --ignored --nocapture`
+#[test]
+#[ignore]
+fn coverage_study_twenty_seeds() {
+    let seeds: Vec<u64> = (1..=20).collect();
+    let ambient = coverage(&seeds, Method::SsiCov, ambient_input_seeded);
+    print_coverage("ssi-cov, 600-s ambient, 20 dB", seeds.len(), &ambient);
+    let quake = coverage(&seeds, Method::Io, |s| earthquake_input_with_noise(s, 30.0));
+    print_coverage(
+        "io, 40-s earthquake with base input, 30 dB",
+        seeds.len(),
+        &quake,
+    );
+    let mut failures = Vec::new();
+    for (kind, cov) in [("ssi-cov", &ambient), ("io", &quake)] {
+        for (j, (cf, cz, n)) in cov.iter().enumerate() {
+            for (what, c) in [("f", cf), ("ζ", cz)] {
+                let share = *c as f64 / seeds.len() as f64;
+                if !(0.9..=0.99).contains(&share) || *n < seeds.len() {
+                    failures.push(format!("{kind} mode {} {what}: {c}/{n} covered", j + 1));
+                }
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "coverage outside 90–99 %: {failures:?}"
+    );
+}
