@@ -36,9 +36,8 @@
 //!    Δφ̃ = (Δφ − φ̃ Δφ_c) / φ_c, Δ|φ̃_j| = Re(φ̃_j* Δφ̃_j) / |φ̃_j|.
 //!
 //! A mode's estimate is the mean over the poles of the best-converged part
-//! of its column ([`super::selection`]); its sensitivity is the mean of the
-//! sensitivities of (up to [`MAX_POLES_PER_MODE`] of) those poles, so σ is
-//! that of the estimate reported, not of one order.
+//! of its column ([`super::selection`]); its σ is the median of the σ of
+//! (up to [`MAX_POLES_PER_MODE`] of) those poles ([`mode_std`] says why).
 //!
 //! Input–output: the factorised matrix L₃₂ is a smooth function of the Gram
 //! matrix G of [U_f; U_p; Y_p; Y_f] (G = L Lᵀ); with dG_t the centred block
@@ -58,6 +57,7 @@ use super::ssi::{
 };
 use super::Method;
 use crate::error::{Error, Result};
+use crate::stats::median_in_place;
 use faer::linalg::solvers::DenseSolveCore;
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
 use faer::{c64, Mat, MatRef, Par};
@@ -82,8 +82,12 @@ pub const BLOCK_PERIODS: f64 = 10.0;
 /// response's memory, only hold a few cycles of the lowest mode (a 40-s
 /// earthquake record of a 1.3-Hz building gives 10 blocks).
 pub const BLOCK_PERIODS_IO: f64 = 3.0;
-/// … and at least this many times the Hankel matrix's span of 2p samples.
-pub const BLOCK_SPANS: usize = 4;
+/// … and at least this many times the Hankel matrix's span of 2p samples
+/// (the fewest any block may have: fewer, and the σ is refused).  2, not
+/// more: the 14-channel × 41 s event of `benches/modal.rs` (io, p = 28 at
+/// 40 Hz, 1640 samples) gets 14 blocks of 3 periods of its 1.05 Hz
+/// fundamental; 4 spans left it 7 blocks and no σ.
+pub const BLOCK_SPANS: usize = 2;
 /// Poles of a mode's column whose sensitivities are averaged (evenly
 /// spaced over its converged part): they are nearly collinear, and each
 /// costs an eigen-decomposition and products over the n_b columns.
@@ -511,9 +515,18 @@ pub fn normalised_modulus_deltas(p: &PoleSensitivity, c: usize) -> Vec<Vec<f64>>
         .collect()
 }
 
-/// The σ of one mode: the mean sensitivity over (up to
+/// The σ of one mode: per quantity, the median over (up to
 /// [`MAX_POLES_PER_MODE`] of) its member poles `members` (indices into
-/// `poles`), applied to the columns of T.
+/// `poles`) of each pole's first-order σ.  Why the median of the poles'
+/// σ rather than the σ of the mean of their Jacobians: the poles of one
+/// column are nearly the same estimate (their order spread is 10–1000 ×
+/// below σ on the 5-storey records), so the σ of their mean is that of one
+/// pole; but at some orders the truncation splits two nearly equal noise
+/// singular values, K of step 2 has a tiny denominator, and the linearised
+/// σ of that order is 10–100 × the others' (the 8.3 Hz mode of the
+/// 600-s ambient 5-storey record, seed 2: 0.03–0.09 Hz at five orders,
+/// 2.3 Hz at order 30) while the poles themselves stay put: the first
+/// order fails there, and a mean would inherit it.
 pub fn mode_std(
     sensitivity: &Sensitivity<'_>,
     poles: &[Pole],
@@ -530,29 +543,26 @@ pub fn mode_std(
     let c = (0..mode.shape.len())
         .max_by(|&a, &b| mode.shape[a].norm().total_cmp(&mode.shape[b].norm()))
         .unwrap_or(0);
-    let nb = sensitivity.y.len();
     let l = mode.shape.len();
-    let (mut df, mut dz) = (vec![0.0; nb], vec![0.0; nb]);
-    let mut dm = vec![vec![0.0; l]; nb];
-    let w = 1.0 / chosen.len() as f64;
+    let rss = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
+    let (mut sf, mut sz) = (Vec::new(), Vec::new());
+    let mut sm = vec![Vec::new(); l];
     for &i in &chosen {
         let p = &poles[i];
         let s = sensitivity.pole(p.order, p.frequency_hz, p.damping_ratio, dt)?;
         let moduli = normalised_modulus_deltas(&s, c);
-        for t in 0..nb {
-            df[t] += w * s.d_frequency[t];
-            dz[t] += w * s.d_damping[t];
-            for (acc, d) in dm[t].iter_mut().zip(&moduli[t]) {
-                *acc += w * d;
-            }
+        let (f, z) = s.std();
+        sf.push(f);
+        sz.push(z);
+        for (j, acc) in sm.iter_mut().enumerate() {
+            acc.push(rss(&mut moduli.iter().map(|d| d[j])));
         }
     }
-    let rss = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
     Ok(ModeStd {
-        frequency_hz: rss(&mut df.iter().copied()),
-        damping: rss(&mut dz.iter().copied()),
-        shape_modulus: (0..l).map(|j| rss(&mut dm.iter().map(|d| d[j]))).collect(),
-        blocks: nb,
+        frequency_hz: median_in_place(&mut sf),
+        damping: median_in_place(&mut sz),
+        shape_modulus: sm.iter_mut().map(|v| median_in_place(v)).collect(),
+        blocks: sensitivity.y.len(),
     })
 }
 
@@ -655,9 +665,9 @@ pub fn of_modes(
         ),
     };
     let span = 2 * id.block_rows;
-    if nb < MIN_BLOCKS || samples / nb.max(1) <= 2 * span {
+    if nb < MIN_BLOCKS || samples / nb.max(1) < BLOCK_SPANS * span {
         out.warnings.push(format!(
-            "data-driven σ not computed: the record ({samples} samples after decimation, {:.1} s) gives {nb} block(s) ({rule}); at least {MIN_BLOCKS} blocks longer than 2 × the Hankel span of {span} samples are needed — frequency_std_data_hz and damping_std_data are null, the order-spread σ alone is reported",
+            "data-driven σ not computed: the record ({samples} samples after decimation, {:.1} s) gives {nb} block(s) ({rule}); at least {MIN_BLOCKS} blocks of {BLOCK_SPANS} × the Hankel span of {span} samples are needed — frequency_std_data_hz and damping_std_data are null, the order-spread σ alone is reported",
             samples as f64 * id.dt
         ));
         return out;
