@@ -174,14 +174,6 @@ pub fn hotelling_upper_quantile(tail: f64, k: f64, m: f64) -> f64 {
     upper_quantile_by_bisection(tail, |t| hotelling_survival(t, k, m))
 }
 
-/// Upper quantile of F(d1, d2): the f with P(F > f) = `tail`.
-pub fn f_upper_quantile(tail: f64, d1: f64, d2: f64) -> f64 {
-    if !(tail > 0.0 && tail < 1.0 && d1 > 0.0 && d2 > 0.0) {
-        return f64::NAN;
-    }
-    upper_quantile_by_bisection(tail, |f| f_survival(f, d1, d2))
-}
-
 /// The x ≥ 0 with `survival(x)` = `tail`, for a decreasing `survival`.
 fn upper_quantile_by_bisection(tail: f64, survival: impl Fn(f64) -> f64) -> f64 {
     let (mut lo, mut hi) = (0.0, 1.0);

@@ -43,7 +43,7 @@
 //!      share (the shares sum to χ²; a share may be negative).
 
 use crate::error::{Error, Result};
-use crate::modal::hankel::cross_covariances;
+use crate::modal::hankel::dot;
 use crate::stats::{hotelling_survival, hotelling_upper_quantile};
 use faer::{Mat, Side};
 
@@ -117,6 +117,8 @@ impl Default for ChangeTestSettings {
 pub struct CovarianceBlocks {
     pub channels: usize,
     pub max_lag: usize,
+    /// Samples between consecutive lags.
+    pub lag_step: usize,
     /// Samples of the record (the sum of the blocks').
     pub samples: usize,
     /// R_k / (tr R₀ / l) for k = 1..=max_lag, entry (k − 1)·l² + o·l + c.
@@ -151,24 +153,32 @@ impl CovarianceBlocks {
     }
 }
 
-/// (C1) of `signals` (channels of one record) at lags 1..=`max_lag`, whole
-/// and in `blocks` consecutive blocks (each centred: a drifting offset is
-/// not structure); the record's H is the samples-weighted mean of its
-/// blocks' (products across block boundaries are left out alike in every
-/// record, reference or test).
+/// (C1) of `signals` (channels of one record) at lags k·`lag_step` for
+/// k = 1..=`max_lag`, whole and in `blocks` consecutive blocks (each
+/// centred: a drifting offset is not structure); the record's H is the
+/// samples-weighted mean of its blocks' (products across block boundaries
+/// are left out alike in every record, reference or test).  A lag step s
+/// gives the covariances of the record sampled every s samples (without
+/// anti-aliasing, which covariances do not need as long as no two modes
+/// alias onto each other): the identification's decimation factor, so the
+/// lags span the periods of the modes of interest instead of the first
+/// milliseconds.
 pub fn covariance_blocks(
     signals: &[&[f64]],
     max_lag: usize,
+    lag_step: usize,
     blocks: usize,
 ) -> Result<CovarianceBlocks> {
     let l = signals.len();
     let n = signals.iter().map(|s| s.len()).min().unwrap_or(0);
     let blocks = blocks.max(1);
+    let lag_step = lag_step.max(1);
     let block_len = n / blocks;
-    if l == 0 || block_len < 20 * (max_lag + 1) {
+    let longest = max_lag * lag_step;
+    if l == 0 || max_lag == 0 || block_len < 20 * (longest + 1) {
         return Err(Error::numerical(format!(
-            "change test: {n} samples in {blocks} blocks are too few for lags up to {max_lag} (each block needs at least {} samples)",
-            20 * (max_lag + 1)
+            "change test: {n} samples in {blocks} blocks are too few for lags up to {longest} samples (each block needs at least {})",
+            20 * (longest + 1)
         )));
     }
     let mut raw = Vec::with_capacity(blocks);
@@ -182,10 +192,23 @@ pub fn covariance_blocks(
                 part.iter().map(|v| v - m).collect()
             })
             .collect();
-        let views: Vec<&[f64]> = centred.iter().map(|s| s.as_slice()).collect();
-        let r = cross_covariances(&views, &views, max_lag);
-        variance += (0..l).map(|o| r[0][o * l + o]).sum::<f64>() / (l * blocks) as f64;
-        raw.push(r[1..].concat());
+        variance += centred
+            .iter()
+            .map(|x| dot(x, x) / block_len as f64)
+            .sum::<f64>()
+            / (l * blocks) as f64;
+        // R_k[o, c] = Σ_t y_o[t + k] y_c[t] / (N − k), lag k = i·lag_step.
+        let mut r = vec![0.0; max_lag * l * l];
+        for i in 1..=max_lag {
+            let k = i * lag_step;
+            for o in 0..l {
+                for c in 0..l {
+                    r[(i - 1) * l * l + o * l + c] =
+                        dot(&centred[o][k..], &centred[c][..block_len - k]) / (block_len - k) as f64;
+                }
+            }
+        }
+        raw.push(r);
     }
     if !(variance > 0.0 && variance.is_finite()) {
         return Err(Error::numerical(
@@ -206,6 +229,7 @@ pub fn covariance_blocks(
     Ok(CovarianceBlocks {
         channels: l,
         max_lag,
+        lag_step,
         samples: block_len * blocks,
         mean,
         block_samples: vec![block_len; blocks],
@@ -219,6 +243,7 @@ pub fn covariance_blocks(
 pub struct ChangeReference {
     pub shape: HankelShape,
     pub channels: usize,
+    pub lag_step: usize,
     /// H₀, row-major.
     reference_hankel: Vec<f64>,
     /// S, (p·l) × s.
@@ -253,9 +278,12 @@ pub fn reference_from(records: &[CovarianceBlocks], shape: HankelShape) -> Resul
         .first()
         .ok_or_else(|| Error::usage("change test: the reference holds no record"))?;
     let l = first.channels;
-    if records.iter().any(|r| r.channels != l) {
+    if records
+        .iter()
+        .any(|r| r.channels != l || r.lag_step != first.lag_step)
+    {
         return Err(Error::usage(
-            "change test: the reference records differ in their channels",
+            "change test: the reference records differ in their channels or lag step",
         ));
     }
     if let Some(r) = records.iter().find(|r| r.max_lag < shape.max_lag()) {
@@ -342,6 +370,7 @@ pub fn reference_from(records: &[CovarianceBlocks], shape: HankelShape) -> Resul
     Ok(ChangeReference {
         shape,
         channels: l,
+        lag_step: first.lag_step,
         reference_hankel: h0,
         null_space,
         dof: keep.len(),
@@ -383,13 +412,18 @@ impl ChangeReference {
 
     /// Tests one record (C3, C5–C7) at the false-alarm rate `alpha`.
     pub fn test(&self, record: &CovarianceBlocks, alpha: f64) -> Result<ChangeTestResult> {
-        if record.channels != self.channels || record.max_lag < self.shape.max_lag() {
+        if record.channels != self.channels
+            || record.max_lag < self.shape.max_lag()
+            || record.lag_step != self.lag_step
+        {
             return Err(Error::usage(format!(
-                "change test: the record has {} channels and lags up to {}, the reference {} channels and lags up to {}",
+                "change test: the record has {} channels and lags up to {} (step {}), the reference {} channels and lags up to {} (step {})",
                 record.channels,
                 record.max_lag,
+                record.lag_step,
                 self.channels,
-                self.shape.max_lag()
+                self.shape.max_lag(),
+                self.lag_step
             )));
         }
         let threshold = self.threshold(alpha)?;

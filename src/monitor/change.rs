@@ -18,8 +18,11 @@ use crate::modal::change_test::{
 
 /// The covariances of a window's signals for the change test, `None` with
 /// more than [`MAX_CHANNELS`] channels or when the window is too short.
+/// `lag_step`: the identification's decimation factor (lags in steps of
+/// the rate it found enough for the band).
 pub fn window_covariances(
     signals: &[Vec<f64>],
+    lag_step: usize,
     settings: &ChangeTestSettings,
 ) -> Option<CovarianceBlocks> {
     if signals.len() < 2 || signals.len() > MAX_CHANNELS {
@@ -27,7 +30,7 @@ pub fn window_covariances(
     }
     let views: Vec<&[f64]> = signals.iter().map(|s| s.as_slice()).collect();
     let max_lag = max_lag_for(DEFAULT_MAX_ORDER, signals.len());
-    covariance_blocks(&views, max_lag, settings.blocks_per_record).ok()
+    covariance_blocks(&views, max_lag, lag_step, settings.blocks_per_record).ok()
 }
 
 /// Change tests of the windows (None where a window has no covariances)

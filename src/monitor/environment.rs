@@ -18,21 +18,30 @@
 //!      eigenvectors) carry the environmental variation — a change of
 //!      temperature moves all frequencies together — and the residual
 //!      e_w = (I − U_q U_qᵀ) z_w is what they do not explain.  q: the
-//!      fewest directions holding `explained` (99 %) of the training
-//!      variance, at most m − 1.
-//! (E3) control chart: Hotelling's T²_w = (e_w − ē)ᵀ S⁺ (e_w − ē), S the
-//!      training residuals' covariance truncated to its rank k (m for E1,
-//!      m − q for E2); threshold the upper α quantile of
-//!      (n + 1) k (n − 1)/(n (n − k)) · F(k, n − k), the T² of a new
-//!      observation against n training ones (Montgomery, *Introduction to
-//!      Statistical Quality Control*, Phase II chart).
-//! (E4) a window is out of control when T²_w exceeds the threshold;
-//! (E5) an alarm: at least `min_run` consecutive out-of-control windows
-//!      among those after training (windows missing a mode neither break
-//!      nor extend a run), dated at the run's first window.
+//!      directions that stand above the estimation noise — the i-th
+//!      (eigenvalues descending) is kept while λ_i > `dominance` (5) × the
+//!      mean of the smaller ones, at most m − 1.  (Yan et al. keep a share
+//!      of the variance; a fixed share keeps noise directions when the
+//!      environment moved little over the training period, and those can
+//!      hold the damage.)
+//! (E3) control chart on subgroups of w consecutive windows (w = 24: one
+//!      day of hourly windows; w = 1: each window): Hotelling's
+//!      T²_g = w (ē_g − ē)ᵀ S⁺ (ē_g − ē), ē_g the subgroup's mean residual,
+//!      ē and S the n training residuals' mean and covariance (S truncated
+//!      to its rank k: m for E1, m − q for E2).  Threshold: the upper α
+//!      quantile of (1 + w/n) · T²(k, n − 1), Hotelling's T² with the
+//!      covariance estimated on n − 1 degrees of freedom (Montgomery,
+//!      *Introduction to Statistical Quality Control*, the Phase II chart;
+//!      `stats::hotelling_upper_quantile`).  Why subgroups: a 1 % stiffness
+//!      loss moves the frequencies mostly along the environment's own
+//!      direction (all down together); what is left after (E2) is about one
+//!      hourly window's estimation scatter, and a day's mean brings it out.
+//! (E4) a subgroup is out of control when T²_g exceeds the threshold;
+//! (E5) an alarm: at least `min_run` consecutive out-of-control subgroups
+//!      after training, dated at the first.
 
 use crate::error::{Error, Result};
-use crate::stats::{f_upper_quantile, LinearFit};
+use crate::stats::{hotelling_upper_quantile, LinearFit};
 use faer::{Mat, Side};
 
 /// A measured environmental series (time, value), e.g. temperature.
@@ -109,6 +118,8 @@ pub struct ControlChart {
     pub dof: usize,
     pub threshold: f64,
     pub false_alarm_rate: f64,
+    /// w of (E3).
+    pub subgroup: usize,
     #[serde(skip)]
     residual_mean: Vec<f64>,
     #[serde(skip)]
@@ -120,18 +131,22 @@ pub struct ControlChart {
 pub struct ChartSettings {
     /// α of (E3) per window.
     pub false_alarm_rate: f64,
-    /// Share of the training variance the latent directions keep (E2).
-    pub explained: f64,
-    /// Consecutive out-of-control windows that make an alarm (E5).
+    /// How far above the mean of the smaller eigenvalues a latent
+    /// direction's must be to be kept (E2).
+    pub dominance: f64,
+    /// Consecutive out-of-control subgroups that make an alarm (E5).
     pub min_run: usize,
+    /// Windows per subgroup w (E3).
+    pub subgroup: usize,
 }
 
 impl Default for ChartSettings {
     fn default() -> Self {
         ChartSettings {
-            false_alarm_rate: 0.01,
-            explained: 0.99,
-            min_run: 3,
+            false_alarm_rate: 0.001,
+            dominance: 5.0,
+            min_run: 1,
+            subgroup: 24,
         }
     }
 }
@@ -199,15 +214,17 @@ impl ControlChart {
                     .collect();
                 let (lambda, u) = symmetric_eigen(&z)?;
                 let total: f64 = lambda.iter().map(|v| v.max(0.0)).sum();
+                let descending: Vec<f64> = lambda.iter().rev().map(|v| v.max(0.0)).collect();
                 let mut retained = 0;
-                let mut kept = 0.0;
-                for v in lambda.iter().rev() {
-                    if retained + 1 >= m || kept >= settings.explained * total {
+                while retained + 1 < m {
+                    let rest = &descending[retained + 1..];
+                    let floor = rest.iter().sum::<f64>() / rest.len() as f64;
+                    if descending[retained] <= settings.dominance * floor {
                         break;
                     }
-                    kept += v.max(0.0);
                     retained += 1;
                 }
+                let kept: f64 = descending[..retained].iter().sum();
                 let directions = (0..retained)
                     .map(|r| (0..m).map(|i| u[(i, m - 1 - r)]).collect())
                     .collect();
@@ -225,6 +242,7 @@ impl ControlChart {
             dof: 0,
             threshold: f64::NAN,
             false_alarm_rate: settings.false_alarm_rate,
+            subgroup: 1,
             residual_mean: vec![0.0; m],
             whitening: Vec::new(),
         };
@@ -248,7 +266,9 @@ impl ControlChart {
             .map(|&i| (0..m).map(|j| u[(j, i)] / lambda[i].sqrt()).collect())
             .collect();
         chart.dof = k;
-        chart.threshold = phase_two_threshold(settings.false_alarm_rate, k, n);
+        chart.subgroup = settings.subgroup.max(1);
+        chart.threshold = (1.0 + chart.subgroup as f64 / n as f64)
+            * hotelling_upper_quantile(settings.false_alarm_rate, k as f64, (n - 1) as f64);
         Ok(chart)
     }
 
@@ -286,29 +306,30 @@ impl ControlChart {
         }
     }
 
-    /// T² of one window (E3); NaN when the measured value is missing.
-    pub fn statistic(&self, frequencies: &[f64], environment: Option<f64>) -> f64 {
-        let e = self.residual(frequencies, environment);
-        self.whitening
+    /// T² of a subgroup (E3): `windows` are (frequencies, measured value)
+    /// of its windows; NaN when a measured value is missing.
+    pub fn statistic(&self, windows: &[(&[f64], Option<f64>)]) -> f64 {
+        let w = windows.len().max(1) as f64;
+        let m = self.residual_mean.len();
+        let mut mean = vec![0.0; m];
+        for (f, env) in windows {
+            for (acc, e) in mean.iter_mut().zip(self.residual(f, *env)) {
+                *acc += e / w;
+            }
+        }
+        w * self
+            .whitening
             .iter()
-            .map(|w| {
-                let v: f64 = w
+            .map(|row| {
+                let v: f64 = row
                     .iter()
-                    .zip(e.iter().zip(&self.residual_mean))
+                    .zip(mean.iter().zip(&self.residual_mean))
                     .map(|(a, (x, m))| a * (x - m))
                     .sum();
                 v * v
             })
-            .sum()
+            .sum::<f64>()
     }
-}
-
-/// (E3): upper α quantile of the Phase II T² of a new observation against
-/// n training ones with k degrees of freedom.
-pub fn phase_two_threshold(alpha: f64, k: usize, n: usize) -> f64 {
-    let (kf, nf) = (k as f64, n as f64);
-    let scale = (nf + 1.0) * kf * (nf - 1.0) / (nf * (nf - kf));
-    scale * f_upper_quantile(alpha, kf, nf - kf)
 }
 
 /// (E5): index of the first window of the first run of `min_run`

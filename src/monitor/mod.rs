@@ -94,7 +94,6 @@ pub fn rms_level(signals: &[Vec<f64>]) -> f64 {
 /// one bad window must not stop a year of monitoring.
 pub fn identify_window(w: WindowSignals, settings: &ModalSettings) -> WindowModes {
     let rms = rms_level(&w.signals);
-    let covariances = change::window_covariances(&w.signals, &Default::default());
     let input = ModalInput {
         dt: 1.0 / w.rate_hz,
         output_ids: w.ids.clone(),
@@ -105,6 +104,11 @@ pub fn identify_window(w: WindowSignals, settings: &ModalSettings) -> WindowMode
     };
     match identify(&input, settings) {
         Ok(result) => WindowModes {
+            covariances: change::window_covariances(
+                &input.outputs,
+                result.decimation,
+                &Default::default(),
+            ),
             start_ns: w.start_ns,
             end_ns: w.end_ns,
             channels: w.ids,
@@ -113,7 +117,6 @@ pub fn identify_window(w: WindowSignals, settings: &ModalSettings) -> WindowMode
             present_fraction: w.present_fraction,
             skipped: None,
             notes: result.warnings,
-            covariances,
         },
         Err(e) => {
             let mut m = WindowModes::skipped(

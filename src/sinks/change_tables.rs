@@ -13,8 +13,10 @@ use crate::vocab::tables::{
     change_reference as cr, change_test as ct, CHANGE_REFERENCE, CHANGE_TEST,
 };
 
-/// Metadata key of the largest lag kept.
+/// Metadata key of the number of lags kept.
 pub const MAX_LAG_KEY: &str = "quaketwin.max_lag";
+/// Metadata key of the samples between lags.
+pub const LAG_STEP_KEY: &str = "quaketwin.lag_step";
 
 /// Writes the blocks of `c` (none when `c` is `None`: too many channels or
 /// too short a record, said in `note`).
@@ -46,6 +48,10 @@ pub fn write_change_reference(
         MAX_LAG_KEY.into(),
         c.map_or(0, |c| c.max_lag).to_string(),
     ));
+    metadata.push((
+        LAG_STEP_KEY.into(),
+        c.map_or(1, |c| c.lag_step).to_string(),
+    ));
     if let Some(n) = note {
         metadata.push(("quaketwin.note".into(), n.to_string()));
     }
@@ -66,6 +72,11 @@ pub fn read_change_reference(path: &Path) -> Result<Option<(CovarianceBlocks, Ve
         .metadata(MAX_LAG_KEY)
         .and_then(|v| v.parse().ok())
         .ok_or_else(|| Error::input(loc(), format!("metadata {MAX_LAG_KEY} missing")))?;
+    let lag_step: usize = table
+        .metadata(LAG_STEP_KEY)
+        .and_then(|v| v.parse().ok())
+        .filter(|&s| s >= 1)
+        .ok_or_else(|| Error::input(loc(), format!("metadata {LAG_STEP_KEY} missing")))?;
     let l = channels.len();
     let mut block_samples = Vec::new();
     let mut blocks = Vec::new();
@@ -107,6 +118,7 @@ pub fn read_change_reference(path: &Path) -> Result<Option<(CovarianceBlocks, Ve
         CovarianceBlocks {
             channels: l,
             max_lag,
+            lag_step,
             samples,
             mean,
             block_samples,

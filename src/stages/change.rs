@@ -8,8 +8,8 @@
 //! usable as a reference whatever the order chosen later, and a reference
 //! of several runs possible (S of their union).  The order is twice the
 //! reference run's modes.  The covariances are of the conditioned output
-//! records at their sampling rate (the identification's decimation is not
-//! applied: the lags are the first few samples).
+//! records, at lags that are multiples of the identification's decimation
+//! factor (the rate it found enough for the band of interest).
 
 use std::path::Path;
 
@@ -52,16 +52,17 @@ pub fn record_covariances(
         signals.push(r.samples.get().map_err(|e| e.to_string())?.into_owned());
     }
     let max_lag = max_lag_for(DEFAULT_MAX_ORDER, l);
+    let step = result.decimation.max(1);
     let n = signals.iter().map(|s| s.len()).min().unwrap_or(0);
-    let blocks = (n / (50 * (max_lag + 1))).min(MAX_BLOCKS);
+    let blocks = (n / (50 * (max_lag * step + 1))).min(MAX_BLOCKS);
     if blocks < MIN_BLOCKS {
         return Err(format!(
             "{n} samples: too short for {MIN_BLOCKS} blocks of {} samples",
-            50 * (max_lag + 1)
+            50 * (max_lag * step + 1)
         ));
     }
     let views: Vec<&[f64]> = signals.iter().map(|s| s.as_slice()).collect();
-    covariance_blocks(&views, max_lag, blocks).map_err(|e| e.to_string())
+    covariance_blocks(&views, max_lag, step, blocks).map_err(|e| e.to_string())
 }
 
 /// Writes `change_reference.parquet` of this run and, with a reference

@@ -57,7 +57,7 @@ fn damaged(storey: usize, loss: f64) -> ShearBuilding {
 
 fn blocks_of(record: &[Vec<f64>], settings: &ChangeTestSettings) -> CovarianceBlocks {
     let views: Vec<&[f64]> = record.iter().map(|s| s.as_slice()).collect();
-    covariance_blocks(&views, shape().max_lag(), settings.blocks_per_record).unwrap()
+    covariance_blocks(&views, shape().max_lag(), lag_step(), settings.blocks_per_record).unwrap()
 }
 
 /// Statistics of `seeds` windows of `building` against a reference of
@@ -84,7 +84,18 @@ fn statistics(
 
 /// Order 10 (the five modes) from five channels.
 fn shape() -> HankelShape {
-    HankelShape::for_order(10, 5)
+    let mut s = HankelShape::for_order(10, 5);
+    if let Some(p) = std::env::var("CHANGE_P").ok().and_then(|v| v.parse().ok()) {
+        s.block_rows = p;
+        s.block_columns = p;
+    }
+    s
+}
+
+/// Lags in steps of 3 samples: at 100 Hz the 33 Hz the identification's
+/// decimation would keep for the 12.4 Hz top mode (≥ 2.5 × the band's top).
+fn lag_step() -> usize {
+    std::env::var("CHANGE_LAG_STEP").ok().and_then(|v| v.parse().ok()).unwrap_or(3)
 }
 
 /// CI version: 10-minute windows at 50 Hz, a reference of four healthy
@@ -134,12 +145,16 @@ fn change_test_keeps_healthy_windows_and_detects_a_ten_percent_loss() {
 fn change_test_refuses_a_record_of_another_shape() {
     let settings = ChangeTestSettings::default();
     let healthy = five_storey();
-    let r = ambient_record(&healthy, 300.0, 50.0, 1);
+    let r = ambient_record(&healthy, 600.0, 50.0, 1);
     let refs = vec![blocks_of(&r, &settings), blocks_of(&r, &settings)];
     let reference = reference_from(&refs, shape()).unwrap();
     let other = blocks_of(&r[..4], &settings);
     let e = reference.test(&other, 0.01).unwrap_err().to_string();
     assert!(e.contains("channels"), "{e}");
+}
+
+fn env_count(name: &str, default: u64) -> u64 {
+    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
 }
 
 /// Empirical ROC: (false-alarm rate, detection rate) at every threshold.
@@ -228,7 +243,7 @@ fn roc_of_the_change_test_one_hour_windows() {
         .collect();
     let reference = reference_from(&refs, shape()).unwrap();
     let threshold = reference.threshold(settings.false_alarm_rate).unwrap();
-    let null = statistics(&healthy, &reference, seconds, rate, 2000..2300, &settings);
+    let null = statistics(&healthy, &reference, seconds, rate, 2000..2000 + env_count("CHANGE_ROC_NULL", 300), &settings);
     let fa_theory = null.iter().filter(|&&v| v > threshold).count() as f64 / null.len() as f64;
     eprintln!(
         "dof {}, covariance dof {}, threshold (α = 1 %) {:.1}; healthy windows over it: {:.1} % of {}",
@@ -242,7 +257,7 @@ fn roc_of_the_change_test_one_hour_windows() {
     let mut power_2 = 0.0;
     eprintln!("| stiffness loss | power at 1 % (empirical threshold) | power at 5 % | power at the α = 1 % threshold | median χ² |");
     for (loss, colour, seed0) in [(0.01, "#1b9e77", 3000u64), (0.02, "#d95f02", 4000), (0.05, "#7570b3", 5000)] {
-        let alt = statistics(&damaged(0, loss), &reference, seconds, rate, seed0..seed0 + 100, &settings);
+        let alt = statistics(&damaged(0, loss), &reference, seconds, rate, seed0..seed0 + env_count("CHANGE_ROC_ALT", 100), &settings);
         let p1 = power_at(&null, &alt, 0.01);
         let p5 = power_at(&null, &alt, 0.05);
         let at_threshold = alt.iter().filter(|&&v| v > threshold).count() as f64 / alt.len() as f64;
