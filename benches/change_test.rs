@@ -35,8 +35,13 @@ fn hour(seed: u64) -> Vec<Vec<f64>> {
 
 fn blocks(record: &[Vec<f64>], shape: HankelShape) -> CovarianceBlocks {
     let views: Vec<&[f64]> = record.iter().map(|s| s.as_slice()).collect();
-    covariance_blocks(&views, shape.max_lag(), 3, ChangeTestSettings::default().blocks_per_record)
-        .unwrap()
+    covariance_blocks(
+        &views,
+        shape.max_lag(),
+        3,
+        ChangeTestSettings::default().blocks_per_record,
+    )
+    .unwrap()
 }
 
 fn bench_change_test(c: &mut Criterion) {

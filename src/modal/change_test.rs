@@ -204,7 +204,8 @@ pub fn covariance_blocks(
             for o in 0..l {
                 for c in 0..l {
                     r[(i - 1) * l * l + o * l + c] =
-                        dot(&centred[o][k..], &centred[c][..block_len - k]) / (block_len - k) as f64;
+                        dot(&centred[o][k..], &centred[c][..block_len - k])
+                            / (block_len - k) as f64;
                 }
             }
         }
@@ -265,7 +266,9 @@ fn residual(null_space: &Mat<f64>, x: &[f64], rows: usize, cols: usize) -> Vec<f
     let mut z = vec![0.0; s * cols];
     for c in 0..cols {
         for k in 0..s {
-            z[c * s + k] = (0..rows).map(|r| null_space[(r, k)] * x[r * cols + c]).sum();
+            z[c * s + k] = (0..rows)
+                .map(|r| null_space[(r, k)] * x[r * cols + c])
+                .sum();
         }
     }
     z
@@ -430,7 +433,11 @@ impl ChangeReference {
         let l = self.channels;
         let (rows, cols) = (self.shape.block_rows * l, self.shape.block_columns * l);
         let h = record.hankel(&record.mean, self.shape);
-        let centred: Vec<f64> = h.iter().zip(&self.reference_hankel).map(|(a, b)| a - b).collect();
+        let centred: Vec<f64> = h
+            .iter()
+            .zip(&self.reference_hankel)
+            .map(|(a, b)| a - b)
+            .collect();
         let n = record.samples as f64;
         let scale = (n / (1.0 + n / self.samples as f64)).sqrt();
         let zeta: Vec<f64> = residual(&self.null_space, &centred, rows, cols)

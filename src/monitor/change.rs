@@ -50,7 +50,10 @@ pub fn test_windows(
         .filter_map(|(c, _)| c.cloned())
         .collect();
     let Some(first) = reference.first() else {
-        return none("no training window kept its covariances (more than 16 channels, or windows too short)".into());
+        return none(
+            "no training window kept its covariances (more than 16 channels, or windows too short)"
+                .into(),
+        );
     };
     let l = first.channels;
     let shape = HankelShape::for_order((2 * modes).clamp(2, DEFAULT_MAX_ORDER), l);
@@ -60,13 +63,7 @@ pub fn test_windows(
     };
     let tests = covariances
         .iter()
-        .map(|c| {
-            c.and_then(|c| {
-                reference
-                    .test(c, settings.false_alarm_rate)
-                    .ok()
-            })
-        })
+        .map(|c| c.and_then(|c| reference.test(c, settings.false_alarm_rate).ok()))
         .collect();
     (tests, None)
 }

@@ -334,6 +334,10 @@ impl ControlChart {
 
 /// (E5): index of the first window of the first run of `min_run`
 /// out-of-control windows among `eligible` ones (`None` = not charted).
-pub fn alarm_onset(out_of_control: &[Option<bool>], eligible: &[bool], min_run: usize) -> Option<usize> {
+pub fn alarm_onset(
+    out_of_control: &[Option<bool>],
+    eligible: &[bool],
+    min_run: usize,
+) -> Option<usize> {
     super::anomaly::anomaly_onset(out_of_control, eligible, min_run)
 }

@@ -44,14 +44,8 @@ pub fn write_change_reference(
         OUTPUT_CHANNELS_KEY.into(),
         serde_json::to_string(channels).unwrap_or_default(),
     ));
-    metadata.push((
-        MAX_LAG_KEY.into(),
-        c.map_or(0, |c| c.max_lag).to_string(),
-    ));
-    metadata.push((
-        LAG_STEP_KEY.into(),
-        c.map_or(1, |c| c.lag_step).to_string(),
-    ));
+    metadata.push((MAX_LAG_KEY.into(), c.map_or(0, |c| c.max_lag).to_string()));
+    metadata.push((LAG_STEP_KEY.into(), c.map_or(1, |c| c.lag_step).to_string()));
     if let Some(n) = note {
         metadata.push(("quaketwin.note".into(), n.to_string()));
     }

@@ -92,7 +92,13 @@ pub fn write(
         .parent()
         .unwrap_or(Path::new("."))
         .join(REFERENCE_FILE);
-    let tested = test_against(&own, &result.output_ids, &reference_file, modes, false_alarm_rate);
+    let tested = test_against(
+        &own,
+        &result.output_ids,
+        &reference_file,
+        modes,
+        false_alarm_rate,
+    );
     if let Err(why) = &tested {
         crate::console::warn(format!("modal ({}): no change test: {why}", event.name));
     }
@@ -114,7 +120,9 @@ fn test_against(
     modes: usize,
     false_alarm_rate: f64,
 ) -> std::result::Result<ChangeTestResult, String> {
-    let own = own.as_ref().map_err(|e| format!("this run's record: {e}"))?;
+    let own = own
+        .as_ref()
+        .map_err(|e| format!("this run's record: {e}"))?;
     if !reference_file.exists() {
         return Err(format!(
             "{} missing (a run made before the change test, or of more than 16 channels)",

@@ -72,7 +72,9 @@ pub fn identify_and_write(
     let against = reference
         .as_ref()
         .map(|r| (r.run.file.as_path(), r.modes.len()));
-    let alpha = reference.as_ref().map_or(0.01, |r| r.run.change_false_alarm_rate);
+    let alpha = reference
+        .as_ref()
+        .map_or(0.01, |r| r.run.change_false_alarm_rate);
     super::change::write(event, &result, against, alpha, out, &provenance)?;
     Ok(result)
 }

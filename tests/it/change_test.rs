@@ -35,7 +35,12 @@ fn chi2_and_hotelling_against_tabulated_values() {
 /// Ambient response of `building` (independent white floor forces),
 /// `seconds` at `rate_hz`, floor accelerations with 20 dB noise — the
 /// records of `ambient_input_seeded`, any length.
-fn ambient_record(building: &ShearBuilding, seconds: f64, rate_hz: f64, seed: u64) -> Vec<Vec<f64>> {
+fn ambient_record(
+    building: &ShearBuilding,
+    seconds: f64,
+    rate_hz: f64,
+    seed: u64,
+) -> Vec<Vec<f64>> {
     let mut rng = Rng::new(seed);
     let n = (seconds * rate_hz) as usize;
     let response = building
@@ -57,7 +62,13 @@ fn damaged(storey: usize, loss: f64) -> ShearBuilding {
 
 fn blocks_of(record: &[Vec<f64>], settings: &ChangeTestSettings) -> CovarianceBlocks {
     let views: Vec<&[f64]> = record.iter().map(|s| s.as_slice()).collect();
-    covariance_blocks(&views, shape().max_lag(), lag_step(), settings.blocks_per_record).unwrap()
+    covariance_blocks(
+        &views,
+        shape().max_lag(),
+        lag_step(),
+        settings.blocks_per_record,
+    )
+    .unwrap()
 }
 
 /// Statistics of `seeds` windows of `building` against a reference of
@@ -95,7 +106,10 @@ fn shape() -> HankelShape {
 /// Lags in steps of 3 samples: at 100 Hz the 33 Hz the identification's
 /// decimation would keep for the 12.4 Hz top mode (≥ 2.5 × the band's top).
 fn lag_step() -> usize {
-    std::env::var("CHANGE_LAG_STEP").ok().and_then(|v| v.parse().ok()).unwrap_or(3)
+    std::env::var("CHANGE_LAG_STEP")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(3)
 }
 
 /// CI version: 10-minute windows at 50 Hz, a reference of four healthy
@@ -121,10 +135,11 @@ fn change_test_keeps_healthy_windows_and_detects_a_ten_percent_loss() {
     );
     for seed in 200..203 {
         let r = ambient_record(&healthy, seconds, rate, seed);
-        let t = reference
-            .test(&blocks_of(&r, &settings), alpha)
-            .unwrap();
-        eprintln!("healthy seed {seed}: χ² {:.1}, p {:.3}", t.statistic, t.p_value);
+        let t = reference.test(&blocks_of(&r, &settings), alpha).unwrap();
+        eprintln!(
+            "healthy seed {seed}: χ² {:.1}, p {:.3}",
+            t.statistic, t.p_value
+        );
         assert!(!t.changed, "healthy window {seed} flagged: {t:?}");
         let sum: f64 = t.channel_contributions.iter().sum();
         assert!((sum / t.statistic - 1.0).abs() < 1e-9);
@@ -132,10 +147,11 @@ fn change_test_keeps_healthy_windows_and_detects_a_ten_percent_loss() {
     let broken = damaged(0, 0.10);
     for seed in 300..303 {
         let r = ambient_record(&broken, seconds, rate, seed);
-        let t = reference
-            .test(&blocks_of(&r, &settings), alpha)
-            .unwrap();
-        eprintln!("damaged seed {seed}: χ² {:.1}, p {:.2e}", t.statistic, t.p_value);
+        let t = reference.test(&blocks_of(&r, &settings), alpha).unwrap();
+        eprintln!(
+            "damaged seed {seed}: χ² {:.1}, p {:.2e}",
+            t.statistic, t.p_value
+        );
         assert!(t.changed && t.p_value < 1e-6, "10 % loss missed: {t:?}");
     }
 }
@@ -154,7 +170,10 @@ fn change_test_refuses_a_record_of_another_shape() {
 }
 
 fn env_count(name: &str, default: u64) -> u64 {
-    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
 }
 
 /// Empirical ROC: (false-alarm rate, detection rate) at every threshold.
@@ -243,7 +262,14 @@ fn roc_of_the_change_test_one_hour_windows() {
         .collect();
     let reference = reference_from(&refs, shape()).unwrap();
     let threshold = reference.threshold(settings.false_alarm_rate).unwrap();
-    let null = statistics(&healthy, &reference, seconds, rate, 2000..2000 + env_count("CHANGE_ROC_NULL", 300), &settings);
+    let null = statistics(
+        &healthy,
+        &reference,
+        seconds,
+        rate,
+        2000..2000 + env_count("CHANGE_ROC_NULL", 300),
+        &settings,
+    );
     let fa_theory = null.iter().filter(|&&v| v > threshold).count() as f64 / null.len() as f64;
     eprintln!(
         "dof {}, covariance dof {}, threshold (α = 1 %) {:.1}; healthy windows over it: {:.1} % of {}",
@@ -256,8 +282,19 @@ fn roc_of_the_change_test_one_hour_windows() {
     let mut curves = Vec::new();
     let mut power_2 = 0.0;
     eprintln!("| stiffness loss | power at 1 % (empirical threshold) | power at 5 % | power at the α = 1 % threshold | median χ² |");
-    for (loss, colour, seed0) in [(0.01, "#1b9e77", 3000u64), (0.02, "#d95f02", 4000), (0.05, "#7570b3", 5000)] {
-        let alt = statistics(&damaged(0, loss), &reference, seconds, rate, seed0..seed0 + env_count("CHANGE_ROC_ALT", 100), &settings);
+    for (loss, colour, seed0) in [
+        (0.01, "#1b9e77", 3000u64),
+        (0.02, "#d95f02", 4000),
+        (0.05, "#7570b3", 5000),
+    ] {
+        let alt = statistics(
+            &damaged(0, loss),
+            &reference,
+            seconds,
+            rate,
+            seed0..seed0 + env_count("CHANGE_ROC_ALT", 100),
+            &settings,
+        );
         let p1 = power_at(&null, &alt, 0.01);
         let p5 = power_at(&null, &alt, 0.05);
         let at_threshold = alt.iter().filter(|&&v| v > threshold).count() as f64 / alt.len() as f64;
@@ -274,15 +311,25 @@ fn roc_of_the_change_test_one_hour_windows() {
         if loss == 0.02 {
             power_2 = p1;
         }
-        curves.push((format!("{:.0} % loss, ground storey", 100.0 * loss), colour, roc(&null, &alt)));
+        curves.push((
+            format!("{:.0} % loss, ground storey", 100.0 * loss),
+            colour,
+            roc(&null, &alt),
+        ));
     }
     let labelled: Vec<(&str, &str, Vec<(f64, f64)>)> = curves
         .iter()
         .map(|(l, c, p)| (l.as_str(), *c, p.clone()))
         .collect();
-    let svg = roc_svg(&labelled, "χ² change test, one-hour ambient windows, 5-storey shear building");
+    let svg = roc_svg(
+        &labelled,
+        "χ² change test, one-hour ambient windows, 5-storey shear building",
+    );
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/figures");
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("change-test-roc.svg"), svg).unwrap();
-    assert!(power_2 >= 0.95, "power for a 2 % loss at 1 % false alarms: {power_2}");
+    assert!(
+        power_2 >= 0.95,
+        "power for a 2 % loss at 1 % false alarms: {power_2}"
+    );
 }

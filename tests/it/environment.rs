@@ -146,7 +146,9 @@ fn evaluate(year: &Year, training_hours: usize) -> Outcome {
         .collect();
     let before_flags: Vec<bool> = (0..n)
         .map(|h| {
-            let flagged = (0..5).filter(|&j| models[j].band(&obs(h, j)).flagged).count();
+            let flagged = (0..5)
+                .filter(|&j| models[j].band(&obs(h, j)).flagged)
+                .count();
             2 * flagged >= 5
         })
         .collect();
@@ -204,12 +206,19 @@ fn print(label: &str, o: &Outcome) {
     let show = |(c, d): (usize, Option<usize>)| {
         format!(
             "{c} false alarms, detection after {}",
-            d.map_or("never".into(), |d| format!("{d} h ({:.1} d)", d as f64 / 24.0))
+            d.map_or("never".into(), |d| format!(
+                "{d} h ({:.1} d)",
+                d as f64 / 24.0
+            ))
         )
     };
     eprintln!("{label}: before compensation {}", show(o.before));
     eprintln!("{label}: measured temperature {}", show(o.measured));
-    eprintln!("{label}: latent (PCA, {} direction(s)) {}", o.retained, show(o.latent));
+    eprintln!(
+        "{label}: latent (PCA, {} direction(s)) {}",
+        o.retained,
+        show(o.latent)
+    );
 }
 
 /// CI version: 40 days of spring (from day 60, when the season moves
@@ -223,10 +232,17 @@ fn compensation_removes_the_season_and_keeps_the_damage_short_run() {
     let (healthy, damaged) = (frequencies(10.0, 0.0), frequencies(10.0, 0.01));
     eprintln!(
         "1 % ground-storey loss, relative frequency changes: {:?}",
-        healthy.iter().zip(&damaged).map(|(h, d)| format!("{:+.2e}", d / h - 1.0)).collect::<Vec<_>>()
+        healthy
+            .iter()
+            .zip(&damaged)
+            .map(|(h, d)| format!("{:+.2e}", d / h - 1.0))
+            .collect::<Vec<_>>()
     );
     print("40 days", &o);
-    assert!(o.before.0 >= 1, "the season should trouble the uncompensated band");
+    assert!(
+        o.before.0 >= 1,
+        "the season should trouble the uncompensated band"
+    );
     for (name, (fa, delay)) in [("measured", o.measured), ("latent", o.latent)] {
         assert_eq!(fa, 0, "{name}: false alarms");
         assert!(delay.is_some_and(|d| d <= 72), "{name}: delay {delay:?} h");
@@ -253,9 +269,14 @@ fn synthetic_year_false_alarms_and_detection_delay() {
         // docs/statistics.md).
         let (fa, delay) = o.latent;
         if fa > 1 || !delay.is_some_and(|d| d <= 72) {
-            failures.push(format!("seed {seed} latent: {fa} false alarms, delay {delay:?} h"));
+            failures.push(format!(
+                "seed {seed} latent: {fa} false alarms, delay {delay:?} h"
+            ));
         }
-        assert!(o.before.0 > 1, "seed {seed}: the season should trouble the uncompensated band");
+        assert!(
+            o.before.0 > 1,
+            "seed {seed}: the season should trouble the uncompensated band"
+        );
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
