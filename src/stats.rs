@@ -174,11 +174,12 @@ pub fn hotelling_upper_quantile(tail: f64, k: f64, m: f64) -> f64 {
     upper_quantile_by_bisection(tail, |t| hotelling_survival(t, k, m))
 }
 
-/// The x ≥ 0 with `survival(x)` = `tail`, for a decreasing `survival`.
+/// The x ≥ 0 with `survival(x)` = `tail`, for a decreasing `survival`: the
+/// upper end doubled from 1 until it brackets (at most 10¹²), then bisection
+/// of [0, upper] to a relative 10⁻¹².
 fn upper_quantile_by_bisection(tail: f64, survival: impl Fn(f64) -> f64) -> f64 {
     let (mut lo, mut hi) = (0.0, 1.0);
-    while survival(hi) > tail && hi < 1e15 {
-        lo = hi;
+    while survival(hi) > tail && hi < 1e12 {
         hi *= 2.0;
     }
     for _ in 0..200 {
@@ -202,23 +203,9 @@ pub fn student_t_upper_quantile(tail: f64, nu: f64) -> f64 {
     if !(tail > 0.0 && tail < 0.5 && nu > 0.0) {
         return f64::NAN;
     }
-    let upper = |t: f64| 0.5 * regularized_incomplete_beta(nu / (nu + t * t), 0.5 * nu, 0.5);
-    let (mut lo, mut hi) = (0.0, 1.0);
-    while upper(hi) > tail && hi < 1e12 {
-        hi *= 2.0;
-    }
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if upper(mid) > tail {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-        if hi - lo < 1e-12 * hi {
-            break;
-        }
-    }
-    0.5 * (lo + hi)
+    upper_quantile_by_bisection(tail, |t| {
+        0.5 * regularized_incomplete_beta(nu / (nu + t * t), 0.5 * nu, 0.5)
+    })
 }
 
 /// Median of `values` (reordered in place): the middle element, the upper
