@@ -89,21 +89,102 @@ pub fn regularized_incomplete_beta(x: f64, a: f64, b: f64) -> f64 {
     (ln_front.exp() * h / a).clamp(0.0, 1.0)
 }
 
-/// Upper quantile of Student's t distribution with `nu` degrees of freedom:
-/// the t with P(T > t) = `tail` (0 < tail < ½), from P(T > t) =
-/// ½ I_{ν/(ν+t²)}(ν/2, ½) by bisection (the tail is monotone in t).
-pub fn student_t_upper_quantile(tail: f64, nu: f64) -> f64 {
-    if !(tail > 0.0 && tail < 0.5 && nu > 0.0) {
+/// Regularised upper incomplete gamma Q(a, x) = Γ(a, x)/Γ(a), a > 0, x ≥ 0:
+/// the series of P = 1 − Q for x < a + 1, otherwise the continued fraction
+/// of Q (modified Lentz) — the standard split (Press et al., *Numerical
+/// Recipes*, 3rd ed., §6.2), each converging fast on its side.
+pub fn regularized_upper_gamma(a: f64, x: f64) -> f64 {
+    if !(a > 0.0) || x.is_nan() {
         return f64::NAN;
     }
-    let upper = |t: f64| 0.5 * regularized_incomplete_beta(nu / (nu + t * t), 0.5 * nu, 0.5);
+    if !(x > 0.0) {
+        return 1.0;
+    }
+    if x.is_infinite() {
+        return 0.0;
+    }
+    let ln_front = a * x.ln() - x - ln_gamma(a);
+    if x < a + 1.0 {
+        // P(a, x) = e^{−x} x^a / Γ(a + 1) · Σ_n x^n / ((a+1)…(a+n)).
+        let (mut term, mut sum, mut ap) = (1.0 / a, 1.0 / a, a);
+        for _ in 0..1000 {
+            ap += 1.0;
+            term *= x / ap;
+            sum += term;
+            if term.abs() < sum.abs() * 1e-16 {
+                break;
+            }
+        }
+        return (1.0 - sum * ln_front.exp()).clamp(0.0, 1.0);
+    }
+    const TINY: f64 = 1e-300;
+    let mut b = x + 1.0 - a;
+    let mut c = 1.0 / TINY;
+    let mut d = 1.0 / b;
+    let mut h = d;
+    for i in 1..1000 {
+        let an = -(i as f64) * (i as f64 - a);
+        b += 2.0;
+        d = an * d + b;
+        d = if d.abs() < TINY { TINY } else { d };
+        c = b + an / c;
+        c = if c.abs() < TINY { TINY } else { c };
+        d = 1.0 / d;
+        let step = d * c;
+        h *= step;
+        if (step - 1.0).abs() < 1e-16 {
+            break;
+        }
+    }
+    (ln_front.exp() * h).clamp(0.0, 1.0)
+}
+
+/// P(X > x) for X ~ χ²(k): Q(k/2, x/2).
+pub fn chi2_survival(x: f64, k: f64) -> f64 {
+    regularized_upper_gamma(0.5 * k, 0.5 * x)
+}
+
+/// Upper quantile of χ²(k): the x with P(X > x) = `tail` (0 < tail < 1),
+/// by bisection (the survival function is monotone).
+pub fn chi2_upper_quantile(tail: f64, k: f64) -> f64 {
+    if !(tail > 0.0 && tail < 1.0 && k > 0.0) {
+        return f64::NAN;
+    }
+    upper_quantile_by_bisection(tail, |x| chi2_survival(x, k))
+}
+
+/// P(T² > t2) for Hotelling's T² of a k-dimensional mean whose covariance
+/// was estimated with m degrees of freedom (Gaussian data, zero mean):
+/// (m − k + 1)/(m k) · T² ~ F(k, m − k + 1) (Anderson, *An Introduction to
+/// Multivariate Statistical Analysis*, 3rd ed., §5.2); tends to χ²(k) as
+/// m → ∞.  NaN when m < k.
+pub fn hotelling_survival(t2: f64, k: f64, m: f64) -> f64 {
+    if !(k > 0.0 && m >= k) {
+        return f64::NAN;
+    }
+    let d2 = m - k + 1.0;
+    f_survival(t2 * d2 / (m * k), k, d2)
+}
+
+/// The T² with [`hotelling_survival`] = `tail`.
+pub fn hotelling_upper_quantile(tail: f64, k: f64, m: f64) -> f64 {
+    if !(tail > 0.0 && tail < 1.0 && k > 0.0 && m >= k) {
+        return f64::NAN;
+    }
+    upper_quantile_by_bisection(tail, |t| hotelling_survival(t, k, m))
+}
+
+/// The x ≥ 0 with `survival(x)` = `tail`, for a decreasing `survival`: the
+/// upper end doubled from 1 until it brackets (at most 10¹²), then bisection
+/// of [0, upper] to a relative 10⁻¹².
+fn upper_quantile_by_bisection(tail: f64, survival: impl Fn(f64) -> f64) -> f64 {
     let (mut lo, mut hi) = (0.0, 1.0);
-    while upper(hi) > tail && hi < 1e12 {
+    while survival(hi) > tail && hi < 1e12 {
         hi *= 2.0;
     }
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if upper(mid) > tail {
+        if survival(mid) > tail {
             lo = mid;
         } else {
             hi = mid;
@@ -113,6 +194,18 @@ pub fn student_t_upper_quantile(tail: f64, nu: f64) -> f64 {
         }
     }
     0.5 * (lo + hi)
+}
+
+/// Upper quantile of Student's t distribution with `nu` degrees of freedom:
+/// the t with P(T > t) = `tail` (0 < tail < ½), from P(T > t) =
+/// ½ I_{ν/(ν+t²)}(ν/2, ½) by bisection (the tail is monotone in t).
+pub fn student_t_upper_quantile(tail: f64, nu: f64) -> f64 {
+    if !(tail > 0.0 && tail < 0.5 && nu > 0.0) {
+        return f64::NAN;
+    }
+    upper_quantile_by_bisection(tail, |t| {
+        0.5 * regularized_incomplete_beta(nu / (nu + t * t), 0.5 * nu, 0.5)
+    })
 }
 
 /// Median of `values` (reordered in place): the middle element, the upper

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::modal::change_test::ChangeTestResult;
 use crate::modal::{ModalSettings, Mode};
 use crate::monitor::anomaly::{self, BandModel, BandSettings};
 use crate::monitor::tracking::{Reference, TrackSettings, TrackedMode};
@@ -355,7 +356,16 @@ impl Prepared {
                     )
                 })
                 .collect();
-            bar.inc(done.len() as u64);
+            // Only the training windows' blocks make the change test's
+            // reference (monitor::change); the others keep their means.
+            let training_end = self.plan.grid.start_ns + self.plan.training_ns;
+            let done = done.into_iter().map(|mut w| {
+                if w.start_ns >= training_end {
+                    w.covariances = w.covariances.map(|c| c.without_blocks());
+                }
+                w
+            });
+            bar.inc(chunk.len() as u64);
             windows.extend(done);
             if let Some(&next) = chunk.last() {
                 self.archive.forget_before(next + self.plan.grid.step_ns);
@@ -569,6 +579,11 @@ pub fn tracking_batch(t: &Tracking) -> Result<arrow_array::RecordBatch> {
         t.bands.iter().map(|b| b.as_ref().map(f)).collect()
     };
     let rows = &t.rows;
+    let change = |f: fn(&ChangeTestResult) -> f64| -> Vec<Option<f64>> {
+        rows.iter()
+            .map(|r| t.change_tests[r.window].as_ref().map(f))
+            .collect()
+    };
     TableBuilder::new(&MODAL_TRACKING)
         .timestamp_ns(
             col::WINDOW_START.name,
@@ -652,6 +667,21 @@ pub fn tracking_batch(t: &Tracking) -> Result<arrow_array::RecordBatch> {
         .bool(
             col::ANOMALOUS_WINDOW.name,
             rows.iter().map(|r| t.anomalous[r.window]).collect(),
+        )
+        .opt_f64(col::CHANGE_STATISTIC.name, change(|c| c.statistic))
+        .opt_f64(col::CHANGE_THRESHOLD.name, change(|c| c.threshold))
+        .opt_f64(col::CHANGE_P_VALUE.name, change(|c| c.p_value))
+        .opt_i32(
+            col::CHANGE_DOF.name,
+            rows.iter()
+                .map(|r| t.change_tests[r.window].as_ref().map(|c| c.dof as i32))
+                .collect(),
+        )
+        .opt_bool(
+            col::CHANGE_DETECTED.name,
+            rows.iter()
+                .map(|r| t.change_tests[r.window].as_ref().map(|c| c.changed))
+                .collect(),
         )
         .build()
 }

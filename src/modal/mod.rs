@@ -29,6 +29,7 @@
 //!   against a reference event (docs/formats.md).
 
 pub mod apparent;
+pub mod change_test;
 pub mod compare;
 pub mod direction;
 pub mod fallback;

@@ -12,6 +12,8 @@
 //! windows outside the 99 % prediction band (docs/monitoring.md, Eqs. M1–M5).
 
 pub mod anomaly;
+pub mod change;
+pub mod environment;
 pub mod tracking;
 pub mod window;
 
@@ -55,6 +57,9 @@ pub struct WindowModes {
     pub skipped: Option<String>,
     /// The identification's warnings and the reader's notes.
     pub notes: Vec<String>,
+    /// Normalised output covariances for the change test ([`change`]);
+    /// not handed between processes ([`windows_to_json`]).
+    pub covariances: Option<crate::modal::change_test::CovarianceBlocks>,
 }
 
 impl WindowModes {
@@ -69,6 +74,7 @@ impl WindowModes {
             present_fraction,
             skipped: Some(why),
             notes: Vec::new(),
+            covariances: None,
         }
     }
 }
@@ -98,6 +104,11 @@ pub fn identify_window(w: WindowSignals, settings: &ModalSettings) -> WindowMode
     };
     match identify(&input, settings) {
         Ok(result) => WindowModes {
+            covariances: change::window_covariances(
+                &input.outputs,
+                result.decimation,
+                &Default::default(),
+            ),
             start_ns: w.start_ns,
             end_ns: w.end_ns,
             channels: w.ids,
@@ -133,6 +144,10 @@ pub struct Tracking {
     pub models: Vec<Option<BandModel>>,
     pub band_settings: BandSettings,
     pub anomaly_from: Option<usize>,
+    /// Per window: the χ² change test against the training windows ([`change`]).
+    pub change_tests: Vec<Option<crate::modal::change_test::ChangeTestResult>>,
+    /// Why no window was tested, if so.
+    pub change_note: Option<String>,
 }
 
 /// Tracking, bands and anomalies of identified windows (module doc).
@@ -208,7 +223,17 @@ pub fn analyse(
         .map(|w| w.start_ns >= band_settings.training_end_ns)
         .collect();
     let anomaly_from = anomaly::anomaly_onset(&per_window, &eligible, band_settings.min_run);
+    let covariances: Vec<_> = windows.iter().map(|w| w.covariances.as_ref()).collect();
+    let training: Vec<bool> = eligible.iter().map(|e| !e).collect();
+    let (change_tests, change_note) = change::test_windows(
+        &covariances,
+        &training,
+        reference.modes.len(),
+        &Default::default(),
+    );
     Ok(Tracking {
+        change_tests,
+        change_note,
         anomalous: per_window.iter().map(|a| a.unwrap_or(false)).collect(),
         windows,
         reference,
@@ -267,6 +292,7 @@ pub fn windows_from_json(text: &str) -> Result<Vec<WindowModes>> {
             present_fraction: w.present_fraction,
             skipped: w.skipped,
             notes: w.notes,
+            covariances: None,
         })
         .collect())
 }

@@ -7,6 +7,7 @@
 //! `pipeline::Stage` trait.
 
 pub mod assess;
+pub mod change;
 pub mod condition;
 pub mod design;
 pub mod hysteresis;

@@ -64,9 +64,18 @@ pub fn identify_and_write(
     let spectrum = out.join(SPECTRUM_FILE);
     tables::write_spectrum(&spectrum, &result, overlay.as_ref(), json, &provenance)?;
     if let Some(reference) = &reference {
-        let provenance = provenance.then(result.preprocessing.iter().cloned());
+        let provenance = provenance
+            .clone()
+            .then(result.preprocessing.iter().cloned());
         prepost::compare_and_write(reference, &result, out, &event.name, &provenance)?;
     }
+    let against = reference
+        .as_ref()
+        .map(|r| (r.run.file.as_path(), r.modes.len()));
+    let alpha = reference
+        .as_ref()
+        .map_or(0.01, |r| r.run.change_false_alarm_rate);
+    super::change::write(event, &result, against, alpha, out, &provenance)?;
     Ok(result)
 }
 
@@ -90,9 +99,11 @@ impl Stage for Modal {
             MODES_FILE.into(),
             MODE_SHAPES_FILE.into(),
             SPECTRUM_FILE.into(),
+            super::change::REFERENCE_FILE.into(),
         ];
         if self.reference.is_some() {
             v.push(prepost::SHIFTS_FILE.into());
+            v.push(super::change::TEST_FILE.into());
         }
         v
     }

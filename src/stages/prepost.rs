@@ -24,6 +24,7 @@ pub const KEYS: &[&str] = &[
     "reference_min_mac",
     "reference_frequency_window",
     "reference_frequency_std_floor",
+    "change_false_alarm_rate",
 ];
 
 /// Pre/post params of the `modal` stage (docs/pipelines.md).
@@ -41,6 +42,9 @@ pub struct ReferenceParams {
     /// Least relative standard deviation of each frequency in the shift's
     /// uncertainty (`modal::compare`).
     pub reference_frequency_std_floor: f64,
+    /// False-alarm rate of the change test against the reference
+    /// (`change_test.parquet`, docs/statistics.md).
+    pub change_false_alarm_rate: f64,
 }
 
 impl Default for ReferenceParams {
@@ -51,6 +55,7 @@ impl Default for ReferenceParams {
             reference_min_mac: d.min_mac,
             reference_frequency_window: d.frequency_window,
             reference_frequency_std_floor: d.frequency_std_floor,
+            change_false_alarm_rate: 0.01,
         }
     }
 }
@@ -78,6 +83,12 @@ impl ReferenceParams {
                 self.reference_frequency_std_floor
             )));
         }
+        if !(self.change_false_alarm_rate > 0.0 && self.change_false_alarm_rate < 0.5) {
+            return Err(Error::usage(format!(
+                "change_false_alarm_rate {} must lie in (0, 0.5) (a fraction: 0.01 = 1 %)",
+                self.change_false_alarm_rate
+            )));
+        }
         let pairing = PairingSettings {
             min_mac: self.reference_min_mac,
             frequency_window: self.reference_frequency_window,
@@ -88,7 +99,11 @@ impl ReferenceParams {
             .as_deref()
             .map(|p| {
                 let file = tables::locate_modes(p).map_err(|e| e.usage_about(REFERENCE_KEY))?;
-                Ok(ReferenceRun { file, pairing })
+                Ok(ReferenceRun {
+                    file,
+                    pairing,
+                    change_false_alarm_rate: self.change_false_alarm_rate,
+                })
             })
             .transpose()
     }
@@ -99,6 +114,8 @@ impl ReferenceParams {
 pub struct ReferenceRun {
     pub file: PathBuf,
     pub pairing: PairingSettings,
+    /// α of the change test (`change_test.parquet`).
+    pub change_false_alarm_rate: f64,
 }
 
 /// The modes of the reference run, read back.

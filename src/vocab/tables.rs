@@ -438,6 +438,31 @@ declare!(MODAL_TRACKING, modal_tracking, "modal_tracking", "modal_tracking.parqu
     DEVIATION_PERCENT: "deviation_percent", F64, nullable, "%", "100 (f − predicted) / predicted";
     FLAGGED: "flagged", Bool, nullable, "", "the frequency lies outside the band (Eq. M4); null without a band";
     ANOMALOUS_WINDOW: "anomalous_window", Bool, required, "", "at least half of this window's modes with a band are flagged (Eq. M5; the same on every row of the window)";
+    CHANGE_STATISTIC: "change_statistic", F64, nullable, "1", "χ² statistic of the subspace change test of the window against the training windows (docs/statistics.md Eq. C6; the same on every row of the window); null when the window kept no covariances (more than 16 channels, or identified by another process)";
+    CHANGE_THRESHOLD: "change_threshold", F64, nullable, "1", "the statistic's threshold at a 1 % false-alarm rate (Hotelling's T² quantile, Eq. C6)";
+    CHANGE_P_VALUE: "change_p_value", F64, nullable, "1", "probability of a statistic at least this large in the training state";
+    CHANGE_DOF: "change_dof", I32, nullable, "", "degrees of freedom of the statistic (rank kept of the residual covariance)";
+    CHANGE_DETECTED: "change_detected", Bool, nullable, "", "the statistic exceeds the threshold";
+});
+
+declare!(CHANGE_REFERENCE, change_reference, "change_reference", "change_reference.parquet",
+    "one row per block of the identified record: its normalised output covariances, what a later run's change test (`reference_modes`) builds the reference state from (docs/statistics.md Eqs. C1, C4); written by every `modal` run with 2–16 output channels, empty otherwise", {
+    BLOCK: "block", U32, required, "", "0-based block of the record (consecutive, equal length)";
+    BLOCK_SAMPLES: "block_samples", U32, required, "", "samples of the block";
+    COVARIANCES: "covariances", ListF64, required, "1", "R_k / (tr R₀ / l) of the block for k = 1…max_lag, entry (k − 1)·l² + o·l + c for output channel o and reference channel c (channel order: `quaketwin.output_channels`; max_lag: `quaketwin.max_lag`)";
+});
+
+declare!(CHANGE_TEST, change_test, "change_test", "change_test.parquet",
+    "one row per output channel: the subspace χ² change test of this run's record against the reference run's (`reference_modes`), the test's figures repeated on every row, and the channel's share of the statistic (docs/statistics.md Eqs. C1–C7)", {
+    CHANNEL: "channel", Utf8, required, "", "output channel id";
+    CONTRIBUTION: "contribution", F64, required, "1", "the channel's share of the statistic (Eq. C7; the shares sum to the statistic, one may be negative)";
+    STATISTIC: "statistic", F64, required, "1", "χ² (Hotelling T²) statistic of the residual (Eq. C6)";
+    THRESHOLD: "threshold", F64, required, "1", "the statistic's threshold at the false-alarm rate";
+    P_VALUE: "p_value", F64, required, "1", "probability of a statistic at least this large in the reference state";
+    DOF: "dof", I32, required, "", "degrees of freedom (rank kept of the residual covariance)";
+    COVARIANCE_DOF: "covariance_dof", I32, required, "", "degrees of freedom of the reference's residual covariance (blocks − 1 per record)";
+    FALSE_ALARM_RATE: "false_alarm_rate", F64, required, "1", "false-alarm rate the threshold holds (`change_false_alarm_rate`)";
+    CHANGED: "changed", Bool, required, "", "the statistic exceeds the threshold: the structure's dynamics differ from the reference's";
 });
 
 declare!(FREQUENCY_TRACK, frequency_track, "frequency_track", "frequency_track.parquet",
@@ -575,6 +600,8 @@ pub const ALL_TABLES: &[&TableSchema] = &[
     &FREQUENCY_TRACK,
     &ASSESSMENT,
     &MODAL_TRACKING,
+    &CHANGE_REFERENCE,
+    &CHANGE_TEST,
     &HISTORY_MODES,
     &HISTORY_EVENTS,
 ];

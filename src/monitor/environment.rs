@@ -1,0 +1,343 @@
+//! Environmental compensation of tracked frequencies and the control chart
+//! on what is left (docs/monitoring.md "Environmental compensation",
+//! docs/statistics.md Eqs. E1–E5).
+//!
+//! A frequency follows temperature (a few per cent a year in concrete and
+//! steel frames): without compensation the band of Eqs. M1–M5, trained on
+//! one day, flags every season.  Two models remove it, fitted on the
+//! training windows where every compensated mode was found:
+//!
+//! (E1) measured temperature T_w (the mean of a series over the window):
+//!      f_{j,w} = β_{j0} + β_{j1} T_w + ε_{j,w} for each mode j (least
+//!      squares, [`crate::stats::LinearFit`]); residual e_{j,w} = f − f̂.
+//! (E2) nothing measured: the latent-variable model of Yan, Kerschen, De Boe
+//!      & Golinval (2005, *Structural damage diagnosis under varying
+//!      environmental conditions — Part I: a linear analysis*, MSSP 19):
+//!      z_w = (f_w − f̄)/f̄ (relative deviations of the m modes); the first q
+//!      principal directions U_q of the training z (their covariance's
+//!      eigenvectors) carry the environmental variation — a change of
+//!      temperature moves all frequencies together — and the residual
+//!      e_w = (I − U_q U_qᵀ) z_w is what they do not explain.  q: the
+//!      directions that stand above the estimation noise — the i-th
+//!      (eigenvalues descending) is kept while λ_i > `dominance` (5) × the
+//!      mean of the smaller ones, at most m − 1.  (Yan et al. keep a share
+//!      of the variance; a fixed share keeps noise directions when the
+//!      environment moved little over the training period, and those can
+//!      hold the damage.)
+//! (E3) control chart on subgroups of w consecutive windows (w = 24: one
+//!      day of hourly windows; w = 1: each window): Hotelling's
+//!      T²_g = w (ē_g − ē)ᵀ S⁺ (ē_g − ē), ē_g the subgroup's mean residual,
+//!      ē and S the n training residuals' mean and covariance (S truncated
+//!      to its rank k: m for E1, m − q for E2).  Threshold: the upper α
+//!      quantile of (1 + w/n) · T²(k, n − 1), Hotelling's T² with the
+//!      covariance estimated on n − 1 degrees of freedom (Montgomery,
+//!      *Introduction to Statistical Quality Control*, the Phase II chart;
+//!      `stats::hotelling_upper_quantile`).  Why subgroups: a 1 % stiffness
+//!      loss moves the frequencies mostly along the environment's own
+//!      direction (all down together); what is left after (E2) is about one
+//!      hourly window's estimation scatter, and a day's mean brings it out.
+//! (E4) a subgroup is out of control when T²_g exceeds the threshold;
+//! (E5) an alarm: at least `min_run` consecutive out-of-control subgroups
+//!      after training, dated at the first.
+
+use crate::error::{Error, Result};
+use crate::stats::{hotelling_upper_quantile, LinearFit};
+use faer::{Mat, Side};
+
+/// A measured environmental series (time, value), e.g. temperature.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EnvironmentSeries {
+    /// Sample times, ns, increasing.
+    pub times_ns: Vec<i64>,
+    pub values: Vec<f64>,
+    /// Where it came from (file or channel).
+    pub source: String,
+}
+
+impl EnvironmentSeries {
+    /// Checks times increasing and values finite (else a usage error naming `source`).
+    pub fn new(mut pairs: Vec<(i64, f64)>, source: &str) -> Result<Self> {
+        pairs.sort_by_key(|p| p.0);
+        if pairs.is_empty() {
+            return Err(Error::usage(format!("{source}: no (time, value) pair")));
+        }
+        if let Some(p) = pairs.iter().find(|p| !p.1.is_finite()) {
+            return Err(Error::usage(format!(
+                "{source}: value {} is not finite",
+                p.1
+            )));
+        }
+        Ok(EnvironmentSeries {
+            times_ns: pairs.iter().map(|p| p.0).collect(),
+            values: pairs.iter().map(|p| p.1).collect(),
+            source: source.to_string(),
+        })
+    }
+
+    /// The value over [start, end): the mean of the samples inside, or the
+    /// linear interpolation at the middle when none lies inside; `None`
+    /// outside the series' span.
+    pub fn over(&self, start_ns: i64, end_ns: i64) -> Option<f64> {
+        let a = self.times_ns.partition_point(|&t| t < start_ns);
+        let b = self.times_ns.partition_point(|&t| t < end_ns);
+        if b > a {
+            return Some(self.values[a..b].iter().sum::<f64>() / (b - a) as f64);
+        }
+        let mid = start_ns + (end_ns - start_ns) / 2;
+        let i = self.times_ns.partition_point(|&t| t <= mid);
+        if i == 0 || i == self.times_ns.len() {
+            return None;
+        }
+        let (t0, t1) = (self.times_ns[i - 1], self.times_ns[i]);
+        let w = (mid - t0) as f64 / (t1 - t0).max(1) as f64;
+        Some(self.values[i - 1] + w * (self.values[i] - self.values[i - 1]))
+    }
+}
+
+/// Which model removes the environment (module doc).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub enum Compensation {
+    /// E1: per mode, frequency on the measured series.
+    Measured { fits: Vec<(f64, f64)> },
+    /// E2: principal directions of the training deviations.
+    Latent {
+        mean_hz: Vec<f64>,
+        retained: usize,
+        explained: f64,
+        #[serde(skip)]
+        directions: Vec<Vec<f64>>,
+    },
+}
+
+/// The fitted compensation and its control chart (E1–E4).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ControlChart {
+    pub compensation: Compensation,
+    pub training_windows: usize,
+    /// k of (E3).
+    pub dof: usize,
+    pub threshold: f64,
+    pub false_alarm_rate: f64,
+    /// w of (E3).
+    pub subgroup: usize,
+    #[serde(skip)]
+    residual_mean: Vec<f64>,
+    #[serde(skip)]
+    whitening: Vec<Vec<f64>>,
+}
+
+/// Settings of the chart.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ChartSettings {
+    /// α of (E3) per window.
+    pub false_alarm_rate: f64,
+    /// How far above the mean of the smaller eigenvalues a latent
+    /// direction's must be to be kept (E2).
+    pub dominance: f64,
+    /// Consecutive out-of-control subgroups that make an alarm (E5).
+    pub min_run: usize,
+    /// Windows per subgroup w (E3).
+    pub subgroup: usize,
+}
+
+impl Default for ChartSettings {
+    fn default() -> Self {
+        ChartSettings {
+            false_alarm_rate: 0.001,
+            dominance: 5.0,
+            min_run: 1,
+            subgroup: 24,
+        }
+    }
+}
+
+fn symmetric_eigen(rows: &[Vec<f64>]) -> Result<(Vec<f64>, Mat<f64>)> {
+    // Covariance of the rows (each an observation), eigenvalues ascending.
+    let n = rows.len();
+    let m = rows[0].len();
+    let mean: Vec<f64> = (0..m)
+        .map(|j| rows.iter().map(|r| r[j]).sum::<f64>() / n as f64)
+        .collect();
+    let c = Mat::<f64>::from_fn(m, m, |i, j| {
+        rows.iter()
+            .map(|r| (r[i] - mean[i]) * (r[j] - mean[j]))
+            .sum::<f64>()
+            / (n - 1) as f64
+    });
+    let evd = c
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| Error::numerical(format!("control chart: eigenvalues: {e:?}")))?;
+    let lambda = evd.S().column_vector().iter().copied().collect();
+    Ok((lambda, evd.U().to_owned()))
+}
+
+impl ControlChart {
+    /// Fits on the training rows: `frequencies[w][j]` of mode j in window w
+    /// (every mode found), `environment[w]` the measured value when E1.
+    pub fn fit(
+        frequencies: &[Vec<f64>],
+        environment: Option<&[f64]>,
+        settings: &ChartSettings,
+    ) -> Result<ControlChart> {
+        let n = frequencies.len();
+        let m = frequencies.first().map_or(0, |r| r.len());
+        if m == 0 || n < m + 5 {
+            return Err(Error::numerical(format!(
+                "control chart: {n} training windows with all {m} modes: at least {} needed",
+                m + 5
+            )));
+        }
+        let compensation = match environment {
+            Some(t) => {
+                let x: Vec<Vec<f64>> = t.iter().map(|&v| vec![1.0, v]).collect();
+                let fits = (0..m)
+                    .map(|j| {
+                        let y: Vec<f64> = frequencies.iter().map(|r| r[j]).collect();
+                        LinearFit::fit(&x, &y)
+                            .map(|f| (f.coefficients[0], f.coefficients[1]))
+                            .ok_or_else(|| {
+                                Error::numerical(
+                                    "control chart: the measured series does not vary over the training windows",
+                                )
+                            })
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                Compensation::Measured { fits }
+            }
+            None => {
+                let mean_hz: Vec<f64> = (0..m)
+                    .map(|j| frequencies.iter().map(|r| r[j]).sum::<f64>() / n as f64)
+                    .collect();
+                let z: Vec<Vec<f64>> = frequencies
+                    .iter()
+                    .map(|r| r.iter().zip(&mean_hz).map(|(f, f0)| f / f0 - 1.0).collect())
+                    .collect();
+                let (lambda, u) = symmetric_eigen(&z)?;
+                let total: f64 = lambda.iter().map(|v| v.max(0.0)).sum();
+                let descending: Vec<f64> = lambda.iter().rev().map(|v| v.max(0.0)).collect();
+                let mut retained = 0;
+                while retained + 1 < m {
+                    let rest = &descending[retained + 1..];
+                    let floor = rest.iter().sum::<f64>() / rest.len() as f64;
+                    if descending[retained] <= settings.dominance * floor {
+                        break;
+                    }
+                    retained += 1;
+                }
+                let kept: f64 = descending[..retained].iter().sum();
+                let directions = (0..retained)
+                    .map(|r| (0..m).map(|i| u[(i, m - 1 - r)]).collect())
+                    .collect();
+                Compensation::Latent {
+                    mean_hz,
+                    retained,
+                    explained: if total > 0.0 { kept / total } else { 0.0 },
+                    directions,
+                }
+            }
+        };
+        let mut chart = ControlChart {
+            compensation,
+            training_windows: n,
+            dof: 0,
+            threshold: f64::NAN,
+            false_alarm_rate: settings.false_alarm_rate,
+            subgroup: 1,
+            residual_mean: vec![0.0; m],
+            whitening: Vec::new(),
+        };
+        let residuals: Vec<Vec<f64>> = frequencies
+            .iter()
+            .enumerate()
+            .map(|(w, r)| chart.residual(r, environment.map(|t| t[w])))
+            .collect();
+        chart.residual_mean = (0..m)
+            .map(|j| residuals.iter().map(|r| r[j]).sum::<f64>() / n as f64)
+            .collect();
+        let (lambda, u) = symmetric_eigen(&residuals)?;
+        let max = lambda.iter().fold(0.0f64, |a, &v| a.max(v));
+        let keep: Vec<usize> = (0..m).filter(|&i| lambda[i] > 1e-9 * max).collect();
+        let k = keep.len();
+        if k == 0 || n <= k + 1 {
+            return Err(Error::numerical("control chart: the residuals do not vary"));
+        }
+        chart.whitening = keep
+            .iter()
+            .map(|&i| (0..m).map(|j| u[(j, i)] / lambda[i].sqrt()).collect())
+            .collect();
+        chart.dof = k;
+        chart.subgroup = settings.subgroup.max(1);
+        chart.threshold = (1.0 + chart.subgroup as f64 / n as f64)
+            * hotelling_upper_quantile(settings.false_alarm_rate, k as f64, (n - 1) as f64);
+        Ok(chart)
+    }
+
+    /// The residual of one window (E1/E2).
+    pub fn residual(&self, frequencies: &[f64], environment: Option<f64>) -> Vec<f64> {
+        match &self.compensation {
+            Compensation::Measured { fits } => frequencies
+                .iter()
+                .zip(fits)
+                .map(|(f, (b0, b1))| {
+                    let predicted = b0 + b1 * environment.unwrap_or(f64::NAN);
+                    // Relative, so modes of different frequency weigh alike in E3.
+                    f / predicted - 1.0
+                })
+                .collect(),
+            Compensation::Latent {
+                mean_hz,
+                directions,
+                ..
+            } => {
+                let z: Vec<f64> = frequencies
+                    .iter()
+                    .zip(mean_hz)
+                    .map(|(f, f0)| f / f0 - 1.0)
+                    .collect();
+                let mut e = z.clone();
+                for d in directions {
+                    let c: f64 = d.iter().zip(&z).map(|(a, b)| a * b).sum();
+                    for (ei, di) in e.iter_mut().zip(d) {
+                        *ei -= c * di;
+                    }
+                }
+                e
+            }
+        }
+    }
+
+    /// T² of a subgroup (E3): `windows` are (frequencies, measured value)
+    /// of its windows; NaN when a measured value is missing.
+    pub fn statistic(&self, windows: &[(&[f64], Option<f64>)]) -> f64 {
+        let w = windows.len().max(1) as f64;
+        let m = self.residual_mean.len();
+        let mut mean = vec![0.0; m];
+        for (f, env) in windows {
+            for (acc, e) in mean.iter_mut().zip(self.residual(f, *env)) {
+                *acc += e / w;
+            }
+        }
+        w * self
+            .whitening
+            .iter()
+            .map(|row| {
+                let v: f64 = row
+                    .iter()
+                    .zip(mean.iter().zip(&self.residual_mean))
+                    .map(|(a, (x, m))| a * (x - m))
+                    .sum();
+                v * v
+            })
+            .sum::<f64>()
+    }
+}
+
+/// (E5): index of the first window of the first run of `min_run`
+/// out-of-control windows among `eligible` ones (`None` = not charted).
+pub fn alarm_onset(
+    out_of_control: &[Option<bool>],
+    eligible: &[bool],
+    min_run: usize,
+) -> Option<usize> {
+    super::anomaly::anomaly_onset(out_of_control, eligible, min_run)
+}

@@ -1,0 +1,170 @@
+//! `change_reference.parquet` (what a run leaves for a later run's change
+//! test) and `change_test.parquet` (the test of a run against a reference
+//! run): docs/statistics.md "Change test", docs/formats.md.
+
+use std::path::Path;
+
+use super::modal_tables::OUTPUT_CHANNELS_KEY;
+use super::parquet::{write_parquet, TableBuilder};
+use super::provenance::Provenance;
+use crate::error::{Error, Result};
+use crate::modal::change_test::{ChangeTestResult, CovarianceBlocks};
+use crate::vocab::tables::{
+    change_reference as cr, change_test as ct, CHANGE_REFERENCE, CHANGE_TEST,
+};
+
+/// Metadata key of the number of lags kept.
+pub const MAX_LAG_KEY: &str = "quaketwin.max_lag";
+/// Metadata key of the samples between lags.
+pub const LAG_STEP_KEY: &str = "quaketwin.lag_step";
+
+/// Writes the blocks of `c` (none when `c` is `None`: too many channels or
+/// too short a record, said in `note`).
+pub fn write_change_reference(
+    path: &Path,
+    c: Option<&CovarianceBlocks>,
+    channels: &[String],
+    note: Option<&str>,
+    provenance: &Provenance,
+) -> Result<()> {
+    let (samples, blocks): (Vec<u32>, Vec<Vec<f64>>) = match c {
+        Some(c) => (
+            c.block_samples.iter().map(|&n| n as u32).collect(),
+            c.blocks.clone(),
+        ),
+        None => (Vec::new(), Vec::new()),
+    };
+    let batch = TableBuilder::new(&CHANGE_REFERENCE)
+        .u32(cr::BLOCK.name, (0..blocks.len() as u32).collect())
+        .u32(cr::BLOCK_SAMPLES.name, samples)
+        .list_f64(cr::COVARIANCES.name, &blocks)
+        .build()?;
+    let mut metadata = provenance.metadata();
+    metadata.push((
+        OUTPUT_CHANNELS_KEY.into(),
+        serde_json::to_string(channels).unwrap_or_default(),
+    ));
+    metadata.push((MAX_LAG_KEY.into(), c.map_or(0, |c| c.max_lag).to_string()));
+    metadata.push((LAG_STEP_KEY.into(), c.map_or(1, |c| c.lag_step).to_string()));
+    if let Some(n) = note {
+        metadata.push(("quaketwin.note".into(), n.to_string()));
+    }
+    write_parquet(path, &[batch], &metadata)
+}
+
+/// The blocks of a `change_reference.parquet` and its channel ids; `None`
+/// when the file holds no block.
+pub fn read_change_reference(path: &Path) -> Result<Option<(CovarianceBlocks, Vec<String>)>> {
+    use arrow_array::{Array, Float64Array, ListArray, UInt32Array};
+    let table = super::parquet::ReadTable::open(path)?;
+    let loc = || table.location();
+    let channels: Vec<String> = table
+        .metadata(OUTPUT_CHANNELS_KEY)
+        .and_then(|v| serde_json::from_str(v).ok())
+        .ok_or_else(|| Error::input(loc(), format!("metadata {OUTPUT_CHANNELS_KEY} missing")))?;
+    let max_lag: usize = table
+        .metadata(MAX_LAG_KEY)
+        .and_then(|v| v.parse().ok())
+        .ok_or_else(|| Error::input(loc(), format!("metadata {MAX_LAG_KEY} missing")))?;
+    let lag_step: usize = table
+        .metadata(LAG_STEP_KEY)
+        .and_then(|v| v.parse().ok())
+        .filter(|&s| s >= 1)
+        .ok_or_else(|| Error::input(loc(), format!("metadata {LAG_STEP_KEY} missing")))?;
+    let l = channels.len();
+    let mut block_samples = Vec::new();
+    let mut blocks = Vec::new();
+    for b in &table.batches {
+        let n = table.declared::<UInt32Array>(b, &cr::BLOCK_SAMPLES)?;
+        let lists = table.declared::<ListArray>(b, &cr::COVARIANCES)?;
+        for i in 0..b.num_rows() {
+            let values = lists.value(i);
+            let values = values
+                .as_any()
+                .downcast_ref::<Float64Array>()
+                .ok_or_else(|| Error::input(loc(), "covariances: not float64"))?;
+            let v: Vec<f64> = values.values().to_vec();
+            if v.len() != max_lag * l * l || v.iter().any(|x| !x.is_finite()) {
+                return Err(Error::input(
+                    loc(),
+                    format!(
+                        "covariances of block {i}: {} values, expected {} finite ones ({l} channels, lags 1–{max_lag})",
+                        v.len(),
+                        max_lag * l * l
+                    ),
+                ));
+            }
+            block_samples.push(n.value(i) as usize);
+            blocks.push(v);
+        }
+    }
+    if blocks.is_empty() {
+        return Ok(None);
+    }
+    let samples: usize = block_samples.iter().sum();
+    let mut mean = vec![0.0; max_lag * l * l];
+    for (b, &n) in blocks.iter().zip(&block_samples) {
+        for (acc, v) in mean.iter_mut().zip(b) {
+            *acc += v * n as f64 / samples.max(1) as f64;
+        }
+    }
+    Ok(Some((
+        CovarianceBlocks {
+            channels: l,
+            max_lag,
+            lag_step,
+            samples,
+            mean,
+            block_samples,
+            blocks,
+        },
+        channels,
+    )))
+}
+
+/// Writes the test of a run against `reference` (one row per channel; no
+/// row when no test could be made, and why in `note`).
+pub fn write_change_test(
+    path: &Path,
+    t: Option<&ChangeTestResult>,
+    channels: &[String],
+    reference: &Path,
+    note: Option<&str>,
+    provenance: &Provenance,
+) -> Result<()> {
+    let empty = ChangeTestResult {
+        statistic: 0.0,
+        threshold: 0.0,
+        p_value: 1.0,
+        dof: 0,
+        covariance_dof: 0,
+        false_alarm_rate: 0.0,
+        changed: false,
+        channel_contributions: Vec::new(),
+    };
+    let (t, channels) = match t {
+        Some(t) => (t, channels),
+        None => (&empty, &[][..]),
+    };
+    let n = channels.len();
+    let batch = TableBuilder::new(&CHANGE_TEST)
+        .str(ct::CHANNEL.name, channels)
+        .f64(ct::CONTRIBUTION.name, t.channel_contributions.clone())
+        .f64(ct::STATISTIC.name, vec![t.statistic; n])
+        .f64(ct::THRESHOLD.name, vec![t.threshold; n])
+        .f64(ct::P_VALUE.name, vec![t.p_value; n])
+        .i32(ct::DOF.name, vec![t.dof as i32; n])
+        .i32(ct::COVARIANCE_DOF.name, vec![t.covariance_dof as i32; n])
+        .f64(ct::FALSE_ALARM_RATE.name, vec![t.false_alarm_rate; n])
+        .bool(ct::CHANGED.name, vec![t.changed; n])
+        .build()?;
+    let mut metadata = provenance.metadata();
+    metadata.push((
+        "quaketwin.reference".into(),
+        reference.display().to_string(),
+    ));
+    if let Some(n) = note {
+        metadata.push(("quaketwin.note".into(), n.to_string()));
+    }
+    write_parquet(path, &[batch], &metadata)
+}
