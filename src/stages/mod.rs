@@ -11,6 +11,7 @@ pub mod condition;
 pub mod design;
 pub mod hysteresis;
 pub mod ingest;
+pub mod lab;
 pub mod metrics;
 pub mod modal;
 pub mod prepost;
@@ -35,6 +36,7 @@ pub const CATALOG: &[StageKind] = &[
     assess::KIND,
     design::KIND,
     rehearse::KIND,
+    lab::KIND,
     report::KIND,
 ];
 
