@@ -135,7 +135,7 @@ impl Problem<'_> {
                         best = f;
                         lambda = (lambda / 3.0).max(1e-12);
                         improved = true;
-                        if gain < 1e-12 {
+                        if gain < 1e-8 {
                             break 'outer;
                         }
                         break;
@@ -151,12 +151,14 @@ impl Problem<'_> {
         Some(best)
     }
 
-    /// Seeded global search: `draws` uniform draws of the free parameters in
-    /// their bounds (u_y log-uniform) around `base`, the `refined` best of
-    /// them (and `base` itself) refined by [`Problem::refine`].
+    /// Seeded global search: `draws` uniform draws of the parameters
+    /// `drawn` (a subset of the free ones; u_y log-uniform) in their bounds,
+    /// the others as in `base`; the `refined` best of them (and `base`
+    /// itself) refined over all free parameters by [`Problem::refine`].
     pub fn search(
         &self,
         base: &[f64; 9],
+        drawn: &[usize],
         rng: &mut Rng,
         draws: usize,
         refined: usize,
@@ -168,7 +170,7 @@ impl Problem<'_> {
         }
         for _ in 0..draws {
             let mut s = *base;
-            for &i in &self.free {
+            for &i in drawn {
                 s[i] = if i == 0 {
                     (rng.uniform_in(self.lower[0].ln(), self.upper[0].ln())).exp()
                 } else {

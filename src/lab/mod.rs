@@ -313,7 +313,14 @@ pub fn identify_specimen(
     let plain_problem = problem_with(&PLAIN_FREE);
     let start = BwbnParameters::plain(1.0, 0.1, range / 20.0, 0.5, 2.0).shape();
     let plain = plain_problem
-        .search(&start, &mut rng, settings.draws, settings.refined, settings.max_iterations)
+        .search(
+            &start,
+            &PLAIN_FREE,
+            &mut rng,
+            settings.draws,
+            settings.refined,
+            settings.max_iterations,
+        )
         .ok_or_else(|| Error::numerical("lab identification: no plain Bouc–Wen model fits the record (the force does not follow the displacement)"))?;
 
     let degrading_problem = problem_with(&DEGRADING_FREE);
@@ -329,16 +336,16 @@ pub fn identify_specimen(
         base[7] = 0.1;
         base[8] = 0.2;
         let mut draw_rng = Rng::derived(settings.seed, 1);
-        // First the extras alone (the plain part held), then all nine.
-        problem_with(&DEGRADING_FREE[3..])
-            .search(
-                &base,
-                &mut draw_rng,
-                settings.degrading_draws,
-                settings.refined,
-                settings.max_iterations,
-            )
-            .and_then(|s| degrading_problem.refine(&s.params.shape(), settings.max_iterations))
+        // The extras drawn with the plain part held, the best draws refined
+        // over all nine shape parameters.
+        degrading_problem.search(
+            &base,
+            &DEGRADING_FREE[3..],
+            &mut draw_rng,
+            settings.degrading_draws,
+            settings.refined,
+            settings.max_iterations,
+        )
     };
 
     let plain_resid: Vec<f64> = f

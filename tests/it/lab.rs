@@ -17,6 +17,18 @@ fn protocol(points_per_cycle: usize) -> Vec<f64> {
     cyclic_protocol(&amplitudes, points_per_cycle)
 }
 
+/// A shorter search for CI (debug builds): the synthetic records start the
+/// search near nothing in particular, so this still tests the global search;
+/// the shipped defaults run in the `#[ignore]`d release tests.
+fn ci_settings() -> LabIdentifySettings {
+    LabIdentifySettings {
+        draws: 12,
+        degrading_draws: 24,
+        refined: 1,
+        ..Default::default()
+    }
+}
+
 fn value(id: &quaketwin::lab::SpecimenIdentification, name: &str) -> (f64, f64) {
     let e = id.estimates.iter().find(|e| e.name == name).unwrap();
     (e.value, e.std)
@@ -43,13 +55,13 @@ fn truth_values() -> Vec<(&'static str, f64)> {
 /// degrading/pinching form chosen by the F-test, the fit's NRMSE tiny.
 #[test]
 fn synthetic_bwbn_noise_free_parameters_within_two_percent() {
-    let rec = synthetic_specimen(reference_bwbn(), protocol(60), 0.0, 1);
+    let rec = synthetic_specimen(reference_bwbn(), protocol(40), 0.0, 1);
     let history = SpecimenHistory {
         displacement_m: &rec.displacement_m,
         force_n: &rec.measured_force_n,
         time_s: None,
     };
-    let settings = LabIdentifySettings::default();
+    let settings = ci_settings();
     let id = identify_specimen(&history, &settings).unwrap();
     for e in &id.estimates {
         eprintln!("{:>28} {:>14.6e} ± {:.3e}", e.name, e.value, e.std);
@@ -75,13 +87,13 @@ fn synthetic_bwbn_noise_free_parameters_within_two_percent() {
 /// part).
 #[test]
 fn synthetic_bwbn_with_noise_within_reported_uncertainty() {
-    let rec = synthetic_specimen(reference_bwbn(), protocol(60), 0.01, 7);
+    let rec = synthetic_specimen(reference_bwbn(), protocol(40), 0.01, 7);
     let history = SpecimenHistory {
         displacement_m: &rec.displacement_m,
         force_n: &rec.measured_force_n,
         time_s: None,
     };
-    let id = identify_specimen(&history, &LabIdentifySettings::default()).unwrap();
+    let id = identify_specimen(&history, &ci_settings()).unwrap();
     for e in &id.estimates {
         eprintln!("{:>28} {:>14.6e} ± {:.3e}", e.name, e.value, e.std);
     }
@@ -109,13 +121,13 @@ fn synthetic_plain_bouc_wen_keeps_the_plain_form() {
         t.beta,
         t.n,
     );
-    let rec = synthetic_specimen(truth, protocol(40), 0.01, 3);
+    let rec = synthetic_specimen(truth, protocol(30), 0.01, 3);
     let history = SpecimenHistory {
         displacement_m: &rec.displacement_m,
         force_n: &rec.measured_force_n,
         time_s: None,
     };
-    let id = identify_specimen(&history, &LabIdentifySettings::default()).unwrap();
+    let id = identify_specimen(&history, &ci_settings()).unwrap();
     assert_eq!(id.form, ModelForm::Plain, "{}", id.form_reason);
     let s = &id.spring;
     for (got, want, name) in [
