@@ -490,3 +490,85 @@ fn synthetic_bwbn_uncertainty_coverage() {
     println!("within 2σ: {inside}/{total} = {share:.3}");
     assert!(share > 0.85, "{share}");
 }
+
+/// A lab folder with an `event.toml` `[lab]` section (displacement in mm
+/// and force in kN in one CSV with a header, a command channel beside
+/// them): loaded in SI, identified by the stage's function, the three
+/// tables written and the lab report drawn with the loops.
+#[test]
+fn lab_folder_with_manifest_runs_through_stage_tables_and_report() {
+    let t = reference_bwbn();
+    let truth = quaketwin::lab::BwbnParameters::plain(
+        t.initial_stiffness_n_per_m,
+        t.post_yield_ratio,
+        t.yield_displacement_m,
+        t.beta,
+        t.n,
+    );
+    let rec = synthetic_specimen(truth, protocol(20), 0.0, 5);
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv = String::from("step,cmd [mm],disp [mm],force [kN]\n");
+    for (i, (x, f)) in rec.displacement_m.iter().zip(&rec.measured_force_n).enumerate() {
+        csv.push_str(&format!("{i},{},{},{}\n", x * 1e3, x * 1e3, f * 1e-3));
+    }
+    std::fs::write(dir.path().join("test.csv"), csv).unwrap();
+    std::fs::write(
+        dir.path().join("event.toml"),
+        r#"[lab]
+specimen = "synthetic column"
+protocol = "quasi-static"
+
+[[lab.channel]]
+file = "test.csv"
+column = "cmd"
+id = "command"
+role = "command"
+units = "mm"
+
+[[lab.channel]]
+file = "test.csv"
+column = "disp"
+id = "d"
+quantity = "displacement"
+units = "mm"
+
+[[lab.channel]]
+file = "test.csv"
+column = 3
+id = "F"
+units = "kN"
+actuator = "A1"
+"#,
+    )
+    .unwrap();
+    let recs = load_lab(dir.path()).unwrap();
+    assert_eq!(recs.len(), 1);
+    assert_eq!(recs[0].name, "synthetic column");
+    assert_eq!(recs[0].channels[0].role, LabRole::Command);
+    let h = history_of(&recs[0]).unwrap();
+    assert!((h.displacement_m[5] - rec.displacement_m[5]).abs() < 1e-12);
+    assert!((h.force_n[5] - rec.measured_force_n[5]).abs() < 1e-6);
+
+    let out = tempfile::tempdir().unwrap();
+    let settings = LabIdentifySettings {
+        form: FormChoice::Plain,
+        ..ci_settings()
+    };
+    let done = quaketwin::stages::lab::identify_lab_event(dir.path(), &settings, out.path()).unwrap();
+    assert!(done[0].1.force_nrmse < 1e-4, "{}", done[0].1.force_nrmse);
+    for f in quaketwin::stages::lab::LAB_FILES {
+        assert!(out.path().join(f).is_file(), "{f}");
+    }
+    let page = quaketwin::report::write_report(out.path(), &Default::default()).unwrap();
+    let html = std::fs::read_to_string(page).unwrap();
+    assert!(html.contains("Lab test: hysteresis identified from measured force"));
+    assert!(html.contains("synthetic column") && html.contains("<svg"), "loops drawn");
+
+    // A units/quantity contradiction is an error naming event.toml.
+    let bad = std::fs::read_to_string(dir.path().join("event.toml"))
+        .unwrap()
+        .replace("units = \"kN\"", "units = \"kN\"\nquantity = \"displacement\"");
+    std::fs::write(dir.path().join("event.toml"), bad).unwrap();
+    let e = load_lab(dir.path()).unwrap_err().to_string();
+    assert!(e.contains("event.toml") && e.contains("kN"), "{e}");
+}
