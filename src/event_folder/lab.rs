@@ -12,7 +12,9 @@ use super::manifest::ColumnRef;
 use super::{collect, is_manifest, parse_manifest, ArchiveLimits, EventFile};
 use crate::error::{Error, Location, Result};
 use crate::readers::lab::{read_json, read_mat, read_text, LabTable, MAX_LAB_FILE_BYTES};
-use crate::vocab::{lab_units, LabChannel, LabRecord, LabRole, Quantity, SourceRef, TimeBase};
+use crate::vocab::{
+    lab_units, times_problem, LabChannel, LabRecord, LabRole, Quantity, SourceRef, TimeBase,
+};
 
 /// Most `[[lab.channel]]` entries.
 pub const MAX_LAB_CHANNELS: usize = 256;
@@ -204,18 +206,8 @@ fn time_base(
     what: &str,
 ) -> Result<(TimeBase, Option<Vec<f64>>)> {
     if let Some(t) = times {
-        if t.len() != n {
-            return Err(Error::usage(format!(
-                "{what}: the time column has {} values, the channels {n}",
-                t.len()
-            )));
-        }
-        if let Some(i) = (1..n).find(|&i| !(t[i] > t[i - 1])) {
-            return Err(Error::usage(format!(
-                "{what}: time does not increase at sample {i} ({} after {})",
-                t[i],
-                t[i - 1]
-            )));
+        if let Some(problem) = times_problem(&t, n, what) {
+            return Err(Error::usage(problem));
         }
         let dt0 = if n > 1 {
             (t[n - 1] - t[0]) / (n - 1) as f64

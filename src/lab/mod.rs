@@ -28,7 +28,7 @@ use crate::error::{Error, Result};
 use crate::rehearse::specimen::BoucWenSpring;
 use crate::rng::Rng;
 use crate::stats::f_survival;
-use crate::vocab::{LabRecord, LabRole, Quantity};
+use crate::vocab::{times_problem, LabRecord, LabRole, Quantity};
 
 pub use loops::{CycleEnergy, SpecimenDamage};
 pub use model::BwbnParameters;
@@ -240,20 +240,11 @@ fn check_history(history: &SpecimenHistory<'_>) -> Result<()> {
             )));
         }
     }
-    if let Some(t) = history.time_s {
-        if t.len() != n {
-            return Err(Error::usage(format!(
-                "lab identification: {n} samples but {} time values",
-                t.len()
-            )));
-        }
-        if let Some(i) = (1..n).find(|&i| !(t[i] > t[i - 1])) {
-            return Err(Error::usage(format!(
-                "lab identification: time does not increase at sample {i} ({} after {})",
-                t[i],
-                t[i - 1]
-            )));
-        }
+    if let Some(problem) = history
+        .time_s
+        .and_then(|t| times_problem(t, n, "lab identification"))
+    {
+        return Err(Error::usage(problem));
     }
     let (lo, hi) = history
         .displacement_m

@@ -31,6 +31,22 @@ pub struct LabTable {
     pub layout: String,
 }
 
+/// Columns from parallel names, units and values.
+fn columns_of(
+    names: impl IntoIterator<Item = (String, Option<String>)>,
+    values: Vec<Vec<f64>>,
+) -> Vec<LabColumn> {
+    names
+        .into_iter()
+        .zip(values)
+        .map(|((name, units), values)| LabColumn {
+            name,
+            units,
+            values,
+        })
+        .collect()
+}
+
 impl LabTable {
     pub fn column(&self, name: &str) -> Option<&LabColumn> {
         self.columns.iter().find(|c| c.name == name).or_else(|| {
@@ -154,16 +170,7 @@ pub fn read_text(bytes: &[u8], location: &Location, stem: &str) -> Result<LabTab
     };
     let units = if header { units } else { vec![None; width] };
     Ok(LabTable {
-        columns: names
-            .into_iter()
-            .zip(units)
-            .zip(columns)
-            .map(|((name, units), values)| LabColumn {
-                name,
-                units,
-                values,
-            })
-            .collect(),
+        columns: columns_of(names.into_iter().zip(units), columns),
         dt_s: None,
         layout: if header {
             "delimited text with a header".into()
@@ -271,15 +278,7 @@ pub fn read_json(bytes: &[u8], location: &Location) -> Result<LabTable> {
                 (0..width).map(|i| (i.to_string(), None)).collect()
             };
         return Ok(LabTable {
-            columns: names
-                .into_iter()
-                .zip(columns)
-                .map(|((name, units), values)| LabColumn {
-                    name,
-                    units,
-                    values,
-                })
-                .collect(),
+            columns: columns_of(names, columns),
             dt_s,
             layout: if arts {
                 "ARTS-Laboratory friction-damper JSON (rows: time, displacement, friction force, velocity, actuator forces 1 and 2)".into()

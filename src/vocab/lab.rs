@@ -170,3 +170,21 @@ impl LabRecord {
         })
     }
 }
+
+/// Why `times` cannot order `samples` samples (a count that differs, or a
+/// time that does not increase), naming `what`; None when they can.
+pub fn times_problem(times: &[f64], samples: usize, what: &str) -> Option<String> {
+    if times.len() != samples {
+        return Some(format!(
+            "{what}: {samples} samples but {} time values",
+            times.len()
+        ));
+    }
+    (1..samples).find(|&i| !(times[i] > times[i - 1])).map(|i| {
+        format!(
+            "{what}: time does not increase at sample {i} ({} after {})",
+            times[i],
+            times[i - 1]
+        )
+    })
+}

@@ -508,7 +508,12 @@ fn lab_folder_with_manifest_runs_through_stage_tables_and_report() {
     let rec = synthetic_specimen(truth, protocol(20), 0.0, 5);
     let dir = tempfile::tempdir().unwrap();
     let mut csv = String::from("step,cmd [mm],disp [mm],force [kN]\n");
-    for (i, (x, f)) in rec.displacement_m.iter().zip(&rec.measured_force_n).enumerate() {
+    for (i, (x, f)) in rec
+        .displacement_m
+        .iter()
+        .zip(&rec.measured_force_n)
+        .enumerate()
+    {
         csv.push_str(&format!("{i},{},{},{}\n", x * 1e3, x * 1e3, f * 1e-3));
     }
     std::fs::write(dir.path().join("test.csv"), csv).unwrap();
@@ -554,7 +559,8 @@ actuator = "A1"
         form: FormChoice::Plain,
         ..ci_settings()
     };
-    let done = quaketwin::stages::lab::identify_lab_event(dir.path(), &settings, out.path()).unwrap();
+    let done =
+        quaketwin::stages::lab::identify_lab_event(dir.path(), &settings, out.path()).unwrap();
     assert!(done[0].1.force_nrmse < 1e-4, "{}", done[0].1.force_nrmse);
     for f in quaketwin::stages::lab::LAB_FILES {
         assert!(out.path().join(f).is_file(), "{f}");
@@ -562,12 +568,18 @@ actuator = "A1"
     let page = quaketwin::report::write_report(out.path(), &Default::default()).unwrap();
     let html = std::fs::read_to_string(page).unwrap();
     assert!(html.contains("Lab test: hysteresis identified from measured force"));
-    assert!(html.contains("synthetic column") && html.contains("<svg"), "loops drawn");
+    assert!(
+        html.contains("synthetic column") && html.contains("<svg"),
+        "loops drawn"
+    );
 
     // A units/quantity contradiction is an error naming event.toml.
     let bad = std::fs::read_to_string(dir.path().join("event.toml"))
         .unwrap()
-        .replace("units = \"kN\"", "units = \"kN\"\nquantity = \"displacement\"");
+        .replace(
+            "units = \"kN\"",
+            "units = \"kN\"\nquantity = \"displacement\"",
+        );
     std::fs::write(dir.path().join("event.toml"), bad).unwrap();
     let e = load_lab(dir.path()).unwrap_err().to_string();
     assert!(e.contains("event.toml") && e.contains("kN"), "{e}");
