@@ -22,6 +22,7 @@ pub mod history;
 pub mod hysteresis;
 pub mod in_memory;
 pub mod input_file;
+pub mod lab;
 pub mod metrics;
 pub mod modal;
 pub mod monitor;

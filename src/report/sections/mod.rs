@@ -12,6 +12,7 @@ mod drift;
 mod event;
 mod fourier;
 mod hysteresis;
+mod lab;
 mod layout;
 mod loops;
 mod modal;
@@ -42,7 +43,7 @@ pub use loops::segment_levels;
 /// the page calls it (every table of `vocab::tables`, the run's JSON/TOML
 /// files and the page itself).  File names appear on the page only in the
 /// appendix; sections name an output in words.
-const OUTPUTS: [(&str, &str, &str); 28] = [
+const OUTPUTS: [(&str, &str, &str); 31] = [
     ("event.json", "ingest", "event inventory"),
     (tables::SAMPLES.file, "condition", "conditioned records"),
     (
@@ -117,6 +118,21 @@ const OUTPUTS: [(&str, &str, &str); 28] = [
         tables::REHEARSAL.file,
         "rehearse",
         "rehearsal time histories",
+    ),
+    (
+        tables::LAB_IDENTIFICATION.file,
+        "lab_hysteresis",
+        "lab specimen identification",
+    ),
+    (
+        tables::LAB_FIT.file,
+        "lab_hysteresis",
+        "lab force–displacement loops",
+    ),
+    (
+        tables::LAB_CYCLES.file,
+        "lab_hysteresis",
+        "lab dissipated energy per cycle",
     ),
     ("report.html", "report", "this report"),
 ];
@@ -380,6 +396,9 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
     let event = event::read_event(dir);
     if test_design::applies(dir) {
         return test_design::page(dir, &event, settings);
+    }
+    if lab::applies(dir) {
+        return lab::page(dir, &event, settings);
     }
     let channels = load(dir, &tables::CHANNELS, None);
     let time_axis = time_axis(&channels);
