@@ -3,6 +3,7 @@
 
 pub mod assessment_tables;
 pub mod atomic;
+pub mod compare_test_tables;
 pub mod dataset;
 pub mod design_tables;
 pub mod event_tables;

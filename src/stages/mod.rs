@@ -7,6 +7,7 @@
 //! `pipeline::Stage` trait.
 
 pub mod assess;
+pub mod compare_test;
 pub mod condition;
 pub mod design;
 pub mod hysteresis;

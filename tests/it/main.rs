@@ -23,6 +23,7 @@ mod budgets;
 mod buildings;
 mod child;
 mod cli_output;
+mod compare_test;
 mod conditioning;
 mod dashboard;
 mod dataset;
