@@ -195,9 +195,9 @@ fn bad_logs_are_refused_with_file_line_and_column() {
     let l2 = HybridLog::parse_csv(&mm, "x").unwrap();
     assert!((l2.command_m[0][1] - 1e-6).abs() < 1e-18 && (l2.force_n[1][2] - 3e4).abs() < 1e-9);
 
-    let e = parse_err(&good.replace(",force_n", ""));
+    let e = parse_err(&good.replace("1,0.01,1,1,1e-3,0.9e-3,10\n", "1,0.01,1,1,1e-3,0.9e-3\n"));
     assert!(
-        e.contains("lab/log.csv line 2") && e.contains("7 fields, the header has 6"),
+        e.contains("lab/log.csv line 4") && e.contains("6 fields, the header has 7"),
         "{e}"
     );
     let e = parse_err(&good.replace("force_n", "load"));
