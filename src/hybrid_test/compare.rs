@@ -274,13 +274,12 @@ fn rehearse_steps(
     Ok((summary, h))
 }
 
-/// The figures of rehearsed histories against the log.
+/// The figures of rehearsed histories against the log (`settings`: the rehearsal's).
 fn figures(
     source: &str,
     h: &Histories,
     summary: &crate::rehearse::RunSummary,
-    actuator: &ActuatorModel,
-    noise: f64,
+    settings: &RehearseSettings,
     log: &HybridLog,
     model: &RehearsalModel,
     substeps: usize,
@@ -289,8 +288,8 @@ fn figures(
     let stable = summary.stable;
     RunFigures {
         source: source.into(),
-        lag_s: equivalent_lag_s(actuator),
-        noise_std_m: noise,
+        lag_s: equivalent_lag_s(&settings.actuator(model.actuator_band_hz)),
+        noise_std_m: settings.displacement_noise_m,
         tracking_rms_m: rms,
         tracking_peak_m: peak,
         energy_error: energy_error(
@@ -392,13 +391,11 @@ pub fn compare(
 
     let (summary, rehearsal) =
         rehearse_steps(&model, &settings.rehearsal, time_scale, substeps, n)?;
-    let rehearsal_actuator = settings.rehearsal.actuator(model.actuator_band_hz);
     let predicted = figures(
         "rehearsal",
         &rehearsal,
         &summary,
-        &rehearsal_actuator,
-        settings.rehearsal.displacement_noise_m,
+        &settings.rehearsal,
         log,
         &model,
         substeps,
@@ -440,13 +437,11 @@ pub fn compare(
             s.bouc_wen = Some(f.spring.clone());
         }
         let (sum, h) = rehearse_steps(&model, &s, time_scale, substeps, n)?;
-        let act = s.actuator(model.actuator_band_hz);
         runs.push(figures(
             "updated rehearsal",
             &h,
             &sum,
-            &act,
-            s.displacement_noise_m,
+            &s,
             log,
             &model,
             substeps,

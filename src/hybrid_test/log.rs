@@ -228,7 +228,7 @@ impl HybridLog {
                 continue;
             }
             let dt = (t[n - 1] - t[0]) / (n - 1) as f64;
-            if !(dt > 0.0) {
+            if dt.is_nan() || dt <= 0.0 {
                 return bad(format!("`{name}` must increase"));
             }
             if let Some(k) = (1..n).find(|&k| {

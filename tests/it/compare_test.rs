@@ -4,21 +4,11 @@
 //! the logged one; bad logs are refused with errors naming file, line and column.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::sync::OnceLock;
 
+use crate::common::{os, quaketwin};
 use quaketwin::hybrid_test::{identify_tracking, HybridLog};
-
-fn quaketwin(args: &[&std::ffi::OsStr]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_quaketwin"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn os<P: AsRef<std::ffi::OsStr> + ?Sized>(p: &P) -> &std::ffi::OsStr {
-    p.as_ref()
-}
 
 /// The facade sample's design run, made once for the module's tests.
 fn facade_design() -> &'static Path {
