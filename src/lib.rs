@@ -23,6 +23,7 @@ pub mod hybrid_test;
 pub mod hysteresis;
 pub mod in_memory;
 pub mod input_file;
+pub mod lab;
 pub mod metrics;
 pub mod modal;
 pub mod monitor;

@@ -62,6 +62,8 @@ pub struct Manifest {
     pub structure: Option<StructureSection>,
     #[serde(default, rename = "channel")]
     pub channels: Vec<ChannelEntry>,
+    /// A laboratory record (docs/lab-tests.md).
+    pub lab: Option<super::lab::LabSection>,
 }
 
 #[derive(Debug, Clone, Default, Deserialize)]
@@ -343,6 +345,9 @@ impl Manifest {
             Error::input(loc, format!("invalid event manifest: {}", e.message()))
         })?;
         m.validate(file)?;
+        if let Some(lab) = &m.lab {
+            lab.validate(file)?;
+        }
         Ok(m)
     }
 

@@ -5,6 +5,7 @@
 
 mod archive;
 pub mod init;
+pub mod lab;
 pub mod lengths;
 pub mod manifest;
 mod referenced;

@@ -14,6 +14,8 @@ pub mod csv;
 pub mod dayfile;
 pub mod dmg;
 pub mod geonet;
+pub mod lab;
+pub mod mat5;
 pub mod mcap;
 pub mod mseed;
 pub mod resample;

@@ -10,6 +10,7 @@ pub mod event_tables;
 pub mod fourier_tables;
 pub mod history_tables;
 pub mod hysteresis_tables;
+pub mod lab_tables;
 pub mod matrix_market;
 pub mod mcap_writer;
 pub mod modal_tables;

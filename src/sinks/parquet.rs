@@ -144,6 +144,11 @@ impl TableBuilder {
         let a = Arc::new(UInt32Array::from(values));
         self.push(name.as_ref(), ColumnType::U32, false, a)
     }
+    /// UInt32, nullable.
+    pub fn opt_u32(self, name: impl AsRef<str>, values: Vec<Option<u32>>) -> Self {
+        let a = Arc::new(UInt32Array::from(values));
+        self.push(name.as_ref(), ColumnType::U32, true, a)
+    }
     /// Boolean, not null.
     pub fn bool(self, name: impl AsRef<str>, values: Vec<bool>) -> Self {
         let a = Arc::new(BooleanArray::from(values));

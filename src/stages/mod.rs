@@ -12,6 +12,7 @@ pub mod condition;
 pub mod design;
 pub mod hysteresis;
 pub mod ingest;
+pub mod lab;
 pub mod metrics;
 pub mod modal;
 pub mod prepost;
@@ -36,6 +37,7 @@ pub const CATALOG: &[StageKind] = &[
     assess::KIND,
     design::KIND,
     rehearse::KIND,
+    lab::KIND,
     report::KIND,
 ];
 

@@ -29,6 +29,7 @@ pub mod event;
 pub mod facade;
 pub mod ground_motion;
 pub mod hybrid_log;
+pub mod lab_specimen;
 pub mod plan;
 pub mod realistic;
 pub mod smc_writer;

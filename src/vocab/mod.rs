@@ -6,6 +6,7 @@
 mod channel;
 mod event;
 mod history;
+mod lab;
 mod samples;
 pub mod schema;
 pub mod tables;
@@ -15,6 +16,7 @@ mod units;
 pub use channel::{most_common_station, Axis, Channel, Direction, QaFlag, Role, SourceRef};
 pub use event::{Event, Hypocentre, Record, Structure};
 pub use history::{ProcessingHistory, ProcessingStep};
+pub use lab::{lab_units, LabChannel, LabRecord, LabRole, Quantity, TimeBase};
 pub use samples::{SampleStore, Samples};
 pub use time::{
     day_start_ns, epoch_ns_from_civil, epoch_ns_from_ordinal, format_epoch_ns,

@@ -590,6 +590,56 @@ declare!(HISTORY_EVENTS, history_events, "history_events", "history_events.parqu
     NOTES: "notes", ListUtf8, required, "", "why a value is missing: no modes, no prediction and why";
 });
 
+declare!(LAB_IDENTIFICATION, lab_identification, "lab_identification", "lab_identification.parquet",
+    "one row per lab record and model parameter: the hysteresis identified from measured displacement and force (docs/lab-tests.md), with the record's fit figures, form test and damage repeated on its rows", {
+    RECORD: "record", Utf8, required, "", "the lab record (the specimen's name, or the file it was read from)";
+    FORM: "form", Utf8, required, "", "`plain` (Bouc–Wen) or `degrading_pinching` (Bouc–Wen–Baber–Noori, Eq. L1–L6)";
+    PARAMETER: "parameter", Utf8, required, "", "`initial_stiffness_n_per_m`, `post_yield_ratio`, `yield_displacement_m`, `beta` (γ = 1 − β), `n`, `strength_degradation` (δ_ν), `stiffness_degradation` (δ_η), `pinching_extent` (ζ_s), `pinching_rate` (p), `pinching_centre` (q), `pinching_width` (ψ)";
+    VALUE: "value", F64, required, "varies", "the identified value, in the row's `unit`";
+    STD: "std", F64, required, "varies", "its standard deviation from s²(JᵀJ)⁻¹ at the optimum inflated by (1 + ρ₁)/(1 − ρ₁) (Eq. L8); 0 on a fixed row, NaN when JᵀJ is singular";
+    UNIT: "unit", Utf8, required, "", "`N/m`, `m` or `1`";
+    FIXED: "fixed", Bool, required, "", "not fitted in this form (the plain form's degradation and pinching, held at 0)";
+    FORCE_NRMSE: "force_nrmse", F64, required, "1", "NRMSE of the fitted force against the measured one (Eq. 83: RMS error over the measured force range)";
+    PLAIN_NRMSE: "plain_nrmse", F64, required, "1", "the plain model's NRMSE (equal to `force_nrmse` when plain is chosen)";
+    ENERGY_ERROR_MEAN: "energy_error_mean", F64, nullable, "1", "mean of |fitted − measured| / |measured| dissipated energy over the record's cycles (per cycle in lab_cycles.parquet); null without a complete cycle";
+    CYCLES: "cycles", U32, required, "", "displacement cycles counted (maximum to maximum, dead band `cycle_band` of the range)";
+    F_STATISTIC: "f_statistic", F64, nullable, "1", "F-test of the plain model nested in the degrading/pinching one, [(S_plain − S_deg)/6] / [S_deg/(N_eff − 11)] (Eq. L9); null when only one form was fitted";
+    P_VALUE: "p_value", F64, nullable, "1", "its p-value: the degrading/pinching form is chosen when p < `significance`";
+    EFFECTIVE_SAMPLES: "effective_samples", U32, nullable, "", "N_eff = N (1 − ρ₁)/(1 + ρ₁) of the F-test (ρ₁: lag-1 autocorrelation of the plain model's residuals)";
+    FORM_REASON: "form_reason", Utf8, required, "", "why this form, in words (the F-test's numbers)";
+    YIELD_FORCE_N: "yield_force_n", F64, required, "N", "F_y = k₀ u_y";
+    DUCTILITY: "ductility", F64, required, "1", "max |x| / u_y";
+    HYSTERETIC_ENERGY_J: "hysteretic_energy_j", F64, required, "J", "∫ F dx of the measured record";
+    PARK_ANG: "park_ang", F64, nullable, "1", "Park–Ang index δ_max/δ_u + β_PA E_h/(F_y δ_u) (null without `ultimate_displacement_m`)";
+    STIFFNESS_INDEX: "stiffness_index", F64, required, "1", "1 − sqrt(k_end/k₀), k_end = k₀ (α + (1 − α)/η_end): the single-DoF form of Eq. 34 (0 for the plain model)";
+    SAMPLES: "samples", U32, required, "", "samples of the record";
+    SAMPLES_FITTED: "samples_fitted", U32, required, "", "samples the fit used (every k-th beyond `max_samples`)";
+    QUASI_STATIC: "quasi_static", Bool, required, "", "no time base: the step index orders the samples";
+});
+
+declare!(series LAB_FIT, lab_fit, "lab_fit", "lab_fit.parquet",
+    "one row per lab record and sample: measured and fitted force along the measured displacement (the loops)", {
+    RECORD: "record", Utf8, required, "", "the lab record";
+    STEP: "step", U32, required, "", "sample index (the time of a quasi-static protocol)";
+    T_S: "t_s", F64, nullable, "s", "time; null for a quasi-static record";
+    DISPLACEMENT_M: "displacement_m", F64, required, "m", "measured displacement";
+    FORCE_MEASURED_N: "force_measured_n", F64, required, "N", "measured restoring force";
+    FORCE_FITTED_N: "force_fitted_n", F64, required, "N", "force of the identified model (the chosen form) along the measured displacement";
+    FORCE_PLAIN_N: "force_plain_n", F64, required, "N", "force of the plain Bouc–Wen fit (equal to `force_fitted_n` when plain is chosen)";
+});
+
+declare!(LAB_CYCLES, lab_cycles, "lab_cycles", "lab_cycles.parquet",
+    "one row per lab record and displacement cycle: dissipated energy measured and fitted", {
+    RECORD: "record", Utf8, required, "", "the lab record";
+    CYCLE: "cycle", U32, required, "", "cycle, 1-based (displacement maximum to the next)";
+    START_STEP: "start_step", U32, required, "", "first sample of the cycle";
+    END_STEP: "end_step", U32, required, "", "last sample of the cycle";
+    AMPLITUDE_M: "amplitude_m", F64, required, "m", "peak-to-peak displacement within the cycle";
+    ENERGY_MEASURED_J: "energy_measured_j", F64, required, "J", "∮ F dx of the measured force over the cycle";
+    ENERGY_FITTED_J: "energy_fitted_j", F64, required, "J", "∮ F dx of the fitted force over the cycle";
+    ENERGY_ERROR: "energy_error", F64, required, "1", "(fitted − measured) / |measured|";
+});
+
 /// Every table quaketwin writes, in pipeline order.
 pub const ALL_TABLES: &[&TableSchema] = &[
     &EVENT,
@@ -607,6 +657,9 @@ pub const ALL_TABLES: &[&TableSchema] = &[
     &BOUC_WEN_INSTANTANEOUS,
     &HYSTERESIS_FIT,
     &DAMAGE,
+    &LAB_IDENTIFICATION,
+    &LAB_FIT,
+    &LAB_CYCLES,
     &TWIN_UPDATE,
     &TWIN_MODES,
     &ACTUATOR_LAYOUT,

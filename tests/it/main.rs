@@ -44,6 +44,7 @@ mod hysteresis_partial;
 mod hysteresis_real;
 mod hysteresis_verdict;
 mod hysteresis_window;
+mod lab;
 mod metrics;
 mod modal;
 mod modal_buildings;

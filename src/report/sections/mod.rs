@@ -13,6 +13,7 @@ mod drift;
 mod event;
 mod fourier;
 mod hysteresis;
+mod lab;
 mod layout;
 mod loops;
 mod modal;
@@ -43,7 +44,7 @@ pub use loops::segment_levels;
 /// the page calls it (every table of `vocab::tables`, the run's JSON/TOML
 /// files and the page itself).  File names appear on the page only in the
 /// appendix; sections name an output in words.
-const OUTPUTS: [(&str, &str, &str); 31] = [
+const OUTPUTS: [(&str, &str, &str); 34] = [
     ("event.json", "ingest", "event inventory"),
     (tables::SAMPLES.file, "condition", "conditioned records"),
     (
@@ -133,6 +134,21 @@ const OUTPUTS: [(&str, &str, &str); 31] = [
         tables::COMPARE_TEST.file,
         "compare-test",
         "logged and rehearsed time histories",
+    ),
+    (
+        tables::LAB_IDENTIFICATION.file,
+        "lab_hysteresis",
+        "lab specimen identification",
+    ),
+    (
+        tables::LAB_FIT.file,
+        "lab_hysteresis",
+        "lab force–displacement loops",
+    ),
+    (
+        tables::LAB_CYCLES.file,
+        "lab_hysteresis",
+        "lab dissipated energy per cycle",
     ),
     ("report.html", "report", "this report"),
 ];
@@ -399,6 +415,9 @@ pub fn page(dir: &Path, settings: &ReportSettings) -> String {
     let event = event::read_event(dir);
     if test_design::applies(dir) {
         return test_design::page(dir, &event, settings);
+    }
+    if lab::applies(dir) {
+        return lab::page(dir, &event, settings);
     }
     let channels = load(dir, &tables::CHANNELS, None);
     let time_axis = time_axis(&channels);

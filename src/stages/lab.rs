@@ -1,0 +1,98 @@
+//! `lab_hysteresis`: the hysteresis of a laboratory specimen identified
+//! from its measured displacement and force (issue 37; numerical work in
+//! `crate::lab`, records read by `crate::event_folder::lab`). Writes
+//! `lab_identification.parquet`, `lab_fit.parquet` and `lab_cycles.parquet`
+//! (`crate::sinks::lab_tables`); the report's lab section reads them.
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::event_folder::lab::load_lab;
+use crate::lab::{history_of, identify_specimen, LabIdentifySettings, SpecimenIdentification};
+use crate::pipeline::{Product, RunContext, Stage, StageKind, StageSource};
+use crate::sinks::lab_tables::{
+    write_lab_cycles, write_lab_fit, write_lab_identification, LabOutcome,
+};
+use crate::vocab::tables::{LAB_CYCLES, LAB_FIT, LAB_IDENTIFICATION};
+use crate::vocab::LabRecord;
+
+pub const KIND: StageKind = StageKind {
+    kind: "lab_hysteresis",
+    needs: &[],
+    provides: None,
+    reads_all_earlier: false,
+    build,
+};
+
+/// The stage's output files.
+pub const LAB_FILES: [&str; 3] = [LAB_IDENTIFICATION.file, LAB_FIT.file, LAB_CYCLES.file];
+
+fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
+    let settings: LabIdentifySettings = src.params()?;
+    settings.check().map_err(|e| {
+        Error::usage(format!(
+            "{}: stage {:?} (lab_hysteresis): params: {e}",
+            src.file(),
+            src.decl.name
+        ))
+    })?;
+    Ok(Box::new(LabHysteresis { settings }))
+}
+
+struct LabHysteresis {
+    settings: LabIdentifySettings,
+}
+
+/// Identifies every lab record of the event at `event` and writes the three
+/// tables into `out_dir`; returns the records and their identifications.
+pub fn identify_lab_event(
+    event: &Path,
+    settings: &LabIdentifySettings,
+    out_dir: &Path,
+) -> Result<Vec<(LabRecord, SpecimenIdentification)>> {
+    let records = load_lab(event)?;
+    let mut done = Vec::with_capacity(records.len());
+    for record in records {
+        let id = identify_specimen(&history_of(&record)?, settings)
+            .map_err(|e| Error::usage(format!("lab record {:?}: {e}", record.name)))?;
+        done.push((record, id));
+    }
+    let histories: Vec<_> = done
+        .iter()
+        .map(|(r, _)| history_of(r))
+        .collect::<Result<Vec<_>>>()?;
+    let outcomes: Vec<LabOutcome<'_>> = done
+        .iter()
+        .zip(&histories)
+        .map(|((r, id), h)| LabOutcome {
+            record: &r.name,
+            displacement_m: h.displacement_m,
+            force_n: h.force_n,
+            time_s: h.time_s,
+            identification: id,
+        })
+        .collect();
+    write_lab_identification(&out_dir.join(LAB_IDENTIFICATION.file), &outcomes, settings)?;
+    write_lab_fit(&out_dir.join(LAB_FIT.file), &outcomes)?;
+    write_lab_cycles(&out_dir.join(LAB_CYCLES.file), &outcomes)?;
+    Ok(done)
+}
+
+impl Stage for LabHysteresis {
+    fn outputs(&self) -> Vec<String> {
+        LAB_FILES.iter().map(|s| s.to_string()).collect()
+    }
+    fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
+        let done = identify_lab_event(&ctx.event_path.clone(), &self.settings, &ctx.out_dir)?;
+        for (r, id) in &done {
+            ctx.info(format!(
+                "lab_hysteresis: {}: {} form, force NRMSE {:.4} ({})",
+                r.name,
+                id.form.name(),
+                id.force_nrmse,
+                id.form_reason
+            ));
+        }
+        Ok(None)
+    }
+}
