@@ -92,6 +92,13 @@ pub fn synth_hybrid_log(
     let actuator = settings.test.actuator(model.actuator_band_hz);
     actuator.check()?;
     let (summary, h) = run_recorded(&model, &settings.test, &actuator, lam, substeps, 0, Some(1))?;
+    if !summary.stable {
+        // A diverged test has no log worth comparing (its last steps are not finite).
+        return Err(Error::numerical(format!(
+            "synth-hybrid-log: the emulated test diverged at {} s of simulation time (λ = {lam}, {substeps} steps per motion step): choose a larger λ or another specimen",
+            summary.divergence_time_s.unwrap_or(f64::NAN)
+        )));
+    }
     let dt = model.dt / substeps as f64;
     let n = h.time_s.len();
     let log = HybridLog {
