@@ -705,6 +705,81 @@ pub fn rehearse(
     crate::stages::rehearse::rehearse_design_output(design_out, &s, out)
 }
 
+/// `quaketwin compare-test DESIGN_OUT TEST_RECORDS --out DIR` (docs/lab-tests.md).
+pub fn compare_test(
+    design_out: &Path,
+    test_records: &Path,
+    out: &Path,
+    settings: Option<&Path>,
+    time_scale: Option<f64>,
+    max_lag_s: f64,
+    update_specimen: bool,
+) -> Result<crate::stages::compare_test::CompareTestSummary> {
+    use crate::error::Error;
+    if let Some(l) = time_scale.filter(|l| !(*l > 0.0 && l.is_finite())) {
+        return Err(Error::usage(format!("--time-scale {l}: must be positive")));
+    }
+    let most = crate::rehearse::actuator::MAX_DELAY_S;
+    if !(max_lag_s > 0.0 && max_lag_s <= most) {
+        return Err(Error::usage(format!(
+            "--max-lag {max_lag_s}: must lie in (0, {most}] s"
+        )));
+    }
+    let rehearsal = crate::stages::compare_test::rehearsal_settings(design_out, settings)?;
+    rehearsal.check("rehearsal settings")?;
+    let s = crate::hybrid_test::CompareSettings {
+        rehearsal,
+        time_scale,
+        max_lag_s,
+        update_specimen,
+    };
+    crate::stages::compare_test::compare_test(design_out, test_records, out, s)
+}
+
+/// The flags of `quaketwin synth-hybrid-log`.
+#[derive(Debug, Clone, Default)]
+pub struct HybridLogFlags {
+    pub settings: Option<std::path::PathBuf>,
+    pub time_scale: Option<f64>,
+    pub substeps: Option<usize>,
+    pub duration_s: Option<f64>,
+    pub delay_s: Option<f64>,
+    pub bandwidth_hz: Option<f64>,
+    pub noise_m: Option<f64>,
+    pub force_noise_n: Option<f64>,
+    pub seed: Option<u64>,
+}
+
+/// `quaketwin synth-hybrid-log DESIGN_OUT --out DIR`.
+pub fn synth_hybrid_log(
+    design_out: &Path,
+    out: &Path,
+    f: &HybridLogFlags,
+) -> Result<(
+    crate::synth::hybrid_log::HybridLogTruth,
+    Vec<std::path::PathBuf>,
+)> {
+    use crate::error::Error;
+    let mut s = crate::synth::hybrid_log::HybridLogSettings::default();
+    if let Some(p) = &f.settings {
+        let text = crate::input_file::read_to_string(p, crate::input_file::MAX_SETTINGS_BYTES)?;
+        s.test = toml::from_str(&text)
+            .map_err(|e| Error::usage(format!("{}: bad test settings: {e}", p.display())))?;
+    }
+    s.time_scale = f.time_scale;
+    s.substeps = f.substeps;
+    s.duration_s = f.duration_s;
+    let t = &mut s.test;
+    t.delay_s = f.delay_s.unwrap_or(t.delay_s);
+    t.bandwidth_hz = f.bandwidth_hz.or(t.bandwidth_hz);
+    t.displacement_noise_m = f.noise_m.unwrap_or(t.displacement_noise_m);
+    t.force_noise_n = f.force_noise_n.unwrap_or(t.force_noise_n);
+    t.seed = f.seed.unwrap_or(t.seed);
+    // Flags named in errors: the settings' keys are these flags' values.
+    t.check("synth-hybrid-log flags (--delay, --bandwidth, --noise, --force-noise)")?;
+    crate::stages::compare_test::write_synth_hybrid_log(design_out, out, &s)
+}
+
 /// Expands the EVENT arguments: a folder with no manifest whose
 /// sub-folders each hold an `event.toml` is a folder of event folders.
 pub fn expand_events(events: &[std::path::PathBuf]) -> Vec<std::path::PathBuf> {

@@ -19,6 +19,7 @@ pub mod flags;
 pub mod geometry;
 pub mod hash;
 pub mod history;
+pub mod hybrid_test;
 pub mod hysteresis;
 pub mod in_memory;
 pub mod input_file;

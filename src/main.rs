@@ -208,6 +208,74 @@ enum Command {
         #[arg(long, value_delimiter = ',', value_name = "L1,L2,…")]
         time_scales: Option<Vec<f64>>,
     },
+    /// Compare a pseudo-dynamic or real-time hybrid test's log with the rehearsal of its design
+    /// and with the twin: tracking error, identified actuator lag and noise, energy error,
+    /// response; then update the specimen and actuator models from the log and re-run the
+    /// rehearsal (docs/lab-tests.md).
+    #[command(after_help = "Examples:
+  quaketwin compare-test out/design lab/hybrid_log.csv --out out/compare
+  quaketwin synth-hybrid-log out/design --out out/log --duration 2 --substeps 20
+  quaketwin compare-test out/design out/log --out out/compare --json")]
+    CompareTest {
+        /// Output directory of a design run (holds rehearsal_model.json).
+        design_out: PathBuf,
+        /// The test's log: a CSV file, or a folder holding hybrid_log.csv (format: docs/lab-tests.md).
+        test_records: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Rehearsal settings (TOML, the `rehearse` stage's params; default: the design run's).
+        #[arg(long, value_name = "FILE")]
+        settings: Option<PathBuf>,
+        /// Time scale λ of a log without a lab_time_s column.
+        #[arg(long, value_name = "LAMBDA")]
+        time_scale: Option<f64>,
+        /// Longest actuator lag searched (s, laboratory time).
+        #[arg(long, default_value_t = 1.0, value_name = "SECONDS")]
+        max_lag: f64,
+        /// Skip the specimen update and the updated rehearsal.
+        #[arg(long)]
+        no_update: bool,
+    },
+    /// Generate a synthetic hybrid-test log of a design run: its rehearsal with a known
+    /// actuator (servo, delay, noise; seeded) logged at every step, with truth.json.
+    #[command(after_help = "Examples:
+  quaketwin synth-hybrid-log out/design --out out/log
+  quaketwin synth-hybrid-log out/design --out out/log --duration 2 --substeps 20 --delay 0.008 --noise 2e-8 --seed 7")]
+    SynthHybridLog {
+        /// Output directory of a design run (holds rehearsal_model.json).
+        design_out: PathBuf,
+        /// Directory to write hybrid_log.csv and truth.json into.
+        #[arg(long)]
+        out: PathBuf,
+        /// The emulated test's settings (TOML, the `rehearse` stage's params: servo, bouc_wen, …); the flags below override it.
+        #[arg(long, value_name = "FILE")]
+        settings: Option<PathBuf>,
+        /// Time scale λ (default: the design's).
+        #[arg(long, value_name = "LAMBDA")]
+        time_scale: Option<f64>,
+        /// Integration steps per motion step (default: the rehearsal's automatic choice).
+        #[arg(long, value_name = "N")]
+        substeps: Option<usize>,
+        /// Simulation time logged (s; default: the design's whole motion).
+        #[arg(long, value_name = "SECONDS")]
+        duration: Option<f64>,
+        /// Pure delay of the actuators (s, laboratory time).
+        #[arg(long, value_name = "SECONDS")]
+        delay: Option<f64>,
+        /// Servo bandwidth (Hz; default: the design's actuator band).
+        #[arg(long, value_name = "HZ")]
+        bandwidth: Option<f64>,
+        /// Standard deviation of the displacement measurement noise (m).
+        #[arg(long, value_name = "METRES")]
+        noise: Option<f64>,
+        /// Standard deviation of the load-cell noise (N).
+        #[arg(long, value_name = "NEWTONS")]
+        force_noise: Option<f64>,
+        /// Seed of the noise.
+        #[arg(long)]
+        seed: Option<u64>,
+    },
     /// Generate the synthetic sample events (known model, with truth files).
     #[command(after_help = "Examples:
   quaketwin synth
@@ -745,6 +813,84 @@ fn run_command(cli: &Cli) -> Result<()> {
             out,
             scheduler,
         } => commands::fleet(pipeline, events, out, scheduler.as_deref(), quiet),
+        Command::CompareTest {
+            design_out,
+            test_records,
+            out,
+            settings,
+            time_scale,
+            max_lag,
+            no_update,
+        } => {
+            let s = commands::compare_test(
+                design_out,
+                test_records,
+                out,
+                settings.as_deref(),
+                *time_scale,
+                *max_lag,
+                !*no_update,
+            )?;
+            console::info(format!(
+                "compare-test: λ = {}, {} steps × {} actuators; lag {:.4} s, noise {:.3e} m; tracking RMS logged {:.3e} m, rehearsal {:.3e} m; energy error logged {:.3}, rehearsal {:.3}; wrote {}",
+                s.time_scale,
+                s.steps,
+                s.actuators,
+                s.lag_s,
+                s.noise_std_m,
+                s.logged_tracking_rms_m,
+                s.rehearsal_tracking_rms_m,
+                s.logged_energy_error,
+                s.rehearsal_energy_error,
+                out.display()
+            ));
+            if let Some(f) = &s.specimen_failure {
+                console::info(format!("compare-test: specimen not updated: {f}"));
+            }
+            print_json(json, &s)
+        }
+        Command::SynthHybridLog {
+            design_out,
+            out,
+            settings,
+            time_scale,
+            substeps,
+            duration,
+            delay,
+            bandwidth,
+            noise,
+            force_noise,
+            seed,
+        } => {
+            let flags = commands::HybridLogFlags {
+                settings: settings.clone(),
+                time_scale: *time_scale,
+                substeps: *substeps,
+                duration_s: *duration,
+                delay_s: *delay,
+                bandwidth_hz: *bandwidth,
+                noise_m: *noise,
+                force_noise_n: *force_noise,
+                seed: *seed,
+            };
+            let (truth, files) = commands::synth_hybrid_log(design_out, out, &flags)?;
+            console::info(format!(
+                "synth-hybrid-log: λ = {}, {} steps of {} s; lag {:.4} s (servo {} {} Hz, delay {} s), noise {:e} m; wrote {}",
+                truth.time_scale,
+                truth.steps,
+                truth.dt_s,
+                truth.lag_s,
+                truth.servo,
+                truth.bandwidth_hz,
+                truth.delay_s,
+                truth.displacement_noise_m,
+                out.display()
+            ));
+            print_json(
+                json,
+                &serde_json::json!({ "truth": truth, "written": files }),
+            )
+        }
         Command::Rehearse {
             design_out,
             out,

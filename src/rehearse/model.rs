@@ -316,6 +316,24 @@ impl RehearsalModel {
         Ok(out)
     }
 
+    /// The same hybrid system under the first `steps` samples of its base motion (and of the
+    /// reference): a test logged over part of the motion is compared over that part.
+    pub fn truncated(&self, steps: usize) -> Result<RehearsalModel> {
+        if !(2..=self.steps()).contains(&steps) {
+            return Err(Error::usage(format!(
+                "rehearsal: {steps} base-motion steps requested, the design's motion has {} (at least 2 are needed)",
+                self.steps()
+            )));
+        }
+        let cut =
+            |a: &[Vec<f64>]| -> Vec<Vec<f64>> { a.iter().map(|r| r[..steps].to_vec()).collect() };
+        Ok(RehearsalModel {
+            accelerations: cut(&self.accelerations),
+            reference: cut(&self.reference),
+            ..self.clone()
+        })
+    }
+
     /// Eigenfrequencies of (K̂, M̂), ascending (Hz).
     pub fn eigenfrequencies_hz(&self) -> Result<Vec<f64>> {
         let k = mat(&self.stiffness);

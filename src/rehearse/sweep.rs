@@ -41,6 +41,8 @@ pub struct RunSummary {
     /// Per actuator: RMS and max |command − achieved| (m).
     pub tracking_rms_m: Vec<f64>,
     pub tracking_max_m: Vec<f64>,
+    /// max_t |E_in(t)|, the ground motion's input energy (J): the energy error's denominator.
+    pub max_input_energy_j: f64,
     pub safe: bool,
 }
 
@@ -108,7 +110,8 @@ pub fn auto_substeps(model: &RehearsalModel) -> usize {
     ((w * model.dt).ceil() as usize).max(1)
 }
 
-/// One rehearsal of `model` at time scale λ; `stream` seeds its noise; histories when `record`.
+/// One rehearsal of `model` at time scale λ; `stream` seeds its noise; histories (at the
+/// base-motion steps) when `record`.
 pub fn run(
     model: &RehearsalModel,
     settings: &RehearseSettings,
@@ -118,6 +121,26 @@ pub fn run(
     stream: u64,
     record: bool,
 ) -> Result<(RunSummary, Histories)> {
+    let every = record.then_some(substeps);
+    run_recorded(
+        model, settings, actuator, time_scale, substeps, stream, every,
+    )
+}
+
+/// [`run`] with histories every `record_every` simulation steps (`Some(1)`: every step, what
+/// a pseudo-dynamic test's controller logs — `crate::synth::hybrid_log`, `crate::hybrid_test`);
+/// None: no histories.
+pub fn run_recorded(
+    model: &RehearsalModel,
+    settings: &RehearseSettings,
+    actuator: &ActuatorModel,
+    time_scale: f64,
+    substeps: usize,
+    stream: u64,
+    record_every: Option<usize>,
+) -> Result<(RunSummary, Histories)> {
+    let record = record_every.is_some();
+    let every = record_every.unwrap_or(substeps).max(1);
     let n = model.n_coordinates();
     let (o, m) = (model.ns_modes, model.actuators.len());
     let k_hat = mat(&model.stiffness);
@@ -220,6 +243,7 @@ pub fn run(
         h.command = d_g.iter().map(|d| vec![*d]).collect();
         h.achieved = h.command.clone();
         h.force = r_g.iter().map(|r| vec![*r]).collect();
+        h.response = vec![vec![0.0]; m];
     }
     let mut diverged = None;
     let total = (steps - 1) * substeps;
@@ -244,15 +268,18 @@ pub fn run(
         dc0.copy_from_slice(&command);
         dm0.copy_from_slice(&spec.measured);
         (f_n, fd_n) = (f_next, fd_next);
+        // The seismic response: total displacement less the static one (the reference's).
+        let observe = |x: &[f64], a: usize| -> f64 {
+            model.observation[a]
+                .iter()
+                .zip(x)
+                .map(|(p, x)| p * x)
+                .sum::<f64>()
+                - y_g[a]
+        };
         if (j + 1) % substeps == 0 {
-            // The seismic response: total displacement less the static one (the reference's).
             for (a, ya) in y.iter_mut().enumerate() {
-                *ya = model.observation[a]
-                    .iter()
-                    .zip(&integ.x)
-                    .map(|(p, x)| p * x)
-                    .sum::<f64>()
-                    - y_g[a];
+                *ya = observe(&integ.x, a);
             }
             let t = (j + 1) as f64 * dt;
             if y.iter().any(|v| !v.is_finite() || v.abs() > limit) {
@@ -262,13 +289,14 @@ pub fn run(
             for a in 0..m {
                 response[a].push(y[a]);
             }
-            if record {
-                h.time_s.push(t);
-                for a in 0..m {
-                    h.command[a].push(command[a]);
-                    h.achieved[a].push(spec.measured[a]);
-                    h.force[a].push(r1[a]);
-                }
+        }
+        if record && (j + 1) % every == 0 {
+            h.time_s.push((j + 1) as f64 * dt);
+            for a in 0..m {
+                h.command[a].push(command[a]);
+                h.achieved[a].push(spec.measured[a]);
+                h.force[a].push(r1[a]);
+                h.response[a].push(observe(&integ.x, a));
             }
         }
     }
@@ -278,9 +306,6 @@ pub fn run(
         let got = mat(&response);
         wnrmse(reference.as_ref(), got.as_ref()).0
     });
-    if record {
-        h.response = response;
-    }
     let top = model.top_frequency_hz();
     let safe = response_wnrmse.is_some_and(|w| w <= settings.response_tolerance)
         && energy.error() <= settings.energy_tolerance;
@@ -296,6 +321,7 @@ pub fn run(
             response_wnrmse,
             tracking_rms_m: sum_sq.iter().map(|s| (s / done).sqrt()).collect(),
             tracking_max_m: max_e,
+            max_input_energy_j: energy.max_input,
             safe,
         },
         h,

@@ -4,6 +4,7 @@
 pub mod assessment_tables;
 pub mod atomic;
 pub mod change_tables;
+pub mod compare_test_tables;
 pub mod dataset;
 pub mod design_tables;
 pub mod event_tables;

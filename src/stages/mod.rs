@@ -8,6 +8,7 @@
 
 pub mod assess;
 pub mod change;
+pub mod compare_test;
 pub mod condition;
 pub mod design;
 pub mod hysteresis;

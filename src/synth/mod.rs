@@ -28,6 +28,7 @@ pub mod csmip_writer;
 pub mod event;
 pub mod facade;
 pub mod ground_motion;
+pub mod hybrid_log;
 pub mod lab_specimen;
 pub mod plan;
 pub mod realistic;

@@ -416,6 +416,57 @@ declare!(REHEARSAL_SUMMARY, rehearsal_summary, "rehearsal_summary", "rehearsal_s
     RECOMMENDED: "recommended", Bool, required, "", "the smallest safe λ at the design's NS mode count";
 });
 
+declare!(COMPARE_TEST_SUMMARY, compare_test_summary, "compare_test_summary", "compare_test_summary.parquet",
+    "a logged hybrid test against its rehearsal and its twin (`quaketwin compare-test`): one row for the log, one for the design's rehearsal, one for the rehearsal updated from the log", {
+    SOURCE: "source", Utf8, required, "", "`logged`, `rehearsal` (the design's rehearsal settings at the log's λ and step) or `updated rehearsal` (identified actuator and specimen)";
+    TIME_SCALE: "time_scale", F64, required, "1", "time scale λ (laboratory time / simulation time), the log's";
+    LAG_S: "lag_s", F64, nullable, "s", "actuator lag in laboratory time: identified from the log (equivalent pure delay), or the model's low-frequency group delay (delay + servo lag)";
+    NOISE_STD_M: "noise_std_m", F64, required, "m", "displacement measurement noise: identified (residual after the lag model), or the model's";
+    POOLED_TRACKING_RMS_M: "pooled_tracking_rms_m", F64, required, "m", "RMS of command − measured over steps and actuators (√ of the mean of the per-actuator mean squares)";
+    MAX_TRACKING_ERROR_M: "max_tracking_error_m", F64, required, "m", "largest |command − measured| over actuators and steps";
+    ENERGY_ERROR: "energy_error", F64, required, "1", "max |spurious energy| / max |input energy| (Mosqueda energy balance; the input energy of the rehearsal of the same motion)";
+    COMMAND_WNRMSE: "command_wnrmse", F64, nullable, "1", "WNRMSE (Eq. 84) of the commanded displacements against the log's (null for the log itself or a diverged run)";
+    FORCE_WNRMSE: "force_wnrmse", F64, nullable, "1", "WNRMSE of the restoring forces against the log's";
+    RESPONSE_WNRMSE: "response_wnrmse", F64, nullable, "1", "WNRMSE of the actuated DoFs' response against the log's `response_m` (null when not logged)";
+    TWIN_WNRMSE: "twin_wnrmse", F64, nullable, "1", "WNRMSE of the actuated DoFs' response against the twin (the full model, `reference` of the rehearsal model) at the motion's steps";
+    STABLE: "stable", Bool, required, "", "the run did not diverge (the log: true)";
+    DIVERGENCE_TIME_S: "divergence_time_s", F64, nullable, "s", "simulation time of a rehearsal's divergence";
+});
+
+declare!(COMPARE_TEST_ACTUATORS, compare_test_actuators, "compare_test_actuators", "compare_test_actuators.parquet",
+    "one row per actuator of a compared hybrid test: tracking error logged and predicted, identified lag and noise", {
+    ACTUATOR: "actuator", U32, required, "", "1-based actuator number (as in `actuator_layout.parquet`)";
+    NODE_ID: "node_id", I64, required, "", "twin node id of the actuated DoF";
+    DIRECTION: "direction", Utf8, required, "", "DoF name";
+    LOGGED_TRACKING_RMS_M: "logged_tracking_rms_m", F64, required, "m", "RMS of the log's command − measured";
+    LOGGED_TRACKING_MAX_M: "logged_tracking_max_m", F64, required, "m", "peak |command − measured| in the log";
+    LAG_S: "lag_s", F64, nullable, "s", "this actuator's lag identified alone (null when its command does not move)";
+    NOISE_STD_M: "noise_std_m", F64, nullable, "m", "this actuator's noise identified alone";
+    REHEARSAL_TRACKING_RMS_M: "rehearsal_tracking_rms_m", F64, required, "m", "RMS of command − measured predicted by the rehearsal";
+    REHEARSAL_TRACKING_MAX_M: "rehearsal_tracking_max_m", F64, required, "m", "peak |command − measured| predicted by the rehearsal";
+    UPDATED_TRACKING_RMS_M: "updated_tracking_rms_m", F64, nullable, "m", "the same from the updated rehearsal (null when not run)";
+    UPDATED_TRACKING_MAX_M: "updated_tracking_max_m", F64, nullable, "m", "peak from the updated rehearsal";
+});
+
+declare!(series COMPARE_TEST, compare_test, "compare_test", "compare_test.parquet",
+    "time histories of a compared hybrid test, one row per logged step and actuator: logged, rehearsed, updated, and the twin", {
+    STEP: "step", U32, required, "", "integration step of the log (0: the state the test starts from)";
+    TIME_S: "time_s", F64, required, "s", "simulation time (laboratory time = λ × this)";
+    ACTUATOR: "actuator", U32, required, "", "1-based actuator number";
+    COMMAND_M: "command_m", F64, required, "m", "logged commanded displacement";
+    MEASURED_M: "measured_m", F64, required, "m", "logged measured displacement";
+    FORCE_N: "force_n", F64, required, "N", "logged restoring force";
+    RESPONSE_M: "response_m", F64, nullable, "m", "logged response of the actuated DoF relative to the base (null when not logged)";
+    REHEARSAL_COMMAND_M: "rehearsal_command_m", F64, nullable, "m", "the rehearsal's command (null after a divergence)";
+    REHEARSAL_MEASURED_M: "rehearsal_measured_m", F64, nullable, "m", "the rehearsal's measured displacement";
+    REHEARSAL_FORCE_N: "rehearsal_force_n", F64, nullable, "N", "the rehearsal's restoring force";
+    REHEARSAL_RESPONSE_M: "rehearsal_response_m", F64, nullable, "m", "the rehearsal's response";
+    UPDATED_COMMAND_M: "updated_command_m", F64, nullable, "m", "the updated rehearsal's command (null when not run)";
+    UPDATED_MEASURED_M: "updated_measured_m", F64, nullable, "m", "the updated rehearsal's measured displacement";
+    UPDATED_FORCE_N: "updated_force_n", F64, nullable, "N", "the updated rehearsal's restoring force";
+    REFERENCE_M: "reference_m", F64, nullable, "m", "the twin's response there (at the motion's steps; null between them)";
+});
+
 declare!(MODAL_TRACKING, modal_tracking, "modal_tracking", "modal_tracking.parquet",
     "one row per window of a continuous record and tracked mode: frequency, damping, MAC to the reference shape, quality and the anomaly band (`quaketwin track`, docs/monitoring.md)", {
     WINDOW_START: "window_start", TimestampNsUtc, required, "", "start of the window (UTC)";
@@ -650,6 +701,9 @@ pub const ALL_TABLES: &[&TableSchema] = &[
     &HYBRID_PROTOTYPE,
     &REHEARSAL_SUMMARY,
     &REHEARSAL,
+    &COMPARE_TEST_SUMMARY,
+    &COMPARE_TEST_ACTUATORS,
+    &COMPARE_TEST,
     &FREQUENCY_TRACK,
     &ASSESSMENT,
     &MODAL_TRACKING,

@@ -3,23 +3,13 @@
 //! command and a description for every flag (docs/cli.md).
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
+use crate::common::{os, quaketwin};
 use serde_json::Value;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn quaketwin(args: &[&std::ffi::OsStr]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_quaketwin"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn os<P: AsRef<std::ffi::OsStr> + ?Sized>(p: &P) -> &std::ffi::OsStr {
-    p.as_ref()
 }
 
 fn stdout_json(o: &Output) -> Value {

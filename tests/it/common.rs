@@ -42,6 +42,19 @@ pub fn run_sample_pipeline(
     );
 }
 
+/// The CLI binary run with `args` (its output captured).
+pub fn quaketwin(args: &[&std::ffi::OsStr]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_quaketwin"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Any path or string as a command-line argument.
+pub fn os<P: AsRef<std::ffi::OsStr> + ?Sized>(p: &P) -> &std::ffi::OsStr {
+    p.as_ref()
+}
+
 /// The files of an output directory, sorted, without its lock.
 pub fn output_files(dir: &std::path::Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)

@@ -24,6 +24,7 @@ mod buildings;
 mod change_test;
 mod child;
 mod cli_output;
+mod compare_test;
 mod conditioning;
 mod dashboard;
 mod dataset;

@@ -148,8 +148,9 @@ fn formats_md_lists_every_declared_column_with_its_type_and_unit() {
     assert!(wrong.is_empty(), "docs/formats.md:\n{}", wrong.join("\n"));
 }
 
-/// Tables of the hybrid-test design, whose provenance is the design file.
-const DESIGN_TABLES: [&str; 7] = [
+/// Tables of the hybrid-test design, whose provenance is the design file (and, for the
+/// comparison of a hybrid test with its rehearsal, the design run and the test's log).
+const DESIGN_TABLES: [&str; 10] = [
     "actuator_layout",
     "pod",
     "reduction_validation",
@@ -157,6 +158,9 @@ const DESIGN_TABLES: [&str; 7] = [
     "hybrid_prototype",
     "rehearsal_summary",
     "rehearsal",
+    "compare_test_summary",
+    "compare_test_actuators",
+    "compare_test",
 ];
 
 /// Tables of a structure's history, made from a dataset of many events:
@@ -324,12 +328,47 @@ fn every_table_of_the_sample_runs_matches_its_declaration() {
             .is_some_and(|h| h.contains("\"history\"")));
     }
 
+    // compare_test*.parquet: a short synthetic log of the facade design compared with its
+    // rehearsal (the design run's rehearsal settings, read back from its summary).
+    let lab = tempfile::tempdir().unwrap();
+    let log_settings = quaketwin::synth::hybrid_log::HybridLogSettings {
+        duration_s: Some(0.5),
+        substeps: Some(20),
+        ..Default::default()
+    };
+    quaketwin::stages::compare_test::write_synth_hybrid_log(
+        design.path(),
+        lab.path(),
+        &log_settings,
+    )
+    .unwrap();
+    let compared = lab.path().join("compare");
+    let compare_settings = quaketwin::hybrid_test::CompareSettings {
+        rehearsal: quaketwin::stages::compare_test::rehearsal_settings(design.path(), None)
+            .unwrap(),
+        ..Default::default()
+    };
+    quaketwin::stages::compare_test::compare_test(
+        design.path(),
+        lab.path(),
+        &compared,
+        compare_settings,
+    )
+    .unwrap();
+
     check_mode_shapes(quake.path());
     check_samples_time(quake.path());
     check_ascii_segments(quake.path());
 
     let mut seen = BTreeSet::new();
-    for dir in [quake.path(), design.path(), &out, &track, &history] {
+    for dir in [
+        quake.path(),
+        design.path(),
+        &out,
+        &track,
+        &history,
+        &compared,
+    ] {
         check_outputs(dir, &mut seen);
     }
     let never: Vec<&str> = ALL_TABLES

@@ -6,6 +6,7 @@ mod actuators;
 mod appendix;
 pub(crate) mod assessment;
 mod channels;
+mod compare_test;
 mod damage;
 mod design;
 mod drift;
@@ -43,7 +44,7 @@ pub use loops::segment_levels;
 /// the page calls it (every table of `vocab::tables`, the run's JSON/TOML
 /// files and the page itself).  File names appear on the page only in the
 /// appendix; sections name an output in words.
-const OUTPUTS: [(&str, &str, &str); 31] = [
+const OUTPUTS: [(&str, &str, &str); 34] = [
     ("event.json", "ingest", "event inventory"),
     (tables::SAMPLES.file, "condition", "conditioned records"),
     (
@@ -118,6 +119,21 @@ const OUTPUTS: [(&str, &str, &str); 31] = [
         tables::REHEARSAL.file,
         "rehearse",
         "rehearsal time histories",
+    ),
+    (
+        tables::COMPARE_TEST_SUMMARY.file,
+        "compare-test",
+        "hybrid test against its rehearsal",
+    ),
+    (
+        tables::COMPARE_TEST_ACTUATORS.file,
+        "compare-test",
+        "tracking per actuator",
+    ),
+    (
+        tables::COMPARE_TEST.file,
+        "compare-test",
+        "logged and rehearsed time histories",
     ),
     (
         tables::LAB_IDENTIFICATION.file,
@@ -393,6 +409,9 @@ pub fn assessments(dir: &Path, settings: &ReportSettings) -> Vec<Assessment> {
 pub fn page(dir: &Path, settings: &ReportSettings) -> String {
     // Table checks of an earlier page (or of `assessments`) are not this one's.
     let _ = super::html::take_diagnostics();
+    if compare_test::applies(dir) {
+        return compare_test::page(dir, settings);
+    }
     let event = event::read_event(dir);
     if test_design::applies(dir) {
         return test_design::page(dir, &event, settings);
