@@ -24,11 +24,42 @@ fn settings_meta(settings: &LabIdentifySettings) -> Vec<(String, String)> {
     vec![("quaketwin.lab_settings".into(), format!("{settings:?}"))]
 }
 
+/// Which lab test the tables come from and by which steps (the contract every table made
+/// from an event keeps: `quaketwin.event` and `quaketwin.history`, docs/formats.md):
+/// the records were converted to SI by the lab readers, then identified with `settings`.
+pub fn lab_provenance(
+    event_source: &str,
+    records: &[&str],
+    settings: &LabIdentifySettings,
+) -> Vec<(String, String)> {
+    let name = records.first().copied().unwrap_or(event_source);
+    let event = serde_json::json!({
+        "name": name,
+        "source": event_source,
+        "kind": "lab test",
+        "records": records,
+    });
+    let history = serde_json::json!({
+        "steps": [
+            {"step": "units_to_si", "note": "lab channels converted to SI from their stated or inferred units"},
+            {"step": "lab_identification", "settings": format!("{settings:?}")},
+        ]
+    });
+    vec![
+        (super::provenance::EVENT_KEY.to_string(), event.to_string()),
+        (
+            super::provenance::HISTORY_KEY.to_string(),
+            history.to_string(),
+        ),
+    ]
+}
+
 /// `lab_identification.parquet`.
 pub fn write_lab_identification(
     path: &Path,
     outcomes: &[LabOutcome<'_>],
     settings: &LabIdentifySettings,
+    provenance: &[(String, String)],
 ) -> Result<()> {
     use lab_identification as c;
     let mut rows: Vec<(&LabOutcome<'_>, &crate::lab::ParameterEstimate)> = Vec::new();
@@ -132,11 +163,17 @@ pub fn write_lab_identification(
                 .collect(),
         )
         .build()?;
-    write_parquet(path, &[batch], &settings_meta(settings))
+    let mut meta = settings_meta(settings);
+    meta.extend_from_slice(provenance);
+    write_parquet(path, &[batch], &meta)
 }
 
 /// `lab_fit.parquet`.
-pub fn write_lab_fit(path: &Path, outcomes: &[LabOutcome<'_>]) -> Result<()> {
+pub fn write_lab_fit(
+    path: &Path,
+    outcomes: &[LabOutcome<'_>],
+    provenance: &[(String, String)],
+) -> Result<()> {
     use lab_fit as c;
     let mut record = Vec::new();
     let (mut step, mut t, mut x, mut fm, mut ff, mut fp) = (
@@ -167,11 +204,15 @@ pub fn write_lab_fit(path: &Path, outcomes: &[LabOutcome<'_>]) -> Result<()> {
         .f64(c::FORCE_FITTED_N, ff)
         .f64(c::FORCE_PLAIN_N, fp)
         .build()?;
-    write_parquet(path, &[batch], &[])
+    write_parquet(path, &[batch], provenance)
 }
 
 /// `lab_cycles.parquet`.
-pub fn write_lab_cycles(path: &Path, outcomes: &[LabOutcome<'_>]) -> Result<()> {
+pub fn write_lab_cycles(
+    path: &Path,
+    outcomes: &[LabOutcome<'_>],
+    provenance: &[(String, String)],
+) -> Result<()> {
     use lab_cycles as c;
     let rows: Vec<(&str, usize, &crate::lab::CycleEnergy)> = outcomes
         .iter()
@@ -208,5 +249,5 @@ pub fn write_lab_cycles(path: &Path, outcomes: &[LabOutcome<'_>]) -> Result<()> 
             rows.iter().map(|r| r.2.relative_error()).collect(),
         )
         .build()?;
-    write_parquet(path, &[batch], &[])
+    write_parquet(path, &[batch], provenance)
 }

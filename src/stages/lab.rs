@@ -11,7 +11,7 @@ use crate::event_folder::lab::load_lab;
 use crate::lab::{history_of, identify_specimen, LabIdentifySettings, SpecimenIdentification};
 use crate::pipeline::{Product, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::lab_tables::{
-    write_lab_cycles, write_lab_fit, write_lab_identification, LabOutcome,
+    lab_provenance, write_lab_cycles, write_lab_fit, write_lab_identification, LabOutcome,
 };
 use crate::vocab::tables::{LAB_CYCLES, LAB_FIT, LAB_IDENTIFICATION};
 use crate::vocab::LabRecord;
@@ -72,9 +72,16 @@ pub fn identify_lab_event(
             identification: id,
         })
         .collect();
-    write_lab_identification(&out_dir.join(LAB_IDENTIFICATION.file), &outcomes, settings)?;
-    write_lab_fit(&out_dir.join(LAB_FIT.file), &outcomes)?;
-    write_lab_cycles(&out_dir.join(LAB_CYCLES.file), &outcomes)?;
+    let names: Vec<&str> = done.iter().map(|(r, _)| r.name.as_str()).collect();
+    let provenance = lab_provenance(&event.display().to_string(), &names, settings);
+    write_lab_identification(
+        &out_dir.join(LAB_IDENTIFICATION.file),
+        &outcomes,
+        settings,
+        &provenance,
+    )?;
+    write_lab_fit(&out_dir.join(LAB_FIT.file), &outcomes, &provenance)?;
+    write_lab_cycles(&out_dir.join(LAB_CYCLES.file), &outcomes, &provenance)?;
     Ok(done)
 }
 

@@ -360,6 +360,39 @@ fn every_table_of_the_sample_runs_matches_its_declaration() {
     check_samples_time(quake.path());
     check_ascii_segments(quake.path());
 
+    // lab_*.parquet: a small synthetic specimen test (plain Bouc–Wen, quasi-static protocol)
+    // through the lab stage, its channels inferred from the CSV's header.
+    let lab_event = tempfile::tempdir().unwrap();
+    let t = quaketwin::synth::lab_specimen::reference_bwbn();
+    let truth = quaketwin::lab::BwbnParameters::plain(
+        t.initial_stiffness_n_per_m,
+        t.post_yield_ratio,
+        t.yield_displacement_m,
+        t.beta,
+        t.n,
+    );
+    let protocol = quaketwin::synth::lab_specimen::cyclic_protocol(&[0.005, 0.02, 0.04], 16);
+    let rec = quaketwin::synth::lab_specimen::synthetic_specimen(truth, protocol, 0.0, 5);
+    let mut csv = String::from("step,disp [mm],force [kN]\n");
+    for (i, (x, f)) in rec
+        .displacement_m
+        .iter()
+        .zip(&rec.measured_force_n)
+        .enumerate()
+    {
+        csv.push_str(&format!("{i},{},{}\n", x * 1e3, f * 1e-3));
+    }
+    std::fs::write(lab_event.path().join("test.csv"), csv).unwrap();
+    let lab_out = lab_event.path().join("out");
+    std::fs::create_dir_all(&lab_out).unwrap();
+    let lab_settings = quaketwin::lab::LabIdentifySettings {
+        form: quaketwin::lab::FormChoice::Plain,
+        draws: 8,
+        refined: 1,
+        ..Default::default()
+    };
+    quaketwin::stages::lab::identify_lab_event(lab_event.path(), &lab_settings, &lab_out).unwrap();
+
     let mut seen = BTreeSet::new();
     for dir in [
         quake.path(),
@@ -368,6 +401,7 @@ fn every_table_of_the_sample_runs_matches_its_declaration() {
         &track,
         &history,
         &compared,
+        &lab_out,
     ] {
         check_outputs(dir, &mut seen);
     }
