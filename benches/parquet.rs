@@ -1,4 +1,4 @@
-//! Issue 18: Parquet write throughput of `samples.parquet` for 64 channels
+//! Issue 18: Parquet write throughput of `samples/samples.parquet` for 64 channels
 //! × 1 h × 200 Hz (46.08 M rows: channel id, sample, t, absolute time,
 //! acceleration, velocity, displacement), through the product's writer
 //! (`sinks::event_tables::write_samples`: zstd level 3, series encodings,
@@ -65,7 +65,7 @@ fn event() -> (Event, Vec<Motion>) {
 fn bench_parquet(c: &mut Criterion) {
     let (event, motions) = event();
     let dir = tempfile::tempdir().expect("temporary directory");
-    let path = dir.path().join("samples.parquet");
+    let path = dir.path().join("samples/samples.parquet");
     let id_bytes: usize = event
         .records
         .iter()
@@ -76,7 +76,7 @@ fn bench_parquet(c: &mut Criterion) {
     write_samples(&path, &event, &motions).expect("write");
     let file_bytes = std::fs::metadata(&path).expect("file").len();
     eprintln!(
-        "samples.parquet: {} rows, {:.0} MB of Arrow data, {:.0} MB file",
+        "samples/samples.parquet: {} rows, {:.0} MB of Arrow data, {:.0} MB file",
         CHANNELS * SAMPLES,
         arrow_bytes as f64 / 1e6,
         file_bytes as f64 / 1e6

@@ -69,7 +69,7 @@ def run_event(binary, event, out):
     ]
     if proc.returncode != 0:
         return None, None, warnings or [proc.stderr.strip()[-300:]]
-    ch = pq.read_table(os.path.join(out, "channels.parquet")).to_pylist()
+    ch = pq.read_table(os.path.join(out, "channels/channels.parquet")).to_pylist()
     peak = max(
         (
             c["pga_m_s2"]
@@ -79,7 +79,7 @@ def run_event(binary, event, out):
         ),
         default=None,
     )
-    modes_file = os.path.join(out, "modes.parquet")
+    modes_file = os.path.join(out, "modes/modes.parquet")
     if not os.path.exists(modes_file):  # the modal stage was not applicable
         return peak, [], warnings
     modes = pq.read_table(modes_file).to_pylist()

@@ -78,7 +78,7 @@ def row(binary, pipeline, event, out):
     ev = json.loads((out / "event.json").read_text())
     chans = [c for c in ev.get("channels", []) if not c.get("combines")]
     with_level = sum(1 for c in chans if c.get("level") is not None)
-    modes = table(out / "modes.parquet")
+    modes = table(out / "modes/modes.parquet")
     if modes is None:
         mode_text = ", ".join(
             "%.3f %s" % (m["frequency_hz"], m.get("direction") or "") for m in summary.get("modes", [])
@@ -90,7 +90,7 @@ def row(binary, pipeline, event, out):
             tag = "" if kind in (None, "structural") else " (%s)" % kind
             parts.append("%.3f %s%s" % (m["frequency_hz"], m.get("direction") or "", tag))
         mode_text = ", ".join(parts)
-    drift = table(out / "drift.parquet")
+    drift = table(out / "drift/drift.parquet")
     if drift is None:
         drift_text = "?"
     elif not drift:

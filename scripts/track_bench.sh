@@ -43,7 +43,7 @@ wall=$(grep "Elapsed (wall clock)" "$work/time.txt" | awk '{print $NF}')
 rss=$(grep "Maximum resident" "$work/time.txt" | awk '{print int($NF/1024)}')
 user=$(grep "User time" "$work/time.txt" | awk '{print $NF}')
 echo "track days=$days wall=$wall user_s=$user peak_rss_mb=$rss"
-python3 - "$work/track/modal_tracking.parquet" "$work/arch/truth.csv" "$work/summary.json" <<'PY'
+python3 - "$work/track/modal_tracking/modal_tracking.parquet" "$work/arch/truth.csv" "$work/summary.json" <<'PY'
 import collections, csv, json, sys
 import pyarrow.parquet as pq
 t = pq.read_table(sys.argv[1]).to_pydict()

@@ -518,7 +518,7 @@ pub fn update(
     };
     // `--modes` may name a run's output directory: its modes.parquet.
     let modes = if modes.is_dir() {
-        modes.join(crate::vocab::tables::MODES.file)
+        crate::vocab::tables::MODES.locate(modes)
     } else {
         modes.to_path_buf()
     };

@@ -20,7 +20,18 @@ and ``InputError`` are ``ValueError``\\ s); the library's warnings are
 """
 
 from . import _native
-from ._api import event_partition, hysteresis, inspect, modal, read_event, run, track, update
+from ._api import (
+    event_partition,
+    hysteresis,
+    inspect,
+    locate_table,
+    modal,
+    read_event,
+    run,
+    table_file,
+    track,
+    update,
+)
 from ._errors import (
     InputError,
     PathError,
@@ -48,10 +59,12 @@ __all__ = [
     "event_partition",
     "hysteresis",
     "inspect",
+    "locate_table",
     "modal",
     "read",
     "read_event",
     "run",
+    "table_file",
     "track",
     "update",
 ]

@@ -85,8 +85,8 @@ def run(
     out : str or os.PathLike
         The output directory (made if missing).
     reference : str or os.PathLike, optional
-        An earlier run's output directory (or its ``modes.parquet``): adds
-        ``frequency_shifts.parquet`` (``--reference``).
+        An earlier run's output directory (or its ``modes/modes.parquet``): adds
+        ``frequency_shifts/frequency_shifts.parquet`` (``--reference``).
 
     Returns
     -------
@@ -155,7 +155,7 @@ def track(
     """Continuous monitoring from an SDS archive in this process
     (``quaketwin track``, docs/monitoring.md).
 
-    Writes ``modal_tracking.parquet`` and ``tracking.html`` into ``out``.
+    Writes ``modal_tracking/modal_tracking.parquet`` and ``tracking.html`` into ``out``.
     ``quaketwin.fleet.track`` identifies the windows over a Dask cluster.
 
     Parameters
@@ -176,7 +176,7 @@ def track(
         training period of the band (default 24 h) and the environmental
         cycle (default 24 h).
     reference : str or os.PathLike, optional
-        Reference modes (a run directory or ``modes.parquet``).
+        Reference modes (a run directory or ``modes/modes.parquet``).
     min_present : float, optional
         Windows with a smaller share of recorded samples are skipped
         (default 0.9).
@@ -253,7 +253,7 @@ def modal(
     Parameters
     ----------
     samples : pyarrow.Table or pyarrow.RecordBatch
-        A ``samples`` table: from :func:`read_event` or a ``samples.parquet``.
+        A ``samples`` table: from :func:`read_event` or a ``samples/samples.parquet``.
     settings : dict, optional
         The ``modal`` stage's parameters (docs/pipelines.md), e.g.
         ``{"method": "ssi-cov", "band_hz": [0.5, 15.0]}``; an unknown key is
@@ -262,7 +262,7 @@ def modal(
     Returns
     -------
     modes, stabilization : pyarrow.Table
-        In the schemas of ``modes.parquet`` and ``stabilization.parquet``,
+        In the schemas of ``modes/modes.parquet`` and ``stabilization/stabilization.parquet``,
         with their ``quaketwin.*`` metadata.  ``Event.modal`` returns the
         same as a :class:`Modes`.
 
@@ -322,7 +322,7 @@ def update(
     twin : str or os.PathLike
         The twin file (TOML, docs/twin.md).
     modes : str, os.PathLike or pyarrow.Table
-        A ``modes.parquet``, the run directory holding one, or a modes table
+        A ``modes/modes.parquet``, the run directory holding one, or a modes table
         from :func:`modal` (written into ``out`` first).
     out : str or os.PathLike
         The output directory.
@@ -338,13 +338,14 @@ def update(
     out = _path(out, "out")
     if isinstance(modes, pa.Table):
         os.makedirs(out, exist_ok=True)
-        path = os.path.join(out, "measured_modes.parquet")
+        os.makedirs(os.path.join(out, "measured_modes"), exist_ok=True)
+        path = os.path.join(out, "measured_modes", "measured_modes.parquet")
         pq.write_table(modes, path)
         modes = path
     settings = None if settings is None else _path(settings, "settings")
     summary = json.loads(_native.update_json(_path(twin, "twin"), _path(modes, "modes"), out, settings))
     summary["tables"] = _read_tables(
-        out, ("twin_update", "twin_modes"), ["twin_update.parquet", "twin_modes.parquet"]
+        out, ("twin_update", "twin_modes"), [table_file("twin_update"), table_file("twin_modes")]
     )
     return summary
 
@@ -366,10 +367,48 @@ def event_partition(event: PathLike) -> str:
     return _native.event_partition(_path(event, "event"))
 
 
+def table_file(name: str) -> str:
+    """A table's file relative to a run's output directory.
+
+    Parameters
+    ----------
+    name : str
+        The table (``"modes"``).
+
+    Returns
+    -------
+    str
+        ``"modes/modes.parquet"``: each table in a folder of its own, so that
+        ``out/modes/*.parquet`` reads one schema (docs/formats.md).
+    """
+    return f"{name}/{name}.parquet"
+
+
+def locate_table(out: PathLike, name: str) -> str:
+    """A table's file in a run's output directory.
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        A run's output directory.
+    name : str
+        The table (``"modes"``).
+
+    Returns
+    -------
+    str
+        ``out/modes/modes.parquet``, or the flat ``out/modes.parquet`` of a
+        run made before the per-table folders when only that exists.
+    """
+    nested = os.path.join(os.fspath(out), table_file(name))
+    flat = os.path.join(os.fspath(out), f"{name}.parquet")
+    return flat if not os.path.exists(nested) and os.path.isfile(flat) else nested
+
+
 def _read_tables(out: PathLike, names: Sequence[str], listed: List[str]) -> Dict[str, pa.Table]:
     tables = {}
     for name in names:
-        file = f"{name}.parquet"
+        file = table_file(name)
         path = os.path.join(_path(out), file)
         if file in listed and os.path.isfile(path):
             tables[name] = pq.read_table(path)

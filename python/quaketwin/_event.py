@@ -27,7 +27,7 @@ class Event:
     """The records of one event, in memory.
 
     Made by :func:`quaketwin.read` from an event folder or zip, or from any
-    table in the ``samples`` schema (a ``samples.parquet`` read with
+    table in the ``samples`` schema (a ``samples/samples.parquet`` read with
     pyarrow: the conditioned records of a run).
 
     Parameters

@@ -511,7 +511,7 @@ def track(archive: Any, out: Any, client: Any = None, **options: Any) -> Dict[st
     reading the archive itself (the archive must be readable at the same
     path on every worker: a shared file system), the identified windows
     returned as JSON; this process then tracks, fits the bands and writes
-    ``modal_tracking.parquet`` and ``tracking.html`` into ``out`` (a local
+    ``modal_tracking/modal_tracking.parquet`` and ``tracking.html`` into ``out`` (a local
     directory, the command line's output directory rules).  ``options``: as
     ``quaketwin.track``.  Each window is identified by the same code with
     the same settings as on the command line, so the table is the same.

@@ -9,6 +9,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from ._api import locate_table
 from ._optional import need
 
 
@@ -51,9 +52,9 @@ class Modes:
     Parameters
     ----------
     modes : pyarrow.Table
-        A table in the ``modes.parquet`` schema, with its metadata.
+        A table in the ``modes/modes.parquet`` schema, with its metadata.
     stabilization : pyarrow.Table, optional
-        The matching ``stabilization.parquet`` table.
+        The matching ``stabilization/stabilization.parquet`` table.
     channels : list of dict, optional
         The channels' metadata (as in ``quaketwin.channels``): their levels
         place the shape components along the building in :meth:`plot`.
@@ -80,19 +81,21 @@ class Modes:
 
     @classmethod
     def read(cls, path: "str | os.PathLike[str]") -> "Modes":
-        """The modes of a run: its output directory or its ``modes.parquet``.
+        """The modes of a run: its output directory or its ``modes/modes.parquet``.
 
-        ``stabilization.parquet`` and ``event.json`` (the channels' levels)
+        ``stabilization/stabilization.parquet`` and ``event.json`` (the channels' levels)
         are read too when they lie beside it.
         """
         path = os.fspath(path)
-        file = os.path.join(path, "modes.parquet") if os.path.isdir(path) else path
+        file = locate_table(path, "modes") if os.path.isdir(path) else path
         if not os.path.exists(file):
             from ._errors import PathNotFoundError
 
             raise PathNotFoundError(2, f"{file}: no modes table (the output of a run with a modal stage)", file)
         folder = os.path.dirname(file)
-        stabilization = os.path.join(folder, "stabilization.parquet")
+        if os.path.basename(folder) == "modes":  # out/modes/modes.parquet: the run is above
+            folder = os.path.dirname(folder)
+        stabilization = locate_table(folder, "stabilization")
         event = os.path.join(folder, "event.json")
         channels = None
         if os.path.isfile(event):
@@ -252,7 +255,7 @@ class Modes:
         """
         plt = need("matplotlib.pyplot", "Modes.plot_stabilization")
         if self.stabilization is None:
-            raise ValueError("these modes have no stabilization table (Modes.read found none beside modes.parquet)")
+            raise ValueError("these modes have no stabilization table (Modes.read found none beside modes/modes.parquet)")
         poles = self.stabilization.to_pydict()
         fig, ax = plt.subplots(figsize=(8, 4.5))
         stable = [

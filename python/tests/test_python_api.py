@@ -333,7 +333,7 @@ class Objects(unittest.TestCase):
         with tempfile.TemporaryDirectory() as out:
             cli("modal", AMBIENT, "--out", out)
             read = quaketwin.Modes.read(out)
-            expected = pq.read_table(pathlib.Path(out) / "modes.parquet")
+            expected = pq.read_table(pathlib.Path(out) / "modes/modes.parquet")
             self.assertEqual(read.table.column("frequency_hz").to_pylist(), expected.column("frequency_hz").to_pylist())
             self.assertIsNotNone(read.stabilization)
             self.assertEqual(read.output_channels, json.loads(expected.schema.metadata[b"quaketwin.output_channels"]))

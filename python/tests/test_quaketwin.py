@@ -73,9 +73,9 @@ class Bindings(unittest.TestCase):
         # settings gives the same modes, bit for bit.
         with tempfile.TemporaryDirectory() as out:
             cli("modal", SAMPLES / "synthetic-4storey-ambient", "--out", out)
-            samples = pq.read_table(pathlib.Path(out) / "samples.parquet")
+            samples = pq.read_table(pathlib.Path(out) / "samples/samples.parquet")
             modes, stabilization = quaketwin.modal(samples)
-            expected = pq.read_table(pathlib.Path(out) / "modes.parquet")
+            expected = pq.read_table(pathlib.Path(out) / "modes/modes.parquet")
             self.assertGreater(expected.num_rows, 0)
             self.assertEqual(
                 modes.column("frequency_hz").to_pylist(),
@@ -251,8 +251,8 @@ class TrackTest(unittest.TestCase):
         cls.work.cleanup()
 
     def _same_table(self, out):
-        mine = pq.read_table(out / "modal_tracking.parquet")
-        theirs = pq.read_table(self.cli_out / "modal_tracking.parquet")
+        mine = pq.read_table(out / "modal_tracking/modal_tracking.parquet")
+        theirs = pq.read_table(self.cli_out / "modal_tracking/modal_tracking.parquet")
         self.assertEqual(mine.num_rows, theirs.num_rows)
         self.assertGreater(mine.num_rows, 0)
         for name in ("window_start", "mode", "frequency_hz", "damping_ratio", "flagged"):

@@ -27,10 +27,10 @@ pub struct TrackRows {
 /// What earlier stages say of a direction's fundamental.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct KnownFundamentals {
-    /// Lowest identified mode per direction label (`modes.parquet`).
+    /// Lowest identified mode per direction label (`modes/modes.parquet`).
     pub identified: Vec<(String, f64)>,
     /// The reference event's lowest mode per direction label
-    /// (`frequency_shifts.parquet`, with `--reference`).
+    /// (`frequency_shifts/frequency_shifts.parquet`, with `--reference`).
     pub reference: Vec<(String, f64)>,
 }
 

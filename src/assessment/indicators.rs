@@ -6,7 +6,7 @@
 use super::fragility::{DamageState, DriftFragility};
 use super::{Indicator, IndicatorKind, FREQUENCY_DROP_THRESHOLDS, RESIDUAL_DRIFT_THRESHOLDS};
 
-/// One row of drift.parquet, as the assessment needs it.
+/// One row of drift/drift.parquet, as the assessment needs it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DriftEvidence {
     pub direction: String,
@@ -67,7 +67,7 @@ pub fn drift_indicator(
         .max_by(|a, b| a.peak_ratio.total_cmp(&b.peak_ratio));
     let Some(d) = driver else {
         let why = if rows.is_empty() {
-            "no storey or segment drift (drift.parquet has no rows: no direction has records at two levels)".to_string()
+            "no storey or segment drift (drift/drift.parquet has no rows: no direction has records at two levels)".to_string()
         } else if rows.iter().any(|r| r.height_source.starts_with("unknown")) {
             "the only drifts run to a roof whose level was assumed (storey count unknown): state structure.storeys"
                 .to_string()

@@ -22,7 +22,7 @@
 //! state that at least two indicators reach is *corroborated* and gives its
 //! colour; a state that only one indicator reaches gives "inspect" (YELLOW)
 //! at most.  I/O free: the `assess` stage gathers the evidence from the
-//! other stages' tables and writes `assessment.parquet`.
+//! other stages' tables and writes `assessment/assessment.parquet`.
 
 pub mod fragility;
 pub mod frequency;
@@ -176,7 +176,7 @@ impl Indicator {
 }
 
 /// The assessment of one event: what the `assess` stage writes as one row
-/// of `assessment.parquet`.
+/// of `assessment/assessment.parquet`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Assessment {
     pub event: String,

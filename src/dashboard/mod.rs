@@ -179,22 +179,21 @@ fn place(src: &Path, to: &Path) -> Result<()> {
     link_or_copy_atomically(src, to)
 }
 
-/// The history tables of a structure (`history_*.parquet` in its history
-/// folder), each as an HTML table; a table that does not read says why.
+/// The history tables of a structure (`history_modes`, `history_events` in
+/// its history folder), each as an HTML table; a table that does not read
+/// says why.
 fn history_tables(dir: &Path) -> Vec<(String, String)> {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return Vec::new();
-    };
-    let mut names: Vec<String> = entries
-        .flatten()
-        .filter_map(|e| e.file_name().to_str().map(str::to_string))
-        .filter(|n| n.starts_with("history_") && n.ends_with(".parquet"))
+    use crate::vocab::tables::{HISTORY_EVENTS, HISTORY_MODES};
+    let mut found: Vec<(String, std::path::PathBuf)> = [HISTORY_EVENTS, HISTORY_MODES]
+        .iter()
+        .map(|t| (t.file.to_string(), t.locate(dir)))
+        .filter(|(_, p)| p.is_file())
         .collect();
-    names.sort();
-    names
+    found.sort();
+    found
         .into_iter()
-        .map(|n| {
-            let html = match crate::report::table::load(&dir.join(&n), None) {
+        .map(|(n, path)| {
+            let html = match crate::report::table::load(&path, None) {
                 Ok(t) => crate::report::whole_table(&t, MAX_HISTORY_ROWS),
                 Err(e) => format!(
                     "<p class=\"note\">unreadable: {}</p>",

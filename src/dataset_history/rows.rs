@@ -1,4 +1,4 @@
-//! The rows of `history_modes.parquet` and `history_events.parquet`, the
+//! The rows of `history_modes/history_modes.parquet` and `history_events/history_events.parquet`, the
 //! fitted bands as metadata JSON, and the `--json` summary, from the
 //! analysed structures.
 

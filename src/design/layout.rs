@@ -145,7 +145,7 @@ impl Default for ActuatorSettings {
     }
 }
 
-/// One actuator: the columns of `actuator_layout.parquet`.
+/// One actuator: the columns of `actuator_layout/actuator_layout.parquet`.
 #[derive(Debug, Clone)]
 pub struct Actuator {
     pub actuator: usize,
@@ -180,7 +180,7 @@ pub fn interface_gravity_forces(
         .collect()
 }
 
-/// Reduced vs full PS response: the columns of `reduction_validation.parquet`.
+/// Reduced vs full PS response: the columns of `reduction_validation/reduction_validation.parquet`.
 #[derive(Debug, Clone)]
 pub struct ReductionValidation {
     /// Retained PS positions (rigid-body removal's r set), one row each.

@@ -16,11 +16,11 @@
 //! - `plan`: the whole design (`design_hybrid_test`).
 //!
 //! Output tables the lead writes from these results (Parquet):
-//! - `actuator_layout.parquet` ← [`layout::Actuator`]: actuator, node (id), direction (DoF
+//! - `actuator_layout/actuator_layout.parquet` ← [`layout::Actuator`]: actuator, node (id), direction (DoF
 //!   name), control mode, nominal force (N), participation in each retained POM (`pom_1` …);
-//! - `pod.parquet` ← [`pod::Pod`] + [`pod::PodCurve`]: pom, singular value, energy fraction,
+//! - `pod/pod.parquet` ← [`pod::Pod`] + [`pod::PodCurve`]: pom, singular value, energy fraction,
 //!   cumulative energy, WNRMSE of the reconstruction with POMs 1..=pom, retained (bool);
-//! - `reduction_validation.parquet` ← [`layout::ReductionValidation`]: node, direction,
+//! - `reduction_validation/reduction_validation.parquet` ← [`layout::ReductionValidation`]: node, direction,
 //!   NRMSE, weight max|x − μ|, master (bool); the overall WNRMSE in the metadata.
 
 pub mod craig_bampton;

@@ -62,7 +62,7 @@ pub struct BaseMotion {
 pub struct DesignSettings {
     /// Retain the fewest POMs whose cumulative energy reaches this (Eq. 56–58).
     pub energy_target: f64,
-    /// POMs listed in `pod.parquet` (at most).
+    /// POMs listed in `pod/pod.parquet` (at most).
     pub max_poms: usize,
     /// The reduced model must reproduce the reference PS response within this WNRMSE (Eq. 83).
     pub wnrmse_target: f64,
@@ -101,7 +101,7 @@ impl Default for DesignSettings {
     }
 }
 
-/// One step of the interface refinement (the trade-off curve of `interface_refinement.parquet`).
+/// One step of the interface refinement (the trade-off curve of `interface_refinement/interface_refinement.parquet`).
 #[derive(Debug, Clone)]
 pub struct RefinementStep {
     pub control_nodes: usize,

@@ -111,7 +111,7 @@ pub enum Status {
 }
 
 impl Status {
-    /// The name written to `history_modes.parquet` (`status`).
+    /// The name written to `history_modes/history_modes.parquet` (`status`).
     pub fn name(self) -> &'static str {
         match self {
             Status::InBand => "in_band",

@@ -3,7 +3,7 @@
 //! event's intensity with an amplitude-dependence band, the events outside
 //! the band, a permanent shift, and event-to-event prediction.  Numerical
 //! code only, no I/O: `crate::dataset_history` reads a many-event dataset
-//! and writes `history_modes.parquet`, `history_events.parquet` and
+//! and writes `history_modes/history_modes.parquet`, `history_events/history_events.parquet` and
 //! `history.html` (docs/history.md).
 //!
 //! Flow per structure: its events in date order → the modes of every event

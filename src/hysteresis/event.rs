@@ -28,7 +28,7 @@ pub struct DirectionSpec {
     pub masses_kg: Option<Vec<f64>>,
 }
 
-/// The direction-level verdict a later stage reads (bouc_wen.parquet `verdict`).
+/// The direction-level verdict a later stage reads (bouc_wen/bouc_wen.parquet `verdict`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Verdict {
     /// (a) Hysteretic terms significant at one DoF at least: nonlinear

@@ -39,7 +39,7 @@ pub struct DirectionIdentification {
     pub sampling_rate_hz: f64,
     /// Time of the first sample identified from the record's start, s (the
     /// identification window's start, `super::window`); the times of
-    /// `damage`, of the instantaneous estimates and of `hysteresis_fit.parquet`
+    /// `damage`, of the instantaneous estimates and of `hysteresis_fit/hysteresis_fit.parquet`
     /// count from the record's start.
     pub start_s: f64,
     pub form: BasisForm,

@@ -42,7 +42,7 @@ pub struct ReducedMassRecord {
 }
 
 /// Which masses a direction used and where they came from (written to the
-/// `quaketwin.masses` metadata of bouc_wen.parquet and logged by the stage).
+/// `quaketwin.masses` metadata of bouc_wen/bouc_wen.parquet and logged by the stage).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MassResolution {
     pub direction: String,

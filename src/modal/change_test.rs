@@ -111,7 +111,7 @@ impl Default for ChangeTestSettings {
 /// What a record contributes to a test or to a reference: its normalised
 /// output covariances at lags 1..=max_lag (C1), of the whole record and of
 /// each block (C4).  A reference run stores these
-/// (`change_reference.parquet`), not S and Σ: the null space depends on
+/// (`change_reference/change_reference.parquet`), not S and Σ: the null space depends on
 /// the union of the reference records and on the order chosen.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CovarianceBlocks {

@@ -16,14 +16,14 @@
 //!   the shared channels is not paired (its MAC there would be noise);
 //! - with fewer shared channels a MAC says nothing (one component: always 1),
 //!   so a pair needs the frequency window and the same direction label
-//!   (`direction` of modes.parquet); candidates are taken by increasing |Δf|.
+//!   (`direction` of modes/modes.parquet); candidates are taken by increasing |Δf|.
 //!
 //! Shift and uncertainty: s = (f − f_ref)/f_ref; with the two frequency
 //! standard deviations σ, σ_ref (independent estimates), first-order
 //! propagation gives σ_s = √((σ/f_ref)² + (f σ_ref/f_ref²)²).  A shift is
 //! significant when |s| > 2 σ_s; unknown (None) when both σ are zero.
 //! Each σ is the mode's data-driven standard deviation
-//! (`frequency_std_data_hz` of modes.parquet, issue 36: the statistical
+//! (`frequency_std_data_hz` of modes/modes.parquet, issue 36: the statistical
 //! error of that record's estimate, docs/statistics.md) when it was
 //! computed; otherwise the order spread `frequency_std_hz` taken at least
 //! `frequency_std_floor` × f: the scatter of the poles over the model
@@ -153,7 +153,7 @@ pub enum PairingBasis {
 }
 
 impl PairingBasis {
-    /// The name written to `frequency_shifts.parquet` (`pairing`).
+    /// The name written to `frequency_shifts/frequency_shifts.parquet` (`pairing`).
     pub fn name(self) -> &'static str {
         match self {
             PairingBasis::MacAndFrequency => "mac_and_frequency",
@@ -400,12 +400,14 @@ pub fn compare_events(
     let (ra, rb) = (reference.modes, current.modes);
     if ra.is_empty() {
         notes.push(
-            "the reference run identified no mode (its modes.parquet warnings say why)".into(),
+            "the reference run identified no mode (its modes/modes.parquet warnings say why)"
+                .into(),
         );
     }
     if rb.is_empty() {
         notes.push(
-            "this event's identification found no mode (modes.parquet warnings say why)".into(),
+            "this event's identification found no mode (modes/modes.parquet warnings say why)"
+                .into(),
         );
     }
     let scored: Vec<(usize, usize, f64)> = candidates

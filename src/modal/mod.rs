@@ -12,7 +12,7 @@
 //! [`Event`] onto a [`ModalInput`] by channel role.
 //!
 //! Suggested Parquet layouts (written by the sinks, not here):
-//! - `stabilization.parquet`, one row per pole: `order` u32, `frequency_hz` f64,
+//! - `stabilization/stabilization.parquet`, one row per pole: `order` u32, `frequency_hz` f64,
 //!   `damping_ratio` f64, `mpc` f64, `mpd_deg` f64, `complexity` f64,
 //!   `stable_frequency` bool, `stable_damping` bool, `stable_shape` bool,
 //!   `physical` bool, `mode` i32 (−1 = none), `shape_re` list<f64>,
@@ -20,12 +20,12 @@
 //!   output channel ids, settings JSON, preprocessing JSON, singular values.
 //!   A second table (or a metadata entry) `singular_values`: `index` u32, `value` f64,
 //!   and the PSD overlay ([`spectral_overlay`]): `frequency_hz` f64, `sv1` … `svL` f64.
-//! - `modes.parquet`, one row per mode: `mode` u32, `frequency_hz`, `frequency_std_hz`,
+//! - `modes/modes.parquet`, one row per mode: `mode` u32, `frequency_hz`, `frequency_std_hz`,
 //!   `damping_ratio`, `damping_std`, `mpc`, `mpd_deg`, `mean_mac`, `pole_count` u32,
 //!   `order_min` u32, `order_max` u32, `manual` bool, and per output channel
 //!   either list columns `shape_re`, `shape_im`, `shape_std` plus a metadata entry
 //!   with the channel ids, or long format (`mode`, `channel_id`, `shape_re`, `shape_im`, `shape_std`).
-//! - `frequency_shifts.parquet` (from [`compare`]): the pre/post comparison
+//! - `frequency_shifts/frequency_shifts.parquet` (from [`compare`]): the pre/post comparison
 //!   against a reference event (docs/formats.md).
 
 pub mod apparent;

@@ -11,7 +11,7 @@
 //! a neighbouring mode of similar shape (the same direction's next mode
 //! differs by far more) from being taken for the tracked one.
 //!
-//! Reference modes: those of a `modes.parquet` given by the user, or by
+//! Reference modes: those of a `modes/modes.parquet` given by the user, or by
 //! default the *confirmed* modes of one of the first N =
 //! [`TrackSettings::reference_windows`] identified windows.  A mode of window
 //! i is confirmed when it pairs (same rule as the tracking) with a mode of

@@ -17,7 +17,7 @@ use crate::sinks::dataset;
 /// the records' headers give, so that the events of one instrumented
 /// structure share a partition, else `unknown`; the manifest's `event.id`,
 /// else the event folder's name (the zip's without its extension).  The
-/// free-text names are columns of `event.parquet`.
+/// free-text names are columns of `event/event.parquet`.
 pub fn event_ids(event: &Path) -> Result<(String, String)> {
     let manifest = crate::event_folder::read_manifest(event)?;
     let folder = event

@@ -82,16 +82,20 @@ impl Progress {
 /// The stamp directory of quaketwin versions before the run manifest.
 const LEGACY_STAMP_DIR: &str = ".quaketwin";
 
-/// Whether `name` is a plain file name directly inside the output directory
-/// (no separator, not `.`/`..`, not hidden: hidden names are quaketwin's own
-/// lock and temporary files).
+/// Whether `name` is an output file's name relative to the output
+/// directory: a plain file name directly inside it (`report.html`) or inside
+/// one folder of its own (a table: `modes/modes.parquet`) — no other
+/// separator, no `.`/`..`, nothing hidden (hidden names are quaketwin's own
+/// lock and temporary files), not the run manifest.
 pub(crate) fn is_plain_name(name: &str) -> bool {
-    let p = Path::new(name);
-    let mut c = p.components();
-    matches!(
-        (c.next(), c.next()),
-        (Some(std::path::Component::Normal(_)), None)
-    ) && !name.starts_with('.')
+    let parts: Vec<_> = Path::new(name).components().collect();
+    let normal = |c: &std::path::Component| {
+        matches!(c, std::path::Component::Normal(n)
+            if !n.to_string_lossy().starts_with('.'))
+    };
+    (1..=2).contains(&parts.len())
+        && parts.iter().all(normal)
+        && !name.ends_with('/')
         && name != manifest::MANIFEST_FILE
 }
 
@@ -120,9 +124,10 @@ fn event_path_string(p: &Path) -> String {
 }
 
 /// Removes the regular files among `names` in `out` (a link, directory or
-/// other non-regular file is left alone: writing there is refused later);
-/// returns the names removed, sorted.  Names that are not plain file names
-/// (a hand-edited manifest) are ignored.
+/// other non-regular file is left alone: writing there is refused later),
+/// and a table's folder when that leaves it empty; returns the names
+/// removed, sorted.  Names that are not output names ([`is_plain_name`]: a
+/// hand-edited manifest) are ignored.
 fn remove_files(out: &Path, names: impl IntoIterator<Item = String>) -> Result<Vec<String>> {
     let mut removed = std::collections::BTreeSet::new();
     for n in names {
@@ -133,6 +138,10 @@ fn remove_files(out: &Path, names: impl IntoIterator<Item = String>) -> Result<V
         if let Ok(m) = std::fs::symlink_metadata(&p) {
             if m.file_type().is_file() {
                 std::fs::remove_file(&p).map_err(|e| Error::io(&p, e))?;
+                if let Some((folder, _)) = n.split_once('/') {
+                    // Only an empty real folder goes (remove_dir refuses the rest).
+                    let _ = std::fs::remove_dir(out.join(folder));
+                }
                 removed.insert(n);
             }
         }
@@ -146,7 +155,12 @@ fn remove_files(out: &Path, names: impl IntoIterator<Item = String>) -> Result<V
 /// as the one list the output directory's cleaning needs; a stage that
 /// writes a new default file name adds it to its table or to this list.
 pub fn known_output_names() -> impl Iterator<Item = String> {
+    known_output_names_static().map(str::to_string)
+}
+
+fn known_output_names_static() -> impl Iterator<Item = &'static str> {
     const OTHER_OUTPUTS: &[&str] = &[
+        "samples_as_recorded/samples_as_recorded.parquet",
         "samples_as_recorded.parquet",
         "event.json",
         "report.html",
@@ -157,10 +171,12 @@ pub fn known_output_names() -> impl Iterator<Item = String> {
         "prototype_mass.mtx",
         "ps_basis.mtx",
     ];
+    // A table's flat file name (`modes.parquet`) is where quaketwin versions
+    // before the per-table folders wrote it: such a file is not of this run.
     crate::vocab::tables::ALL_TABLES
         .iter()
-        .map(|t| t.file.to_string())
-        .chain(OTHER_OUTPUTS.iter().map(|s| s.to_string()))
+        .flat_map(|t| [t.file, t.flat_file()])
+        .chain(OTHER_OUTPUTS.iter().copied())
 }
 
 /// Outputs listed by the stamps of quaketwin versions before the run
@@ -301,7 +317,21 @@ pub fn run_showing(
 
 /// Removes the temporary files an interrupted run left in `out`, saying so.
 fn sweep_interrupted(out: &Path) -> Result<()> {
-    let swept = crate::sinks::atomic::sweep_temp_files(out)?;
+    let mut swept = crate::sinks::atomic::sweep_temp_files(out)?;
+    // And in the tables' folders (real folders only, never through a link).
+    let folders: std::collections::BTreeSet<&str> = known_output_names_static()
+        .filter_map(|n| n.split_once('/').map(|(folder, _)| folder))
+        .collect();
+    for folder in folders {
+        let dir = out.join(folder);
+        if std::fs::symlink_metadata(&dir).is_ok_and(|m| m.is_dir()) {
+            swept.extend(
+                crate::sinks::atomic::sweep_temp_files(&dir)?
+                    .into_iter()
+                    .map(|n| format!("{folder}/{n}")),
+            );
+        }
+    }
     if !swept.is_empty() {
         note(&format!(
             "{}: removed temporary files of an interrupted run: {}",

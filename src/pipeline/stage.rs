@@ -18,7 +18,7 @@ pub enum ProductKind {
     ConditionedEvent,
     /// Strong-motion metrics, spectra and drift tables.
     Metrics,
-    /// Identified modes (`modes.parquet`).
+    /// Identified modes (`modes/modes.parquet`).
     Modes,
     /// Bouc-Wen identification per direction.
     Hysteresis,

@@ -24,7 +24,7 @@ pub struct StructurePage<'a> {
     pub structure: &'a str,
     pub name: Option<&'a str>,
     pub history: &'a StructureHistory,
-    /// Rows of history_events.parquet, in the order of `history.events`.
+    /// Rows of history_events/history_events.parquet, in the order of `history.events`.
     pub events: &'a [HistoryEventRow],
 }
 

@@ -304,10 +304,13 @@ pub fn convert(array: &ArrayRef) -> Column {
 }
 
 impl Table {
+    /// The file as the output directory names it: `modes/modes.parquet`
+    /// for a table in its own folder, else the file name.
     pub fn file_name(&self) -> String {
+        let run = crate::vocab::schema::run_dir_of(&self.path);
         self.path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
+            .strip_prefix(&run)
+            .map(|p| p.to_string_lossy().into_owned())
             .unwrap_or_default()
     }
     pub fn has(&self, name: &str) -> bool {

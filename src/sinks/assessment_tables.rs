@@ -1,7 +1,7 @@
 //! The assessment's Parquet tables (schemas in docs/formats.md):
-//! `assessment.parquet` (one row per event: colour, priority, damage-state
+//! `assessment/assessment.parquet` (one row per event: colour, priority, damage-state
 //! probabilities, each indicator's value and verdict, the assumptions) and
-//! `frequency_track.parquet` (the apparent frequency per moving window and
+//! `frequency_track/frequency_track.parquet` (the apparent frequency per moving window and
 //! direction).
 
 use std::path::Path;
@@ -13,7 +13,7 @@ use crate::error::Result;
 use crate::vocab::tables::{assessment as a, frequency_track as f, ASSESSMENT, FREQUENCY_TRACK};
 use crate::vocab::Event;
 
-/// `frequency_track.parquet`.
+/// `frequency_track/frequency_track.parquet`.
 pub fn write_frequency_track(path: &Path, event: &Event, tracks: &[TrackRows]) -> Result<()> {
     let mut direction = Vec::new();
     let mut output = Vec::new();
@@ -68,7 +68,7 @@ pub fn write_frequency_track(path: &Path, event: &Event, tracks: &[TrackRows]) -
     )
 }
 
-/// `assessment.parquet`: one row.
+/// `assessment/assessment.parquet`: one row.
 pub fn write_assessment(path: &Path, event: &Event, row: &Assessment) -> Result<()> {
     let o = &row.overall;
     let ind = |k: IndicatorKind| row.indicator(k);

@@ -1,5 +1,5 @@
-//! `change_reference.parquet` (what a run leaves for a later run's change
-//! test) and `change_test.parquet` (the test of a run against a reference
+//! `change_reference/change_reference.parquet` (what a run leaves for a later run's change
+//! test) and `change_test/change_test.parquet` (the test of a run against a reference
 //! run): docs/statistics.md "Change test", docs/formats.md.
 
 use std::path::Path;
@@ -52,7 +52,7 @@ pub fn write_change_reference(
     write_parquet(path, &[batch], &metadata)
 }
 
-/// The blocks of a `change_reference.parquet` and its channel ids; `None`
+/// The blocks of a `change_reference/change_reference.parquet` and its channel ids; `None`
 /// when the file holds no block.
 pub fn read_change_reference(path: &Path) -> Result<Option<(CovarianceBlocks, Vec<String>)>> {
     use arrow_array::{Array, Float64Array, ListArray, UInt32Array};

@@ -1,5 +1,5 @@
 //! Files of `quaketwin compare-test` (docs/lab-tests.md, docs/formats.md):
-//! `compare_test_summary.parquet`, `compare_test_actuators.parquet`, `compare_test.parquet`,
+//! `compare_test_summary/compare_test_summary.parquet`, `compare_test_actuators/compare_test_actuators.parquet`, `compare_test/compare_test.parquet`,
 //! and of `quaketwin synth-hybrid-log`: the log (`hybrid_log.csv`) and its `truth.json`. Every
 //! file is written atomically.
 

@@ -104,7 +104,7 @@ pub fn publish_tables(root: &Path, partition: &Path, run_dir: &Path) -> Result<V
     let produced: Vec<&'static str> = produced_tables(run_dir)?;
     let mut published = Vec::with_capacity(produced.len());
     for name in &produced {
-        let from = run_dir.join(format!("{name}.parquet"));
+        let from = run_dir.join(tables::table_file_of(name));
         let dir = table_dir(root, name).join(partition);
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         let to = dir.join(PART_FILE);
@@ -140,24 +140,15 @@ pub fn publish_tables(root: &Path, partition: &Path, run_dir: &Path) -> Result<V
     Ok(published)
 }
 
-/// The declared tables a run directory holds (regular files named as their
-/// declaration), sorted by table name.
+/// The declared tables a run directory holds (regular files at their
+/// declared path, `<table>/<table>.parquet`), sorted by table name.
 fn produced_tables(run_dir: &Path) -> Result<Vec<&'static str>> {
-    let mut produced: Vec<&'static str> = Vec::new();
-    for entry in std::fs::read_dir(run_dir).map_err(|e| Error::io(run_dir, e))? {
-        let path = entry.map_err(|e| Error::io(run_dir, e))?.path();
-        let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
-            continue;
-        };
-        let declared = name
-            .strip_suffix(".parquet")
-            .and_then(tables::by_name)
-            .filter(|t| t.file == name);
-        let is_file = std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file());
-        if let (Some(t), true) = (declared, is_file) {
-            produced.push(t.name);
-        }
-    }
+    std::fs::metadata(run_dir).map_err(|e| Error::io(run_dir, e))?;
+    let mut produced: Vec<&'static str> = tables::ALL_TABLES
+        .iter()
+        .filter(|t| std::fs::symlink_metadata(run_dir.join(t.file)).is_ok_and(|m| m.is_file()))
+        .map(|t| t.name)
+        .collect();
     produced.sort_unstable();
     Ok(produced)
 }
@@ -169,7 +160,7 @@ fn produced_tables(run_dir: &Path) -> Result<Vec<&'static str>> {
 pub fn run_tables(run_dir: &Path) -> Result<Vec<(String, String)>> {
     Ok(produced_tables(run_dir)?
         .into_iter()
-        .map(|t| (format!("{t}.parquet"), t.to_string()))
+        .map(|t| (tables::table_file_of(t), t.to_string()))
         .collect())
 }
 

@@ -1,6 +1,6 @@
 //! Tables and matrices of the hybrid-test design (schemas in docs/test-design.md and
-//! docs/formats.md): `actuator_layout.parquet`, `pod.parquet`, `reduction_validation.parquet`,
-//! `interface_refinement.parquet`, `hybrid_prototype.parquet`, and Matrix Market files of the
+//! docs/formats.md): `actuator_layout/actuator_layout.parquet`, `pod/pod.parquet`, `reduction_validation/reduction_validation.parquet`,
+//! `interface_refinement/interface_refinement.parquet`, `hybrid_prototype/hybrid_prototype.parquet`, and Matrix Market files of the
 //! Craig–Bampton prototype (`prototype_stiffness.mtx`, `prototype_mass.mtx`, symmetric) and of
 //! the PS basis u_PS = T q (`ps_basis.mtx`, general). Every file is written atomically.
 
@@ -38,7 +38,7 @@ pub const DESIGN_FILES: &[&str] = &[
     PS_BASIS_FILE,
 ];
 
-/// Metadata key of the overall WNRMSE (deformation) in reduction_validation.parquet.
+/// Metadata key of the overall WNRMSE (deformation) in reduction_validation/reduction_validation.parquet.
 pub const WNRMSE_KEY: &str = "quaketwin.wnrmse";
 /// Metadata key of the overall WNRMSE of the total displacement.
 pub const WNRMSE_TOTAL_KEY: &str = "quaketwin.wnrmse_total";
@@ -109,7 +109,7 @@ fn nodes_json(model: &Model, d: &TestDesign) -> String {
     .to_string()
 }
 
-/// `actuator_layout.parquet`: one row per actuator; `pom_1` … `pom_k` hold each retained
+/// `actuator_layout/actuator_layout.parquet`: one row per actuator; `pom_1` … `pom_k` hold each retained
 /// POM's component at the actuated DoF; the node coordinates in [`NODES_KEY`].
 pub fn write_actuator_layout(
     path: &Path,
@@ -154,7 +154,7 @@ pub fn write_actuator_layout(
     write_parquet(path, &[t.build()?], &m)
 }
 
-/// `pod.parquet`: one row per listed POM.
+/// `pod/pod.parquet`: one row per listed POM.
 pub fn write_pod(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()> {
     let pod = &d.pod;
     let n = d.pod_curve.wnrmse.len().min(pod.singular_values.len());
@@ -192,7 +192,7 @@ pub fn write_pod(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()
     write_parquet(path, &[batch], &m)
 }
 
-/// `reduction_validation.parquet`: one row per retained PS DoF; the overall WNRMSE (deformation
+/// `reduction_validation/reduction_validation.parquet`: one row per retained PS DoF; the overall WNRMSE (deformation
 /// and total displacement) in the metadata.
 pub fn write_reduction_validation(
     path: &Path,
@@ -225,7 +225,7 @@ pub fn write_reduction_validation(
     write_parquet(path, &[batch], &m)
 }
 
-/// `interface_refinement.parquet`: one row per step of the interface refinement.
+/// `interface_refinement/interface_refinement.parquet`: one row per step of the interface refinement.
 pub fn write_interface_refinement(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()> {
     let r = &d.refinement;
     let batch = TableBuilder::new(&INTERFACE_REFINEMENT)
@@ -258,7 +258,7 @@ pub fn write_interface_refinement(path: &Path, d: &TestDesign, p: &DesignProvena
     write_parquet(path, &[batch], &meta(p))
 }
 
-/// `hybrid_prototype.parquet`: one row per prototype eigenfrequency, paired in ascending order
+/// `hybrid_prototype/hybrid_prototype.parquet`: one row per prototype eigenfrequency, paired in ascending order
 /// with the full model's; the recommendation (NS modes, λ, bandwidth) on every row and in the
 /// metadata.
 pub fn write_hybrid_prototype(path: &Path, d: &TestDesign, p: &DesignProvenance) -> Result<()> {

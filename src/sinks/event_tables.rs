@@ -1,8 +1,8 @@
 //! The backbone's Parquet tables (schemas in docs/formats.md):
-//! `channels.parquet` (metadata, QA, metrics — one row per channel),
-//! `samples.parquet` (acceleration, velocity, displacement per channel and
-//! time — long format), `spectra.parquet` (response spectra, long format),
-//! `drift.parquet` (peak inter-storey drift ratios).  `samples.parquet` also
+//! `channels/channels.parquet` (metadata, QA, metrics — one row per channel),
+//! `samples/samples.parquet` (acceleration, velocity, displacement per channel and
+//! time — long format), `spectra/spectra.parquet` (response spectra, long format),
+//! `drift/drift.parquet` (peak inter-storey drift ratios).  `samples/samples.parquet` also
 //! carries the channels and the processing history as JSON metadata so a
 //! later stage can load the conditioned event back without re-running.
 
@@ -36,7 +36,7 @@ fn azimuth(d: &Option<Direction>) -> Option<f64> {
 }
 
 /// What the absolute times of a channel's samples count from (the `time`
-/// column of samples.parquet, `time_source` of channels.parquet): the
+/// column of samples/samples.parquet, `time_source` of channels/channels.parquet): the
 /// record's own start, else the event's origin time (the first sample taken
 /// at the origin: late or early by the record's unknown trigger delay, as
 /// the MCAP writer does), else nothing.  The start in ns and its name.
@@ -53,7 +53,7 @@ fn event_metadata(event: &Event) -> Vec<(String, String)> {
     super::provenance::Provenance::of_event(event).metadata()
 }
 
-/// `event.parquet`: one row, the event and its structure — the ids
+/// `event/event.parquet`: one row, the event and its structure — the ids
 /// `(structure_id, event_id)` a many-event dataset partitions by
 /// (`pipeline::dataset::event_ids`) beside the free-text names.
 pub fn write_event(path: &Path, event: &Event, ids: (&str, &str)) -> Result<()> {
@@ -79,7 +79,7 @@ pub fn write_event(path: &Path, event: &Event, ids: (&str, &str)) -> Result<()> 
     write_parquet(path, &[batch], &event_metadata(event))
 }
 
-/// `channels.parquet`: one row per channel, metadata + QA + metrics.
+/// `channels/channels.parquet`: one row per channel, metadata + QA + metrics.
 /// `metrics` are matched to channels by id (channels without metrics get nulls).
 pub fn write_channels(path: &Path, event: &Event, metrics: &[StrongMotionMetrics]) -> Result<()> {
     let recs = &event.records;
@@ -230,7 +230,7 @@ pub fn write_channels(path: &Path, event: &Event, metrics: &[StrongMotionMetrics
     write_parquet(path, &[batch], &event_metadata(event))
 }
 
-/// `samples.parquet`: long format, one row per channel and sample.
+/// `samples/samples.parquet`: long format, one row per channel and sample.
 /// `motions` give velocity/displacement (matched by channel id); channels
 /// without a motion carry their samples as acceleration and null vel/disp.
 /// Written a channel at a time (parked samples are read back one channel
@@ -240,7 +240,7 @@ pub fn write_samples(path: &Path, event: &Event, motions: &[Motion]) -> Result<(
     write_parquet_stream(path, &meta, samples_batches(event, motions))
 }
 
-/// The metadata of `samples.parquet`: the event's, and the channels.
+/// The metadata of `samples/samples.parquet`: the event's, and the channels.
 fn samples_metadata(event: &Event) -> std::result::Result<Vec<(String, String)>, String> {
     let channels: Vec<&Channel> = event.records.iter().map(|r| &r.channel).collect();
     let mut meta = event_metadata(event);
@@ -251,7 +251,7 @@ fn samples_metadata(event: &Event) -> std::result::Result<Vec<(String, String)>,
     Ok(meta)
 }
 
-/// The rows of `samples.parquet`, a batch at a time.
+/// The rows of `samples/samples.parquet`, a batch at a time.
 fn samples_batches<'a>(
     event: &'a Event,
     motions: &'a [Motion],
@@ -271,12 +271,12 @@ pub fn samples_table(event: &Event, motions: &[Motion]) -> Result<Vec<arrow_arra
     crate::sinks::parquet::with_table_metadata(batches, &meta)
 }
 
-/// Rows of `samples.parquet` built at a time: a channel longer than this
+/// Rows of `samples/samples.parquet` built at a time: a channel longer than this
 /// (about 87 minutes at 200 Hz) is written in several batches, so that a day
 /// of a channel is not built in memory as one table.
 pub const SAMPLES_BATCH_ROWS: usize = 1 << 20;
 
-/// The rows of one channel of `samples.parquet`, from sample `from` on (at
+/// The rows of one channel of `samples/samples.parquet`, from sample `from` on (at
 /// most [`SAMPLES_BATCH_ROWS`]); absolute times from the channel's
 /// [`time_base`] (its start, else `origin_ns`).
 fn samples_batch(
@@ -322,7 +322,7 @@ fn samples_batch(
         .build()
 }
 
-/// `spectra.parquet`: one row per channel and period.
+/// `spectra/spectra.parquet`: one row per channel and period.
 pub fn write_spectra(path: &Path, event: &Event, metrics: &[StrongMotionMetrics]) -> Result<()> {
     let mut id = Vec::new();
     let (mut damping, mut period, mut sd, mut psv, mut psa, mut sa) =
@@ -351,7 +351,7 @@ pub fn write_spectra(path: &Path, event: &Event, metrics: &[StrongMotionMetrics]
     write_parquet(path, &[batch], &event_metadata(event))
 }
 
-/// `drift.parquet`; the table's notes (why drift is missing, heights
+/// `drift/drift.parquet`; the table's notes (why drift is missing, heights
 /// assumed, records trimmed to a common window) in `quaketwin.notes`.
 pub fn write_drift(path: &Path, event: &Event, table: &DriftTable) -> Result<()> {
     let rows = &table.rows;
@@ -409,10 +409,10 @@ pub fn write_drift(path: &Path, event: &Event, table: &DriftTable) -> Result<()>
     write_parquet(path, &[batch], &metadata)
 }
 
-/// Metadata key of drift.parquet's notes (JSON list of strings).
+/// Metadata key of drift/drift.parquet's notes (JSON list of strings).
 pub const DRIFT_NOTES_KEY: &str = "quaketwin.notes";
 
-/// Loads a conditioned event back from `samples.parquet` (channels and
+/// Loads a conditioned event back from `samples/samples.parquet` (channels and
 /// history from its metadata, samples from its columns).
 pub fn read_samples(path: &Path) -> Result<(Event, Vec<Motion>)> {
     read_samples_parked(path, |_| Ok(None))
@@ -479,7 +479,7 @@ fn samples_from(
     if get(SCHEMA_KEY).as_deref() != Some(SAMPLES.name) {
         return Err(Error::input(
             loc(),
-            "not a quaketwin samples.parquet (schema key missing)",
+            "not a quaketwin samples/samples.parquet (schema key missing)",
         ));
     }
     let channels: Vec<Channel> = serde_json::from_str(&get(CHANNELS_KEY).unwrap_or_default())

@@ -1,4 +1,4 @@
-//! `fourier.parquet` (docs/formats.md): each record's smoothed Fourier
+//! `fourier/fourier.parquet` (docs/formats.md): each record's smoothed Fourier
 //! amplitude spectra of the signal and noise windows, their ratio and the
 //! filter corners chosen from it (`conditioning::snr`) — long format, one row
 //! per channel and frequency, the channel's corners and windows on each row.
@@ -44,7 +44,7 @@ fn note(r: &RecordFourier) -> String {
     parts.join("; ")
 }
 
-/// Writes `fourier.parquet` for the records of `list` that have spectra.
+/// Writes `fourier/fourier.parquet` for the records of `list` that have spectra.
 pub fn write_fourier(path: &Path, event: &Event, list: &[RecordFourier]) -> Result<()> {
     let mut id = Vec::new();
     let (mut freq, mut signal, mut noise, mut snr) = (vec![], vec![], vec![], vec![]);

@@ -1,4 +1,4 @@
-//! `history_modes.parquet` and `history_events.parquet` (`quaketwin
+//! `history_modes/history_modes.parquet` and `history_events/history_events.parquet` (`quaketwin
 //! history`, docs/history.md): one row type per table, written from the
 //! declarations and read back the same way, so that `watch` and the
 //! dashboard read a structure's history as the rows `history` wrote.
@@ -21,7 +21,7 @@ use crate::vocab::tables::{
 /// and mode: docs/formats.md).
 pub const MODELS_KEY: &str = "quaketwin.history_models";
 
-/// One row of `history_modes.parquet` (columns: docs/formats.md).
+/// One row of `history_modes/history_modes.parquet` (columns: docs/formats.md).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct HistoryModeRow {
     pub structure: String,
@@ -50,7 +50,7 @@ pub struct HistoryModeRow {
     pub step_p_value: Option<f64>,
 }
 
-/// One row of `history_events.parquet` (columns: docs/formats.md).
+/// One row of `history_events/history_events.parquet` (columns: docs/formats.md).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct HistoryEventRow {
     pub structure: String,
@@ -74,7 +74,7 @@ pub struct HistoryEventRow {
     pub notes: Vec<String>,
 }
 
-/// Writes `history_modes.parquet` with `metadata` (provenance, models).
+/// Writes `history_modes/history_modes.parquet` with `metadata` (provenance, models).
 pub fn write_modes(
     path: &Path,
     rows: &[HistoryModeRow],
@@ -131,7 +131,7 @@ pub fn write_modes(
     write_parquet(path, &[batch], metadata)
 }
 
-/// Writes `history_events.parquet` with `metadata` (provenance).
+/// Writes `history_events/history_events.parquet` with `metadata` (provenance).
 pub fn write_events(
     path: &Path,
     rows: &[HistoryEventRow],
@@ -273,7 +273,7 @@ fn required(v: Option<String>) -> String {
     v.unwrap_or_default()
 }
 
-/// Reads `history_modes.parquet` back, in file order.
+/// Reads `history_modes/history_modes.parquet` back, in file order.
 pub fn read_modes(path: &Path) -> Result<Vec<HistoryModeRow>> {
     let table = open(path, &HISTORY_MODES)?;
     let mut rows = Vec::new();
@@ -340,7 +340,7 @@ pub fn read_modes(path: &Path) -> Result<Vec<HistoryModeRow>> {
     Ok(rows)
 }
 
-/// Reads `history_events.parquet` back, in file order.
+/// Reads `history_events/history_events.parquet` back, in file order.
 pub fn read_events(path: &Path) -> Result<Vec<HistoryEventRow>> {
     let table = open(path, &HISTORY_EVENTS)?;
     let mut rows = Vec::new();

@@ -1,7 +1,7 @@
 //! Parquet tables of the Bouc-Wen identification and the damage index
-//! (schemas in docs/formats.md): `bouc_wen.parquet`,
-//! `bouc_wen_instantaneous.parquet`, `hysteresis_fit.parquet`,
-//! `damage.parquet`.
+//! (schemas in docs/formats.md): `bouc_wen/bouc_wen.parquet`,
+//! `bouc_wen_instantaneous/bouc_wen_instantaneous.parquet`, `hysteresis_fit/hysteresis_fit.parquet`,
+//! `damage/damage.parquet`.
 
 use std::path::Path;
 
@@ -38,7 +38,7 @@ pub fn identification_provenance(
     )
 }
 
-/// `bouc_wen.parquet`: one row per direction, DoF and parameter (a direction
+/// `bouc_wen/bouc_wen.parquet`: one row per direction, DoF and parameter (a direction
 /// that could not be identified has one row with `status` saying why).
 pub fn write_bouc_wen(
     path: &Path,
@@ -295,7 +295,7 @@ impl Cols {
     }
 }
 
-/// `bouc_wen_instantaneous.parquet`: cumulative (t_e → t) estimates per frame.
+/// `bouc_wen_instantaneous/bouc_wen_instantaneous.parquet`: cumulative (t_e → t) estimates per frame.
 pub fn write_instantaneous(
     path: &Path,
     outcomes: &[DirectionOutcome],
@@ -357,7 +357,7 @@ fn storey_shears(forces: &[&[f64]]) -> Vec<Vec<f64>> {
     shears
 }
 
-/// `hysteresis_fit.parquet`: storey (segment) shear vs drift from the records
+/// `hysteresis_fit/hysteresis_fit.parquet`: storey (segment) shear vs drift from the records
 /// and, for identified directions, from the model — the force–drift loops.
 /// A direction that is not identified contributes its measured loops when
 /// its kinematics could be formed (model column null).
@@ -470,7 +470,7 @@ pub fn write_fit(
     write_parquet(path, &[batch], metadata)
 }
 
-/// `damage.parquet`: ι(t) and, per mode, ω_s(t)/ω_s(0) and c_s(t) — one row
+/// `damage/damage.parquet`: ι(t) and, per mode, ω_s(t)/ω_s(0) and c_s(t) — one row
 /// per direction, time and mode (ι repeated on the mode rows of one time).
 pub fn write_damage(
     path: &Path,

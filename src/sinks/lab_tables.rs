@@ -1,6 +1,6 @@
 //! Parquet tables of the lab identification (docs/lab-tests.md,
-//! docs/formats.md): `lab_identification.parquet`, `lab_fit.parquet`,
-//! `lab_cycles.parquet`.
+//! docs/formats.md): `lab_identification/lab_identification.parquet`, `lab_fit/lab_fit.parquet`,
+//! `lab_cycles/lab_cycles.parquet`.
 
 use std::path::Path;
 
@@ -54,7 +54,7 @@ pub fn lab_provenance(
     ]
 }
 
-/// `lab_identification.parquet`.
+/// `lab_identification/lab_identification.parquet`.
 pub fn write_lab_identification(
     path: &Path,
     outcomes: &[LabOutcome<'_>],
@@ -168,7 +168,7 @@ pub fn write_lab_identification(
     write_parquet(path, &[batch], &meta)
 }
 
-/// `lab_fit.parquet`.
+/// `lab_fit/lab_fit.parquet`.
 pub fn write_lab_fit(
     path: &Path,
     outcomes: &[LabOutcome<'_>],
@@ -207,7 +207,7 @@ pub fn write_lab_fit(
     write_parquet(path, &[batch], provenance)
 }
 
-/// `lab_cycles.parquet`.
+/// `lab_cycles/lab_cycles.parquet`.
 pub fn write_lab_cycles(
     path: &Path,
     outcomes: &[LabOutcome<'_>],

@@ -144,7 +144,7 @@ pub fn write_event_to<W: Write + Seek>(
                 ch.id
             )));
         }
-        // The time base of samples.parquet's `time` (one home); 1970 and
+        // The time base of samples/samples.parquet's `time` (one home); 1970 and
         // `none` (this file's contract) when neither start nor origin is known.
         let (t0_ns, time_base) = match super::event_tables::time_base(ch, event.origin_ns) {
             (Some(t0), base) => (t0, base),

@@ -1,10 +1,10 @@
 //! Parquet tables of the modal stage (schemas in docs/formats.md):
-//! `stabilization.parquet` (every pole of every order), `modes.parquet`
-//! (selected modes with statistics and shapes), `mode_shapes.parquet` (the
+//! `stabilization/stabilization.parquet` (every pole of every order), `modes/modes.parquet`
+//! (selected modes with statistics and shapes), `mode_shapes/mode_shapes.parquet` (the
 //! same shapes in long form: one row per mode and channel),
-//! `modal_spectrum.parquet`
+//! `modal_spectrum/modal_spectrum.parquet`
 //! (singular values of the PSD matrix, plotted beside the stabilisation
-//! diagram), `frequency_shifts.parquet` (pre/post comparison).
+//! diagram), `frequency_shifts/frequency_shifts.parquet` (pre/post comparison).
 
 use std::path::Path;
 
@@ -119,7 +119,7 @@ pub fn write_stabilization(
     )
 }
 
-/// The rows of `stabilization.parquet` (every pole of every order).
+/// The rows of `stabilization/stabilization.parquet` (every pole of every order).
 pub fn stabilization_batch(r: &ModalResult) -> Result<arrow_array::RecordBatch> {
     let p = &r.poles;
     TableBuilder::new(&STABILIZATION)
@@ -179,7 +179,7 @@ pub fn write_modes(
     )
 }
 
-/// The rows of `modes.parquet` (one per selected mode).
+/// The rows of `modes/modes.parquet` (one per selected mode).
 pub fn modes_batch(r: &ModalResult) -> Result<arrow_array::RecordBatch> {
     let m = &r.modes;
     TableBuilder::new(&MODES)
@@ -257,7 +257,7 @@ pub fn modes_batch(r: &ModalResult) -> Result<arrow_array::RecordBatch> {
         .build()
 }
 
-/// `mode_shapes.parquet`: the shapes of `modes.parquet` in long form, one
+/// `mode_shapes/mode_shapes.parquet`: the shapes of `modes/modes.parquet` in long form, one
 /// row per mode and output channel (in the order of
 /// `quaketwin.output_channels`), so that a query needs no metadata to know
 /// which channel a component belongs to.  `levels` gives each output
@@ -277,7 +277,7 @@ pub fn write_mode_shapes(
     )
 }
 
-/// The rows of `mode_shapes.parquet`.
+/// The rows of `mode_shapes/mode_shapes.parquet`.
 pub fn mode_shapes_batch(
     r: &ModalResult,
     levels: &[Option<i32>],
@@ -453,8 +453,8 @@ pub fn write_shifts(
     write_parquet(path, &[batch], &meta)
 }
 
-/// The `modes.parquet` an earlier run left at `path`: the file itself, or
-/// `path/modes.parquet` when `path` is a run's output directory.  Usage
+/// The `modes/modes.parquet` an earlier run left at `path`: the file itself, or
+/// `path/modes/modes.parquet` when `path` is a run's output directory.  Usage
 /// errors (the user named it) that name the path: missing, no modes table
 /// in the directory, not a quaketwin modes table.
 pub fn locate_modes(path: &Path) -> Result<std::path::PathBuf> {
@@ -476,7 +476,7 @@ pub fn locate_modes(path: &Path) -> Result<std::path::PathBuf> {
             });
         }
         Ok(m) if m.is_dir() => {
-            let f = path.join(MODES.file);
+            let f = MODES.locate(path);
             // Absent only: a FIFO or device there is refused below, by name.
             if std::fs::metadata(&f).is_err() {
                 return Err(Error::usage(format!(
@@ -499,7 +499,7 @@ pub fn locate_modes(path: &Path) -> Result<std::path::PathBuf> {
     Ok(file)
 }
 
-/// Reads the modes of a `modes.parquet` back (for pre/post comparison),
+/// Reads the modes of a `modes/modes.parquet` back (for pre/post comparison),
 /// with the output channel ids of its metadata.
 pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)> {
     use arrow_array::{Array, BooleanArray, Float64Array, ListArray, UInt32Array};
@@ -525,7 +525,9 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
         .ok_or_else(|| {
             Error::input(
                 loc(),
-                format!("metadata {OUTPUT_CHANNELS_KEY} missing: not a quaketwin modes.parquet"),
+                format!(
+                    "metadata {OUTPUT_CHANNELS_KEY} missing: not a quaketwin modes/modes.parquet"
+                ),
             )
         })?;
     let mut out = Vec::new();
@@ -617,7 +619,7 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
                     .as_ref()
                     .map(|a| a.value(i).to_string())
                     .unwrap_or_default(),
-                // The shape's data-driven σ lives in mode_shapes.parquet.
+                // The shape's data-driven σ lives in mode_shapes/mode_shapes.parquet.
                 data_std: valid(&fs_data, i).zip(valid(&zs_data, i)).map(|(f, z)| {
                     crate::modal::uncertainty::ModeStd {
                         frequency_hz: f,

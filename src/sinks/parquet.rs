@@ -97,7 +97,7 @@ impl TableBuilder {
     }
     /// The unit of the column added last, in place of the declared one: a
     /// member of a family declared with unit `varies` (`param_<name>` of
-    /// twin_update.parquet: each parameter its own unit).  Refused (at
+    /// twin_update/twin_update.parquet: each parameter its own unit).  Refused (at
     /// `build`) for a column declared with one unit.
     pub fn with_unit(mut self, unit: &str) -> Self {
         use crate::vocab::schema::{UNIT_KEY, UNIT_VARIES};
@@ -354,7 +354,7 @@ pub fn write_parquet_stream(
 
 /// `parquet::arrow::ArrowWriter` with the columns of each batch encoded in
 /// parallel, one task per column (issue 14 item 5: a 46 M-row
-/// samples.parquet).  Row groups are cut where `ArrowWriter` cuts them (at
+/// samples/samples.parquet).  Row groups are cut where `ArrowWriter` cuts them (at
 /// the row-count limit, splitting a batch), and each column writer is given
 /// the same slices in the same order, so the file is byte for byte the one
 /// `ArrowWriter` writes.  (No byte limit per row group and no content-defined
@@ -548,7 +548,7 @@ pub fn writer_setup(
 /// chunk, which for samples means hashing a sixth of the values for nothing;
 /// byte-stream splitting puts the sign-and-exponent bytes of the floats
 /// together, where zstd finds the structure that plain doubles hide.  On an
-/// hour of 64 channels: samples.parquet a quarter smaller, 928 MB instead of
+/// hour of 64 channels: samples/samples.parquet a quarter smaller, 928 MB instead of
 /// 1.23 GB (docs/performance.md).  Every reader of Parquet 2.8 reads them
 /// (pyarrow, DuckDB ≥ 0.10, polars ≥ 1.1).
 fn series_encodings(

@@ -5,7 +5,7 @@
 //! stage (or by a command run on its own) says the same thing the same way.
 //!
 //! Provenance travels with the data: a stage that starts from another table
-//! (twin updating starts from `modes.parquet`) reads the provenance of that
+//! (twin updating starts from `modes/modes.parquet`) reads the provenance of that
 //! table back ([`Provenance::from_metadata`]) and appends its own steps.
 
 use crate::vocab::{Event, ProcessingHistory, ProcessingStep};

@@ -1,7 +1,7 @@
 //! Files of the hybrid-test rehearsal (docs/test-design.md, docs/formats.md):
 //! `rehearsal_model.json` (written by the design stage: what a rehearsal needs, read back by
-//! `quaketwin rehearse` and by a skipped design stage's restore), `rehearsal_summary.parquet`
-//! and `rehearsal.parquet`. Every file is written atomically.
+//! `quaketwin rehearse` and by a skipped design stage's restore), `rehearsal_summary/rehearsal_summary.parquet`
+//! and `rehearsal/rehearsal.parquet`. Every file is written atomically.
 
 use std::path::{Path, PathBuf};
 
@@ -38,7 +38,7 @@ pub fn read_rehearsal_model(path: &Path) -> Result<RehearsalModel> {
     Ok(model)
 }
 
-/// `rehearsal_summary.parquet` and `rehearsal.parquet` into `out_dir`.
+/// `rehearsal_summary/rehearsal_summary.parquet` and `rehearsal/rehearsal.parquet` into `out_dir`.
 pub fn write_rehearsal(
     out_dir: &Path,
     model: &RehearsalModel,

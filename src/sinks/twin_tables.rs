@@ -1,6 +1,6 @@
-//! Twin-updating tables: `twin_update.parquet` (one row per round and candidate of the
-//! ensemble, thesis Table 1), `twin_modes.parquet` (paired modes before and after updating)
-//! and the reader of the measured modes in `modes.parquet` (written by the modal stage).
+//! Twin-updating tables: `twin_update/twin_update.parquet` (one row per round and candidate of the
+//! ensemble, thesis Table 1), `twin_modes/twin_modes.parquet` (paired modes before and after updating)
+//! and the reader of the measured modes in `modes/modes.parquet` (written by the modal stage).
 //! Schemas are documented in docs/formats.md.
 
 use std::collections::BTreeSet;
@@ -19,14 +19,14 @@ use crate::twin::ensemble::EnsembleResult;
 use crate::twin::objective::{MeasuredMode, MeasuredModes, ModeComparison};
 use crate::vocab::tables::{modes, twin_modes, twin_update, TWIN_MODES, TWIN_UPDATE};
 
-/// File metadata key of the output channel ids (JSON list) in modes.parquet.
+/// File metadata key of the output channel ids (JSON list) in modes/modes.parquet.
 pub use super::modal_tables::OUTPUT_CHANNELS_KEY;
 /// File metadata key of the schema name.
 pub use crate::vocab::schema::SCHEMA_KEY;
-/// File metadata key of the error summary (JSON) in twin_modes.parquet.
+/// File metadata key of the error summary (JSON) in twin_modes/twin_modes.parquet.
 pub const SUMMARY_KEY: &str = "quaketwin.summary";
 
-/// Measured modes as read from modes.parquet, with the file's mode numbers.
+/// Measured modes as read from modes/modes.parquet, with the file's mode numbers.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModesFile {
     pub measured: MeasuredModes,
@@ -37,7 +37,7 @@ pub struct ModesFile {
     pub provenance: Option<Provenance>,
 }
 
-/// Read measured modes from `modes.parquet` (columns named by the declaration
+/// Read measured modes from `modes/modes.parquet` (columns named by the declaration
 /// [`crate::vocab::tables::MODES`], but tolerant of the types other tools write): `mode` (UInt32/Int32/Int64), `frequency_hz`
 /// (Float64), `shape_re` (list<f64>, one entry per output channel), optional `shape_im`,
 /// and the channel ids as a JSON list in the `quaketwin.output_channels` metadata entry.
@@ -241,7 +241,7 @@ fn parameter_units(metadata: &[(String, String)]) -> std::collections::HashMap<S
         .collect()
 }
 
-/// Write `twin_update.parquet`: one row per round and candidate. `parameter_names` name the
+/// Write `twin_update/twin_update.parquet`: one row per round and candidate. `parameter_names` name the
 /// `param_<name>` columns (ensemble parameter order); `metadata` is appended to the file's
 /// key/value metadata (e.g. settings).
 pub fn write_twin_update(
@@ -364,9 +364,9 @@ pub fn write_twin_update(
     write_parquet(path, &[batch], &meta)
 }
 
-/// Write `twin_modes.parquet`: the paired modes at the start values (`stage` "initial") and
+/// Write `twin_modes/twin_modes.parquet`: the paired modes at the start values (`stage` "initial") and
 /// at the updated values ("updated"). `mode_numbers` are the measured modes' numbers (from
-/// modes.parquet); the mean errors of `ModeComparison` go into `quaketwin.summary`.
+/// modes/modes.parquet); the mean errors of `ModeComparison` go into `quaketwin.summary`.
 pub fn write_twin_modes(
     path: &Path,
     mode_numbers: &[u32],

@@ -1,7 +1,7 @@
 //! `assess`: the post-earthquake assessment (`crate::assessment`) →
-//! `assessment.parquet` (one row: colour, priority, damage-state
+//! `assessment/assessment.parquet` (one row: colour, priority, damage-state
 //! probabilities, every indicator's value and verdict, the assumptions) and
-//! `frequency_track.parquet` (the apparent fundamental frequency through the
+//! `frequency_track/frequency_track.parquet` (the apparent fundamental frequency through the
 //! event, `modal::apparent`).
 //!
 //! Glue only: the evidence is read from the tables the earlier stages wrote
@@ -48,7 +48,7 @@ pub struct AssessParams {
     /// edges: `assessment::frequency::without_edges`).
     pub edge_guard_periods: f64,
     /// An earlier run of the structure (its output directory or its
-    /// `modes.parquet`; `quaketwin run … --reference` sets it): its lowest
+    /// `modes/modes.parquet`; `quaketwin run … --reference` sets it): its lowest
     /// mode per direction is the frequency before the event where the
     /// record has no pre-event window.
     pub reference_modes: Option<PathBuf>,
@@ -112,7 +112,7 @@ impl Stage for Assess {
                         .map(|m| (m.direction.clone(), m.frequency_hz))
                         .collect()
                 }
-                // Without one: the reference of frequency_shifts.parquet, if any.
+                // Without one: the reference of frequency_shifts/frequency_shifts.parquet, if any.
                 None => modes_per_direction(
                     &read(&out, &t::FREQUENCY_SHIFTS),
                     t::frequency_shifts::DIRECTION_REFERENCE.name,
@@ -162,7 +162,7 @@ impl Stage for Assess {
     }
 }
 
-/// The reference run's `modes.parquet` (an output directory or the file).
+/// The reference run's `modes/modes.parquet` (an output directory or the file).
 fn reference_file(p: &Path) -> Result<PathBuf> {
     crate::sinks::modal_tables::locate_modes(p)
         .map_err(|e| e.usage_about("assess: reference_modes"))
@@ -171,10 +171,15 @@ fn reference_file(p: &Path) -> Result<PathBuf> {
 /// A table of the run, when the run manifest lists it and it reads.
 fn read(dir: &Path, schema: &crate::vocab::schema::TableSchema) -> Option<Table> {
     let listed = crate::pipeline::listed_results(dir)
-        .map(|files| files.iter().any(|f| f == schema.file))
+        .map(|files| {
+            files
+                .iter()
+                .any(|f| f == schema.file || f == schema.flat_file())
+        })
         .unwrap_or(true);
-    (listed && dir.join(schema.file).exists())
-        .then(|| table::load(&dir.join(schema.file), None).ok())
+    let path = schema.locate(dir);
+    (listed && path.exists())
+        .then(|| table::load(&path, None).ok())
         .flatten()
 }
 
@@ -209,9 +214,9 @@ fn drift_evidence(d: &Table) -> Vec<DriftEvidence> {
         .collect()
 }
 
-/// Per direction: the Bouc-Wen verdict (bouc_wen.parquet's `verdict`,
+/// Per direction: the Bouc-Wen verdict (bouc_wen/bouc_wen.parquet's `verdict`,
 /// else its statuses), the energies of its DoFs and, where identified, ι
-/// from damage.parquet.
+/// from damage/damage.parquet.
 fn hysteresis_evidence(dir: &Path) -> Vec<HysteresisEvidence> {
     use t::bouc_wen as c;
     let Some(b) = read(dir, &t::BOUC_WEN) else {
@@ -270,7 +275,7 @@ fn hysteresis_evidence(dir: &Path) -> Vec<HysteresisEvidence> {
     out
 }
 
-/// (final, peak) ι of `direction` in damage.parquet.
+/// (final, peak) ι of `direction` in damage/damage.parquet.
 fn iota_of(d: &Table, direction: &str) -> (Option<f64>, Option<f64>) {
     let (Some(iota), Some(time)) = (
         d.number(t::damage::IOTA.name),

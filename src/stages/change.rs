@@ -1,8 +1,8 @@
 //! The change test of the `modal` stage (docs/statistics.md "Change
-//! test"): every run leaves `change_reference.parquet` (the normalised
+//! test"): every run leaves `change_reference/change_reference.parquet` (the normalised
 //! output covariances of its record, per block), and a run with
 //! `reference_modes` tests its record against the reference run's and
-//! writes `change_test.parquet`.
+//! writes `change_test/change_test.parquet`.
 //!
 //! Storing the covariances, not the null space S and Σ, keeps a run
 //! usable as a reference whatever the order chosen later, and a reference
@@ -65,9 +65,9 @@ pub fn record_covariances(
     covariance_blocks(&views, max_lag, step, blocks).map_err(|e| e.to_string())
 }
 
-/// Writes `change_reference.parquet` of this run and, with a reference
-/// run (its `modes.parquet` at `reference_modes`, `reference_mode_count`
-/// modes), `change_test.parquet`; a test that cannot be made is a warning
+/// Writes `change_reference/change_reference.parquet` of this run and, with a reference
+/// run (its `modes/modes.parquet` at `reference_modes`, `reference_mode_count`
+/// modes), `change_test/change_test.parquet`; a test that cannot be made is a warning
 /// and a table without rows.
 pub fn write(
     event: &Event,
@@ -88,10 +88,8 @@ pub fn write(
     let Some((modes_file, modes)) = reference else {
         return Ok(None);
     };
-    let reference_file = modes_file
-        .parent()
-        .unwrap_or(Path::new("."))
-        .join(REFERENCE_FILE);
+    let reference_file = crate::vocab::tables::CHANGE_REFERENCE
+        .locate(&crate::vocab::schema::run_dir_of(modes_file));
     let tested = test_against(
         &own,
         &result.output_ids,

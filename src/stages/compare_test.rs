@@ -10,9 +10,7 @@ use crate::hybrid_test::log::LOG_FILE;
 use crate::hybrid_test::{compare, CompareSettings, HybridLog};
 use crate::rehearse::RehearseSettings;
 use crate::sinks::compare_test_tables::{write_comparison, write_hybrid_log};
-use crate::sinks::rehearsal_tables::{
-    read_rehearsal_model, REHEARSAL_MODEL_FILE, REHEARSAL_SUMMARY_FILE,
-};
+use crate::sinks::rehearsal_tables::{read_rehearsal_model, REHEARSAL_MODEL_FILE};
 use crate::synth::hybrid_log::{synth_hybrid_log, HybridLogSettings, HybridLogTruth};
 
 /// What `compare-test` found (what it prints; `--json`).
@@ -49,7 +47,7 @@ pub fn read_log(test_records: &Path) -> Result<HybridLog> {
 }
 
 /// The design run's rehearsal settings: `settings` (a TOML file of the `rehearse` stage's
-/// params) if given, else those recorded in DESIGN_OUT's `rehearsal_summary.parquet`, else
+/// params) if given, else those recorded in DESIGN_OUT's `rehearsal_summary/rehearsal_summary.parquet`, else
 /// the defaults.
 pub fn rehearsal_settings(design_out: &Path, settings: Option<&Path>) -> Result<RehearseSettings> {
     if let Some(p) = settings {
@@ -57,7 +55,7 @@ pub fn rehearsal_settings(design_out: &Path, settings: Option<&Path>) -> Result<
         return toml::from_str(&text)
             .map_err(|e| Error::usage(format!("{}: bad rehearsal settings: {e}", p.display())));
     }
-    let summary = design_out.join(REHEARSAL_SUMMARY_FILE);
+    let summary = crate::vocab::tables::REHEARSAL_SUMMARY.locate(design_out);
     if !summary.exists() {
         return Ok(RehearseSettings::default());
     }

@@ -1,7 +1,7 @@
 //! `condition`: QA and units, then the declared conditioning steps
 //! (resampling/alignment, detrend, taper, zero-phase band-pass, integration;
-//! METHODS §1) → `samples.parquet`; with a filter whose corners come from the
-//! signal-to-noise ratio (`conditioning::snr`), also `fourier.parquet`.
+//! METHODS §1) → `samples/samples.parquet`; with a filter whose corners come from the
+//! signal-to-noise ratio (`conditioning::snr`), also `fourier/fourier.parquet`.
 
 use crate::conditioning::event_window::EventWindow;
 use crate::conditioning::{
@@ -56,12 +56,23 @@ fn build(src: &StageSource) -> Result<Box<dyn Stage>> {
     let (settings, output): (ConditioningSettings, OutputParams) =
         src.params_split(&["samples_file", "high_pass"])?;
     settings.validate().map_err(|e| src.invalid(e))?;
-    let samples_file = output.samples_file.unwrap_or_else(|| SAMPLES_FILE.into());
-    if !samples_file.ends_with(".parquet") {
-        return Err(src.invalid(format!(
-            "samples_file {samples_file:?} must be a .parquet file name"
-        )));
-    }
+    // A file name (`samples_as_recorded/samples_as_recorded.parquet`), written in a folder of
+    // its own like every table (`samples_as_recorded/samples_as_recorded.parquet`).
+    let samples_file = match output.samples_file {
+        None => SAMPLES_FILE.to_string(),
+        Some(name)
+            if name.ends_with(".parquet")
+                && crate::pipeline::is_plain_name(&name)
+                && !name.contains('/') =>
+        {
+            crate::vocab::schema::table_file(&name)
+        }
+        Some(name) => {
+            return Err(src.invalid(format!(
+                "samples_file {name:?} must be a .parquet file name (no folder)"
+            )))
+        }
+    };
     let auto_high_pass = match output.high_pass.as_deref() {
         None | Some("auto") => true,
         Some("stated") => false,

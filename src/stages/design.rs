@@ -58,7 +58,7 @@ pub struct DesignSummary {
     pub retained_poms: usize,
     pub retained_energy: f64,
     pub control_nodes: usize,
-    /// Steps of the interface refinement (rows of interface_refinement.parquet).
+    /// Steps of the interface refinement (rows of interface_refinement/interface_refinement.parquet).
     pub refinement_steps: usize,
     pub actuators: usize,
     pub force_controlled: usize,

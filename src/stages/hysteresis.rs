@@ -78,10 +78,10 @@ pub struct HysteresisParams {
     /// Explicit directions; default: one per horizontal direction that has a
     /// level-0 input channel and at least one floor (any levels).
     pub directions: Option<Vec<DirectionSpec>>,
-    /// Keep every n-th sample in hysteresis_fit.parquet and damage.parquet.
+    /// Keep every n-th sample in hysteresis_fit/hysteresis_fit.parquet and damage/damage.parquet.
     pub output_decimation: usize,
     /// Fail the stage when a direction cannot be identified (the CLI command
-    /// does); in a pipeline the reason is written to bouc_wen.parquet instead.
+    /// does); in a pipeline the reason is written to bouc_wen/bouc_wen.parquet instead.
     pub fail_on_error: bool,
     /// The part of each record identified (`crate::hysteresis::window`).
     pub window: crate::hysteresis::WindowSettings,
@@ -263,7 +263,7 @@ impl Stage for Hysteresis {
 #[derive(Debug, Clone, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct DamageParams {
-    /// Keep every n-th time step in damage.parquet (the last is always kept).
+    /// Keep every n-th time step in damage/damage.parquet (the last is always kept).
     pub output_decimation: usize,
 }
 

@@ -1,5 +1,5 @@
 //! `ingest`: read the event folder and write `event.json`, the inventory of
-//! what was read, inferred and missing, and `event.parquet`, the event's
+//! what was read, inferred and missing, and `event/event.parquet`, the event's
 //! ids and names as a table.
 
 use serde::{Deserialize, Serialize};

@@ -1,7 +1,7 @@
 //! `lab_hysteresis`: the hysteresis of a laboratory specimen identified
 //! from its measured displacement and force (issue 37; numerical work in
 //! `crate::lab`, records read by `crate::event_folder::lab`). Writes
-//! `lab_identification.parquet`, `lab_fit.parquet` and `lab_cycles.parquet`
+//! `lab_identification/lab_identification.parquet`, `lab_fit/lab_fit.parquet` and `lab_cycles/lab_cycles.parquet`
 //! (`crate::sinks::lab_tables`); the report's lab section reads them.
 
 use std::path::Path;

@@ -1,6 +1,6 @@
 //! `metrics`: strong-motion metrics and response spectra per channel, drift
 //! ratios per storey or instrumented segment (peak from the conditioned
-//! records, residual from the records as recorded; `metrics::drift`) → `channels.parquet`, `spectra.parquet`, `drift.parquet`.
+//! records, residual from the records as recorded; `metrics::drift`) → `channels/channels.parquet`, `spectra/spectra.parquet`, `drift/drift.parquet`.
 
 use rayon::prelude::*;
 

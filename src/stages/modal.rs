@@ -1,7 +1,7 @@
 //! `modal`: subspace identification of the conditioned records (METHODS §2)
-//! → `stabilization.parquet`, `modes.parquet`, `mode_shapes.parquet`,
-//! `modal_spectrum.parquet`,
-//! and `frequency_shifts.parquet` against an earlier run's modes
+//! → `stabilization/stabilization.parquet`, `modes/modes.parquet`, `mode_shapes/mode_shapes.parquet`,
+//! `modal_spectrum/modal_spectrum.parquet`,
+//! and `frequency_shifts/frequency_shifts.parquet` against an earlier run's modes
 //! ([`super::prepost`]).
 
 use std::path::{Path, PathBuf};
@@ -35,7 +35,7 @@ pub struct ModesFile {
 }
 
 /// Identifies `event` and writes the modal tables into `out`; with a
-/// reference, also `frequency_shifts.parquet` (read before identifying, so
+/// reference, also `frequency_shifts/frequency_shifts.parquet` (read before identifying, so
 /// a bad reference fails first).
 pub fn identify_and_write(
     event: &Event,

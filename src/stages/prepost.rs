@@ -1,6 +1,6 @@
 //! The pre/post part of the `modal` stage (issue 13): its params
 //! (`reference_modes`, `reference_min_mac`, `reference_frequency_window`),
-//! the modes of an earlier run read back, and `frequency_shifts.parquet`
+//! the modes of an earlier run read back, and `frequency_shifts/frequency_shifts.parquet`
 //! (pairing and shifts: `modal::compare`).
 
 use std::path::{Path, PathBuf};
@@ -32,8 +32,8 @@ pub const KEYS: &[&str] = &[
 #[serde(deny_unknown_fields, default)]
 pub struct ReferenceParams {
     /// An earlier run of the same structure: its output directory or its
-    /// `modes.parquet` (relative to the working directory) →
-    /// `frequency_shifts.parquet`.
+    /// `modes/modes.parquet` (relative to the working directory) →
+    /// `frequency_shifts/frequency_shifts.parquet`.
     pub reference_modes: Option<PathBuf>,
     /// Least MAC of a pair on the shared channels.
     pub reference_min_mac: f64,
@@ -43,7 +43,7 @@ pub struct ReferenceParams {
     /// uncertainty (`modal::compare`).
     pub reference_frequency_std_floor: f64,
     /// False-alarm rate of the change test against the reference
-    /// (`change_test.parquet`, docs/statistics.md).
+    /// (`change_test/change_test.parquet`, docs/statistics.md).
     pub change_false_alarm_rate: f64,
 }
 
@@ -109,12 +109,12 @@ impl ReferenceParams {
     }
 }
 
-/// A checked reference: its `modes.parquet` and the pairing settings.
+/// A checked reference: its `modes/modes.parquet` and the pairing settings.
 #[derive(Debug, Clone)]
 pub struct ReferenceRun {
     pub file: PathBuf,
     pub pairing: PairingSettings,
-    /// α of the change test (`change_test.parquet`).
+    /// α of the change test (`change_test/change_test.parquet`).
     pub change_false_alarm_rate: f64,
 }
 
@@ -126,7 +126,7 @@ pub struct Reference {
 }
 
 impl ReferenceRun {
-    /// Reads the reference modes; refuses this run's own `modes.parquet`
+    /// Reads the reference modes; refuses this run's own `modes/modes.parquet`
     /// in `out` (it is about to be replaced).
     pub fn read(&self, out: &Path) -> Result<Reference> {
         let own = out.join(crate::vocab::tables::MODES.file);
@@ -157,7 +157,7 @@ impl ReferenceRun {
 }
 
 /// Pairs the modes of `result` with the reference's and writes
-/// `frequency_shifts.parquet` into `out`; a warning on stderr when no mode
+/// `frequency_shifts/frequency_shifts.parquet` into `out`; a warning on stderr when no mode
 /// pairs.
 pub fn compare_and_write(
     reference: &Reference,

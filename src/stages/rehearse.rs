@@ -1,8 +1,8 @@
 //! `rehearse`: the hybrid test run virtually before the specimen is loaded (issue 16; numerical
 //! work in `crate::rehearse`). Takes the design stage's product — the rehearsal model, in
 //! memory, or read back from `rehearsal_model.json` when the design was up to date — sweeps
-//! the time scales (and NS mode counts) and writes `rehearsal_summary.parquet` and
-//! `rehearsal.parquet` (`crate::sinks::rehearsal_tables`).
+//! the time scales (and NS mode counts) and writes `rehearsal_summary/rehearsal_summary.parquet` and
+//! `rehearsal/rehearsal.parquet` (`crate::sinks::rehearsal_tables`).
 
 use std::path::{Path, PathBuf};
 

@@ -1,6 +1,6 @@
 //! `update`: ensemble updating of the event's digital twin against the modes identified by
 //! the modal stage (thesis ch. 3, METHODS §3; numerical work in `crate::twin`). Writes
-//! `twin_update.parquet`, `twin_modes.parquet` and `twin_updated.toml`.
+//! `twin_update/twin_update.parquet`, `twin_modes/twin_modes.parquet` and `twin_updated.toml`.
 
 use std::path::{Path, PathBuf};
 
@@ -146,7 +146,7 @@ pub struct UpdateSummary {
 }
 
 /// Load the twin at `twin_path`, read the measured modes at `modes_path`, run the ensemble
-/// update and write `twin_update.parquet`, `twin_modes.parquet` and `twin_updated.toml`
+/// update and write `twin_update/twin_update.parquet`, `twin_modes/twin_modes.parquet` and `twin_updated.toml`
 /// (each atomically) into `out_dir`. The inputs are not modified.
 pub fn update_from_files(
     twin_path: &Path,

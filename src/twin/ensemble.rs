@@ -97,7 +97,7 @@ impl EnsembleOptions {
     }
 }
 
-/// One candidate in one round (a row of twin_update.parquet).
+/// One candidate in one round (a row of twin_update/twin_update.parquet).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CandidateRecord {
     pub round: usize,

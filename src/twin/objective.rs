@@ -14,7 +14,7 @@ pub struct MeasuredMode {
     pub shape: Vec<f64>,
 }
 
-/// Measured modes (e.g. from the modal stage's modes.parquet) on a set of channels.
+/// Measured modes (e.g. from the modal stage's modes/modes.parquet) on a set of channels.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeasuredModes {
     /// Where the modes came from (for messages).
@@ -316,7 +316,7 @@ impl<'a> ModalObjective<'a> {
     }
 }
 
-/// Per-mode comparison for reporting (twin_modes.parquet): f_exp, f_num, MAC, errors.
+/// Per-mode comparison for reporting (twin_modes/twin_modes.parquet): f_exp, f_num, MAC, errors.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModeComparison {
     pub pairs: Vec<ModePair>,

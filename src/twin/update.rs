@@ -1,6 +1,6 @@
 //! One call for the `update` command: ensemble-update a twin against measured modes and
-//! gather what the outputs need (twin_update.parquet rows are in `ensemble.rounds`,
-//! twin_modes.parquet rows in `modes`, the updated twin file text in `updated_twin_toml`).
+//! gather what the outputs need (twin_update/twin_update.parquet rows are in `ensemble.rounds`,
+//! twin_modes/twin_modes.parquet rows in `modes`, the updated twin file text in `updated_twin_toml`).
 
 use super::ensemble::{run_ensemble, EnsembleOptions, EnsembleResult};
 use super::file::{updated_twin_toml, Twin};

@@ -7,6 +7,7 @@
 //! back needs no writer.
 
 use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 
 use arrow_schema::{DataType, Field, TimeUnit};
 
@@ -196,13 +197,56 @@ pub enum Rows {
     Series,
 }
 
+/// The file, relative to a run's output directory, of a table whose file
+/// name is `file_name` (`modes.parquet` → `modes/modes.parquet`): each table
+/// in a folder of its own, so that a glob over a folder (`out/modes/*.parquet`)
+/// reads one schema, and the glob across tables that DuckDB and polars refuse
+/// (`out/*.parquet`) matches nothing (docs/formats.md).  A name that is
+/// already a relative path is returned as it is.
+pub fn table_file(file_name: &str) -> String {
+    match file_name.strip_suffix(".parquet") {
+        Some(stem) if !file_name.contains('/') => format!("{stem}/{file_name}"),
+        _ => file_name.to_string(),
+    }
+}
+
+/// [`TableSchema::locate`] for a table file given by its path relative to
+/// the output directory (`modes/modes.parquet`).
+pub fn locate_table_file(dir: &Path, file: &str) -> PathBuf {
+    let nested = dir.join(file);
+    if nested.exists() {
+        return nested;
+    }
+    match file.rsplit_once('/') {
+        Some((_, flat)) if dir.join(flat).is_file() => dir.join(flat),
+        _ => nested,
+    }
+}
+
+/// The output directory of the run a table file belongs to: the folder
+/// above the table's own (`out/modes/modes.parquet` → `out`), or the file's
+/// folder for a flat file of a run made before the per-table folders
+/// (`out/modes.parquet` → `out`).
+pub fn run_dir_of(table_path: &Path) -> PathBuf {
+    let parent = table_path.parent().unwrap_or(Path::new("."));
+    let own_folder = table_path
+        .file_stem()
+        .is_some_and(|stem| Some(stem) == parent.file_name());
+    match (own_folder, parent.parent()) {
+        (true, Some(grand)) => grand.to_path_buf(),
+        _ => parent.to_path_buf(),
+    }
+}
+
 /// One declared table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TableSchema {
     /// The `quaketwin.schema` value.
     pub name: &'static str,
-    /// The file the stage writes (a stage may write the same schema under
-    /// another name, e.g. `samples_as_recorded.parquet`).
+    /// The file the stage writes, relative to the output directory: a folder
+    /// of the table's own, `modes/modes.parquet` ([`table_file`]; a stage may
+    /// write the same schema under another name, e.g.
+    /// `samples_as_recorded/samples_as_recorded.parquet`).
     pub file: &'static str,
     pub doc: &'static str,
     pub rows: Rows,
@@ -210,6 +254,20 @@ pub struct TableSchema {
 }
 
 impl TableSchema {
+    /// The table's file name without its folder (`modes.parquet`): where
+    /// quaketwin versions before the per-table folders wrote it, directly in
+    /// the output directory.
+    pub fn flat_file(&self) -> &'static str {
+        self.file.rsplit('/').next().unwrap_or(self.file)
+    }
+
+    /// The table's file in the output directory `dir` of a run to read
+    /// back: `dir/<table>/<table>.parquet`, or the flat `dir/<table>.parquet`
+    /// of a run made before the per-table folders when only that exists.
+    pub fn locate(&self, dir: &Path) -> PathBuf {
+        locate_table_file(dir, self.file)
+    }
+
     /// The declared column `name` belongs to (a family member included).
     pub fn column(&self, name: &str) -> Option<&'static ColumnSpec> {
         self.columns.iter().find(|c| c.matches(name))

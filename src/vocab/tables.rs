@@ -50,7 +50,7 @@ macro_rules! declare {
     (@null nullable) => { true };
 }
 
-declare!(EVENT, event, "event", "event.parquet",
+declare!(EVENT, event, "event", "event/event.parquet",
     "one row: the event and its structure, their ids (the partitions of a many-event dataset) beside the free-text names the manifest or the records give", {
     STRUCTURE_ID: "structure_id", Utf8, required, "", "the structure's id: `structure.id` of event.toml, else its `structure.name`, else `unknown`, in canonical form (lower case, runs of other characters one `-`): the `structure=` partition of a many-event dataset";
     STRUCTURE_NAME: "structure_name", Utf8, nullable, "", "the structure's name as given (free text; `structure.name`, else from the records' headers); null when none";
@@ -65,7 +65,7 @@ declare!(EVENT, event, "event", "event.parquet",
     LONGITUDE_DEG: "longitude_deg", F64, nullable, "deg", "the structure's longitude (WGS 84, east positive), when stated";
 });
 
-declare!(CHANNELS, channels, "channels", "channels.parquet",
+declare!(CHANNELS, channels, "channels", "channels/channels.parquet",
     "one row per channel: metadata, QA and strong-motion metrics", {
     CHANNEL_ID: "channel_id", Utf8, required, "", "unique id within the event";
     NETWORK: "network", Utf8, nullable, "", "network code, as the file header or StationXML states";
@@ -84,7 +84,7 @@ declare!(CHANNELS, channels, "channels", "channels.parquet",
     SAMPLING_RATE_HZ: "sampling_rate_hz", F64, required, "Hz", "after resampling, when configured";
     NPTS: "npts", I64, required, "", "number of samples";
     START_TIME: "start_time", TimestampNsUtc, nullable, "", "time of the first sample, as the record states it (null when the record has none)";
-    TIME_SOURCE: "time_source", Utf8, required, "", "what the `time` column of samples.parquet counts from: `record_start` (`start_time`), `origin_time` (the record has no start time: its first sample is taken at the event's origin time, so the times are late or early by the unknown trigger delay) or `unknown` (neither: `time` is null)";
+    TIME_SOURCE: "time_source", Utf8, required, "", "what the `time` column of samples/samples.parquet counts from: `record_start` (`start_time`), `origin_time` (the record has no start time: its first sample is taken at the event's origin time, so the times are late or early by the unknown trigger delay) or `unknown` (neither: `time` is null)";
     SOURCE_FILE: "source_file", Utf8, required, "", "file the samples came from; `(rigid-floor combination)` for a floor motion formed by the rigid-floor combination (its sensors are listed in `inferred`, and in `event.json` / the `quaketwin.channels` metadata as `combines`; each sensor's `combined_into` names the floor)";
     SOURCE_MEMBER: "source_member", Utf8, nullable, "", "zip member the samples came from";
     SOURCE_COLUMN: "source_column", Utf8, nullable, "", "column of the file the samples came from";
@@ -102,18 +102,18 @@ declare!(CHANNELS, channels, "channels", "channels.parquet",
     CAV_M_S: "cav_m_s", F64, nullable, "m/s", "cumulative absolute velocity ∫|a| dt";
 });
 
-declare!(series SAMPLES, samples, "samples", "samples.parquet",
+declare!(series SAMPLES, samples, "samples", "samples/samples.parquet",
     "one row per channel and sample: the conditioned records (long format)", {
-    CHANNEL_ID: "channel_id", Utf8, required, "", "channel id (`channel_id` of channels.parquet)";
+    CHANNEL_ID: "channel_id", Utf8, required, "", "channel id (`channel_id` of channels/channels.parquet)";
     SAMPLE: "sample", I64, required, "", "index from 0";
     T_S: "t_s", F64, required, "s", "time from the channel's first sample";
-    TIME: "time", TimestampNsUtc, nullable, "", "absolute time (UTC) of the sample: the record's start time + `t_s`; for a record without a start time of its own, the event's origin time + `t_s` (`time_source` of channels.parquet says which); null when neither is known";
+    TIME: "time", TimestampNsUtc, nullable, "", "absolute time (UTC) of the sample: the record's start time + `t_s`; for a record without a start time of its own, the event's origin time + `t_s` (`time_source` of channels/channels.parquet says which); null when neither is known";
     ACC_M_S2: "acc_m_s2", F64, required, "m/s^2", "conditioned acceleration";
     VEL_M_S: "vel_m_s", F64, nullable, "m/s", "velocity (integration with drift control)";
     DISP_M: "disp_m", F64, nullable, "m", "displacement";
 });
 
-declare!(SPECTRA, spectra, "spectra", "spectra.parquet",
+declare!(SPECTRA, spectra, "spectra", "spectra/spectra.parquet",
     "one row per channel and period: elastic response spectra", {
     CHANNEL_ID: "channel_id", Utf8, required, "", "channel id";
     DAMPING: "damping", F64, required, "1", "damping ratio (0.05)";
@@ -124,9 +124,9 @@ declare!(SPECTRA, spectra, "spectra", "spectra.parquet",
     SA_ABS_M_S2: "sa_abs_m_s2", F64, required, "m/s^2", "peak absolute acceleration of the oscillator";
 });
 
-declare!(FOURIER, fourier, "fourier", "fourier.parquet",
+declare!(FOURIER, fourier, "fourier", "fourier/fourier.parquet",
     "one row per channel and frequency: smoothed Fourier amplitude spectra of the signal and pre-event noise windows, their ratio, and the filter corners chosen from it (a `condition` stage whose filter has `corners_from = \"snr\"`)", {
-    CHANNEL_ID: "channel_id", Utf8, required, "", "channel id (`channel_id` of channels.parquet)";
+    CHANNEL_ID: "channel_id", Utf8, required, "", "channel id (`channel_id` of channels/channels.parquet)";
     FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "centre frequency 10^(k/50), from 1/(signal window duration) to the Nyquist frequency";
     SIGNAL_FAS: "signal_fas", F64, required, "m/s^2/Hz^0.5", "Fourier amplitude |X(f)|·Δt of the signal window (demeaned, Hann taper 5 % at each end), Konno–Ohmachi smoothed (b = 20) and divided by √(window duration)";
     NOISE_FAS: "noise_fas", F64, nullable, "m/s^2/Hz^0.5", "the same for the noise window; null without a noise window and below 1/(noise window duration), which the window does not resolve";
@@ -141,7 +141,7 @@ declare!(FOURIER, fourier, "fourier", "fourier.parquet",
     NOISE_END_S: "noise_end_s", F64, nullable, "s", "noise window end (the onset); null without a noise window";
 });
 
-declare!(DRIFT, drift, "drift", "drift.parquet",
+declare!(DRIFT, drift, "drift", "drift/drift.parquet",
     "one row per storey or instrumented segment and direction: peak drift ratios (measured, segment average, or per-storey estimate: `kind`)", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y` or an azimuth";
     STOREY: "storey", I32, required, "", "upper level of the row: storey L joins levels L−1 and L; for a `segment` row its upper level (`lower_level`–`upper_level`)";
@@ -161,7 +161,7 @@ declare!(DRIFT, drift, "drift", "drift.parquet",
     RESIDUAL_STATUS: "residual_status", Utf8, nullable, "", "`unresolved` (|D| < 2σ), else `artefact` (|D| more than twice the row's own peak drift: impossible for an offset reached during the motion, the band-pass taking at most about half of such an offset out of the peak — docs/report.md), else `resolved`; only `resolved` is rated; null without a residual";
 });
 
-declare!(STABILIZATION, stabilization, "stabilization", "stabilization.parquet",
+declare!(STABILIZATION, stabilization, "stabilization", "stabilization/stabilization.parquet",
     "one row per pole of every model order (the stabilisation diagram)", {
     ORDER: "order", U32, required, "", "model order";
     FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "pole frequency";
@@ -175,7 +175,7 @@ declare!(STABILIZATION, stabilization, "stabilization", "stabilization.parquet",
     MODE: "mode", I32, required, "", "selected mode it belongs to (1-based), −1 = none";
 });
 
-declare!(MODES, modes, "modes", "modes.parquet",
+declare!(MODES, modes, "modes", "modes/modes.parquet",
     "one row per selected mode, with statistics and shapes", {
     MODE: "mode", U32, required, "", "1-based, ascending frequency";
     FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "mean frequency over the best-converged part of the pole column (upper half of its orders, physical poles)";
@@ -198,20 +198,20 @@ declare!(MODES, modes, "modes", "modes.parquet",
     SHAPE_STD: "shape_std", ListF64, required, "1", "standard deviation of each component's modulus";
 });
 
-declare!(MODE_SHAPES, mode_shapes, "mode_shapes", "mode_shapes.parquet",
-    "one row per selected mode and output channel: the mode shapes of modes.parquet in long form, each component beside its channel, level and direction", {
-    MODE: "mode", U32, required, "", "mode (`mode` of modes.parquet)";
-    FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "the mode's frequency (`frequency_hz` of modes.parquet)";
-    CHANNEL_ID: "channel_id", Utf8, required, "", "output channel of this component (`channel_id` of channels.parquet; the k-th entry of `quaketwin.output_channels`)";
+declare!(MODE_SHAPES, mode_shapes, "mode_shapes", "mode_shapes/mode_shapes.parquet",
+    "one row per selected mode and output channel: the mode shapes of modes/modes.parquet in long form, each component beside its channel, level and direction", {
+    MODE: "mode", U32, required, "", "mode (`mode` of modes/modes.parquet)";
+    FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "the mode's frequency (`frequency_hz` of modes/modes.parquet)";
+    CHANNEL_ID: "channel_id", Utf8, required, "", "output channel of this component (`channel_id` of channels/channels.parquet; the k-th entry of `quaketwin.output_channels`)";
     LEVEL: "level", I32, nullable, "", "the channel's level (0 = base/ground); null when unknown";
     DIRECTION: "direction", Utf8, required, "", "the channel's direction label (`X`, `Y`, `Z`, an azimuth `<deg>deg`; empty when unknown)";
-    REAL: "real", F64, required, "1", "real part of the shape component (`shape_re[k]` of modes.parquet; largest component of the mode 1)";
+    REAL: "real", F64, required, "1", "real part of the shape component (`shape_re[k]` of modes/modes.parquet; largest component of the mode 1)";
     IMAG: "imag", F64, required, "1", "imaginary part (`shape_im[k]`)";
     MODULUS_STD: "modulus_std", F64, required, "1", "order spread: standard deviation of the component's modulus over the cluster (`shape_std[k]`)";
     MODULUS_STD_DATA: "modulus_std_data", F64, nullable, "1", "data-driven standard deviation of the component's modulus, the shape normalised to its largest component (0 there by construction; docs/statistics.md); null when not computed";
 });
 
-declare!(MODAL_SPECTRUM, modal_spectrum, "modal_spectrum", "modal_spectrum.parquet",
+declare!(MODAL_SPECTRUM, modal_spectrum, "modal_spectrum", "modal_spectrum/modal_spectrum.parquet",
     "singular values of the factorisation and of the PSD matrix (long format)", {
     KIND: "kind", Utf8, required, "", "`subspace` (singular values of the factorised matrix) or `psd` (singular values of the Welch PSD matrix)";
     INDEX: "index", I32, required, "", "singular value number (1 = largest)";
@@ -219,11 +219,11 @@ declare!(MODAL_SPECTRUM, modal_spectrum, "modal_spectrum", "modal_spectrum.parqu
     VALUE: "value", F64, required, "arbitrary", "singular value, on the scale of the factorised matrix (compare values of one `kind` with each other)";
 });
 
-declare!(FREQUENCY_SHIFTS, frequency_shifts, "frequency_shifts", "frequency_shifts.parquet",
+declare!(FREQUENCY_SHIFTS, frequency_shifts, "frequency_shifts", "frequency_shifts/frequency_shifts.parquet",
     "one row per mode of a reference (earlier) event paired with a mode of this event on the channels both share", {
-    REFERENCE_MODE: "reference_mode", U32, required, "", "mode of the reference event (`mode` of its modes.parquet)";
-    CURRENT_MODE: "current_mode", U32, required, "", "mode of this event (`mode` of modes.parquet)";
-    DIRECTION_REFERENCE: "direction_reference", Utf8, required, "", "direction label of the reference mode (`direction` of its modes.parquet)";
+    REFERENCE_MODE: "reference_mode", U32, required, "", "mode of the reference event (`mode` of its modes/modes.parquet)";
+    CURRENT_MODE: "current_mode", U32, required, "", "mode of this event (`mode` of modes/modes.parquet)";
+    DIRECTION_REFERENCE: "direction_reference", Utf8, required, "", "direction label of the reference mode (`direction` of its modes/modes.parquet)";
     DIRECTION_CURRENT: "direction_current", Utf8, required, "", "direction label of this event's mode";
     FREQUENCY_REFERENCE_HZ: "frequency_reference_hz", F64, required, "Hz", "reference frequency";
     FREQUENCY_REFERENCE_STD_HZ: "frequency_reference_std_hz", F64, required, "Hz", "its standard deviation (`frequency_std_hz` of the reference)";
@@ -242,7 +242,7 @@ declare!(FREQUENCY_SHIFTS, frequency_shifts, "frequency_shifts", "frequency_shif
     PAIRING: "pairing", Utf8, required, "", "what the pairing was based on: `mac_and_frequency` (MAC ≥ `reference_min_mac` on the shared channels and |Δf|/f_ref ≤ `reference_frequency_window`) or `frequency_and_direction` (fewer than 2 shared channels: the frequency window and the same direction label only)";
 });
 
-declare!(BOUC_WEN, bouc_wen, "bouc_wen", "bouc_wen.parquet",
+declare!(BOUC_WEN, bouc_wen, "bouc_wen", "bouc_wen/bouc_wen.parquet",
     "one row per direction, DoF and Bouc-Wen parameter", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
     DOF: "dof", I32, required, "", "DoF (instrumented floor) from the base up, 1-based; −1 on a not-identifiable row";
@@ -266,7 +266,7 @@ declare!(BOUC_WEN, bouc_wen, "bouc_wen", "bouc_wen.parquet",
 });
 
 declare!(BOUC_WEN_INSTANTANEOUS, bouc_wen_instantaneous, "bouc_wen_instantaneous",
-    "bouc_wen_instantaneous.parquet",
+    "bouc_wen_instantaneous/bouc_wen_instantaneous.parquet",
     "cumulative (t_e → t) Bouc-Wen estimates per frame", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
     DOF: "dof", I32, required, "", "DoF (storey), 1-based";
@@ -279,7 +279,7 @@ declare!(BOUC_WEN_INSTANTANEOUS, bouc_wen_instantaneous, "bouc_wen_instantaneous
     GAMMA: "gamma", F64, required, "N^(1-N)/m", "γ";
 });
 
-declare!(series HYSTERESIS_FIT, hysteresis_fit, "hysteresis_fit", "hysteresis_fit.parquet",
+declare!(series HYSTERESIS_FIT, hysteresis_fit, "hysteresis_fit", "hysteresis_fit/hysteresis_fit.parquet",
     "recorded vs model storey shear and drift per storey (segment): the force–drift loops", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
     DOF: "dof", I32, required, "", "DoF (instrumented floor), 1-based";
@@ -291,7 +291,7 @@ declare!(series HYSTERESIS_FIT, hysteresis_fit, "hysteresis_fit", "hysteresis_fi
     ENERGY_RECORD_J: "energy_record_j", F64, required, "J", "cumulative work of the recorded storey shear along the drift, E_rec(t) = ∫₀ᵗ V_d dΔu_d (trapezoid on the drift increments of every sample, also where rows are decimated)";
 });
 
-declare!(series DAMAGE, damage, "damage", "damage.parquet",
+declare!(series DAMAGE, damage, "damage", "damage/damage.parquet",
     "one row per direction, time and mode: the damage index", {
     DIRECTION: "direction", Utf8, required, "", "`X`, `Y`, …";
     T_S: "t_s", F64, required, "s", "time";
@@ -302,7 +302,7 @@ declare!(series DAMAGE, damage, "damage", "damage.parquet",
     PARTICIPATION: "participation", F64, required, "1", "c_s(t), Eq. 33";
 });
 
-declare!(TWIN_UPDATE, twin_update, "twin_update", "twin_update.parquet",
+declare!(TWIN_UPDATE, twin_update, "twin_update", "twin_update/twin_update.parquet",
     "one row per ensemble round and candidate of the twin update", {
     ROUND: "round", U32, required, "", "0-based ensemble round (thesis Table 1)";
     CANDIDATE: "candidate", U32, required, "", "0-based candidate index (order of the `solvers` setting)";
@@ -318,10 +318,10 @@ declare!(TWIN_UPDATE, twin_update, "twin_update", "twin_update.parquet",
     EVALUATIONS: "evaluations", I64, required, "", "objective evaluations the solver used";
 });
 
-declare!(TWIN_MODES, twin_modes, "twin_modes", "twin_modes.parquet",
+declare!(TWIN_MODES, twin_modes, "twin_modes", "twin_modes/twin_modes.parquet",
     "one row per measured mode, before and after updating", {
     STAGE: "stage", Utf8, required, "", "`initial` (twin start values) or `updated`";
-    MODE: "mode", U32, required, "", "measured mode number (`mode` of modes.parquet)";
+    MODE: "mode", U32, required, "", "measured mode number (`mode` of modes/modes.parquet)";
     MODEL_MODE: "model_mode", I32, nullable, "", "1-based model mode paired by MAC; null when no model mode was left";
     F_EXP_HZ: "f_exp_hz", F64, required, "Hz", "measured frequency";
     F_NUM_HZ: "f_num_hz", F64, nullable, "Hz", "paired model frequency";
@@ -329,7 +329,7 @@ declare!(TWIN_MODES, twin_modes, "twin_modes", "twin_modes.parquet",
     MAC: "mac", F64, required, "1", "MAC at the sensor DoFs (0 when unpaired)";
 });
 
-declare!(ACTUATOR_LAYOUT, actuator_layout, "actuator_layout", "actuator_layout.parquet",
+declare!(ACTUATOR_LAYOUT, actuator_layout, "actuator_layout", "actuator_layout/actuator_layout.parquet",
     "one row per actuator of the hybrid-test design", {
     ACTUATOR: "actuator", U32, required, "", "1-based actuator number (column order of `ps_basis.mtx`)";
     NODE_ID: "node_id", I64, required, "", "twin node id";
@@ -339,7 +339,7 @@ declare!(ACTUATOR_LAYOUT, actuator_layout, "actuator_layout", "actuator_layout.p
     POM: "pom_<j>", F64, required, "1", "component of each retained POM at this DoF (`pom_1` … `pom_k`, k = retained POMs)";
 });
 
-declare!(POD, pod, "pod", "pod.parquet",
+declare!(POD, pod, "pod", "pod/pod.parquet",
     "one row per listed proper orthogonal mode (POM)", {
     POM: "pom", U32, required, "", "1-based";
     SINGULAR_VALUE: "singular_value", F64, required, "m", "σ_i (m·√step)";
@@ -350,7 +350,7 @@ declare!(POD, pod, "pod", "pod.parquet",
 });
 
 declare!(REDUCTION_VALIDATION, reduction_validation, "reduction_validation",
-    "reduction_validation.parquet",
+    "reduction_validation/reduction_validation.parquet",
     "one row per retained PS DoF (outside c): reduced vs full response", {
     NODE_ID: "node_id", I64, required, "", "twin node id";
     DIRECTION: "direction", Utf8, required, "", "DoF name";
@@ -360,7 +360,7 @@ declare!(REDUCTION_VALIDATION, reduction_validation, "reduction_validation",
 });
 
 declare!(INTERFACE_REFINEMENT, interface_refinement, "interface_refinement",
-    "interface_refinement.parquet",
+    "interface_refinement/interface_refinement.parquet",
     "one row per step of the interface refinement", {
     STEP: "step", U32, required, "", "1-based";
     CONTROL_NODES: "control_nodes", U32, required, "", "interface control nodes";
@@ -371,7 +371,7 @@ declare!(INTERFACE_REFINEMENT, interface_refinement, "interface_refinement",
     FIRST_FREQUENCY_ERROR: "first_frequency_error", F64, required, "1", "relative error of the reduced model's first frequency";
 });
 
-declare!(HYBRID_PROTOTYPE, hybrid_prototype, "hybrid_prototype", "hybrid_prototype.parquet",
+declare!(HYBRID_PROTOTYPE, hybrid_prototype, "hybrid_prototype", "hybrid_prototype/hybrid_prototype.parquet",
     "one row per prototype eigenfrequency, paired in ascending order with the full model's", {
     MODE: "mode", U32, required, "", "1-based";
     PROTOTYPE_FREQUENCY_HZ: "prototype_frequency_hz", F64, required, "Hz", "Craig–Bampton prototype frequency";
@@ -384,10 +384,10 @@ declare!(HYBRID_PROTOTYPE, hybrid_prototype, "hybrid_prototype", "hybrid_prototy
     BANDWIDTH_HZ: "bandwidth_hz", F64, required, "Hz", "highest prototype frequency / λ";
 });
 
-declare!(REHEARSAL, rehearsal, "rehearsal", "rehearsal.parquet",
+declare!(REHEARSAL, rehearsal, "rehearsal", "rehearsal/rehearsal.parquet",
     "time histories of one rehearsed hybrid test (the recommended λ), one row per base-motion step and actuator, in simulation time", {
     TIME_S: "time_s", F64, required, "s", "simulation time (laboratory time = λ × this)";
-    ACTUATOR: "actuator", U32, required, "", "1-based actuator number (as in `actuator_layout.parquet`)";
+    ACTUATOR: "actuator", U32, required, "", "1-based actuator number (as in `actuator_layout/actuator_layout.parquet`)";
     NODE_ID: "node_id", I64, required, "", "twin node id of the actuated DoF";
     DIRECTION: "direction", Utf8, required, "", "DoF name";
     COMMAND_M: "command_m", F64, required, "m", "commanded actuator displacement (actuated coordinate q_m: deformation relative to the constrained set)";
@@ -399,7 +399,7 @@ declare!(REHEARSAL, rehearsal, "rehearsal", "rehearsal.parquet",
     NS_MODES: "ns_modes", U32, required, "", "NS fixed-interface modes of this run (same on every row)";
 });
 
-declare!(REHEARSAL_SUMMARY, rehearsal_summary, "rehearsal_summary", "rehearsal_summary.parquet",
+declare!(REHEARSAL_SUMMARY, rehearsal_summary, "rehearsal_summary", "rehearsal_summary/rehearsal_summary.parquet",
     "one row per rehearsal run of the sweep (NS modes × time scale λ)", {
     NS_MODES: "ns_modes", U32, required, "", "NS fixed-interface modes of the prototype";
     TIME_SCALE: "time_scale", F64, required, "1", "time scale λ (laboratory time / simulation time)";
@@ -416,7 +416,7 @@ declare!(REHEARSAL_SUMMARY, rehearsal_summary, "rehearsal_summary", "rehearsal_s
     RECOMMENDED: "recommended", Bool, required, "", "the smallest safe λ at the design's NS mode count";
 });
 
-declare!(COMPARE_TEST_SUMMARY, compare_test_summary, "compare_test_summary", "compare_test_summary.parquet",
+declare!(COMPARE_TEST_SUMMARY, compare_test_summary, "compare_test_summary", "compare_test_summary/compare_test_summary.parquet",
     "a logged hybrid test against its rehearsal and its twin (`quaketwin compare-test`): one row for the log, one for the design's rehearsal, one for the rehearsal updated from the log", {
     SOURCE: "source", Utf8, required, "", "`logged`, `rehearsal` (the design's rehearsal settings at the log's λ and step) or `updated rehearsal` (identified actuator and specimen)";
     TIME_SCALE: "time_scale", F64, required, "1", "time scale λ (laboratory time / simulation time), the log's";
@@ -433,9 +433,9 @@ declare!(COMPARE_TEST_SUMMARY, compare_test_summary, "compare_test_summary", "co
     DIVERGENCE_TIME_S: "divergence_time_s", F64, nullable, "s", "simulation time of a rehearsal's divergence";
 });
 
-declare!(COMPARE_TEST_ACTUATORS, compare_test_actuators, "compare_test_actuators", "compare_test_actuators.parquet",
+declare!(COMPARE_TEST_ACTUATORS, compare_test_actuators, "compare_test_actuators", "compare_test_actuators/compare_test_actuators.parquet",
     "one row per actuator of a compared hybrid test: tracking error logged and predicted, identified lag and noise", {
-    ACTUATOR: "actuator", U32, required, "", "1-based actuator number (as in `actuator_layout.parquet`)";
+    ACTUATOR: "actuator", U32, required, "", "1-based actuator number (as in `actuator_layout/actuator_layout.parquet`)";
     NODE_ID: "node_id", I64, required, "", "twin node id of the actuated DoF";
     DIRECTION: "direction", Utf8, required, "", "DoF name";
     LOGGED_TRACKING_RMS_M: "logged_tracking_rms_m", F64, required, "m", "RMS of the log's command − measured";
@@ -448,7 +448,7 @@ declare!(COMPARE_TEST_ACTUATORS, compare_test_actuators, "compare_test_actuators
     UPDATED_TRACKING_MAX_M: "updated_tracking_max_m", F64, nullable, "m", "peak from the updated rehearsal";
 });
 
-declare!(series COMPARE_TEST, compare_test, "compare_test", "compare_test.parquet",
+declare!(series COMPARE_TEST, compare_test, "compare_test", "compare_test/compare_test.parquet",
     "time histories of a compared hybrid test, one row per logged step and actuator: logged, rehearsed, updated, and the twin", {
     STEP: "step", U32, required, "", "integration step of the log (0: the state the test starts from)";
     TIME_S: "time_s", F64, required, "s", "simulation time (laboratory time = λ × this)";
@@ -467,14 +467,14 @@ declare!(series COMPARE_TEST, compare_test, "compare_test", "compare_test.parque
     REFERENCE_M: "reference_m", F64, nullable, "m", "the twin's response there (at the motion's steps; null between them)";
 });
 
-declare!(MODAL_TRACKING, modal_tracking, "modal_tracking", "modal_tracking.parquet",
+declare!(MODAL_TRACKING, modal_tracking, "modal_tracking", "modal_tracking/modal_tracking.parquet",
     "one row per window of a continuous record and tracked mode: frequency, damping, MAC to the reference shape, quality and the anomaly band (`quaketwin track`, docs/monitoring.md)", {
     WINDOW_START: "window_start", TimestampNsUtc, required, "", "start of the window (UTC)";
     WINDOW_END: "window_end", TimestampNsUtc, required, "", "end of the window (UTC, exclusive)";
     MODE: "mode", U32, required, "", "id of the tracked mode: 1-based rank of its reference mode, the same in every window";
     DIRECTION: "direction", Utf8, required, "", "direction label of this window's shape (`X`, `Y`, `torsion`, an azimuth such as `90deg`, `mixed`; empty when the channels' orientations are unknown)";
     FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "identified natural frequency in this window";
-    FREQUENCY_STD_HZ: "frequency_std_hz", F64, required, "Hz", "scatter of the frequency over the model orders of the mode's pole column (`frequency_std_hz` of modes.parquet): a quality figure, large when the column is split";
+    FREQUENCY_STD_HZ: "frequency_std_hz", F64, required, "Hz", "scatter of the frequency over the model orders of the mode's pole column (`frequency_std_hz` of modes/modes.parquet): a quality figure, large when the column is split";
     DAMPING_RATIO: "damping_ratio", F64, required, "1", "identified modal damping ratio";
     MAC_TO_REFERENCE: "mac_to_reference", F64, nullable, "1", "MAC between this window's shape and the reference shape on the shared channels (null when paired by frequency and direction: fewer than two shared channels)";
     REFERENCE_FREQUENCY_HZ: "reference_frequency_hz", F64, required, "Hz", "frequency of the reference mode";
@@ -496,14 +496,14 @@ declare!(MODAL_TRACKING, modal_tracking, "modal_tracking", "modal_tracking.parqu
     CHANGE_DETECTED: "change_detected", Bool, nullable, "", "the statistic exceeds the threshold";
 });
 
-declare!(CHANGE_REFERENCE, change_reference, "change_reference", "change_reference.parquet",
+declare!(CHANGE_REFERENCE, change_reference, "change_reference", "change_reference/change_reference.parquet",
     "one row per block of the identified record: its normalised output covariances, what a later run's change test (`reference_modes`) builds the reference state from (docs/statistics.md Eqs. C1, C4); written by every `modal` run with 2–16 output channels, empty otherwise", {
     BLOCK: "block", U32, required, "", "0-based block of the record (consecutive, equal length)";
     BLOCK_SAMPLES: "block_samples", U32, required, "", "samples of the block";
     COVARIANCES: "covariances", ListF64, required, "1", "R_k / (tr R₀ / l) of the block for k = 1…max_lag, entry (k − 1)·l² + o·l + c for output channel o and reference channel c (channel order: `quaketwin.output_channels`; max_lag: `quaketwin.max_lag`)";
 });
 
-declare!(CHANGE_TEST, change_test, "change_test", "change_test.parquet",
+declare!(CHANGE_TEST, change_test, "change_test", "change_test/change_test.parquet",
     "one row per output channel: the subspace χ² change test of this run's record against the reference run's (`reference_modes`), the test's figures repeated on every row, and the channel's share of the statistic (docs/statistics.md Eqs. C1–C7)", {
     CHANNEL: "channel", Utf8, required, "", "output channel id";
     CONTRIBUTION: "contribution", F64, required, "1", "the channel's share of the statistic (Eq. C7; the shares sum to the statistic, one may be negative)";
@@ -516,7 +516,7 @@ declare!(CHANGE_TEST, change_test, "change_test", "change_test.parquet",
     CHANGED: "changed", Bool, required, "", "the statistic exceeds the threshold: the structure's dynamics differ from the reference's";
 });
 
-declare!(FREQUENCY_TRACK, frequency_track, "frequency_track", "frequency_track.parquet",
+declare!(FREQUENCY_TRACK, frequency_track, "frequency_track", "frequency_track/frequency_track.parquet",
     "one row per moving window and tracked direction: the apparent fundamental frequency during the event (`assess` stage, docs/assessment.md)", {
     DIRECTION: "direction", Utf8, required, "", "building direction tracked (`X`, `Y`)";
     OUTPUT_CHANNEL: "output_channel", Utf8, required, "", "channel whose response is tracked (the highest level of the direction)";
@@ -531,7 +531,7 @@ declare!(FREQUENCY_TRACK, frequency_track, "frequency_track", "frequency_track.p
     TRUE_FREQUENCY_HZ: "true_frequency_hz", F64, nullable, "Hz", "a synthetic event's true tangent f₁ over the window (its `truth_frequency.csv`, written by `quaketwin synth`) where the frame stays linear across the window; null for real records";
 });
 
-declare!(ASSESSMENT, assessment, "assessment", "assessment.parquet",
+declare!(ASSESSMENT, assessment, "assessment", "assessment/assessment.parquet",
     "one row per event: the overall colour and inspection priority, the damage-state probabilities and every indicator's value and verdict (`assess` stage, docs/assessment.md)", {
     EVENT: "event", Utf8, required, "", "event name";
     STRUCTURE: "structure", Utf8, nullable, "", "structure name";
@@ -571,17 +571,17 @@ declare!(ASSESSMENT, assessment, "assessment", "assessment.parquet",
     ASSUMPTIONS: "assumptions", ListUtf8, required, "", "what the assessment assumed: a default building type, an assumed storey height, a roof level…";
 });
 
-declare!(HISTORY_MODES, history_modes, "history_modes", "history_modes.parquet",
+declare!(HISTORY_MODES, history_modes, "history_modes", "history_modes/history_modes.parquet",
     "one row per structure, followed mode and event holding it: the mode's frequency against the event's intensity, the amplitude-dependence band, the flags and a permanent shift (`quaketwin history`, docs/history.md)", {
     STRUCTURE: "structure", Utf8, required, "", "structure id: the dataset's `structure=` partition, or for events whose manifest names no structure (`structure=unknown`) the recording station `NETWORK.STATION` of their channels";
     EVENT: "event", Utf8, required, "", "event (the dataset's `event=` partition)";
-    EVENT_TIME: "event_time", TimestampNsUtc, nullable, "", "origin time, else the start of the event's records (`time_source` of history_events.parquet)";
+    EVENT_TIME: "event_time", TimestampNsUtc, nullable, "", "origin time, else the start of the event's records (`time_source` of history_events/history_events.parquet)";
     MODE: "mode", U32, required, "", "id of the followed mode: 1-based, in the order the modes first appear in date order; the same in every event";
     DIRECTION: "direction", Utf8, required, "", "direction label of the followed mode: the label most of its events give it (`X`, `Y`, `torsion`, `vertical`, `mixed`, an azimuth; empty when unknown)";
-    EVENT_MODE: "event_mode", U32, required, "", "the mode's number in this event's modes.parquet (`mode`)";
-    EVENT_DIRECTION: "event_direction", Utf8, required, "", "direction label of the mode in this event (`direction` of its modes.parquet)";
+    EVENT_MODE: "event_mode", U32, required, "", "the mode's number in this event's modes/modes.parquet (`mode`)";
+    EVENT_DIRECTION: "event_direction", Utf8, required, "", "direction label of the mode in this event (`direction` of its modes/modes.parquet)";
     FREQUENCY_HZ: "frequency_hz", F64, required, "Hz", "identified frequency in this event";
-    FREQUENCY_STD_HZ: "frequency_std_hz", F64, required, "Hz", "its scatter over the model orders (`frequency_std_hz` of modes.parquet)";
+    FREQUENCY_STD_HZ: "frequency_std_hz", F64, required, "Hz", "its scatter over the model orders (`frequency_std_hz` of modes/modes.parquet)";
     DAMPING_RATIO: "damping_ratio", F64, required, "1", "identified damping ratio in this event";
     PAIRED_WITH_EVENT: "paired_with_event", Utf8, nullable, "", "the earlier event whose mode this one was paired with (null for the event where the mode first appears)";
     MAC: "mac", F64, nullable, "1", "MAC to that event's mode on the channels the two events share (null when first, or when paired by frequency and direction: fewer than two shared channels)";
@@ -599,18 +599,18 @@ declare!(HISTORY_MODES, history_modes, "history_modes", "history_modes.parquet",
     STEP_P_VALUE: "step_p_value", F64, nullable, "1", "Bonferroni-adjusted p-value of the shift's F test; null when none";
 });
 
-declare!(HISTORY_EVENTS, history_events, "history_events", "history_events.parquet",
+declare!(HISTORY_EVENTS, history_events, "history_events", "history_events/history_events.parquet",
     "one row per structure and event: its date, intensity, rating, the flags of its modes, and the prediction of its response by the model of the event before (`quaketwin history`, docs/history.md)", {
-    STRUCTURE: "structure", Utf8, required, "", "structure id (as in history_modes.parquet)";
+    STRUCTURE: "structure", Utf8, required, "", "structure id (as in history_modes/history_modes.parquet)";
     STRUCTURE_NAME: "structure_name", Utf8, nullable, "", "the structure's name as the event's manifest or headers give it (`structure.name` of event.json)";
     EVENT: "event", Utf8, required, "", "event (the dataset's `event=` partition)";
     PARTITION: "partition", Utf8, required, "", "the event's partition `structure=<S>/event=<E>`: its tables are `DATASET/tables/<table>/<partition>/part-0.parquet`, its run directory (report.html) `DATASET/runs/<partition>/`";
     EVENT_TIME: "event_time", TimestampNsUtc, nullable, "", "origin time (event.json), else the earliest start of its channels";
     TIME_SOURCE: "time_source", Utf8, required, "", "`origin_time`, `record_start` or `unknown`";
-    PEAK_BASE_M_S2: "peak_base_m_s2", F64, nullable, "m/s^2", "largest horizontal peak acceleration of the input (base, ground) channels (`pga_m_s2` of channels.parquet)";
+    PEAK_BASE_M_S2: "peak_base_m_s2", F64, nullable, "m/s^2", "largest horizontal peak acceleration of the input (base, ground) channels (`pga_m_s2` of channels/channels.parquet)";
     PEAK_RESPONSE_M_S2: "peak_response_m_s2", F64, nullable, "m/s^2", "largest horizontal peak acceleration of the response (output) channels: the roof of a building, the deck of a bridge";
     INTENSITY_M_S2: "intensity_m_s2", F64, nullable, "m/s^2", "the one of the two the bands are fitted on (`--intensity`)";
-    RATING: "rating", Utf8, nullable, "", "the event's colour (`rating` of assessment.parquet); null when the run had no `assess` stage";
+    RATING: "rating", Utf8, nullable, "", "the event's colour (`rating` of assessment/assessment.parquet); null when the run had no `assess` stage";
     MODES: "modes", U32, required, "", "modes identified in the event";
     STATUS: "status", Utf8, required, "", "the event's most severe mode status: `step` (a permanent shift starts here), `below_band`, `amplitude_softened`, `above_band`, `in_band`, `no_band`, `no_modes`";
     FLAGS: "flags", ListUtf8, required, "", "one sentence per mode outside its band or starting a shift";
@@ -622,7 +622,7 @@ declare!(HISTORY_EVENTS, history_events, "history_events", "history_events.parqu
     NOTES: "notes", ListUtf8, required, "", "why a value is missing: no modes, no prediction and why";
 });
 
-declare!(LAB_IDENTIFICATION, lab_identification, "lab_identification", "lab_identification.parquet",
+declare!(LAB_IDENTIFICATION, lab_identification, "lab_identification", "lab_identification/lab_identification.parquet",
     "one row per lab record and model parameter: the hysteresis identified from measured displacement and force (docs/lab-tests.md), with the record's fit figures, form test and damage repeated on its rows", {
     RECORD: "record", Utf8, required, "", "the lab record (the specimen's name, or the file it was read from)";
     FORM: "form", Utf8, required, "", "`plain` (Bouc–Wen) or `degrading_pinching` (Bouc–Wen–Baber–Noori, Eq. L1–L6)";
@@ -633,7 +633,7 @@ declare!(LAB_IDENTIFICATION, lab_identification, "lab_identification", "lab_iden
     FIXED: "fixed", Bool, required, "", "not fitted in this form (the plain form's degradation and pinching, held at 0)";
     FORCE_NRMSE: "force_nrmse", F64, required, "1", "NRMSE of the fitted force against the measured one (Eq. 83: RMS error over the measured force range)";
     PLAIN_NRMSE: "plain_nrmse", F64, required, "1", "the plain model's NRMSE (equal to `force_nrmse` when plain is chosen)";
-    ENERGY_ERROR_MEAN: "energy_error_mean", F64, nullable, "1", "mean of |fitted − measured| / |measured| dissipated energy over the record's cycles (per cycle in lab_cycles.parquet); null without a complete cycle";
+    ENERGY_ERROR_MEAN: "energy_error_mean", F64, nullable, "1", "mean of |fitted − measured| / |measured| dissipated energy over the record's cycles (per cycle in lab_cycles/lab_cycles.parquet); null without a complete cycle";
     CYCLES: "cycles", U32, required, "", "displacement cycles counted (maximum to maximum, dead band `cycle_band` of the range)";
     F_STATISTIC: "f_statistic", F64, nullable, "1", "F-test of the plain model nested in the degrading/pinching one, [(S_plain − S_deg)/6] / [S_deg/(N_eff − 11)] (Eq. L9); null when only one form was fitted";
     P_VALUE: "p_value", F64, nullable, "1", "its p-value: the degrading/pinching form is chosen when p < `significance`";
@@ -649,7 +649,7 @@ declare!(LAB_IDENTIFICATION, lab_identification, "lab_identification", "lab_iden
     QUASI_STATIC: "quasi_static", Bool, required, "", "no time base: the step index orders the samples";
 });
 
-declare!(series LAB_FIT, lab_fit, "lab_fit", "lab_fit.parquet",
+declare!(series LAB_FIT, lab_fit, "lab_fit", "lab_fit/lab_fit.parquet",
     "one row per lab record and sample: measured and fitted force along the measured displacement (the loops)", {
     RECORD: "record", Utf8, required, "", "the lab record";
     STEP: "step", U32, required, "", "sample index (the time of a quasi-static protocol)";
@@ -660,7 +660,7 @@ declare!(series LAB_FIT, lab_fit, "lab_fit", "lab_fit.parquet",
     FORCE_PLAIN_N: "force_plain_n", F64, required, "N", "force of the plain Bouc–Wen fit (equal to `force_fitted_n` when plain is chosen)";
 });
 
-declare!(LAB_CYCLES, lab_cycles, "lab_cycles", "lab_cycles.parquet",
+declare!(LAB_CYCLES, lab_cycles, "lab_cycles", "lab_cycles/lab_cycles.parquet",
     "one row per lab record and displacement cycle: dissipated energy measured and fitted", {
     RECORD: "record", Utf8, required, "", "the lab record";
     CYCLE: "cycle", U32, required, "", "cycle, 1-based (displacement maximum to the next)";
@@ -716,4 +716,13 @@ pub const ALL_TABLES: &[&TableSchema] = &[
 /// The declared table of a `quaketwin.schema` name.
 pub fn by_name(name: &str) -> Option<&'static TableSchema> {
     ALL_TABLES.iter().copied().find(|t| t.name == name)
+}
+
+/// The file, relative to a run's output directory, of the declared table
+/// `name` (`modes` → `modes/modes.parquet`; an undeclared name gets the same
+/// folder-of-its-own form).
+pub fn table_file_of(name: &str) -> String {
+    by_name(name)
+        .map(|t| t.file.to_string())
+        .unwrap_or_else(|| super::schema::table_file(&format!("{name}.parquet")))
 }

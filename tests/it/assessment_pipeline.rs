@@ -30,16 +30,16 @@ fn run(event: &Path, out: &Path) {
 }
 
 fn text(out: &Path, column: &str) -> String {
-    column_str(&out.join("assessment.parquet"), column)[0].clone()
+    column_str(&out.join("assessment/assessment.parquet"), column)[0].clone()
 }
 
 fn number(out: &Path, column: &str) -> f64 {
-    column_f64(&out.join("assessment.parquet"), column)[0]
+    column_f64(&out.join("assessment/assessment.parquet"), column)[0]
 }
 
 fn drivers(out: &Path) -> Vec<String> {
     use arrow_array::{Array, ListArray, StringArray};
-    let file = std::fs::File::open(out.join("assessment.parquet")).unwrap();
+    let file = std::fs::File::open(out.join("assessment/assessment.parquet")).unwrap();
     let reader = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file)
         .unwrap()
         .build()
@@ -98,7 +98,7 @@ fn the_colour_follows_the_damage_at_three_intensities() {
         .map(|c| format!("{:.2}", number(&out, c.name)))
         .collect();
         let state = |c: &str| {
-            let s = column_str(&out.join("assessment.parquet"), c);
+            let s = column_str(&out.join("assessment/assessment.parquet"), c);
             s.first().cloned().unwrap_or_default()
         };
         let drivers = drivers(&out);
@@ -176,7 +176,7 @@ fn the_colour_follows_the_damage_at_three_intensities() {
     eprintln!("\n{}", track_rows.join("\n"));
 }
 
-/// The X rows of frequency_track.parquet against the simulation's true
+/// The X rows of frequency_track/frequency_track.parquet against the simulation's true
 /// tangent f₁: (worst relative error over the windows wholly inside a
 /// linear span, their number, median pre-event, median post-event).
 fn x_track_against_truth(
@@ -184,7 +184,7 @@ fn x_track_against_truth(
     sim: &quaketwin::synth::realistic::degrading::Simulation,
     truth: &[f64],
 ) -> (f64, usize, f64, f64) {
-    let file = out.join("frequency_track.parquet");
+    let file = out.join("frequency_track/frequency_track.parquet");
     let direction = column_str(&file, "direction");
     let time = column_f64(&file, "time_s");
     let freq = column_f64(&file, "frequency_hz");

@@ -83,7 +83,7 @@ fn parked_runs_write_the_same_bytes_as_runs_in_memory() {
             differing.is_empty(),
             "{pipeline} on {event}: parked and in-memory runs differ in {differing:?}"
         );
-        // A skipped condition stage restores its product (parked) from samples.parquet.
+        // A skipped condition stage restores its product (parked) from samples/samples.parquet.
         run(pipeline, event, &out, true);
         assert_eq!(files(&out), names);
     }
@@ -419,7 +419,7 @@ fn series_tables_are_byte_stream_split_and_delta_encoded() {
     use quaketwin::sinks::parquet::{write_parquet, ReadTable, TableBuilder};
     use quaketwin::vocab::tables::{spectra, SPECTRA};
     let dir = tempfile::tempdir().unwrap();
-    let series = dir.path().join("samples.parquet");
+    let series = dir.path().join("samples/samples.parquet");
     let batch = samples_rows(
         "A",
         0,
@@ -428,7 +428,7 @@ fn series_tables_are_byte_stream_split_and_delta_encoded() {
         |i| (i % 7 != 0).then_some(i as f64 * 1e-3),
     );
     write_parquet(&series, std::slice::from_ref(&batch), &[]).unwrap();
-    let results = dir.path().join("spectra.parquet");
+    let results = dir.path().join("spectra/spectra.parquet");
     let n = 100;
     let spectra_batch = TableBuilder::new(&SPECTRA)
         .str(spectra::CHANNEL_ID, &vec!["A"; n])
@@ -496,7 +496,7 @@ fn big_files_of_a_folder_are_read_when_their_records_are() {
     }
 }
 
-/// The report's time histories read samples.parquet in one pass when each
+/// The report's time histories read samples/samples.parquet in one pass when each
 /// channel's rows are together (our files), and in two when a file
 /// interleaves them: the figures are the same.
 #[test]

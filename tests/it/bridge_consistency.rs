@@ -5,7 +5,7 @@
 //!
 //! Records: `../shared/records/cesmd-bridges-corpus/` (CSMIP zips, never
 //! copied into the repository).  "Small" = peak horizontal deck acceleration
-//! (conditioned, `pga_m_s2` of the output channels in channels.parquet)
+//! (conditioned, `pga_m_s2` of the output channels in channels/channels.parquet)
 //! below 0.1 g: stronger shaking softens the soil and the abutments
 //! (the Painter St. transverse mode falls from 4.4 Hz at 0.03 g to about
 //! 4.0 Hz at 0.25–0.4 g), which is physics, not inconsistency.
@@ -56,7 +56,7 @@ fn modal_run(zip: &Path, out: &Path) -> EventRun {
         zip.display(),
         String::from_utf8_lossy(&status.stderr)
     );
-    let channels = out.join("channels.parquet");
+    let channels = out.join("channels/channels.parquet");
     let roles = column_str(&channels, "role");
     let directions = column_str(&channels, "direction");
     let pga = column_f64(&channels, "pga_m_s2");
@@ -103,9 +103,9 @@ fn check_transverse_consistency(folder: &str, expected_small: usize) {
     let tmp = tempfile::tempdir().unwrap();
     let mut runs = run_bridge(folder, tmp.path());
     runs.sort_by(|a, b| a.peak_g.total_cmp(&b.peak_g));
-    let modes_of = |r: &EventRun| read_modes(&r.out.join("modes.parquet")).unwrap();
+    let modes_of = |r: &EventRun| read_modes(&r.out.join("modes/modes.parquet")).unwrap();
     for r in &runs {
-        if !r.out.join("modes.parquet").exists() {
+        if !r.out.join("modes/modes.parquet").exists() {
             // petrolia91: three free-field channels, no response channel.
             eprintln!(
                 "{folder} {:<45} no response channel: modal stage not applicable",
@@ -136,7 +136,10 @@ fn check_transverse_consistency(folder: &str, expected_small: usize) {
     // bridge's modes near its transverse frequency carry one label in
     // every event (checked over all its events, small or strong).
     let mut labels_near_transverse: Vec<(String, f64, String)> = Vec::new();
-    for r in runs.iter().filter(|r| r.out.join("modes.parquet").exists()) {
+    for r in runs
+        .iter()
+        .filter(|r| r.out.join("modes/modes.parquet").exists())
+    {
         let (modes, channels) = modes_of(r);
         for m in &modes {
             let (k, share) = dominant_channel(&m.shape).expect("a mode has a shape");
@@ -306,7 +309,7 @@ fn shared_painter_street_azimuth_records_take_the_bridge_axes() {
     );
     let tmp = tempfile::tempdir().unwrap();
     let run = modal_run(&zip, tmp.path());
-    let (modes, _) = read_modes(&run.out.join("modes.parquet")).unwrap();
+    let (modes, _) = read_modes(&run.out.join("modes/modes.parquet")).unwrap();
     assert!(!modes.is_empty(), "no mode in {}", run.name);
     assert_eq!(
         modes[0].direction, "Y",
@@ -340,6 +343,6 @@ fn shared_output_only_fallback_rejects_ground_motion_peaks() {
         stderr.contains("peaks the ground motion brings") && stderr.contains("× the ground motion"),
         "{stderr}"
     );
-    let (modes, _) = read_modes(&tmp.path().join("modes.parquet")).unwrap();
+    let (modes, _) = read_modes(&tmp.path().join("modes/modes.parquet")).unwrap();
     assert!(modes.is_empty(), "{modes:?}");
 }

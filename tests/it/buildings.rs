@@ -59,7 +59,7 @@ fn run(folder: &str, out: &Path) -> serde_json::Value {
 /// Drift rows that are not per-storey estimates: (direction, lower level,
 /// upper level, peak relative displacement m, residual status).
 fn segment_rows(out: &Path) -> Vec<(String, i64, i64, f64, String)> {
-    let f = out.join("drift.parquet");
+    let f = out.join("drift/drift.parquet");
     let dirs = crate::common::column_str(&f, "direction");
     let kinds = crate::common::column_str(&f, "kind");
     let status = crate::common::column_str(&f, "residual_status");
@@ -84,7 +84,7 @@ fn segment_rows(out: &Path) -> Vec<(String, i64, i64, f64, String)> {
 /// Every reported mode is global (no shape on one channel) and no two are
 /// near-duplicates of one mode.
 fn assert_global_and_distinct(out: &Path) {
-    let (modes, channels) = read_modes(&out.join("modes.parquet")).unwrap();
+    let (modes, channels) = read_modes(&out.join("modes/modes.parquet")).unwrap();
     for m in &modes {
         let (k, share) = dominant_channel(&m.shape).unwrap();
         assert!(

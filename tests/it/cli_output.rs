@@ -75,14 +75,15 @@ fn run_json_summarises_stages_results_and_rating_on_stdout() {
         .iter()
         .map(|f| f.as_str().unwrap())
         .collect();
-    assert!(outputs.contains(&"modes.parquet") && outputs.contains(&"report.html"));
+    assert!(outputs.contains(&"modes/modes.parquet") && outputs.contains(&"report.html"));
     for f in &outputs {
         assert!(out.path().join(f).is_file(), "{f}");
     }
-    // Modes as modes.parquet holds them.
+    // Modes as modes/modes.parquet holds them.
     let modes = v["modes"].as_array().unwrap();
     let (tabled, _) =
-        quaketwin::sinks::modal_tables::read_modes(&out.path().join("modes.parquet")).unwrap();
+        quaketwin::sinks::modal_tables::read_modes(&out.path().join("modes/modes.parquet"))
+            .unwrap();
     assert_eq!(modes.len(), tabled.len());
     for (m, t) in modes.iter().zip(&tabled) {
         assert_eq!(m["frequency_hz"].as_f64().unwrap(), t.frequency_hz);

@@ -55,13 +55,24 @@ pub fn os<P: AsRef<std::ffi::OsStr> + ?Sized>(p: &P) -> &std::ffi::OsStr {
     p.as_ref()
 }
 
-/// The files of an output directory, sorted, without its lock.
+/// The files of an output directory and of its tables' folders
+/// (`modes/modes.parquet`), sorted, without its lock.
 pub fn output_files(dir: &std::path::Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n != ".quaketwin.lock")
-        .collect();
+    let mut names = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let e = e.unwrap();
+        let name = e.file_name().to_string_lossy().into_owned();
+        if e.file_type().unwrap().is_dir() {
+            for f in std::fs::read_dir(e.path()).unwrap() {
+                names.push(format!(
+                    "{name}/{}",
+                    f.unwrap().file_name().to_string_lossy()
+                ));
+            }
+        } else if name != ".quaketwin.lock" {
+            names.push(name);
+        }
+    }
     names.sort();
     names
 }

@@ -146,9 +146,9 @@ fn compare_test_recovers_lag_and_noise_of_a_synthetic_facade_log() {
         );
     }
     for file in [
-        "compare_test_summary.parquet",
-        "compare_test_actuators.parquet",
-        "compare_test.parquet",
+        "compare_test_summary/compare_test_summary.parquet",
+        "compare_test_actuators/compare_test_actuators.parquet",
+        "compare_test/compare_test.parquet",
         "report.html",
     ] {
         assert!(out.join(file).exists(), "{file} missing");
@@ -156,7 +156,7 @@ fn compare_test_recovers_lag_and_noise_of_a_synthetic_facade_log() {
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(html.contains("Comparing the hybrid test with its rehearsal"));
     let lag_col = crate::common::column_f64(
-        &out.join("compare_test_summary.parquet"),
+        &out.join("compare_test_summary/compare_test_summary.parquet"),
         quaketwin::vocab::tables::compare_test_summary::LAG_S.name,
     );
     assert!((lag_col[0] - lag).abs() < 1e-12);

@@ -147,7 +147,7 @@ fn dashboard_lists_every_structure_with_its_colour_and_links_that_resolve() {
     // A history for one structure (what `quaketwin history` will write):
     // its page is copied into the site, its tables shown.
     let history = dataset.join("history/structure=sample-4-storey-frame");
-    std::fs::create_dir_all(&history).unwrap();
+    std::fs::create_dir_all(history.join("history_events")).unwrap();
     std::fs::write(
         history.join("history.html"),
         "<!DOCTYPE html><title>history</title><p>h</p>",
@@ -157,7 +157,7 @@ fn dashboard_lists_every_structure_with_its_colour_and_links_that_resolve() {
         dataset.join(
             "tables/assessment/structure=sample-4-storey-frame/event=quake-2026/part-0.parquet",
         ),
-        history.join("history_events.parquet"),
+        history.join("history_events/history_events.parquet"),
     )
     .unwrap();
 
@@ -212,7 +212,7 @@ fn dashboard_lists_every_structure_with_its_colour_and_links_that_resolve() {
     assert_eq!(links, 5 + 3 + 4 + 1, "links");
     let structure_page =
         std::fs::read_to_string(site.join("structures/sample-4-storey-frame.html")).unwrap();
-    assert!(structure_page.contains("history_events.parquet"));
+    assert!(structure_page.contains("history_events/history_events.parquet"));
     assert!(site.join("history/sample-4-storey-frame.html").is_file());
 
     if !Path::new(CHROMIUM).exists() {

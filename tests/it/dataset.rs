@@ -58,7 +58,7 @@ fn files_under(dir: &Path) -> Vec<PathBuf> {
 /// `DIR/tables/<table>/structure=…/event=…/part-0.parquet`, runs (JSON,
 /// HTML, TOML) under `DIR/runs/` — and pyarrow.dataset, DuckDB and polars
 /// each query `modes` across the events, with the row count per event that
-/// each run's own modes.parquet holds.  Issue 34: the partitions are ids
+/// each run's own modes/modes.parquet holds.  Issue 34: the partitions are ids
 /// (the structure's name in canonical form here) with the free text in the
 /// `event` table, and a glob over the whole table tree counts every table
 /// file once (the runs' copies are outside it).
@@ -104,7 +104,12 @@ fn events_run_in_parallel_into_a_table_first_dataset_that_pyarrow_duckdb_and_pol
     assert_eq!(temps(out.path()), Vec::<PathBuf>::new());
     let quake = Path::new("structure=sample-4-storey-frame/event=synthetic-4storey-quake");
     let run = out.path().join("runs").join(quake);
-    for f in ["event.json", "run.json", "report.html", "modes.parquet"] {
+    for f in [
+        "event.json",
+        "run.json",
+        "report.html",
+        "modes/modes.parquet",
+    ] {
         assert!(run.join(f).is_file(), "missing {f} in {}", run.display());
     }
     // The dataset root holds the table tree and the runs, nothing else.
@@ -137,7 +142,7 @@ fn events_run_in_parallel_into_a_table_first_dataset_that_pyarrow_duckdb_and_pol
                 .path()
                 .join("runs")
                 .join(partition)
-                .join(format!("{name}.parquet"));
+                .join(format!("{name}/{name}.parquet"));
             assert_eq!(
                 std::fs::read(dir.join(&f)).unwrap(),
                 std::fs::read(&own).unwrap(),
@@ -163,7 +168,7 @@ fn events_run_in_parallel_into_a_table_first_dataset_that_pyarrow_duckdb_and_pol
         expected.push_str(&format!("{event}:{n} "));
     }
     // Issue 32: every event has one assessment row, the same as its run's
-    // assessment.parquet, and its report opens with that rating.
+    // assessment/assessment.parquet, and its report opens with that rating.
     let assessments = out.path().join("tables/assessment");
     let mut ratings: Vec<(String, String)> = Vec::new();
     for f in files_under(&assessments) {
@@ -266,7 +271,7 @@ fn republishing_an_event_withdraws_the_tables_its_run_no_longer_has() {
         .join(PART_FILE);
     assert!(first.contains(&channels), "{first:?}");
     assert!(!out.path().join("tables/notes").exists());
-    std::fs::remove_file(run.join("channels.parquet")).unwrap();
+    std::fs::remove_file(run.join("channels/channels.parquet")).unwrap();
     let second = publish_tables(out.path(), &part, &run).unwrap();
     assert_eq!(second.len(), first.len() - 1);
     assert!(
@@ -302,7 +307,7 @@ m = t.schema.metadata or {}
 unit = (t.schema.field("pga_m_s2").metadata or {}).get(b"unit", b"?").decode()
 print(m.get(b"quaketwin.schema", b"?").decode(), unit, b"quaketwin.version" in m, b"quaketwin.event" in m)
 "#;
-    let Some(stdout) = python(script, &out.path().join("channels.parquet")) else {
+    let Some(stdout) = python(script, &out.path().join("channels/channels.parquet")) else {
         return;
     };
     assert_eq!(stdout.trim(), "channels m/s^2 True True");

@@ -478,8 +478,8 @@ fn design_command_on_the_sample_writes_consistent_tables_deterministically() {
     assert_eq!(s.rigid_body_modes, 3);
     assert_eq!(s.ps_nodes, 81);
 
-    // pod.parquet: energy fractions sum up to the cumulative column; retained rows first.
-    let pod = ReadTable::open(&out1.join("pod.parquet")).unwrap();
+    // pod/pod.parquet: energy fractions sum up to the cumulative column; retained rows first.
+    let pod = ReadTable::open(&out1.join("pod/pod.parquet")).unwrap();
     let energy = f64s(&pod, "energy_fraction");
     let cumulative = f64s(&pod, "cumulative_energy");
     let retained = bools(&pod, "retained");
@@ -530,8 +530,8 @@ fn design_command_on_the_sample_writes_consistent_tables_deterministically() {
         Some(env!("CARGO_PKG_VERSION"))
     );
 
-    // actuator_layout.parquet: one pom_j column per retained POM, known control modes.
-    let layout = ReadTable::open(&out1.join("actuator_layout.parquet")).unwrap();
+    // actuator_layout/actuator_layout.parquet: one pom_j column per retained POM, known control modes.
+    let layout = ReadTable::open(&out1.join("actuator_layout/actuator_layout.parquet")).unwrap();
     let b = &layout.batches[0];
     assert_eq!(b.num_rows(), s.actuators);
     for j in 1..=k {
@@ -555,8 +555,9 @@ fn design_command_on_the_sample_writes_consistent_tables_deterministically() {
         (1..=s.actuators as u32).collect::<Vec<_>>()
     );
 
-    // reduction_validation.parquet: WNRMSE (metadata) = Σ w NRMSE / Σ w (Eq. 84) ≤ target.
-    let val = ReadTable::open(&out1.join("reduction_validation.parquet")).unwrap();
+    // reduction_validation/reduction_validation.parquet: WNRMSE (metadata) = Σ w NRMSE / Σ w (Eq. 84) ≤ target.
+    let val =
+        ReadTable::open(&out1.join("reduction_validation/reduction_validation.parquet")).unwrap();
     let (nrmse, weight) = (f64s(&val, "nrmse"), f64s(&val, "weight"));
     let (num, den) = nrmse
         .iter()
@@ -575,16 +576,17 @@ fn design_command_on_the_sample_writes_consistent_tables_deterministically() {
         s.actuators
     );
 
-    // interface_refinement.parquet: the last step meets the target, control nodes grow.
-    let refine = ReadTable::open(&out1.join("interface_refinement.parquet")).unwrap();
+    // interface_refinement/interface_refinement.parquet: the last step meets the target, control nodes grow.
+    let refine =
+        ReadTable::open(&out1.join("interface_refinement/interface_refinement.parquet")).unwrap();
     let cn = u32s(&refine, "control_nodes");
     assert!(cn.windows(2).all(|w| w[1] > w[0]));
     assert_eq!(*cn.last().unwrap() as usize, s.control_nodes);
     assert!(*f64s(&refine, "wnrmse_deformation").last().unwrap() <= 1e-2);
 
-    // hybrid_prototype.parquet: bandwidth = highest prototype frequency / λ ≤ actuator band;
+    // hybrid_prototype/hybrid_prototype.parquet: bandwidth = highest prototype frequency / λ ≤ actuator band;
     // frequencies in the band of interest within the accuracy.
-    let hy = ReadTable::open(&out1.join("hybrid_prototype.parquet")).unwrap();
+    let hy = ReadTable::open(&out1.join("hybrid_prototype/hybrid_prototype.parquet")).unwrap();
     let fp = f64s(&hy, "prototype_frequency_hz");
     let lambda = f64s(&hy, "time_scale")[0];
     let bw = f64s(&hy, "bandwidth_hz")[0];
@@ -665,7 +667,7 @@ fn test_design_pipeline_runs_and_tracks_the_design_file() {
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     let section = &html[html.find("id=\"test-design\"").expect("design section")..];
     let section = &section[..section.find("</section>").unwrap_or(section.len())];
-    let layout = ReadTable::open(&out.join("actuator_layout.parquet")).unwrap();
+    let layout = ReadTable::open(&out.join("actuator_layout/actuator_layout.parquet")).unwrap();
     assert!(
         section.contains(&format!(
             "<dt>Actuators</dt><dd>{} (",
@@ -717,8 +719,8 @@ fn test_design_pipeline_runs_and_tracks_the_design_file() {
     // The design from the pipeline equals the one of `quaketwin design` on the same file.
     let cli = ws.path().join("cli");
     design_from_file(&event.join("design.toml"), &cli).unwrap();
-    let from_cli = ReadTable::open(&cli.join("pod.parquet")).unwrap();
-    let from_pipeline = ReadTable::open(&out.join("pod.parquet")).unwrap();
+    let from_cli = ReadTable::open(&cli.join("pod/pod.parquet")).unwrap();
+    let from_pipeline = ReadTable::open(&out.join("pod/pod.parquet")).unwrap();
     assert_eq!(
         f64s(&from_cli, "singular_value"),
         f64s(&from_pipeline, "singular_value")

@@ -33,9 +33,9 @@ fn outputs_are_byte_identical_with_one_and_three_threads() {
     let names = files(&out);
     assert_eq!(names, files(&one), "the two runs wrote different files");
     for expected in [
-        "modes.parquet",
-        "stabilization.parquet",
-        "modal_spectrum.parquet",
+        "modes/modes.parquet",
+        "stabilization/stabilization.parquet",
+        "modal_spectrum/modal_spectrum.parquet",
     ] {
         assert!(
             names.iter().any(|n| n == expected),

@@ -55,8 +55,8 @@ fn sample_quake_modes_and_twin_update_match_the_truth() {
         f_true.extend(f.into_iter().zip(z));
     }
     f_true.sort_by(|a, b| a.0.partial_cmp(&b.0).unwrap());
-    let f = column_f64(&out.path().join("modes.parquet"), "frequency_hz");
-    let z = column_f64(&out.path().join("modes.parquet"), "damping_ratio");
+    let f = column_f64(&out.path().join("modes/modes.parquet"), "frequency_hz");
+    let z = column_f64(&out.path().join("modes/modes.parquet"), "damping_ratio");
     assert_eq!(f.len(), 8, "modes found: {f:?}");
     for ((fi, zi), (ft, zt)) in f.iter().zip(&z).zip(&f_true) {
         assert!(((fi - ft) / ft).abs() < 1e-3, "f {fi} vs {ft}");
@@ -81,14 +81,14 @@ fn sample_quake_modes_and_twin_update_match_the_truth() {
         );
     }
     // The building stays linear: no direction may report Bouc-Wen parameters.
-    let status = column_str(&out.path().join("bouc_wen.parquet"), "status");
+    let status = column_str(&out.path().join("bouc_wen/bouc_wen.parquet"), "status");
     assert!(
         !status.is_empty() && status.iter().all(|s| s == "not_identifiable"),
         "{status:?}"
     );
     // Nor a residual drift: its records' noise, integrated twice, wanders by
     // centimetres, and every storey's estimate stays within its 2σ.
-    let drift = out.path().join("drift.parquet");
+    let drift = out.path().join("drift/drift.parquet");
     let (d, sd) = (
         column_f64(&drift, "residual_drift_m"),
         column_f64(&drift, "residual_drift_std_m"),
@@ -116,7 +116,7 @@ fn yielding_sample_bouc_wen_and_damage_match_the_truth() {
         .iter()
         .map(f64s)
         .collect();
-    let path = out.path().join("bouc_wen.parquet");
+    let path = out.path().join("bouc_wen/bouc_wen.parquet");
     let params = column_str(&path, "parameter");
     let values = column_f64(&path, "value");
     let status = column_str(&path, "status");
@@ -173,11 +173,11 @@ fn yielding_sample_bouc_wen_and_damage_match_the_truth() {
     }
     // Residual drift: the noise-free records integrated as they are (the
     // hysteresis stage's drift, velocity_drift = "none") end at the storeys'
-    // permanent drift; drift.parquet's baseline-corrected estimate agrees
+    // permanent drift; drift/drift.parquet's baseline-corrected estimate agrees
     // within 3 mm and stands out of its uncertainty.
-    let fit = out.path().join("hysteresis_fit.parquet");
+    let fit = out.path().join("hysteresis_fit/hysteresis_fit.parquet");
     let (segment, loop_drift) = (column_str(&fit, "segment"), column_f64(&fit, "drift_m"));
-    let drift = out.path().join("drift.parquet");
+    let drift = out.path().join("drift/drift.parquet");
     let (d, sd) = (
         column_f64(&drift, "residual_drift_m"),
         column_f64(&drift, "residual_drift_std_m"),
@@ -199,7 +199,7 @@ fn yielding_sample_bouc_wen_and_damage_match_the_truth() {
             s + 1
         );
     }
-    let iota = column_f64(&out.path().join("damage.parquet"), "iota");
+    let iota = column_f64(&out.path().join("damage/damage.parquet"), "iota");
     let final_true = t["final_damage_index"].as_float().unwrap();
     let final_iota = *iota.last().unwrap();
     assert!(
@@ -218,7 +218,7 @@ fn frequency_shifts_against_a_reference_event() {
     use quaketwin::stages::parse_pipeline;
     let first = tempfile::tempdir().unwrap();
     run("synthetic-4storey-quake", first.path());
-    let reference = first.path().join("modes.parquet");
+    let reference = first.path().join("modes/modes.parquet");
     let (ref_modes, ref_channels) = quaketwin::sinks::modal_tables::read_modes(&reference).unwrap();
     assert_eq!(ref_modes.len(), 8);
     assert_eq!(ref_channels.len(), 8, "{ref_channels:?}");
@@ -236,7 +236,9 @@ fn frequency_shifts_against_a_reference_event() {
         true,
     )
     .unwrap();
-    let shifts = second.path().join("frequency_shifts.parquet");
+    let shifts = second
+        .path()
+        .join("frequency_shifts/frequency_shifts.parquet");
     let rel = column_f64(&shifts, "shift_percent");
     let mac = column_f64(&shifts, "mac");
     assert_eq!(rel.len(), 8);
@@ -253,7 +255,9 @@ fn frequency_shifts_against_a_reference_event() {
     )
     .unwrap();
     let rel = column_f64(
-        &third.path().join("frequency_shifts.parquet"),
+        &third
+            .path()
+            .join("frequency_shifts/frequency_shifts.parquet"),
         "shift_percent",
     );
     assert!(rel.len() >= 6, "paired {} modes", rel.len());

@@ -790,7 +790,9 @@ fn zipped_event_reads_its_design_file_and_twin_from_the_zip() {
         matches!(design, quaketwin::pipeline::StageOutcome::Ran { .. }),
         "{design:?}"
     );
-    assert!(out.join("actuator_layout.parquet").is_file());
+    assert!(out
+        .join("actuator_layout/actuator_layout.parquet")
+        .is_file());
 }
 
 /// Issue 14 item 8: `inspect` on a FIFO or a device hung or grew without

@@ -135,11 +135,11 @@ fn a_continuous_record_is_analysed_on_its_event_window() {
     assert_eq!(window, [strong[0] - 120.0, strong[1] + 120.0]);
 
     // Conditioned records: the window's rows only; as recorded: whole.
-    let ids = column_str(&out.join("samples.parquet"), "channel_id");
+    let ids = column_str(&out.join("samples/samples.parquet"), "channel_id");
     let window_rows = ids.iter().filter(|c| *c == "B-X").count();
     let expected = ((window[1] - window[0]) * RATE_HZ).round() as usize;
     assert_eq!(window_rows, expected);
-    let recorded = out.join("samples_as_recorded.parquet");
+    let recorded = out.join("samples_as_recorded/samples_as_recorded.parquet");
     let recorded_ids = column_str(&recorded, "channel_id");
     assert_eq!(recorded_ids.iter().filter(|c| *c == "B-X").count(), n);
     let values = column_f64(&recorded, "acc_m_s2");
@@ -163,23 +163,26 @@ fn a_continuous_record_is_analysed_on_its_event_window() {
         "cav_m_s",
     ] {
         assert_eq!(
-            column_f64(&out.join("channels.parquet"), column),
-            column_f64(&cut_out.join("channels.parquet"), column),
+            column_f64(&out.join("channels/channels.parquet"), column),
+            column_f64(&cut_out.join("channels/channels.parquet"), column),
             "{column}"
         );
     }
     assert_eq!(
-        column_f64(&out.join("spectra.parquet"), "psa_m_s2"),
-        column_f64(&cut_out.join("spectra.parquet"), "psa_m_s2")
+        column_f64(&out.join("spectra/spectra.parquet"), "psa_m_s2"),
+        column_f64(&cut_out.join("spectra/spectra.parquet"), "psa_m_s2")
     );
     // The burst's peak, not a day's taper of it.
-    let pga = column_f64(&out.join("channels.parquet"), "pga_m_s2");
+    let pga = column_f64(&out.join("channels/channels.parquet"), "pga_m_s2");
     assert!(pga[0] > 1.0, "base PGA {} of a 1 m/s² burst", pga[0]);
 
     // A re-run skips every stage and leaves every output as it was.
-    let before = std::fs::read(out.join("channels.parquet")).unwrap();
+    let before = std::fs::read(out.join("channels/channels.parquet")).unwrap();
     run_ingest(&continuous, &out);
-    assert_eq!(std::fs::read(out.join("channels.parquet")).unwrap(), before);
+    assert_eq!(
+        std::fs::read(out.join("channels/channels.parquet")).unwrap(),
+        before
+    );
 }
 
 /// A spill file for the tests (the run's own, in a temporary directory).

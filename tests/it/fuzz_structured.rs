@@ -767,14 +767,36 @@ fn manifest_case(rng: &mut Rng, dir: &Path) -> Case {
 
 /// After any run, `out/` holds no temporary file (a successful run none at
 /// all; a failed one may not leave its half-written files either).
-fn no_temp_files_in_out(dir: &Path, _: &Outcome) -> Result<(), String> {
-    let out = dir.join("out");
-    let Ok(rd) = std::fs::read_dir(&out) else {
-        return Ok(());
+/// The entries of an output directory and of its real folders (a table's:
+/// `modes/modes.parquet`), as (relative name, type).
+fn out_entries(out: &Path) -> Vec<(String, std::fs::FileType)> {
+    let mut found = Vec::new();
+    let Ok(rd) = std::fs::read_dir(out) else {
+        return found;
     };
-    let temps: Vec<String> = rd
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().into_owned())
+    for e in rd.filter_map(|e| e.ok()) {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let Ok(ft) = e.file_type() else { continue };
+        if ft.is_dir() {
+            for f in std::fs::read_dir(e.path())
+                .into_iter()
+                .flatten()
+                .filter_map(|f| f.ok())
+            {
+                if let Ok(fft) = f.file_type() {
+                    found.push((format!("{name}/{}", f.file_name().to_string_lossy()), fft));
+                }
+            }
+        }
+        found.push((name, ft));
+    }
+    found
+}
+
+fn no_temp_files_in_out(dir: &Path, _: &Outcome) -> Result<(), String> {
+    let temps: Vec<String> = out_entries(&dir.join("out"))
+        .into_iter()
+        .map(|(n, _)| n)
         .filter(|n| n.ends_with(".tmp") || n.contains(".quaketwin-"))
         .collect();
     if temps.is_empty() {
@@ -1348,16 +1370,22 @@ fn made_once(
 }
 
 const OUTPUT_NAMES: &[&str] = &[
-    "channels.parquet",
-    "samples.parquet",
-    "spectra.parquet",
-    "drift.parquet",
+    "channels/channels.parquet",
+    "samples/samples.parquet",
+    "spectra/spectra.parquet",
+    "drift/drift.parquet",
     "event.json",
     "run.json",
-    "assessment.parquet",
-    "modes.parquet",
+    "assessment/assessment.parquet",
+    "modes/modes.parquet",
     "report.html",
-    "bouc_wen.parquet",
+    "bouc_wen/bouc_wen.parquet",
+    // The flat files of runs made before the per-table folders, and a
+    // table's folder itself (a FIFO, link or file there is refused).
+    "modes.parquet",
+    "samples.parquet",
+    "samples",
+    "channels",
 ];
 
 fn outdir_case(rng: &mut Rng, dir: &Path) -> Case {
@@ -1374,13 +1402,24 @@ fn outdir_case(rng: &mut Rng, dir: &Path) -> Case {
         if std::fs::symlink_metadata(&p).is_ok() {
             continue;
         }
+        let folder = p.parent().unwrap();
+        match std::fs::symlink_metadata(folder) {
+            Ok(m) if m.is_dir() => {}
+            Ok(_) => continue, // the table's folder is something else already
+            Err(_) => std::fs::create_dir_all(folder).unwrap(),
+        }
+        let file_name = p.file_name().unwrap().to_string_lossy().into_owned();
         match rng.below(7) {
             0 => mkfifo(&p),
             1 => std::fs::create_dir_all(p.join("inside")).unwrap(),
             2 => std::os::unix::fs::symlink(&outside, &p).unwrap(),
-            3 => std::fs::write(out.join(format!(".{name}.quaketwin-1-0.tmp")), b"stale").unwrap(),
+            3 => std::fs::write(
+                folder.join(format!(".{file_name}.quaketwin-1-0.tmp")),
+                b"stale",
+            )
+            .unwrap(),
             _ => {
-                if other.join(name).exists() {
+                if other.join(name).is_file() {
                     std::fs::copy(other.join(name), &p).unwrap();
                 } else {
                     std::fs::write(&p, b"garbage").unwrap();
@@ -1391,11 +1430,13 @@ fn outdir_case(rng: &mut Rng, dir: &Path) -> Case {
     }
     if rng.below(3) == 0 {
         // Another event's whole run, run.json included.
-        for e in std::fs::read_dir(&other).unwrap() {
-            let e = e.unwrap();
-            let p = out.join(e.file_name());
-            if std::fs::symlink_metadata(&p).is_err() {
-                std::fs::copy(e.path(), &p).unwrap();
+        for (name, ft) in out_entries(&other) {
+            let p = out.join(&name);
+            if ft.is_dir() || std::fs::symlink_metadata(&p).is_ok() {
+                continue;
+            }
+            if std::fs::create_dir_all(p.parent().unwrap()).is_ok() {
+                let _ = std::fs::copy(other.join(&name), &p);
             }
         }
         what.push_str("+ another event's run");
@@ -1447,10 +1488,7 @@ fn stale_files(out: &Path) -> Result<(), String> {
         }
     }
     let mut stale = Vec::new();
-    for e in std::fs::read_dir(out).unwrap() {
-        let e = e.unwrap();
-        let name = e.file_name().to_string_lossy().into_owned();
-        let ft = e.file_type().unwrap();
+    for (name, ft) in out_entries(out) {
         if ft.is_file() && !listed.contains(&name) {
             stale.push(name);
         }

@@ -185,13 +185,19 @@ fn stated_axes_flip_sensors_onto_the_same_event_written_in_xy() {
             .iter()
             .all(|(_, o)| matches!(o, StageOutcome::Ran { .. })));
     }
-    for dir in column_str(&out_r.join("channels.parquet"), "direction") {
+    for dir in column_str(&out_r.join("channels/channels.parquet"), "direction") {
         assert!(matches!(dir.as_str(), "X" | "Y" | "Z"), "direction {dir}");
     }
     for (file, cols) in [
-        ("samples.parquet", &["acc_m_s2", "vel_m_s", "disp_m"][..]),
-        ("drift.parquet", &["peak_drift_ratio"][..]),
-        ("modes.parquet", &["frequency_hz", "damping_ratio"][..]),
+        (
+            "samples/samples.parquet",
+            &["acc_m_s2", "vel_m_s", "disp_m"][..],
+        ),
+        ("drift/drift.parquet", &["peak_drift_ratio"][..]),
+        (
+            "modes/modes.parquet",
+            &["frequency_hz", "damping_ratio"][..],
+        ),
     ] {
         for c in cols {
             assert_eq!(
@@ -201,14 +207,14 @@ fn stated_axes_flip_sensors_onto_the_same_event_written_in_xy() {
             );
         }
     }
-    let dirs = column_str(&out_r.join("drift.parquet"), "direction");
+    let dirs = column_str(&out_r.join("drift/drift.parquet"), "direction");
     assert!(dirs.iter().all(|d| d == "X" || d == "Y") && dirs.len() == 8);
-    let bw_dirs = column_str(&out_r.join("bouc_wen.parquet"), "direction");
+    let bw_dirs = column_str(&out_r.join("bouc_wen/bouc_wen.parquet"), "direction");
     assert!(!bw_dirs.is_empty());
     assert!(bw_dirs.iter().all(|d| d == "X" || d == "Y"), "{bw_dirs:?}");
     assert_eq!(
         bw_dirs,
-        column_str(&out_x.join("bouc_wen.parquet"), "direction")
+        column_str(&out_x.join("bouc_wen/bouc_wen.parquet"), "direction")
     );
 }
 

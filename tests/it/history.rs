@@ -396,8 +396,8 @@ fn history_command_on_a_synthetic_dataset() {
     let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(summary["ok"], true);
     assert_eq!(summary["structures"][0]["structure"], "test-building");
-    let modes = read_modes(&out.join("history_modes.parquet")).unwrap();
-    let rows = read_events(&out.join("history_events.parquet")).unwrap();
+    let modes = read_modes(&out.join("history_modes/history_modes.parquet")).unwrap();
+    let rows = read_events(&out.join("history_events/history_events.parquet")).unwrap();
     assert_eq!(rows.len(), DATASET_EVENTS);
     let names: Vec<String> = (0..DATASET_EVENTS)
         .map(|e| format!("quake{e:02}"))
@@ -532,8 +532,14 @@ fn real_history(
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     (
-        quaketwin::sinks::history_tables::read_modes(&out.join("history_modes.parquet")).unwrap(),
-        quaketwin::sinks::history_tables::read_events(&out.join("history_events.parquet")).unwrap(),
+        quaketwin::sinks::history_tables::read_modes(
+            &out.join("history_modes/history_modes.parquet"),
+        )
+        .unwrap(),
+        quaketwin::sinks::history_tables::read_events(
+            &out.join("history_events/history_events.parquet"),
+        )
+        .unwrap(),
     )
 }
 

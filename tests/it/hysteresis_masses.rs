@@ -243,7 +243,7 @@ fn uninstrumented_floor_uses_reduced_masses_from_the_twin() {
                     && reason.contains("not improve the nested fit significantly"),
                 "{reason}"
             );
-            // The failed F-test is tabled, not only told: bouc_wen.parquet's
+            // The failed F-test is tabled, not only told: bouc_wen/bouc_wen.parquet's
             // not-identifiable row carries F and p.
             let (f, p) = f_test.expect("the F-test that failed travels with the outcome");
             assert!(
@@ -251,7 +251,7 @@ fn uninstrumented_floor_uses_reduced_masses_from_the_twin() {
                 "F {f}, p {p}"
             );
             let tmp = tempfile::tempdir().unwrap();
-            let path = tmp.path().join("bouc_wen.parquet");
+            let path = tmp.path().join("bouc_wen/bouc_wen.parquet");
             quaketwin::sinks::hysteresis_tables::write_bouc_wen(&path, &outcomes, &[]).unwrap();
             let t = quaketwin::report::table::load(&path, None).unwrap();
             assert_eq!(t.number("f_statistic").unwrap()[0], Some(f));

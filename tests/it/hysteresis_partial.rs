@@ -432,7 +432,7 @@ fn write_event_folder(dir: &Path, t: &Truth, levels: &[i32]) {
 
 /// `quaketwin hysteresis` on base + L4 + roof of a linear (weak-motion)
 /// response: exit 0, X not identifiable with its reason row, and the
-/// measured loops of both segments in hysteresis_fit.parquet (model null).
+/// measured loops of both segments in hysteresis_fit/hysteresis_fit.parquet (model null).
 #[test]
 fn cli_exits_0_and_writes_measured_loops_of_a_not_identifiable_direction() {
     let dir = tempfile::tempdir().unwrap();
@@ -450,11 +450,14 @@ fn cli_exits_0_and_writes_measured_loops_of_a_not_identifiable_direction() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     assert!(stderr.contains("not identifiable"), "{stderr}");
-    let status = crate::common::column_str(&out.join("bouc_wen.parquet"), "status");
+    let status = crate::common::column_str(&out.join("bouc_wen/bouc_wen.parquet"), "status");
     assert_eq!(status, vec!["not_identifiable"]);
-    let reason = crate::common::column_str(&out.join("bouc_wen.parquet"), "reason");
+    let reason = crate::common::column_str(&out.join("bouc_wen/bouc_wen.parquet"), "reason");
     assert!(!reason[0].is_empty());
-    let segments = crate::common::column_str(&out.join("hysteresis_fit.parquet"), "segment");
+    let segments = crate::common::column_str(
+        &out.join("hysteresis_fit/hysteresis_fit.parquet"),
+        "segment",
+    );
     assert!(segments.iter().any(|s| s == "L0-L4") && segments.iter().any(|s| s == "L4-L7"));
 }
 

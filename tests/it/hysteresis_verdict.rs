@@ -128,7 +128,7 @@ fn yielding_six_storey_is_never_called_linear() {
     }
 }
 
-/// The bouc_wen.parquet rows of the same run: the verdict column and the
+/// The bouc_wen/bouc_wen.parquet rows of the same run: the verdict column and the
 /// energy of the direction, never "identified" with a linear reason.
 #[test]
 fn yielding_six_storey_bouc_wen_table_states_the_verdict_and_energy() {
@@ -147,7 +147,8 @@ fn yielding_six_storey_bouc_wen_table_states_the_verdict_and_energy() {
         &provenance,
     )
     .unwrap();
-    let t = quaketwin::report::table::load(&out.path().join("bouc_wen.parquet"), None).unwrap();
+    let t = quaketwin::report::table::load(&out.path().join("bouc_wen/bouc_wen.parquet"), None)
+        .unwrap();
     let text = |c: &str| -> Vec<String> {
         t.text(c)
             .unwrap()
@@ -173,8 +174,11 @@ fn yielding_six_storey_bouc_wen_table_states_the_verdict_and_energy() {
     }
     // The fit table carries the cumulative loop energy; its last value per
     // segment is the segment's E_rec.
-    let fit =
-        quaketwin::report::table::load(&out.path().join("hysteresis_fit.parquet"), None).unwrap();
+    let fit = quaketwin::report::table::load(
+        &out.path().join("hysteresis_fit/hysteresis_fit.parquet"),
+        None,
+    )
+    .unwrap();
     let e = fit.number("energy_record_j").unwrap();
     assert!(e.iter().all(|v| v.is_some_and(f64::is_finite)));
 }

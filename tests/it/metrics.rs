@@ -608,11 +608,11 @@ mod instrumented_segments {
         assert!(!verdict.provisional && verdict.drivers.iter().all(|d| !d.provisional));
     }
 
-    /// drift.parquet of `table` written, and the report's verdict and page.
+    /// drift/drift.parquet of `table` written, and the report's verdict and page.
     fn rated(source: &Event, table: &DriftTable) -> (quaketwin::report::Verdict, String) {
         let out = tempfile::tempdir().unwrap();
         quaketwin::sinks::event_tables::write_drift(
-            &out.path().join("drift.parquet"),
+            &out.path().join("drift/drift.parquet"),
             source,
             table,
         )
@@ -627,7 +627,7 @@ mod instrumented_segments {
     /// A step in the roof record's baseline after the shaking (a sensor
     /// offset jump): the double integration turns it into a residual that
     /// stands out of its σ and is more than twice the segment's own peak
-    /// drift → `artefact`, and the report's rating (from drift.parquet) is
+    /// drift → `artefact`, and the report's rating (from drift/drift.parquet) is
     /// not driven by it.
     #[test]
     fn a_baseline_step_is_an_artefact_and_never_rated() {
@@ -656,7 +656,7 @@ mod instrumented_segments {
         assert_eq!(top.residual_status, Some(ResidualStatus::Artefact));
         let out = tempfile::tempdir().unwrap();
         quaketwin::sinks::event_tables::write_drift(
-            &out.path().join("drift.parquet"),
+            &out.path().join("drift/drift.parquet"),
             &source,
             &table,
         )

@@ -49,11 +49,23 @@ fn section<'a>(html: &'a str, id: &str) -> &'a str {
     &html[start..start + len]
 }
 
+/// The files in `dir` and in its folders (a table's: `modes/modes.parquet`).
 fn names_in(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
+    let mut v = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let e = e.unwrap();
+        let name = e.file_name().to_string_lossy().into_owned();
+        if e.file_type().unwrap().is_dir() {
+            for f in std::fs::read_dir(e.path()).unwrap() {
+                v.push(format!(
+                    "{name}/{}",
+                    f.unwrap().file_name().to_string_lossy()
+                ));
+            }
+        } else {
+            v.push(name);
+        }
+    }
     v.sort();
     v
 }
@@ -69,8 +81,8 @@ fn a_second_event_removes_the_first_events_results_and_the_report_ignores_them()
     let first = pipeline::run(&p, &event("synthetic-4storey-quake"), d, true).unwrap();
     assert!(matches!(first[3].1, StageOutcome::Ran { .. }), "{first:?}");
     for f in [
-        "twin_update.parquet",
-        "twin_modes.parquet",
+        "twin_update/twin_update.parquet",
+        "twin_modes/twin_modes.parquet",
         "twin_updated.toml",
     ] {
         assert!(d.join(f).exists(), "{f} missing after the first event");
@@ -90,8 +102,8 @@ fn a_second_event_removes_the_first_events_results_and_the_report_ignores_them()
         "nothing of the first event may count as up to date: {second:?}"
     );
     for f in [
-        "twin_update.parquet",
-        "twin_modes.parquet",
+        "twin_update/twin_update.parquet",
+        "twin_modes/twin_modes.parquet",
         "twin_updated.toml",
     ] {
         assert!(!d.join(f).exists(), "{f} of the first event survived");
@@ -139,9 +151,10 @@ fn the_report_shows_only_files_the_run_manifest_lists() {
     );
     let m = parse_pipeline(&metrics, "m.toml").unwrap();
     pipeline::run(&m, &event("synthetic-2storey-yielding"), other.path(), true).unwrap();
+    std::fs::create_dir_all(d.join("channels")).unwrap();
     std::fs::copy(
-        other.path().join("channels.parquet"),
-        d.join("channels.parquet"),
+        other.path().join("channels/channels.parquet"),
+        d.join("channels/channels.parquet"),
     )
     .unwrap();
     pipeline::run(&p, &event("synthetic-4storey-quake"), d, true).unwrap();
@@ -268,7 +281,7 @@ fn two_runs_started_together_never_mix_two_events() {
     }
 }
 
-/// Item 3: a truncated samples.parquet and a garbage modes.parquet in a
+/// Item 3: a truncated samples/samples.parquet and a garbage modes/modes.parquet in a
 /// finished D are rebuilt by the next run (not "up to date").
 #[test]
 fn damaged_outputs_are_rebuilt_on_re_run() {
@@ -280,26 +293,33 @@ fn damaged_outputs_are_rebuilt_on_re_run() {
     let p = parse_pipeline(&text, "m.toml").unwrap();
     let ev = event("synthetic-4storey-ambient");
     pipeline::run(&p, &ev, d, true).unwrap();
-    let samples = std::fs::read(d.join("samples.parquet")).unwrap();
-    let modes = std::fs::read(d.join("modes.parquet")).unwrap();
+    let samples = std::fs::read(d.join("samples/samples.parquet")).unwrap();
+    let modes = std::fs::read(d.join("modes/modes.parquet")).unwrap();
 
-    // Truncated samples.parquet: condition re-runs; modal is still valid.
-    std::fs::write(d.join("samples.parquet"), &samples[..samples.len() / 2]).unwrap();
+    // Truncated samples/samples.parquet: condition re-runs; modal is still valid.
+    std::fs::write(
+        d.join("samples/samples.parquet"),
+        &samples[..samples.len() / 2],
+    )
+    .unwrap();
     let r = pipeline::run(&p, &ev, d, true).unwrap();
     assert_eq!(r[0].1, StageOutcome::Skipped, "{r:?}");
     assert!(matches!(r[1].1, StageOutcome::Ran { .. }), "{r:?}");
-    assert_eq!(std::fs::read(d.join("samples.parquet")).unwrap(), samples);
+    assert_eq!(
+        std::fs::read(d.join("samples/samples.parquet")).unwrap(),
+        samples
+    );
 
     // Same size, other bytes: the hash, not only the size, is checked.
     let mut garbage = modes.clone();
     for b in garbage.iter_mut().skip(8).take(64) {
         *b = b'x';
     }
-    std::fs::write(d.join("modes.parquet"), &garbage).unwrap();
+    std::fs::write(d.join("modes/modes.parquet"), &garbage).unwrap();
     let r = pipeline::run(&p, &ev, d, true).unwrap();
     assert_eq!(r[1].1, StageOutcome::Skipped, "{r:?}");
     assert!(matches!(r[2].1, StageOutcome::Ran { .. }), "{r:?}");
-    assert_eq!(std::fs::read(d.join("modes.parquet")).unwrap(), modes);
+    assert_eq!(std::fs::read(d.join("modes/modes.parquet")).unwrap(), modes);
 
     // And now everything is up to date again.
     let r = pipeline::run(&p, &ev, d, true).unwrap();
@@ -319,17 +339,17 @@ fn the_run_manifest_is_deterministic_and_lists_sizes_and_hashes() {
     let m = manifest::read(a.path()).unwrap().unwrap();
     let rec = m.stage("condition").unwrap();
     let o = &rec.outputs[0];
-    assert_eq!(o.file, "samples.parquet");
+    assert_eq!(o.file, "samples/samples.parquet");
     assert_eq!(
         o.bytes,
         Some(
-            std::fs::metadata(a.path().join("samples.parquet"))
+            std::fs::metadata(a.path().join("samples/samples.parquet"))
                 .unwrap()
                 .len()
         )
     );
     // Hashed as it was written: the hash of the file read back.
-    let (bytes, hash) = manifest::hash_file(&a.path().join("samples.parquet"))
+    let (bytes, hash) = manifest::hash_file(&a.path().join("samples/samples.parquet"))
         .unwrap()
         .unwrap();
     assert_eq!(
@@ -417,7 +437,8 @@ fn a_symlink_or_fifo_at_an_output_path_is_refused() {
     let elsewhere = tempfile::tempdir().unwrap();
     let target = elsewhere.path().join("precious.parquet");
     std::fs::write(&target, b"keep me").unwrap();
-    std::os::unix::fs::symlink(&target, d.join("samples.parquet")).unwrap();
+    std::fs::create_dir_all(d.join("samples")).unwrap();
+    std::os::unix::fs::symlink(&target, d.join("samples/samples.parquet")).unwrap();
     let e = pipeline::run(
         &ingest_pipeline(),
         &event("synthetic-4storey-quake"),
@@ -428,10 +449,10 @@ fn a_symlink_or_fifo_at_an_output_path_is_refused() {
     let msg = e.to_string();
     assert_eq!(e.exit_code(), 2, "{msg}");
     assert!(
-        msg.contains("samples.parquet") && msg.contains("symbolic link"),
+        msg.contains("samples/samples.parquet") && msg.contains("symbolic link"),
         "{msg}"
     );
-    assert!(file_type(&d.join("samples.parquet")).is_symlink());
+    assert!(file_type(&d.join("samples/samples.parquet")).is_symlink());
     assert_eq!(std::fs::read(&target).unwrap(), b"keep me");
 
     let d2 = tempfile::tempdir().unwrap();
@@ -569,12 +590,12 @@ fn a_stale_lock_on_this_host_is_taken_over_one_of_another_host_refused() {
 
 #[test]
 fn temp_names_are_recognised() {
-    let t = temp_path(Path::new("/x/samples.parquet"));
+    let t = temp_path(Path::new("/x/samples/samples.parquet"));
     let name = t.file_name().unwrap().to_str().unwrap();
     assert!(is_temp_name(name), "{name}");
     assert!(is_temp_name(".samples.parquet.1234.tmp"));
     assert!(is_temp_name(".x.mcap.tmp-77"));
-    assert!(!is_temp_name("samples.parquet"));
+    assert!(!is_temp_name("samples/samples.parquet"));
     assert!(!is_temp_name(".hidden.tmp"));
     assert!(!is_temp_name("a.1.tmp"));
 }

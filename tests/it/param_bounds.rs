@@ -88,7 +88,10 @@ fn run_refused(kind: &str, params: &str, event: &str, names: &[&str]) {
     let ev = sample(event).display().to_string();
     refused(&["run", &p, &ev, "--out", out.to_str().unwrap()], names);
     // Refused before the run: nothing written.
-    assert!(!out.join("samples.parquet").exists(), "{kind}: {params}");
+    assert!(
+        !out.join("samples/samples.parquet").exists(),
+        "{kind}: {params}"
+    );
 }
 
 #[test]
@@ -197,7 +200,7 @@ fn explicit_block_rows_beyond_the_hankel_bound_are_refused_at_run_time() {
         &["run", &p, &ev, "--out", out.to_str().unwrap()],
         &["block_rows = 480", "4096"],
     );
-    assert!(!out.join("modes.parquet").exists());
+    assert!(!out.join("modes/modes.parquet").exists());
 }
 
 #[test]
@@ -212,7 +215,7 @@ fn explicit_orders_beyond_what_the_record_supports_are_refused_at_run_time() {
         &["run", &p, &ev, "--out", out.to_str().unwrap()],
         &["orders [400, 440, 480]", "exceed the subspace dimension"],
     );
-    assert!(!out.join("modes.parquet").exists());
+    assert!(!out.join("modes/modes.parquet").exists());
 }
 
 #[test]

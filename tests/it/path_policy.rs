@@ -431,10 +431,20 @@ fn report_checks_the_files_it_shows_against_run_json() {
     let page = a.join("report.html");
     let before = std::fs::read(&page).unwrap();
 
-    // Another event's channels.parquet copied in: refused, page kept as it was.
-    std::fs::copy(b.join("channels.parquet"), a.join("channels.parquet")).unwrap();
+    // Another event's channels/channels.parquet copied in: refused, page kept as it was.
+    std::fs::copy(
+        b.join("channels/channels.parquet"),
+        a.join("channels/channels.parquet"),
+    )
+    .unwrap();
     let (code, e) = quaketwin(&[&"report", &a], RUN);
-    assert_refused(code, &e, 1, &a.join("channels.parquet"), "run.json");
+    assert_refused(
+        code,
+        &e,
+        1,
+        &a.join("channels/channels.parquet"),
+        "run.json",
+    );
     assert!(e.contains("not the file the run recorded"), "{e}");
     assert_eq!(std::fs::read(&page).unwrap(), before);
 
@@ -451,7 +461,8 @@ fn report_checks_the_files_it_shows_against_run_json() {
         RUN,
     );
     assert_eq!(code, 0, "{e}");
-    std::fs::write(a.join("modes.parquet"), b"another run's").unwrap();
+    std::fs::create_dir_all(a.join("modes")).unwrap();
+    std::fs::write(a.join("modes/modes.parquet"), b"another run's").unwrap();
     let (code, e) = quaketwin(&[&"report", &a], RUN);
     assert_eq!(code, 0, "{e}");
     let html = std::fs::read_to_string(&page).unwrap();

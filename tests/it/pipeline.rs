@@ -31,10 +31,10 @@ fn stages_write_outputs_skip_when_up_to_date_and_rerun_on_new_params() {
     );
     for f in [
         "event.json",
-        "samples.parquet",
-        "channels.parquet",
-        "spectra.parquet",
-        "drift.parquet",
+        "samples/samples.parquet",
+        "channels/channels.parquet",
+        "spectra/spectra.parquet",
+        "drift/drift.parquet",
     ] {
         assert!(out.path().join(f).exists(), "{f} missing");
     }
@@ -50,12 +50,12 @@ fn stages_write_outputs_skip_when_up_to_date_and_rerun_on_new_params() {
     assert!(matches!(third[1].1, StageOutcome::Ran { .. }));
     assert!(matches!(third[2].1, StageOutcome::Ran { .. }));
     // A deleted output re-runs its stage; the metrics stage then loads the
-    // conditioned event back from samples.parquet (condition was skipped).
-    std::fs::remove_file(out.path().join("spectra.parquet")).unwrap();
+    // conditioned event back from samples/samples.parquet (condition was skipped).
+    std::fs::remove_file(out.path().join("spectra/spectra.parquet")).unwrap();
     let fourth = pipeline::run(&p2, &sample_event(), out.path(), true).unwrap();
     assert_eq!(fourth[1].1, StageOutcome::Skipped);
     assert!(matches!(fourth[2].1, StageOutcome::Ran { .. }));
-    assert!(out.path().join("spectra.parquet").exists());
+    assert!(out.path().join("spectra/spectra.parquet").exists());
 }
 
 #[test]

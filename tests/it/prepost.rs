@@ -1,7 +1,7 @@
 //! Pre/post comparison of two events (issue 13): the sample 4-storey shear
 //! building recorded in two earthquakes, the second after an 8 % stiffness
 //! loss of storey 1 in X.  `quaketwin modal --reference` pairs the modes on
-//! the channels both events share and `frequency_shifts.parquet` shows the
+//! the channels both events share and `frequency_shifts/frequency_shifts.parquet` shows the
 //! drop of the X modes (all of which deform storey 1) against the
 //! eigenfrequencies of the model's K and M, and no shift of the Y modes
 //! (their storeys are unchanged).  Figures printed with `--nocapture`.
@@ -80,7 +80,7 @@ struct Shifts {
 }
 
 fn read_shifts(out: &Path) -> Shifts {
-    let p = out.join("frequency_shifts.parquet");
+    let p = out.join("frequency_shifts/frequency_shifts.parquet");
     let t = quaketwin::report::table::load(&p, None).unwrap();
     let numbers = |c: &str| -> Vec<f64> {
         let v = t
@@ -208,16 +208,23 @@ fn pairing_on_the_shared_channels_when_the_second_event_lacks_some() {
     write_event(&after, &damaged(), 12, &["F2-X", "F4-Y"]);
     let (out_before, out_after) = (dir.path().join("out-2026"), dir.path().join("out-2027"));
     identify(&before, &out_before, None);
-    // The reference named by its modes.parquet rather than its directory.
-    identify(&after, &out_after, Some(&out_before.join("modes.parquet")));
+    // The reference named by its modes/modes.parquet rather than its directory.
+    identify(
+        &after,
+        &out_after,
+        Some(&out_before.join("modes/modes.parquet")),
+    );
     let s = read_shifts(&out_after);
     let table = check_against_theory(&s);
     eprintln!("8 % loss of k1 in X, F2-X and F4-Y missing after:\n{table}");
     assert!(s.shared.iter().all(|&n| n == 6), "{:?}", s.shared);
     assert!(s.pairing.iter().all(|p| p == "mac_and_frequency"));
-    let notes = quaketwin::report::table::load(&out_after.join("frequency_shifts.parquet"), None)
-        .unwrap()
-        .metadata["quaketwin.notes"]
+    let notes = quaketwin::report::table::load(
+        &out_after.join("frequency_shifts/frequency_shifts.parquet"),
+        None,
+    )
+    .unwrap()
+    .metadata["quaketwin.notes"]
         .clone();
     assert!(
         notes.contains("only in the reference") && notes.contains("F2-X, F4-Y"),
@@ -275,11 +282,11 @@ fn cli_reference_to_a_missing_directory_is_a_usage_error_naming_it() {
         );
         assert!(!out.exists(), "nothing is written");
     }
-    // An existing directory without modes.parquet, and a table of another kind.
+    // An existing directory without modes/modes.parquet, and a table of another kind.
     std::fs::create_dir(&missing).unwrap();
     let (code, stderr) = quaketwin(&run);
     assert_eq!(code, Some(2), "{stderr}");
-    assert!(stderr.contains("holds no modes.parquet"), "{stderr}");
+    assert!(stderr.contains("holds no modes/modes.parquet"), "{stderr}");
     let other = root().join("sample-records/synthetic-4storey-quake/floors.csv");
     let (code, stderr) = quaketwin(&[
         "modal".as_ref(),

@@ -314,7 +314,7 @@ fn facade_pipeline_ends_with_a_rehearsal_sweep_and_a_recommended_time_scale() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
     crate::common::run_sample_pipeline("test-design.toml", "synthetic-facade", &out, &[]);
-    let summary = out.join("rehearsal_summary.parquet");
+    let summary = out.join("rehearsal_summary/rehearsal_summary.parquet");
     let lam = crate::common::column_f64(&summary, rs::TIME_SCALE.name);
     assert_eq!(lam.len(), 10, "the design's 10 candidate λ");
     let table = quaketwin::sinks::parquet::ReadTable::open(&summary).unwrap();
@@ -341,7 +341,10 @@ fn facade_pipeline_ends_with_a_rehearsal_sweep_and_a_recommended_time_scale() {
         assert!(stable.value(i), "λ = {l} should be stable");
         assert!(wn.value(i) <= 0.05, "λ = {l}: WNRMSE {}", wn.value(i));
     }
-    let t = crate::common::column_f64(&out.join("rehearsal.parquet"), rehearsal::TIME_S.name);
+    let t = crate::common::column_f64(
+        &out.join("rehearsal/rehearsal.parquet"),
+        rehearsal::TIME_S.name,
+    );
     assert!(t.len() > 1000 && t.iter().all(|v| v.is_finite()));
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(html.contains("Rehearsal of the hybrid test"));
@@ -383,14 +386,16 @@ fn rehearse_command_reads_a_design_output() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let lam = crate::common::column_f64(
-        &out.join("rehearsal_summary.parquet"),
+        &out.join("rehearsal_summary/rehearsal_summary.parquet"),
         quaketwin::vocab::tables::rehearsal_summary::TIME_SCALE.name,
     );
     assert_eq!(lam, vec![500.0, 1000.0]);
     // The facade's design has gravity and force-controlled actuators: pre-load on by default,
     // its vertical force (along the twin's gravity, −y: `uy`) recorded.
-    let table =
-        quaketwin::sinks::parquet::ReadTable::open(&out.join("rehearsal_summary.parquet")).unwrap();
+    let table = quaketwin::sinks::parquet::ReadTable::open(
+        &out.join("rehearsal_summary/rehearsal_summary.parquet"),
+    )
+    .unwrap();
     let meta = table.metadata("quaketwin.gravity").unwrap();
     eprintln!("facade gravity: {meta}");
     let g: serde_json::Value = serde_json::from_str(meta).unwrap();
@@ -442,7 +447,7 @@ fn rehearse_stage_reruns_from_the_restored_rehearsal_model() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     pipeline::run(&p, &event, &out, true).unwrap();
-    let first = std::fs::read(out.join("rehearsal_summary.parquet")).unwrap();
+    let first = std::fs::read(out.join("rehearsal_summary/rehearsal_summary.parquet")).unwrap();
     let one = few.replace("[500.0, 1000.0]", "[1000.0]");
     let p1 = quaketwin::stages::parse_pipeline(&one, "test-design.toml").unwrap();
     let outcomes = pipeline::run(&p1, &event, &out, true).unwrap();
@@ -453,7 +458,7 @@ fn rehearse_stage_reruns_from_the_restored_rehearsal_model() {
         "{outcomes:?}"
     );
     let lam = crate::common::column_f64(
-        &out.join("rehearsal_summary.parquet"),
+        &out.join("rehearsal_summary/rehearsal_summary.parquet"),
         quaketwin::vocab::tables::rehearsal_summary::TIME_SCALE.name,
     );
     assert_eq!(lam, vec![1000.0]);
@@ -462,7 +467,9 @@ fn rehearse_stage_reruns_from_the_restored_rehearsal_model() {
     assert!(outcomes
         .iter()
         .any(|(n, o)| n == "rehearse" && matches!(o, StageOutcome::Ran { .. })));
-    assert!(std::fs::read(out.join("rehearsal_summary.parquet")).unwrap() == first);
+    assert!(
+        std::fs::read(out.join("rehearsal_summary/rehearsal_summary.parquet")).unwrap() == first
+    );
     // Bad params: usage errors naming the key, when the file is read.
     for (bad, key) in [
         ("scheme = \"euler\"", "euler"),

@@ -198,7 +198,7 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
         .expect("processing history");
     assert!(history > html.find("<section id=\"appendix\">").unwrap());
 
-    let channels_path = out.path().join("channels.parquet");
+    let channels_path = out.path().join("channels/channels.parquet");
     let ids = parquet_strings(&channels_path, "channel_id");
     assert_eq!(ids.len(), 10);
 
@@ -222,7 +222,7 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
         assert!(n <= 2000, "polyline with {n} points");
     }
 
-    // Channel table: every number equals channels.parquet's value exactly
+    // Channel table: every number equals channels/channels.parquet's value exactly
     // (data-value) and its 4-significant-digit display agrees.
     let (headers, rows) = table_cells(&doc, "channel-table");
     assert_eq!(rows.len(), ids.len());
@@ -284,8 +284,8 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
     }
     assert!(compared >= 80, "{compared} numbers compared");
 
-    // Drift table and the overall rating follow drift.parquet.
-    let drift_path = out.path().join("drift.parquet");
+    // Drift table and the overall rating follow drift/drift.parquet.
+    let drift_path = out.path().join("drift/drift.parquet");
     let drift = parquet_numbers(&drift_path, "peak_drift_ratio");
     assert!(!drift.is_empty());
     let (dh, drows) = table_cells(&doc, "drift-table");
@@ -304,7 +304,7 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
     };
     let labels = ["GREEN", "YELLOW", "RED"];
     let rating = section_text(&doc, "overall-rating");
-    if out.path().join("damage.parquet").exists() {
+    if out.path().join("damage/damage.parquet").exists() {
         // The overall rating is the worst criterion: never better than drift's.
         let shown = labels.iter().position(|l| rating.contains(l)).unwrap();
         assert!(shown >= drift_rating, "{rating} (worst drift {worst})");
@@ -317,7 +317,7 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
         assert!(rating.contains(&report::format_number(worst)), "{rating}");
     }
 
-    // Residual drift: a resolved row shows drift.parquet's value; an
+    // Residual drift: a resolved row shows drift/drift.parquet's value; an
     // unresolved one (or an artefact) says so, without a number.
     let residual = parquet_numbers(&drift_path, "residual_drift_m");
     let status = parquet_strings(&drift_path, "residual_status");
@@ -352,12 +352,28 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
 
     // Stages that did not run say so; those that ran show no such message.
     for (id, file, words) in [
-        ("modal", "stabilization.parquet", "stabilisation diagram"),
-        ("modal", "modes.parquet", "identified modes"),
-        ("hysteresis", "hysteresis_fit.parquet", "force–drift loops"),
-        ("hysteresis", "bouc_wen.parquet", "Bouc-Wen parameters"),
-        ("damage", "damage.parquet", "damage index ι(t)"),
-        ("twin", "twin_update.parquet", "twin-update candidates"),
+        (
+            "modal",
+            "stabilization/stabilization.parquet",
+            "stabilisation diagram",
+        ),
+        ("modal", "modes/modes.parquet", "identified modes"),
+        (
+            "hysteresis",
+            "hysteresis_fit/hysteresis_fit.parquet",
+            "force–drift loops",
+        ),
+        (
+            "hysteresis",
+            "bouc_wen/bouc_wen.parquet",
+            "Bouc-Wen parameters",
+        ),
+        ("damage", "damage/damage.parquet", "damage index ι(t)"),
+        (
+            "twin",
+            "twin_update/twin_update.parquet",
+            "twin-update candidates",
+        ),
     ] {
         let text = section_text(&doc, id);
         let message = format!("Stage not run / output absent: {words}");
@@ -374,19 +390,19 @@ fn sample_event_report_is_self_contained_and_matches_the_parquet_outputs() {
         }
     }
     // No design output at all: one line says why, not one per table.
-    if !out.path().join("pod.parquet").exists() {
+    if !out.path().join("pod/pod.parquet").exists() {
         let text = section_text(&doc, "test-design");
         assert!(
             text.contains("No hybrid-test design in this run") && !text.contains("absent"),
             "{text}"
         );
     }
-    if has_rows(&out.path().join("hysteresis_fit.parquet")) {
+    if has_rows(&out.path().join("hysteresis_fit/hysteresis_fit.parquet")) {
         assert!(svg_count(by_id(&doc, "hysteresis").unwrap()) >= 1);
     }
-    if has_rows(&out.path().join("damage.parquet")) {
+    if has_rows(&out.path().join("damage/damage.parquet")) {
         assert!(svg_count(by_id(&doc, "damage").unwrap()) >= 1);
-    } else if out.path().join("damage.parquet").exists() {
+    } else if out.path().join("damage/damage.parquet").exists() {
         // Written but empty (no direction identifiable): said, not rated.
         assert!(section_text(&doc, "rating").contains("No damage index ι(t)"));
         assert!(section_text(&doc, "damage")
@@ -404,7 +420,7 @@ fn meta() -> Vec<(String, String)> {
 fn write_fixtures(dir: &Path) {
     // Stabilisation: 3 orders × 2 poles; one non-physical pole.
     write_parquet(
-        &dir.join("stabilization.parquet"),
+        &dir.join("stabilization/stabilization.parquet"),
         &[TableBuilder::untyped()
             .u32("order", vec![4, 4, 6, 6, 8, 8])
             .f64("frequency_hz", vec![1.5, 4.4, 1.51, 4.41, 1.505, 7.9])
@@ -426,7 +442,7 @@ fn write_fixtures(dir: &Path) {
     )
     .unwrap();
     write_parquet(
-        &dir.join("modes.parquet"),
+        &dir.join("modes/modes.parquet"),
         &[TableBuilder::untyped()
             .i32("mode", vec![0, 1])
             .f64("frequency_hz", vec![1.507, 4.405])
@@ -456,7 +472,7 @@ fn write_fixtures(dir: &Path) {
     dir_col.extend(vec!["Y"; n]);
     let cat = |a: &Vec<f64>| [a.clone(), a.clone()].concat();
     write_parquet(
-        &dir.join("hysteresis_fit.parquet"),
+        &dir.join("hysteresis_fit/hysteresis_fit.parquet"),
         &[TableBuilder::untyped()
             .str("direction", &dir_col)
             .i32("dof", vec![1; 2 * n])
@@ -472,7 +488,7 @@ fn write_fixtures(dir: &Path) {
     // Long layout, one row per parameter, without cost_j and with a column
     // the report does not know.
     write_parquet(
-        &dir.join("bouc_wen.parquet"),
+        &dir.join("bouc_wen/bouc_wen.parquet"),
         &[TableBuilder::untyped()
             .str("direction", &["X", "X", "Y", "Y"])
             .i32("dof", vec![1, 1, 1, 1])
@@ -515,7 +531,7 @@ fn write_fixtures(dir: &Path) {
         }
     }
     write_parquet(
-        &dir.join("damage.parquet"),
+        &dir.join("damage/damage.parquet"),
         &[TableBuilder::untyped()
             .str("direction", &dcol)
             .f64("t_s", tcol)
@@ -528,7 +544,7 @@ fn write_fixtures(dir: &Path) {
     )
     .unwrap();
     write_parquet(
-        &dir.join("pod.parquet"),
+        &dir.join("pod/pod.parquet"),
         &[TableBuilder::untyped()
             .i32("pod_mode", vec![1, 2, 3])
             .f64("energy_fraction", vec![0.9, 0.08, 0.02])
@@ -581,7 +597,7 @@ fn later_stage_sections_render_fixture_tables_and_rate_damage() {
     let checks = section_text(&doc, "appendix");
     assert!(
         checks.contains(
-            "bouc_wen.parquet: expected column(s) not present: segment, coupled_dof, stability_std, stable, reason, cost_j"
+            "bouc_wen/bouc_wen.parquet: expected column(s) not present: segment, coupled_dof, stability_std, stable, reason, cost_j"
         ),
         "{checks}"
     );
@@ -636,14 +652,15 @@ fn later_stage_sections_render_fixture_tables_and_rate_damage() {
 #[test]
 fn unreadable_outputs_and_bad_arguments_are_reported() {
     let out = tempfile::tempdir().unwrap();
-    std::fs::write(out.path().join("drift.parquet"), b"not parquet").unwrap();
+    std::fs::create_dir_all(out.path().join("drift")).unwrap();
+    std::fs::write(out.path().join("drift/drift.parquet"), b"not parquet").unwrap();
     std::fs::write(out.path().join("event.json"), b"{ broken").unwrap();
     let html = report::render_report(out.path(), &ReportSettings::default()).unwrap();
     let doc = parse(&html);
     assert!(section_text(&doc, "drift").contains("Output unreadable: inter-storey drift"));
     assert!(section_text(&doc, "event").contains("Output unreadable: event inventory"));
     // The file and the reason: in the appendix's table checks.
-    assert!(section_text(&doc, "appendix").contains("drift.parquet: unreadable"));
+    assert!(section_text(&doc, "appendix").contains("drift/drift.parquet: unreadable"));
     assert!(section_text(&doc, "overall-rating").contains("NOT RATED"));
 
     let missing = out.path().join("no-such-dir");
@@ -817,7 +834,7 @@ fn curve_decimation_keeps_segments_short_within_its_budget() {
 /// One drift on the page (issue 34): in every sample event with drift and
 /// force–drift loops, run through the shipped post-earthquake pipeline, each
 /// loop's largest drawn drift is its drift-table row's peak drift (ratio ×
-/// height, read from drift.parquet here) within 1 %.
+/// height, read from drift/drift.parquet here) within 1 %.
 #[test]
 fn loops_are_drawn_from_the_drift_the_drift_table_reports_on_every_sample() {
     use crate::common::{column_f64, column_i64, column_str, run_sample_pipeline};
@@ -843,8 +860,8 @@ fn loops_are_drawn_from_the_drift_the_drift_table_reports_on_every_sample() {
     for e in &events {
         let out = work.path().join(e);
         let (drift, fit) = (
-            out.join("drift.parquet"),
-            out.join("hysteresis_fit.parquet"),
+            out.join("drift/drift.parquet"),
+            out.join("hysteresis_fit/hysteresis_fit.parquet"),
         );
         if !has_rows(&drift) || !has_rows(&fit) {
             eprintln!("{e}: no drift or no loops");

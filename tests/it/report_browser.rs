@@ -1,8 +1,8 @@
 //! The four sample reports in headless Chromium (issue 15): each pipeline is
 //! run, its report.html rendered (`--dump-dom`) and printed
 //! (`--print-to-pdf`).  Checked on the rendered DOM: the rating is the first
-//! section; one mode-shape figure with an SVG per row of modes.parquet; one
-//! loop figure per storey of hysteresis_fit.parquet (the measured loop also
+//! section; one mode-shape figure with an SVG per row of modes/modes.parquet; one
+//! loop figure per storey of hysteresis_fit/hysteresis_fit.parquet (the measured loop also
 //! where the model is not identified); in the yielding sample no drawn loop
 //! segment spans more than 5 % of either axis (the chords of min–max
 //! decimation would); a PDF comes out.  Skips (saying so) only when
@@ -167,9 +167,9 @@ fn parquet_rows(path: &Path) -> usize {
         .unwrap_or(0)
 }
 
-/// Storeys of hysteresis_fit.parquet: distinct (direction, segment).
+/// Storeys of hysteresis_fit/hysteresis_fit.parquet: distinct (direction, segment).
 fn loop_storeys(dir: &Path) -> usize {
-    let path = dir.join("hysteresis_fit.parquet");
+    let path = dir.join("hysteresis_fit/hysteresis_fit.parquet");
     if parquet_rows(&path) == 0 {
         return 0;
     }
@@ -304,14 +304,14 @@ fn sample_reports_render_and_print_in_headless_chromium() {
         }
 
         // One mode-shape figure with its SVG per identified mode.
-        let modes = parquet_rows(&out.join("modes.parquet"));
+        let modes = parquet_rows(&out.join("modes/modes.parquet"));
         let shapes = figures(&dom, "class=\"mode-shape\"");
         assert_eq!(shapes.len(), modes, "{event}: mode-shape figures");
         for f in &shapes {
             assert!(f.contains("<svg"), "{event}: mode-shape figure without svg");
         }
 
-        // A loop per storey of hysteresis_fit.parquet: measured always.
+        // A loop per storey of hysteresis_fit/hysteresis_fit.parquet: measured always.
         let loops = figures(&dom, "class=\"loop\"");
         assert_eq!(loops.len(), loop_storeys(out), "{event}: loop figures");
 

@@ -29,7 +29,7 @@ fn declarations_are_well_formed() {
         "m",
         "m/s",
         "m/s^2",
-        // Amplitude spectral density (fourier.parquet).
+        // Amplitude spectral density (fourier/fourier.parquet).
         "m/s^2/Hz^0.5",
         "s",
         "Hz",
@@ -49,7 +49,7 @@ fn declarations_are_well_formed() {
     for t in ALL_TABLES {
         assert!(names.insert(t.name), "table {} declared twice", t.name);
         assert!(files.insert(t.file), "file {} declared twice", t.file);
-        assert_eq!(t.file, format!("{}.parquet", t.name));
+        assert_eq!(t.file, format!("{0}/{0}.parquet", t.name));
         assert!(tables::by_name(t.name) == Some(*t));
         assert!(!t.doc.is_empty() && !t.columns.is_empty(), "{}", t.name);
         let mut cols = BTreeSet::new();
@@ -181,11 +181,33 @@ fn run(pipeline: &Path, event: &str, out: &Path) {
 /// Every Parquet file under `dir`, checked against the declaration its
 /// `quaketwin.schema` names; returns the schema names seen.
 fn check_outputs(dir: &Path, seen: &mut BTreeSet<String>) {
+    // Each table in a folder of its own: nothing for `out/*.parquet` to mix.
+    let mut paths = Vec::new();
     for e in std::fs::read_dir(dir).unwrap() {
         let path = e.unwrap().path();
-        if path.extension().is_none_or(|x| x != "parquet") {
-            continue;
+        assert!(
+            path.extension().is_none_or(|x| x != "parquet"),
+            "{}: a table directly in the output directory",
+            path.display()
+        );
+        if path.is_dir() {
+            for f in std::fs::read_dir(&path).unwrap() {
+                let f = f.unwrap().path();
+                if f.extension().is_some_and(|x| x == "parquet") {
+                    let folder = path.file_name().unwrap();
+                    assert_eq!(
+                        f.file_stem().unwrap(),
+                        folder,
+                        "{}: not its table's folder",
+                        f.display()
+                    );
+                    paths.push(f);
+                }
+            }
         }
+    }
+    paths.sort();
+    for path in paths {
         let file = std::fs::File::open(&path).unwrap();
         let builder = ParquetRecordBatchReaderBuilder::try_new(file).unwrap();
         let schema = builder.schema().clone();
@@ -257,7 +279,7 @@ fn check_outputs(dir: &Path, seen: &mut BTreeSet<String>) {
             let steps = history["steps"]
                 .as_array()
                 .unwrap_or_else(|| panic!("{p}: {history}"));
-            // event.parquet is written as the records are read, before
+            // event/event.parquet is written as the records are read, before
             // any processing: its history is the reading's.
             assert!(
                 name == "event" || steps.iter().any(|s| s["step"] == "units_to_si"),
@@ -282,11 +304,11 @@ fn every_table_of_the_sample_runs_matches_its_declaration() {
         "synthetic-facade",
         design.path(),
     );
-    // frequency_shifts.parquet: the ambient record against the quake's modes.
+    // frequency_shifts/frequency_shifts.parquet: the ambient record against the quake's modes.
     let text = format!(
         "{}\n[[stage]]\nname = \"modal\"\nkind = \"modal\"\ninputs = [\"condition\"]\n[stage.params]\nreference_modes = {:?}\n",
         quaketwin::commands::INGEST_PIPELINE,
-        quake.path().join("modes.parquet").display().to_string()
+        quake.path().join("modes/modes.parquet").display().to_string()
     );
     let shifts = tempfile::tempdir().unwrap();
     let pipeline = shifts.path().join("shifts.toml");
@@ -294,7 +316,7 @@ fn every_table_of_the_sample_runs_matches_its_declaration() {
     let out = shifts.path().join("out");
     run(&pipeline, "synthetic-4storey-ambient", &out);
 
-    // modal_tracking.parquet: a one-hour synthetic archive, 10-minute windows.
+    // modal_tracking/modal_tracking.parquet: a one-hour synthetic archive, 10-minute windows.
     let archive = tempfile::tempdir().unwrap();
     let settings = quaketwin::synth::archive::ArchiveSettings {
         days: 1,
@@ -318,7 +340,7 @@ fn every_table_of_the_sample_runs_matches_its_declaration() {
     let history = dataset.path().join("history");
     quaketwin::dataset_history::write_history(dataset.path(), None, &history).unwrap();
     for name in DATASET_TABLES {
-        let file = history.join(format!("{name}.parquet"));
+        let file = history.join(format!("{name}/{name}.parquet"));
         let meta = quaketwin::sinks::parquet::ReadTable::open(&file).unwrap();
         assert!(meta
             .metadata(EVENT_KEY)
@@ -456,7 +478,10 @@ fn the_writer_refuses_a_table_that_does_not_match_its_declaration() {
         let e = b.build().unwrap_err();
         assert!(matches!(e, Error::Numerical(_)), "{e:?}");
         let msg = e.to_string();
-        assert!(msg.contains("drift.parquet") && msg.contains(why), "{msg}");
+        assert!(
+            msg.contains("drift/drift.parquet") && msg.contains(why),
+            "{msg}"
+        );
     };
     // Missing.
     refused(
@@ -495,8 +520,8 @@ fn the_writer_refuses_a_table_that_does_not_match_its_declaration() {
 #[test]
 fn a_quaketwin_file_of_the_wrong_type_is_an_input_error_naming_file_and_column() {
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("samples.parquet");
-    // acc_m_s2 as Int64: not what samples.parquet declares.
+    let path = dir.path().join("samples/samples.parquet");
+    // acc_m_s2 as Int64: not what samples/samples.parquet declares.
     let batch = TableBuilder::untyped()
         .str(tables::samples::CHANNEL_ID, &["B-X"])
         .i64(tables::samples::ACC_M_S2, vec![1])
@@ -524,7 +549,9 @@ fn a_quaketwin_file_of_the_wrong_type_is_an_input_error_naming_file_and_column()
     let msg = e.to_string();
     assert!(matches!(e, Error::Input { .. }), "{e:?}");
     assert!(
-        msg.contains("samples.parquet") && msg.contains("acc_m_s2") && msg.contains("float64"),
+        msg.contains("samples/samples.parquet")
+            && msg.contains("acc_m_s2")
+            && msg.contains("float64"),
         "{msg}"
     );
 }
@@ -536,33 +563,33 @@ fn read_batches(path: &Path) -> Vec<arrow_array::RecordBatch> {
         .batches
 }
 
-/// Issue 34: `mode_shapes.parquet` is `modes.parquet`'s shapes in long
+/// Issue 34: `mode_shapes/mode_shapes.parquet` is `modes/modes.parquet`'s shapes in long
 /// form — one row per mode and output channel, the same numbers bit for
-/// bit, the channel named on the row with its level (channels.parquet) and
+/// bit, the channel named on the row with its level (channels/channels.parquet) and
 /// direction (`quaketwin.output_directions`).
 fn check_mode_shapes(out: &Path) {
     use arrow_array::{Array, Float64Array, Int32Array, StringArray, UInt32Array};
     let (modes, channels) =
-        quaketwin::sinks::modal_tables::read_modes(&out.join("modes.parquet")).unwrap();
+        quaketwin::sinks::modal_tables::read_modes(&out.join("modes/modes.parquet")).unwrap();
     assert!(
         !modes.is_empty() && channels.len() >= 4,
         "{} modes",
         modes.len()
     );
     let directions: Vec<String> = serde_json::from_str(
-        quaketwin::sinks::parquet::ReadTable::open(&out.join("modes.parquet"))
+        quaketwin::sinks::parquet::ReadTable::open(&out.join("modes/modes.parquet"))
             .unwrap()
             .metadata("quaketwin.output_directions")
             .unwrap(),
     )
     .unwrap();
-    let ch = out.join("channels.parquet");
+    let ch = out.join("channels/channels.parquet");
     let level_of: std::collections::HashMap<String, i64> =
         crate::common::column_str(&ch, "channel_id")
             .into_iter()
             .zip(crate::common::column_i64(&ch, "level"))
             .collect();
-    let batches = read_batches(&out.join("mode_shapes.parquet"));
+    let batches = read_batches(&out.join("mode_shapes/mode_shapes.parquet"));
     let rows: usize = batches.iter().map(|b| b.num_rows()).sum();
     assert_eq!(rows, modes.len() * channels.len());
     let mut row = 0;
@@ -613,20 +640,20 @@ fn check_mode_shapes(out: &Path) {
     }
 }
 
-/// Issue 34: samples.parquet's `time` is filled where the event's origin is
+/// Issue 34: samples/samples.parquet's `time` is filled where the event's origin is
 /// known.  The sample event's records (AT2, CSV) have no start time of their
 /// own, its manifest an origin time (2026-01-15T10:20:30Z): every row's time
-/// is that origin + `t_s`, and channels.parquet says so in `time_source`.
+/// is that origin + `t_s`, and channels/channels.parquet says so in `time_source`.
 fn check_samples_time(out: &Path) {
     use arrow_array::{Array, Float64Array, TimestampNanosecondArray};
     let origin_ns = 1_768_472_430_000_000_000i64; // 2026-01-15T10:20:30Z
-    let sources = crate::common::column_str(&out.join("channels.parquet"), "time_source");
+    let sources = crate::common::column_str(&out.join("channels/channels.parquet"), "time_source");
     assert!(
         !sources.is_empty() && sources.iter().all(|s| s == "origin_time"),
         "{sources:?}"
     );
     let mut rows = 0;
-    for b in read_batches(&out.join("samples.parquet")) {
+    for b in read_batches(&out.join("samples/samples.parquet")) {
         let t = b.column_by_name("t_s").unwrap();
         let t = t.as_any().downcast_ref::<Float64Array>().unwrap();
         let time = b.column_by_name("time").unwrap();
@@ -653,7 +680,10 @@ fn check_samples_time(out: &Path) {
 /// matches), in both tables that carry them.
 fn check_ascii_segments(out: &Path) {
     let mut seen = 0;
-    for file in ["bouc_wen.parquet", "hysteresis_fit.parquet"] {
+    for file in [
+        "bouc_wen/bouc_wen.parquet",
+        "hysteresis_fit/hysteresis_fit.parquet",
+    ] {
         for s in crate::common::column_str(&out.join(file), "segment") {
             assert!(s.is_empty() || s.is_ascii(), "{file}: segment {s:?}");
             if !s.is_empty() {

@@ -463,7 +463,7 @@ fn fourier_table_and_report_section() {
     };
     let out = condition_event_each(&mut event, &snr_settings(""), None, &|_, _| Ok(())).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("fourier.parquet");
+    let path = dir.path().join("fourier/fourier.parquet");
     quaketwin::sinks::fourier_tables::write_fourier(&path, &event, &out.fourier).unwrap();
     let ids = crate::common::column_str(&path, "channel_id");
     let freq = crate::common::column_f64(&path, "frequency_hz");
@@ -495,7 +495,7 @@ fn fourier_table_and_report_section() {
     assert_eq!(section.matches("<svg").count(), 2);
     assert!(section.contains("chosen from the signal-to-noise ratio"));
     assert!(section.contains("the pipeline&#39;s corners"));
-    assert!(!section.contains("fourier.parquet") && !section.contains("noise_fas"));
+    assert!(!section.contains("fourier/fourier.parquet") && !section.contains("noise_fas"));
 }
 
 #[test]

@@ -622,7 +622,7 @@ fn a_segment_up_to_an_assumed_roof_level_is_shown_and_not_rated() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let f = out.join("drift.parquet");
+    let f = out.join("drift/drift.parquet");
     let sources = crate::common::column_str(&f, "height_source");
     let upper = crate::common::column_i64(&f, "upper_level");
     let kinds = crate::common::column_str(&f, "kind");

@@ -74,7 +74,7 @@ fn track(dir: &Path, out: &Path, limit: Duration) -> (Output, serde_json::Value)
 /// The `quaketwin.window_notes` of the tracking table: (window start, note).
 fn window_notes(out: &Path) -> Vec<(String, String)> {
     use parquet::file::reader::{FileReader, SerializedFileReader};
-    let f = std::fs::File::open(out.join("modal_tracking.parquet")).unwrap();
+    let f = std::fs::File::open(out.join("modal_tracking/modal_tracking.parquet")).unwrap();
     let r = SerializedFileReader::new(f).unwrap();
     let kv = r.metadata().file_metadata().key_value_metadata().unwrap();
     let text = kv

@@ -296,7 +296,9 @@ fn tracking_recovers_the_frequency_history_and_flags_day_two() {
     let html = std::fs::read_to_string(out.join("tracking.html")).unwrap();
     assert!(html.contains("Anomaly from 2026-01-01T06:00:00"));
     assert!(html.contains("<polygon"), "band shaded");
-    assert!(out.join("modal_tracking.parquet").exists() && out.join("run.json").exists());
+    assert!(
+        out.join("modal_tracking/modal_tracking.parquet").exists() && out.join("run.json").exists()
+    );
 }
 
 /// Bad flags fail before any work (exit 2), with the flag named.

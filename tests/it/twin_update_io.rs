@@ -1,4 +1,4 @@
-//! The I/O edge of twin updating: modes.parquet → measured modes, `update_from_files` on the
+//! The I/O edge of twin updating: modes/modes.parquet → measured modes, `update_from_files` on the
 //! thesis benchmark cantilever (§3.3.2) with "measured" modes generated from the twin itself
 //! at the true moduli (Table 7), the output tables and the updated twin file, bad input.
 
@@ -47,7 +47,7 @@ fn true_modes(twin_path: &Path, channels: &[&str], count: usize) -> (Vec<f64>, V
     (f[..count].to_vec(), shapes)
 }
 
-/// A modes.parquet as the modal stage writes it: `mode` u32, `frequency_hz`, complex shapes
+/// A modes/modes.parquet as the modal stage writes it: `mode` u32, `frequency_hz`, complex shapes
 /// (here a real shape times e^{iα}, a common phase an identification may leave), channel ids
 /// in the metadata. Rows are written in reverse mode order.
 fn write_modes(path: &Path, channels: &[&str], freqs: &[f64], shapes: &[Vec<f64>], alpha: f64) {
@@ -111,7 +111,7 @@ fn modes_parquet_round_trips_into_measured_modes() {
     let twin = write_twin(dir.path());
     let channels = ["top", "h1"];
     let (freqs, shapes) = true_modes(&twin, &channels, 3);
-    let path = dir.path().join("modes.parquet");
+    let path = dir.path().join("modes/modes.parquet");
     write_modes(&path, &channels, &freqs, &shapes, 0.7);
     let read = read_measured_modes(&path).unwrap();
     assert_eq!(read.measured.channels, vec!["top", "h1"]);
@@ -165,7 +165,7 @@ fn update_from_files_recovers_the_benchmark_moduli() {
     // Channel order differs from the twin's sensor order on purpose.
     let channels = ["top", "h1"];
     let (freqs, shapes) = true_modes(&twin, &channels, 2);
-    let modes = dir.path().join("modes.parquet");
+    let modes = dir.path().join("modes/modes.parquet");
     write_modes(&modes, &channels, &freqs, &shapes, 0.3);
     let twin_bytes = std::fs::read(&twin).unwrap();
     let modes_bytes = std::fs::read(&modes).unwrap();
@@ -205,7 +205,7 @@ fn update_from_files_recovers_the_benchmark_moduli() {
     assert!(s.frequency_error_initial > 0.1, "{s:?}");
     assert!(s.objective_updated < s.objective_initial);
 
-    // twin_update.parquet: rounds × candidates rows, one selected per round.
+    // twin_update/twin_update.parquet: rounds × candidates rows, one selected per round.
     let (batches, kv) = read_table(&s.twin_update_path);
     assert_eq!(meta(&kv, "quaketwin.schema"), "twin_update");
     let b = arrow_select::concat::concat_batches(&batches[0].schema(), &batches).unwrap();
@@ -246,7 +246,7 @@ fn update_from_files_recovers_the_benchmark_moduli() {
     assert_eq!(scatter.value(0).len(), 4, "voters f1, f2, MAC1, MAC2");
     assert!(f64_col(&b, "objective_j").iter().all(|j| j.is_finite()));
 
-    // twin_modes.parquet: initial and updated rows; the updated error is smaller.
+    // twin_modes/twin_modes.parquet: initial and updated rows; the updated error is smaller.
     let (batches, kv) = read_table(&s.twin_modes_path);
     assert_eq!(meta(&kv, "quaketwin.schema"), "twin_modes");
     let m = &batches[0];
@@ -312,7 +312,7 @@ fn quick_params() -> UpdateParams {
 fn modes_file_without_required_columns_is_an_input_error() {
     let dir = tempfile::tempdir().unwrap();
     let twin = write_twin(dir.path());
-    let path = dir.path().join("modes.parquet");
+    let path = dir.path().join("modes/modes.parquet");
     let batch = TableBuilder::untyped()
         .u32("mode", vec![1])
         .list_f64("shape_re", &[vec![1.0, 0.3]])
@@ -328,10 +328,10 @@ fn modes_file_without_required_columns_is_an_input_error() {
     let msg = e.to_string();
     assert!(matches!(e, Error::Input { .. }), "{e:?}");
     assert!(
-        msg.contains("modes.parquet") && msg.contains("frequency_hz"),
+        msg.contains("modes/modes.parquet") && msg.contains("frequency_hz"),
         "{msg}"
     );
-    assert!(!out.join("twin_update.parquet").exists());
+    assert!(!out.join("twin_update/twin_update.parquet").exists());
 
     // No channel metadata.
     let batch = TableBuilder::untyped()
@@ -360,7 +360,7 @@ fn channel_missing_from_the_sensor_map_is_reported() {
     let dir = tempfile::tempdir().unwrap();
     let twin = write_twin(dir.path());
     let (freqs, shapes) = true_modes(&twin, &["top", "h1"], 2);
-    let modes = dir.path().join("modes.parquet");
+    let modes = dir.path().join("modes/modes.parquet");
     write_modes(&modes, &["top", "roof"], &freqs, &shapes, 0.0);
     let e = update_from_files(&twin, &modes, &dir.path().join("out"), &quick_params()).unwrap_err();
     let msg = e.to_string();
@@ -375,7 +375,7 @@ fn channel_missing_from_the_sensor_map_is_reported() {
 fn bad_settings_are_usage_errors() {
     let dir = tempfile::tempdir().unwrap();
     let twin = write_twin(dir.path());
-    let modes = dir.path().join("modes.parquet");
+    let modes = dir.path().join("modes/modes.parquet");
     let (freqs, shapes) = true_modes(&twin, &["top", "h1"], 2);
     write_modes(&modes, &["top", "h1"], &freqs, &shapes, 0.0);
     // Names the settings do not know are refused when the settings are read;
@@ -444,7 +444,7 @@ fn pipeline_stage_reads_the_event_twin_and_modes_parquet() {
     std::fs::create_dir_all(&out).unwrap();
     let (freqs, shapes) = true_modes(&twin, &["top", "h1"], 2);
     write_modes(
-        &out.join("modes.parquet"),
+        &out.join("modes/modes.parquet"),
         &["top", "h1"],
         &freqs,
         &shapes,
@@ -457,13 +457,13 @@ fn pipeline_stage_reads_the_event_twin_and_modes_parquet() {
         .with_loaded_event(loaded_event(Some("model/twin.toml")));
     ctx.run_stage(3).unwrap();
     for f in [
-        "twin_update.parquet",
-        "twin_modes.parquet",
+        "twin_update/twin_update.parquet",
+        "twin_modes/twin_modes.parquet",
         "twin_updated.toml",
     ] {
         assert!(out.join(f).exists(), "{f}");
     }
-    let (batches, _) = read_table(&out.join("twin_update.parquet"));
+    let (batches, _) = read_table(&out.join("twin_update/twin_update.parquet"));
     assert_eq!(batches.iter().map(|b| b.num_rows()).sum::<usize>(), 1);
 
     // Unknown param → usage error when the pipeline is read; no twin named → usage error.

@@ -1,5 +1,5 @@
 //! The actuator layout of a hybrid-test design drawn on the twin: the
-//! twin's nodes (the coordinates `actuator_layout.parquet` carries in its
+//! twin's nodes (the coordinates `actuator_layout/actuator_layout.parquet` carries in its
 //! metadata, `quaketwin.nodes`), the physical substructure's nodes darker,
 //! and an arrow per actuated DoF in its direction, coloured by control mode.
 //! Drawn in the plane of the twin's two largest extents; inline SVG.

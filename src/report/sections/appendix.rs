@@ -18,7 +18,7 @@ pub(super) fn appendix_section(
     settings: &ReportSettings,
 ) -> String {
     let mut body = String::new();
-    // Processing history: the most complete copy is in channels.parquet's metadata.
+    // Processing history: the most complete copy is in channels/channels.parquet's metadata.
     let history = match &o.channels {
         Loaded::Ok(t) => t
             .metadata
@@ -33,7 +33,7 @@ pub(super) fn appendix_section(
         body.push_str(&note("No processing steps recorded."));
     } else {
         body.push_str(&note(
-            "The conditioning steps with their parameters as recorded (channels.parquet metadata quaketwin.history); \
+            "The conditioning steps with their parameters as recorded (channels/channels.parquet metadata quaketwin.history); \
              each later table carries its own history in its metadata.",
         ));
         body.push_str(&format!("<ol class=\"history\">{}</ol>", steps.join("")));
@@ -43,7 +43,7 @@ pub(super) fn appendix_section(
     if let Loaded::Ok(t) = &o.twin_update {
         body.push_str("<h3 id=\"twin-candidates\">Twin update: every candidate</h3>");
         body.push_str(&note(
-            "twin_update.parquet as written: one row per ensemble round and candidate solver, with the model quantities z, \
+            "twin_update/twin_update.parquet as written: one row per ensemble round and candidate solver, with the model quantities z, \
              the normalised scatter and the score per voter (list columns). The section Digital-twin update summarises it.",
         ));
         body.push_str(&whole_table(t, settings.max_table_rows));

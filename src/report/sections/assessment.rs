@@ -1,7 +1,7 @@
-//! The assessment the page opens with: `assessment.parquet`'s row (colour,
+//! The assessment the page opens with: `assessment/assessment.parquet`'s row (colour,
 //! inspection priority, confidence, drivers, damage-state probabilities,
 //! each indicator's value and verdict, assumptions) and the apparent
-//! frequency through the event (`frequency_track.parquet`).  Nothing is
+//! frequency through the event (`frequency_track/frequency_track.parquet`).  Nothing is
 //! recomputed: the `assess` stage decided; the page shows it.
 
 use std::path::Path;
@@ -24,7 +24,7 @@ pub struct IndicatorView {
     pub verdict: String,
 }
 
-/// `assessment.parquet`'s row, as the page and the `--json` summary show it.
+/// `assessment/assessment.parquet`'s row, as the page and the `--json` summary show it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AssessmentView {
     /// `GREEN`, `YELLOW`, `ORANGE`, `RED` or `NOT RATED`.
@@ -61,7 +61,7 @@ fn list(t: &Table, c: &str) -> Vec<String> {
 }
 
 impl AssessmentView {
-    /// The view of a loaded `assessment.parquet` (its first row).
+    /// The view of a loaded `assessment/assessment.parquet` (its first row).
     pub fn of(t: &Table) -> Option<AssessmentView> {
         if t.rows == 0 {
             return None;

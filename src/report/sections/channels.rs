@@ -1,4 +1,4 @@
-//! Section 3, channels: QA flags and strong-motion metrics of channels.parquet.
+//! Section 3, channels: QA flags and strong-motion metrics of channels/channels.parquet.
 
 use serde_json::Value;
 

@@ -311,7 +311,7 @@ pub(super) fn page(dir: &Path, settings: &ReportSettings) -> String {
     }
     page.push_str(&format!(
         "</main>\n<footer><p>{}</p></footer>\n</body>\n</html>\n",
-        escape("Every number on this page is read from the compare-test outputs in this directory (compare_test_summary.parquet, compare_test_actuators.parquet, compare_test.parquet).")
+        escape("Every number on this page is read from the compare-test outputs in this directory (compare_test_summary/compare_test_summary.parquet, compare_test_actuators/compare_test_actuators.parquet, compare_test/compare_test.parquet).")
     ));
     page
 }

@@ -1,4 +1,4 @@
-//! Damage index ι(t) (damage.parquet): ratings per direction, ι(t) and
+//! Damage index ι(t) (damage/damage.parquet): ratings per direction, ι(t) and
 //! natural-frequency ratio charts on the page's common time axis.
 
 use std::collections::BTreeMap;
@@ -10,7 +10,7 @@ use crate::report::table::Table;
 use crate::report::{Assessment, IotaStatistic, ReportSettings};
 use crate::vocab::tables::{self, damage};
 
-/// Columns damage.parquet may hold besides the wide layout's `omega_ratio_<mode>`.
+/// Columns damage/damage.parquet may hold besides the wide layout's `omega_ratio_<mode>`.
 const KNOWN_COLUMNS: [&str; 7] = [
     damage::DIRECTION.name,
     damage::T_S.name,
@@ -54,7 +54,7 @@ fn final_and_peak(pts: &[(f64, f64)]) -> (Option<f64>, Option<f64>) {
     (final_v, peak_v)
 }
 
-/// Why damage.parquet is empty (the damage stage writes no row when no
+/// Why damage/damage.parquet is empty (the damage stage writes no row when no
 /// direction was identified).
 pub(super) const NO_ROWS: &str = "No damage index ι(t): ι needs a direction whose Bouc-Wen model is identified (see the Bouc-Wen section)";
 

@@ -1,4 +1,4 @@
-//! Inter-storey drift (drift.parquet): peak drift ratio from the band-passed
+//! Inter-storey drift (drift/drift.parquet): peak drift ratio from the band-passed
 //! displacements and residual drift from the unfiltered records, their
 //! ratings and the profile chart.
 
@@ -49,7 +49,7 @@ impl Residual {
     }
 }
 
-/// The residual drift of row `r` of drift.parquet.
+/// The residual drift of row `r` of drift/drift.parquet.
 pub(super) fn residual(t: &Table, r: usize) -> Option<Residual> {
     let num = |c: &str| t.number(c).and_then(|v| v.get(r).copied().flatten());
     Some(Residual {
@@ -126,7 +126,7 @@ pub(super) fn subject(t: &Table, r: usize) -> String {
     format!("{place}, direction {}{assumed}", key(drift::DIRECTION.name))
 }
 
-/// The notes drift.parquet carries (why drift is missing, heights assumed,
+/// The notes drift/drift.parquet carries (why drift is missing, heights assumed,
 /// records trimmed), as a list; empty when none.
 pub(super) fn notes_of(t: &Table) -> Vec<String> {
     t.metadata

@@ -1,12 +1,12 @@
-//! Force–drift loops (hysteresis_fit.parquet): the measured loop of every
+//! Force–drift loops (hysteresis_fit/hysteresis_fit.parquet): the measured loop of every
 //! storey or segment — also where the model is not identified — with the
 //! model's on top where it is, drawn as curves (decimated in time order,
 //! `plot::decimate_curve`).
 //!
 //! One drift on the page: the loops are drawn against the drift the drift
 //! table reports — the relative displacement of the storey's two records of
-//! drift.parquet (`lower_channel`, `upper_channel`) after the condition
-//! stage's band-pass, read from samples.parquet at the loop's times — so a
+//! drift/drift.parquet (`lower_channel`, `upper_channel`) after the condition
+//! stage's band-pass, read from samples/samples.parquet at the loop's times — so a
 //! loop's largest drawn |drift| is the table's peak drift (within the
 //! identification window, which holds the strong motion).  The Bouc-Wen
 //! identification integrates the records as recorded (no band-pass); where
@@ -69,7 +69,7 @@ struct DriftRow {
     residual: Option<Residual>,
 }
 
-/// drift.parquet's measured and segment rows per (direction, lower, upper).
+/// drift/drift.parquet's measured and segment rows per (direction, lower, upper).
 fn drift_rows(drift_table: &Loaded) -> BTreeMap<(String, i32, i32), DriftRow> {
     let mut out = BTreeMap::new();
     let Loaded::Ok(t) = drift_table else {
@@ -131,7 +131,7 @@ fn at(series: &[(f64, f64)], t: f64) -> Option<f64> {
 }
 
 /// The conditioned displacements of the records the loops need, over the
-/// loops' time span; empty when samples.parquet is not there or lacks them.
+/// loops' time span; empty when samples/samples.parquet is not there or lacks them.
 fn conditioned(
     samples: Option<&Path>,
     t: &Table,
@@ -156,7 +156,7 @@ fn conditioned(
         Ok(m) => (m, None),
         Err(e) => {
             crate::report::html::diagnostic(&format!(
-                "samples.parquet: conditioned displacements for the loops not read: {e}"
+                "samples/samples.parquet: conditioned displacements for the loops not read: {e}"
             ));
             (
                 BTreeMap::new(),

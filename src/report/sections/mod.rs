@@ -511,7 +511,7 @@ pub(super) fn page_header(
     )
 }
 
-/// 0 to the longest record (npts / sampling rate of channels.parquet): every
+/// 0 to the longest record (npts / sampling rate of channels/channels.parquet): every
 /// time axis of the page starts where the records start.
 fn time_axis(channels: &Loaded) -> Option<(f64, f64)> {
     let Loaded::Ok(t) = channels else {
@@ -530,7 +530,7 @@ fn time_axis(channels: &Loaded) -> Option<(f64, f64)> {
     (end > 0.0).then_some((0.0, end))
 }
 
-/// channel id → (direction, level) from channels.parquet.
+/// channel id → (direction, level) from channels/channels.parquet.
 fn channel_info(channels: &Loaded) -> BTreeMap<String, (Option<String>, Option<String>)> {
     let mut m = BTreeMap::new();
     if let Loaded::Ok(t) = channels {

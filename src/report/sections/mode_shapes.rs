@@ -1,8 +1,8 @@
-//! Mode shapes (modes.parquet): one chart per mode on the sensor layout,
+//! Mode shapes (modes/modes.parquet): one chart per mode on the sensor layout,
 //! and the shape components under the channel names of the table's
 //! `quaketwin.output_channels` metadata.
 //!
-//! Where every output channel has a level (channels.parquet), a mode is drawn
+//! Where every output channel has a level (channels/channels.parquet), a mode is drawn
 //! as a storey profile: level up, component across, one line per direction
 //! (X, Y, …) through the levels; several sensors of one direction on a level
 //! (a torsion pair) are drawn as separate lines, so components in opposite
@@ -21,7 +21,7 @@ use crate::vocab::tables::modes;
 /// Most channels whose names are written beside the points.
 const MAX_LABELS: usize = 16;
 
-/// The output channel ids of modes.parquet (metadata), if stated.
+/// The output channel ids of modes/modes.parquet (metadata), if stated.
 pub(super) fn output_channels(t: &Table) -> Vec<String> {
     t.metadata
         .get("quaketwin.output_channels")
@@ -60,7 +60,7 @@ pub(super) fn mode_shapes(t: &Table, channels: &Loaded) -> String {
         names = (1..=width).map(|i| format!("#{i}")).collect();
     }
     let info = channel_info(channels);
-    // Level and direction of every component, when channels.parquet has them.
+    // Level and direction of every component, when channels/channels.parquet has them.
     let layout: Option<Vec<(i32, String)>> = names
         .iter()
         .map(|n| {

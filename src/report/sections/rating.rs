@@ -57,7 +57,7 @@ fn residual_gap(drift: &Loaded) -> String {
     format!("no resolved residual drift: {}", why.join("; "))
 }
 
-/// Why drift.parquet gives no peak drift to rate.
+/// Why drift/drift.parquet gives no peak drift to rate.
 fn peak_gap(drift: &Loaded) -> String {
     if let Loaded::Ok(t) = drift {
         let notes = notes_of(t);

@@ -1,5 +1,5 @@
-//! Part of the hybrid-test design section: the rehearsal (rehearsal_summary.parquet,
-//! rehearsal.parquet) — the recommended λ, the sweep plot (response WNRMSE and energy error
+//! Part of the hybrid-test design section: the rehearsal (rehearsal_summary/rehearsal_summary.parquet,
+//! rehearsal/rehearsal.parquet) — the recommended λ, the sweep plot (response WNRMSE and energy error
 //! against λ, divergence marked) and the tables.
 
 use std::path::Path;

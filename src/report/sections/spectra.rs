@@ -1,4 +1,4 @@
-//! Section 4, response spectra (spectra.parquet), one chart per direction.
+//! Section 4, response spectra (spectra/spectra.parquet), one chart per direction.
 
 use std::collections::BTreeMap;
 use std::path::Path;

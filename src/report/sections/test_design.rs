@@ -100,8 +100,8 @@ fn appendix(dir: &Path, event: &Result<Value, String>) -> String {
         ));
     } else {
         body.push_str(&note(
-            "Ingest and conditioning as recorded with the conditioned records (samples.parquet, quaketwin.history), then the \
-             design and the rehearsal with the settings their tables record (pod.parquet and rehearsal_summary.parquet metadata).",
+            "Ingest and conditioning as recorded with the conditioned records (samples/samples.parquet, quaketwin.history), then the \
+             design and the rehearsal with the settings their tables record (pod/pod.parquet and rehearsal_summary/rehearsal_summary.parquet metadata).",
         ));
         body.push_str(&format!("<ol class=\"history\">{}</ol>", steps.join("")));
     }

@@ -1,6 +1,6 @@
-//! Section 5, acceleration time histories (samples.parquet) as small multiples.
+//! Section 5, acceleration time histories (samples/samples.parquet) as small multiples.
 //!
-//! samples.parquet holds every sample of every channel (46 M rows for 64
+//! samples/samples.parquet holds every sample of every channel (46 M rows for 64
 //! channels × 1 h at 200 Hz): it is gone through a batch of rows at a time,
 //! never loaded whole.  A trace's points are gathered while its rows last and
 //! decimated when they end (our files keep a channel's rows together); a
@@ -51,7 +51,7 @@ impl Keys<'_> {
     }
 }
 
-/// Calls `each(trace, point)` for every row of samples.parquet, the point
+/// Calls `each(trace, point)` for every row of samples/samples.parquet, the point
 /// when the row holds both a time and an acceleration; traces numbered in
 /// order of first appearance.
 fn for_each_row(
@@ -219,7 +219,7 @@ pub(super) fn time_history_section(
     body
 }
 
-/// Each trace of samples.parquet (by channel id, in order of first
+/// Each trace of samples/samples.parquet (by channel id, in order of first
 /// appearance) decimated to at most `max_points` (see the module doc).
 fn decimated_traces(
     path: &Path,
@@ -287,7 +287,7 @@ fn decimated_traces(
 }
 
 /// Conditioned displacement (`disp_m`) of the channels `ids` of
-/// samples.parquet, as (t, u) in time order per channel, only the samples
+/// samples/samples.parquet, as (t, u) in time order per channel, only the samples
 /// with t in `t_range` (inclusive): what the loops draw their drift from.
 /// Gone through a batch at a time, as the traces are.
 pub(super) fn displacements(

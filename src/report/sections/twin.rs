@@ -37,7 +37,7 @@ fn meta_json(t: &Table, key: &str) -> Option<Value> {
         .and_then(|s| serde_json::from_str(s).ok())
 }
 
-/// The parameters from twin_update.parquet's metadata: names
+/// The parameters from twin_update/twin_update.parquet's metadata: names
 /// (`quaketwin.parameters`), calibrated values (`quaketwin.result`), start
 /// values and bounds (`quaketwin.parameter_bounds`; for files without it the
 /// first round's start point, no bounds).
