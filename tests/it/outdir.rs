@@ -687,3 +687,42 @@ fn an_output_directory_inside_the_event_folder_is_not_part_of_the_event() {
         "the output folder was read as part of the event"
     );
 }
+
+/// Each table in a folder of its own; the flat tables a run made before the
+/// folders are still found where a run is read back, and a new run into that
+/// directory removes them (no other run's file survives).
+#[test]
+fn flat_tables_of_an_earlier_layout_are_read_back_and_then_removed() {
+    use quaketwin::vocab::tables::{CHANNELS, SAMPLES};
+    let out = tempfile::tempdir().unwrap();
+    let d = out.path();
+    let metrics = format!(
+        "{INGEST}[[stage]]\nname = \"metrics\"\nkind = \"metrics\"\ninputs = [\"condition\"]\n"
+    );
+    let p = parse_pipeline(&metrics, "m.toml").unwrap();
+    pipeline::run(&p, &event("synthetic-4storey-quake"), d, true).unwrap();
+    assert!(d.join("channels/channels.parquet").is_file());
+    assert!(!d.join("channels.parquet").exists());
+    // The earlier layout: the tables flat, no manifest listing them.
+    let flat = tempfile::tempdir().unwrap();
+    let f = flat.path();
+    for t in [CHANNELS, SAMPLES] {
+        std::fs::copy(d.join(t.file), f.join(t.flat_file())).unwrap();
+        assert_eq!(t.locate(f), f.join(t.flat_file()), "{}", t.name);
+        assert_eq!(t.locate(d), d.join(t.file), "{}", t.name);
+    }
+    pipeline::run(&p, &event("synthetic-2storey-yielding"), f, true).unwrap();
+    for t in [CHANNELS, SAMPLES] {
+        assert!(
+            !f.join(t.flat_file()).exists(),
+            "{} survived",
+            t.flat_file()
+        );
+        assert!(f.join(t.file).is_file());
+    }
+    let mut parquet_at_top = std::fs::read_dir(f)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".parquet"));
+    assert_eq!(parquet_at_top.next(), None);
+}
