@@ -325,7 +325,14 @@ pub fn prepare(opts: &TrackOptions) -> Result<Prepared> {
         plan,
         archive,
         cal,
-        settings: ModalSettings::default(),
+        // No data-driven σ per window (docs/statistics.md S1–S5): the tracking
+        // table carries each window's scatter over orders and the anomaly band
+        // the windows' spread, and the per-window change test forms its own
+        // covariance blocks.  It would only cost time on a year of windows.
+        settings: ModalSettings {
+            uncertainty_blocks: Some(0),
+            ..ModalSettings::default()
+        },
     })
 }
 
