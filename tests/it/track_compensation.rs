@@ -95,7 +95,7 @@ fn compensation_of_a_run_charts_days_and_finds_the_damage() {
             assert_eq!(g.training, d < 7);
             let missing = (24 * d..24 * d + 24).filter(|h| h % 10 == 3).count();
             assert_eq!(g.charted, 24 - missing);
-            if d >= 7 && d < 20 {
+            if (7..20).contains(&d) {
                 assert_eq!(g.out_of_control, Some(false), "{measured}: day {d}: {g:?}");
             }
             if g.training {
