@@ -329,9 +329,19 @@ enum Command {
         /// Skip windows with a smaller share of recorded samples.
         #[arg(long, default_value_t = 0.9, value_name = "FRACTION")]
         min_present: f64,
-        /// Period of the environmental cycle in the band's regression.
+        /// Period of the environmental cycle in the band's regression
+        /// (and the length of the control chart's subgroups).
         #[arg(long, default_value = "24h")]
         cycle: String,
+        /// Measured temperature for the environmental compensation: a CSV
+        /// of time (ISO-8601 UTC or epoch seconds), value (default: the
+        /// latent model, nothing measured).
+        #[arg(long, value_name = "FILE")]
+        temperature: Option<PathBuf>,
+        /// Measured temperature: a stream of the archive NET.STA.LOC.CHAN
+        /// (not identified with the accelerometers).
+        #[arg(long, value_name = "ID")]
+        temperature_channel: Option<String>,
     },
     /// Structure history over a many-event dataset: each structure's modes
     /// followed across its events, frequency against intensity with an
@@ -694,6 +704,8 @@ fn run_command(cli: &Cli) -> Result<()> {
             reference,
             min_present,
             cycle,
+            temperature,
+            temperature_channel,
         } => {
             let opts = quaketwin::track::TrackOptions {
                 archive: archive.clone(),
@@ -708,6 +720,8 @@ fn run_command(cli: &Cli) -> Result<()> {
                 reference: reference.clone(),
                 min_present: *min_present,
                 cycle: cycle.clone(),
+                temperature: temperature.clone(),
+                temperature_channel: temperature_channel.clone(),
             };
             let s = match commands::track(&opts) {
                 Ok(s) => s,

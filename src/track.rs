@@ -14,6 +14,8 @@ use crate::error::{Error, Result};
 use crate::modal::change_test::ChangeTestResult;
 use crate::modal::{ModalSettings, Mode};
 use crate::monitor::anomaly::{self, BandModel, BandSettings};
+use crate::monitor::compensation::compensate;
+use crate::monitor::environment::{ChartSettings, EnvironmentSeries};
 use crate::monitor::tracking::{Reference, TrackSettings, TrackedMode};
 use crate::monitor::window::{parse_duration, WindowGrid, NS_PER_S};
 use crate::monitor::{analyse, identify_window, Tracking, WindowModes, WindowSignals};
@@ -21,14 +23,18 @@ use crate::readers::mseed::StreamCodes;
 use crate::readers::sds::{SdsArchive, StreamPattern, DAMAGE_NOTE};
 use crate::sinks::parquet::{write_parquet, TableBuilder};
 use crate::sinks::provenance::Provenance;
-use crate::vocab::tables::{modal_tracking as col, MODAL_TRACKING};
+use crate::vocab::tables::{modal_tracking as col, CONTROL_CHART, MODAL_TRACKING};
 use crate::vocab::{format_epoch_ns, parse_iso8601_ns};
 
+mod chart_table;
 pub mod response;
+pub mod temperature;
+use chart_table::{chart_batch, chart_metadata};
 use response::Calibration;
 
 pub const TABLE_FILE: &str = MODAL_TRACKING.file;
 pub const REPORT_FILE: &str = "tracking.html";
+pub const CHART_FILE: &str = CONTROL_CHART.file;
 
 /// The command's flags, as typed (checked by [`TrackOptions::plan`] before any work).
 /// Unknown fields are refused (a misspelt option from Python, `windw`,
@@ -50,8 +56,13 @@ pub struct TrackOptions {
     pub reference: Option<PathBuf>,
     /// Windows with a smaller share of recorded samples are skipped.
     pub min_present: f64,
-    /// Period of the environmental cycle of the band (default 24 h).
+    /// Period of the environmental cycle of the band (default 24 h); also
+    /// the length of the control chart's subgroups.
     pub cycle: String,
+    /// Measured temperature, a CSV of time, value (Eq. E1).
+    pub temperature: Option<PathBuf>,
+    /// Measured temperature, a stream of the archive (`NET.STA.LOC.CHAN`).
+    pub temperature_channel: Option<String>,
 }
 
 impl Default for TrackOptions {
@@ -75,6 +86,8 @@ impl TrackOptions {
             reference: None,
             min_present: 0.9,
             cycle: "24h".into(),
+            temperature: None,
+            temperature_channel: None,
         }
     }
 }
@@ -125,6 +138,12 @@ pub struct TrackSummary {
     pub anomaly_from: Option<String>,
     /// Anomalous windows after training (Eq. M5).
     pub anomalous_windows: usize,
+    /// Environmental compensation: `measured` or `latent` (empty: no chart).
+    pub compensation: String,
+    /// First subgroup of the control chart's first alarm (Eq. E5), if any.
+    pub control_alarm_from: Option<String>,
+    /// Out-of-control subgroups after training (Eq. E4).
+    pub out_of_control_subgroups: usize,
     pub seconds: f64,
     pub files: Vec<PathBuf>,
 }
@@ -153,6 +172,8 @@ struct Plan {
     training_ns: i64,
     cycle_s: f64,
     reference: Option<(Vec<Mode>, Vec<String>, String)>,
+    /// The `--temperature` CSV, read.
+    temperature: Option<EnvironmentSeries>,
 }
 
 fn time_flag(flag: &str, text: &str) -> Result<i64> {
@@ -207,6 +228,19 @@ impl TrackOptions {
                 Some((modes, channels, p.display().to_string()))
             }
         };
+        if let Some(id) = &self.temperature_channel {
+            StreamPattern::parse(id)?;
+            if self.temperature.is_some() {
+                return Err(Error::usage(
+                    "--temperature and --temperature-channel: give one measured temperature",
+                ));
+            }
+        }
+        let temperature = self
+            .temperature
+            .as_deref()
+            .map(temperature::read_csv)
+            .transpose()?;
         let (start, end) = match (start, end) {
             (Some(s), Some(e)) => (s, e),
             (s, e) => {
@@ -220,6 +254,7 @@ impl TrackOptions {
             training_ns,
             cycle_s,
             reference,
+            temperature,
         })
     }
 }
@@ -310,6 +345,11 @@ pub fn prepare(opts: &TrackOptions) -> Result<Prepared> {
         None => SdsArchive::open(&opts.archive)?,
     }
     .select(&plan.patterns)?;
+    // The temperature stream is no accelerometer: not identified.
+    let archive = match &opts.temperature_channel {
+        Some(id) => archive.without(id),
+        None => archive,
+    };
     if archive.streams().len() < 2 {
         return Err(Error::input(
             crate::error::Location::file(opts.archive.display().to_string()),
@@ -430,7 +470,33 @@ impl Prepared {
             confidence: 0.99,
             min_run: 3,
         };
-        let tracking = analyse(windows, reference, &TrackSettings::default(), band_settings)?;
+        let mut tracking = analyse(windows, reference, &TrackSettings::default(), band_settings)?;
+        let measured = match (&opts.temperature_channel, plan.temperature) {
+            (Some(id), _) => Some(temperature::read_channel(
+                &opts.archive,
+                id,
+                &plan.grid.starts(),
+                length,
+            )?),
+            (None, t) => t,
+        };
+        let chart_settings = ChartSettings {
+            subgroup: ((plan.cycle_s * NS_PER_S as f64 / plan.grid.step_ns as f64).round()
+                as usize)
+                .max(1),
+            ..Default::default()
+        };
+        tracking.compensation = compensate(
+            &tracking.windows,
+            &tracking.rows,
+            tracking.reference.modes.len(),
+            band_settings.training_end_ns,
+            measured.as_ref(),
+            &chart_settings,
+        );
+        for w in &tracking.compensation.warnings {
+            crate::console::warn(format!("track: {w}"));
+        }
         let streams: Vec<String> = archive.streams().iter().map(StreamCodes::id).collect();
         let provenance = Provenance::of_source(serde_json::json!({
             "name": format!("continuous record {}", opts.archive.display()),
@@ -461,17 +527,28 @@ impl Prepared {
                 "tracking": TrackSettings::default(),
                 "band": band_settings,
                 "reference": tracking.reference.source,
+                "control_chart": chart_settings,
+                "temperature": tracking.compensation.source,
             }),
         );
-        let summary_files = vec![opts.out.join(TABLE_FILE), opts.out.join(REPORT_FILE)];
+        let summary_files = vec![
+            opts.out.join(TABLE_FILE),
+            opts.out.join(CHART_FILE),
+            opts.out.join(REPORT_FILE),
+        ];
         let out = opts.out.clone();
         crate::pipeline::run_one_shot(
             &out,
             "track",
             &opts.archive,
-            &[TABLE_FILE, REPORT_FILE],
+            &[TABLE_FILE, CHART_FILE, REPORT_FILE],
             || {
                 write_table(&out.join(TABLE_FILE), &tracking, cal.units(), &provenance)?;
+                write_parquet(
+                    &out.join(CHART_FILE),
+                    &[chart_batch(&tracking.compensation)?],
+                    &chart_metadata(&tracking.compensation, &provenance),
+                )?;
                 let html = crate::report::tracking::page(&tracking, cal.units(), &streams);
                 crate::sinks::atomic::write_bytes_atomically(
                     &out.join(REPORT_FILE),
@@ -573,6 +650,17 @@ fn summarise(
             .iter()
             .zip(&t.anomalous)
             .filter(|(w, a)| **a && w.start_ns >= training_end)
+            .count(),
+        compensation: t.compensation.model.clone(),
+        control_alarm_from: t
+            .compensation
+            .alarm_from
+            .map(|g| format_epoch_ns(t.compensation.subgroups[g].start_ns)),
+        out_of_control_subgroups: t
+            .compensation
+            .subgroups
+            .iter()
+            .filter(|g| g.out_of_control == Some(true))
             .count(),
         seconds: clock.elapsed().as_secs_f64(),
         files,
@@ -688,6 +776,24 @@ pub fn tracking_batch(t: &Tracking) -> Result<arrow_array::RecordBatch> {
             col::CHANGE_DETECTED.name,
             rows.iter()
                 .map(|r| t.change_tests[r.window].as_ref().map(|c| c.changed))
+                .collect(),
+        )
+        .opt_f64(
+            col::ENVIRONMENT_VALUE.name,
+            rows.iter()
+                .map(|r| t.compensation.environment.get(r.window).copied().flatten())
+                .collect(),
+        )
+        .opt_f64(
+            col::COMPENSATED_RESIDUAL.name,
+            (0..rows.len())
+                .map(|k| t.compensation.residuals.get(k).copied().flatten())
+                .collect(),
+        )
+        .opt_bool(
+            col::RESIDUAL_FLAGGED.name,
+            (0..rows.len())
+                .map(|k| t.compensation.residual_flagged.get(k).copied().flatten())
                 .collect(),
         )
         .build()

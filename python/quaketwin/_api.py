@@ -26,6 +26,8 @@ TRACK_OPTIONS = (
     "cycle",
     "reference",
     "min_present",
+    "temperature",
+    "temperature_channel",
 )
 
 
@@ -127,7 +129,7 @@ def _track_options(archive: PathLike, out: PathLike, options: Dict[str, Any], ca
     for key, value in options.items():
         if value is None:
             continue
-        if key in ("stationxml", "reference"):
+        if key in ("stationxml", "reference", "temperature"):
             value = _path(value, key)
         elif key == "channels":
             if isinstance(value, str):
@@ -151,6 +153,8 @@ def track(
     cycle: Optional[str] = None,
     reference: Optional[PathLike] = None,
     min_present: Optional[float] = None,
+    temperature: Optional[PathLike] = None,
+    temperature_channel: Optional[str] = None,
 ) -> Dict[str, Any]:
     """Continuous monitoring from an SDS archive in this process
     (``quaketwin track``, docs/monitoring.md).
@@ -180,6 +184,13 @@ def track(
     min_present : float, optional
         Windows with a smaller share of recorded samples are skipped
         (default 0.9).
+    temperature : str or os.PathLike, optional
+        Measured temperature for the environmental compensation: a CSV of
+        time (ISO-8601 UTC or epoch seconds), value.  Without it (and
+        without ``temperature_channel``) the latent model compensates.
+    temperature_channel : str, optional
+        Measured temperature as a stream of the archive
+        (``NET.STA.LOC.CHAN``, no wildcard).
 
     Returns
     -------
@@ -207,6 +218,8 @@ def track(
         cycle=cycle,
         reference=reference,
         min_present=min_present,
+        temperature=temperature,
+        temperature_channel=temperature_channel,
     )
     return json.loads(_native.track_json(_track_options(archive, out, options, "track")))
 

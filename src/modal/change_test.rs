@@ -41,11 +41,24 @@
 //! (C7) contributions: χ² = Σ_i ζ_i (Cov(ζ)⁺ζ)_i; the terms of the columns of
 //!      H that belong to one channel (all its lags) add up to that channel's
 //!      share (the shares sum to χ²; a share may be negative).
+//! (C8) mode contributions: H₀ = O C with O = U_n Λ^{1/2}, C = Λ^{-1/2} U_nᵀ H₀
+//!      (U_n, Λ the n leading eigenvectors and eigenvalues of H₀H₀ᵀ); the
+//!      state matrix A = O↑⁺ O↓ (shift invariance) = Ψ M Ψ⁻¹, the modal row
+//!      factors C_m = Ψ⁻¹ C (row j: mode j's c_j).  A change of mode j
+//!      moves H by Δo_j c_jᵀ + o_j Δc_jᵀ, and Sᵀ o_j = 0: the residual
+//!      Z = Sᵀ(H − H₀) of that change lies along c_j.  So Z's part in the
+//!      row space of C, Z Cᵀ(CCᵀ)⁻¹ C = G C_m with G = Z Cᵀ(CCᵀ)⁻¹ Ψ, splits
+//!      into the modes' terms Z_j = g_j c_jᵀ (a conjugate pair's two terms
+//!      summed: 2 Re), and mode j's share of χ² is vec(Z_j)ᵀ Cov(ζ)⁺ ζ (as
+//!      C7; the rest, Z's part outside the row space, is `unexplained`).
+//!      Each mode is reported with its discrete eigenvalue μ_j: frequency
+//!      arg μ_j / (2π lag_step) cycles per sample, damping −ln|μ_j| / |ln μ_j|.
 
 use crate::error::{Error, Result};
 use crate::modal::hankel::dot;
 use crate::stats::{hotelling_survival, hotelling_upper_quantile};
-use faer::{Mat, Side};
+use faer::linalg::solvers::DenseSolveCore;
+use faer::{c64, Mat, Side};
 
 /// The shape of the Hankel matrix (C1) and the model order (C2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -257,6 +270,116 @@ pub struct ChangeReference {
     pub covariance_dof: usize,
     /// N_ref.
     pub samples: usize,
+    /// (C8): per mode (one per conjugate pair), μ_j and the real
+    /// `cols`-vectors Re c_j, Im c_j, and the row-space map Cᵀ(CCᵀ)⁻¹Ψ
+    /// (cols × n, complex) restricted to the pair's column.
+    modes: Vec<ModeFactor>,
+}
+
+/// One reference mode's pieces for (C8).
+#[derive(Debug, Clone)]
+struct ModeFactor {
+    mu: c64,
+    /// c_j (cols), complex.
+    row: Vec<c64>,
+    /// Column j of Cᵀ(CCᵀ)⁻¹Ψ (cols), complex: g_j = Z · this.
+    map: Vec<c64>,
+    /// A real eigenvalue: its term counts once, not as 2 Re.
+    real: bool,
+}
+
+/// One mode's share of the statistic (C8).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ModeContribution {
+    /// arg μ / (2π lag_step): cycles per sample of the record.
+    pub frequency_per_sample: f64,
+    pub damping_ratio: f64,
+    pub contribution: f64,
+}
+
+/// (C8): the modal pieces of H₀ of order n (`evd` of H₀H₀ᵀ, ascending).
+fn mode_factors(
+    h0: &[f64],
+    rows: usize,
+    cols: usize,
+    l: usize,
+    n: usize,
+    u: faer::MatRef<'_, f64>,
+    lambda: &[f64],
+) -> Vec<ModeFactor> {
+    let lead: Vec<usize> = (rows - n..rows).rev().collect();
+    if lead.iter().any(|&i| !(lambda[i] > 0.0)) {
+        return Vec::new();
+    }
+    let o = Mat::<f64>::from_fn(rows, n, |r, k| u[(r, lead[k])] * lambda[lead[k]].powf(0.25));
+    let c = Mat::<f64>::from_fn(n, cols, |k, j| {
+        (0..rows)
+            .map(|r| u[(r, lead[k])] * h0[r * cols + j])
+            .sum::<f64>()
+            / lambda[lead[k]].powf(0.25)
+    });
+    let up = o.subrows(0, rows - l).to_owned();
+    let down = o.subrows(l, rows - l).to_owned();
+    let a = match up.thin_svd() {
+        Ok(svd) => {
+            let sv = svd.S().column_vector();
+            let smax = sv.iter().fold(0.0f64, |m, &v| m.max(v));
+            let inv = Mat::<f64>::from_fn(n, n, |i, j| {
+                if i == j && sv[i] > 1e-12 * smax {
+                    1.0 / sv[i]
+                } else {
+                    0.0
+                }
+            });
+            svd.V() * inv * svd.U().transpose() * &down
+        }
+        Err(_) => return Vec::new(),
+    };
+    let Ok(eig) = a.eigen() else {
+        return Vec::new();
+    };
+    let mu = eig.S().column_vector();
+    let psi = eig.U();
+    let psi_inv = psi.partial_piv_lu().inverse();
+    let cc = &c * c.transpose();
+    let cc_inv = cc.partial_piv_lu().inverse();
+    let finite = |v: f64| v.is_finite();
+    if !(0..n).all(|i| (0..n).all(|j| finite(cc_inv[(i, j)]) && finite(psi_inv[(i, j)].re))) {
+        return Vec::new();
+    }
+    let ct_cc = c.transpose() * cc_inv; // cols × n, real
+    let mut out = Vec::new();
+    for j in 0..n {
+        let m = mu[j];
+        if m.im < -1e-12 {
+            continue; // the pair's other half
+        }
+        let row: Vec<c64> = (0..cols)
+            .map(|x| {
+                let mut acc = c64::new(0.0, 0.0);
+                for k in 0..n {
+                    acc += psi_inv[(j, k)] * c64::new(c[(k, x)], 0.0);
+                }
+                acc
+            })
+            .collect();
+        let map: Vec<c64> = (0..cols)
+            .map(|x| {
+                let mut acc = c64::new(0.0, 0.0);
+                for k in 0..n {
+                    acc += c64::new(ct_cc[(x, k)], 0.0) * psi[(k, j)];
+                }
+                acc
+            })
+            .collect();
+        out.push(ModeFactor {
+            mu: m,
+            row,
+            map,
+            real: m.im.abs() <= 1e-12,
+        });
+    }
+    out
 }
 
 /// vec(Sᵀ X), column-major (index = column · s + null vector), of a row-major
@@ -320,6 +443,8 @@ pub fn reference_from(records: &[CovarianceBlocks], shape: HankelShape) -> Resul
     let s_dim = rows - n;
     let u = evd.U();
     let null_space = Mat::<f64>::from_fn(rows, s_dim, |i, j| u[(i, j)]);
+    let gram_lambda: Vec<f64> = evd.S().column_vector().iter().copied().collect();
+    let modes = mode_factors(&h0, rows, cols, l, n, u, &gram_lambda);
     let d = s_dim * cols;
     let mut covariance = Mat::<f64>::zeros(d, d);
     let mut dof = 0usize;
@@ -380,6 +505,7 @@ pub fn reference_from(records: &[CovarianceBlocks], shape: HankelShape) -> Resul
         whitening,
         covariance_dof: dof,
         samples: total,
+        modes,
     })
 }
 
@@ -396,6 +522,10 @@ pub struct ChangeTestResult {
     pub changed: bool,
     /// Per channel (in the record's order): its share of the statistic (C7).
     pub channel_contributions: Vec<f64>,
+    /// Per reference mode (ascending frequency): its share (C8).
+    pub mode_contributions: Vec<ModeContribution>,
+    /// The statistic less the modes' shares (C8): what no mode explains.
+    pub unexplained_contribution: f64,
 }
 
 impl ChangeReference {
@@ -451,11 +581,46 @@ impl ChangeReference {
         let statistic: f64 = w.iter().map(|v| v * v).sum();
         let s = self.null_space.ncols();
         let mut channel_contributions = vec![0.0; l];
+        // (Σ⁺ζ)_i = (Wᵀ W ζ)_i; column of H: i / s, its channel: column mod l.
+        let pinv: Vec<f64> = (0..d)
+            .map(|i| (0..k).map(|r| self.whitening[(r, i)] * w[r]).sum())
+            .collect();
         for (i, z) in zeta.iter().enumerate() {
-            // (Σ⁺ζ)_i = (Wᵀ W ζ)_i; column of H: i / s, its channel: column mod l.
-            let pinv: f64 = (0..k).map(|r| self.whitening[(r, i)] * w[r]).sum();
-            channel_contributions[(i / s) % l] += z * pinv;
+            channel_contributions[(i / s) % l] += z * pinv[i];
         }
+        // (C8): Z = ζ as an s × cols matrix (index column · s + row).
+        let mut mode_contributions: Vec<ModeContribution> = self
+            .modes
+            .iter()
+            .map(|m| {
+                let g: Vec<c64> = (0..s)
+                    .map(|row| {
+                        let mut acc = c64::new(0.0, 0.0);
+                        for (x, mx) in m.map.iter().enumerate() {
+                            acc += *mx * zeta[x * s + row];
+                        }
+                        acc
+                    })
+                    .collect();
+                let factor = if m.real { 1.0 } else { 2.0 };
+                let mut share = 0.0;
+                for (x, cx) in m.row.iter().enumerate() {
+                    for (row, gr) in g.iter().enumerate() {
+                        share += factor * (*gr * *cx).re * pinv[x * s + row];
+                    }
+                }
+                let ln = m.mu.ln();
+                ModeContribution {
+                    frequency_per_sample: ln.im.abs()
+                        / (std::f64::consts::TAU * self.lag_step as f64),
+                    damping_ratio: -ln.re / (ln.re * ln.re + ln.im * ln.im).sqrt(),
+                    contribution: share,
+                }
+            })
+            .collect();
+        mode_contributions
+            .sort_by(|a, b| a.frequency_per_sample.total_cmp(&b.frequency_per_sample));
+        let explained: f64 = mode_contributions.iter().map(|m| m.contribution).sum();
         Ok(ChangeTestResult {
             statistic,
             threshold,
@@ -465,6 +630,8 @@ impl ChangeReference {
             false_alarm_rate: alpha,
             changed: statistic > threshold,
             channel_contributions,
+            unexplained_contribution: statistic - explained,
+            mode_contributions,
         })
     }
 }

@@ -8,8 +8,17 @@
 //! training windows where every compensated mode was found:
 //!
 //! (E1) measured temperature T_w (the mean of a series over the window):
-//!      f_{j,w} = β_{j0} + β_{j1} T_w + ε_{j,w} for each mode j (least
-//!      squares, [`crate::stats::LinearFit`]); residual e_{j,w} = f − f̂.
+//!      per mode j, the squared relative frequency y_{j,w} = (f_{j,w}/f̄_j)²
+//!      − 1 (f² ∝ stiffness, which is linear in T where f = √k is not) on
+//!      T: y_{j,w} = β_{j0} + β_{j1} T_w + ε_{j,w} (least squares,
+//!      [`crate::stats::LinearFit`]); r_{j,w} = ½ (y − ŷ) (≈ the relative
+//!      frequency residual); then, unless `project_temperature` is off, the
+//!      component along the temperature direction u = β_1/‖β_1‖ is removed,
+//!      e_w = (I − u uᵀ) r_w.  Why: trained on a few weeks of one season the
+//!      fit extrapolates its slope (and any curvature, and the bias the
+//!      sensor's noise puts on the slope) to the other seasons, and those
+//!      errors lie along u; what the temperature cannot explain across the
+//!      modes is left.  Rank of the residual: m − 1 (m without projection).
 //! (E2) nothing measured: the latent-variable model of Yan, Kerschen, De Boe
 //!      & Golinval (2005, *Structural damage diagnosis under varying
 //!      environmental conditions — Part I: a linear analysis*, MSSP 19):
@@ -26,22 +35,33 @@
 //!      hold the damage.)
 //! (E3) control chart on subgroups of w consecutive windows (w = 24: one
 //!      day of hourly windows; w = 1: each window): Hotelling's
-//!      T²_g = w (ē_g − ē)ᵀ S⁺ (ē_g − ē), ē_g the subgroup's mean residual,
-//!      ē and S the n training residuals' mean and covariance (S truncated
-//!      to its rank k: m for E1, m − q for E2).  Threshold: the upper α
-//!      quantile of (1 + w/n) · T²(k, n − 1), Hotelling's T² with the
-//!      covariance estimated on n − 1 degrees of freedom (Montgomery,
-//!      *Introduction to Statistical Quality Control*, the Phase II chart;
-//!      `stats::hotelling_upper_quantile`).  Why subgroups: a 1 % stiffness
-//!      loss moves the frequencies mostly along the environment's own
-//!      direction (all down together); what is left after (E2) is about one
-//!      hourly window's estimation scatter, and a day's mean brings it out.
+//!      T²_g = w (ē_g − ē)ᵀ S⁺ (ē_g − ē) / (1 + w/n + w h_g),
+//!      ē_g the subgroup's mean residual, ē and S the n training residuals'
+//!      mean and covariance (S truncated to its rank k: m − 1 for E1, m − q
+//!      for E2), h_g = (x̄_g − x̄)ᵀ (Σ_w (x_w − x̄)(x_w − x̄)ᵀ)⁻¹ (x̄_g − x̄)
+//!      the leverage of the subgroup's mean regressor x̄_g (E1: the measured
+//!      value T; E2: the q latent scores u_iᵀ z) among the training
+//!      windows' x_w.  The denominator is the subgroup mean's prediction
+//!      variance in units of S/w: its own scatter (1), the error of the
+//!      fitted means (w/n) and that of the fitted slopes or directions,
+//!      which grows with the distance from the training conditions (w h_g,
+//!      the leverage term of the band's Eq. M3; for E2 the principal
+//!      directions' estimation error, ≈ σ²/(n λ) per direction, leaks the
+//!      same way).  Threshold: the upper α quantile of T²(k, n − 1 − p),
+//!      Hotelling's T² with the covariance estimated on n − 1 − p degrees of
+//!      freedom, p regressors (Montgomery, *Introduction to Statistical
+//!      Quality Control*, the Phase II chart; `stats::hotelling_upper_quantile`).
+//!      Without the leverage term (`extrapolation_leverage` off, h_g = 0) a
+//!      chart trained in winter alarms in summer: the slopes' error, ~10⁻⁵
+//!      per °C per mode, is 2 × 10⁻⁴ at 30 °C from the training mean —
+//!      a daily mean's scatter (docs/statistics.md, "Synthetic year").
+//!      Why subgroups: a 1 % stiffness
 //! (E4) a subgroup is out of control when T²_g exceeds the threshold;
 //! (E5) an alarm: at least `min_run` consecutive out-of-control subgroups
 //!      after training, dated at the first.
 
 use crate::error::{Error, Result};
-use crate::stats::{hotelling_upper_quantile, LinearFit};
+use crate::stats::{hotelling_survival, hotelling_upper_quantile, LinearFit};
 use faer::{Mat, Side};
 
 /// A measured environmental series (time, value), e.g. temperature.
@@ -97,8 +117,13 @@ impl EnvironmentSeries {
 /// Which model removes the environment (module doc).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub enum Compensation {
-    /// E1: per mode, frequency on the measured series.
-    Measured { fits: Vec<(f64, f64)> },
+    /// E1: per mode, (f/f̄)² − 1 on the measured series: (β₀, β₁).
+    Measured {
+        mean_hz: Vec<f64>,
+        fits: Vec<(f64, f64)>,
+        /// u of (E1) when the temperature direction is projected out.
+        direction: Option<Vec<f64>>,
+    },
     /// E2: principal directions of the training deviations.
     Latent {
         mean_hz: Vec<f64>,
@@ -124,6 +149,13 @@ pub struct ControlChart {
     residual_mean: Vec<f64>,
     #[serde(skip)]
     whitening: Vec<Vec<f64>>,
+    /// Degrees of freedom of S: n − 1 − p (E3).
+    pub covariance_dof: usize,
+    /// x̄ and (Σ (x − x̄)(x − x̄)ᵀ)⁻¹ of (E3); empty without leverage.
+    #[serde(skip)]
+    regressor_mean: Vec<f64>,
+    #[serde(skip)]
+    scatter_inverse: Vec<Vec<f64>>,
 }
 
 /// Settings of the chart.
@@ -138,6 +170,10 @@ pub struct ChartSettings {
     pub min_run: usize,
     /// Windows per subgroup w (E3).
     pub subgroup: usize,
+    /// Remove the temperature direction from the E1 residual (module doc).
+    pub project_temperature: bool,
+    /// Widen a subgroup's variance by its leverage h_g (E3).
+    pub extrapolation_leverage: bool,
 }
 
 impl Default for ChartSettings {
@@ -147,8 +183,29 @@ impl Default for ChartSettings {
             dominance: 5.0,
             min_run: 1,
             subgroup: 24,
+            project_temperature: true,
+            extrapolation_leverage: true,
         }
     }
+}
+
+/// Mean of each column of `rows`.
+fn column_means(rows: &[Vec<f64>]) -> Vec<f64> {
+    let n = rows.len() as f64;
+    (0..rows[0].len())
+        .map(|j| rows.iter().map(|r| r[j]).sum::<f64>() / n)
+        .collect()
+}
+
+/// (I − Σ d dᵀ) v for orthonormal directions d.
+fn project_out(mut v: Vec<f64>, directions: &[Vec<f64>]) -> Vec<f64> {
+    for d in directions {
+        let c: f64 = d.iter().zip(&v).map(|(a, b)| a * b).sum();
+        for (vi, di) in v.iter_mut().zip(d) {
+            *vi -= c * di;
+        }
+    }
+    v
 }
 
 fn symmetric_eigen(rows: &[Vec<f64>]) -> Result<(Vec<f64>, Mat<f64>)> {
@@ -189,10 +246,14 @@ impl ControlChart {
         }
         let compensation = match environment {
             Some(t) => {
+                let mean_hz = column_means(frequencies);
                 let x: Vec<Vec<f64>> = t.iter().map(|&v| vec![1.0, v]).collect();
                 let fits = (0..m)
                     .map(|j| {
-                        let y: Vec<f64> = frequencies.iter().map(|r| r[j]).collect();
+                        let y: Vec<f64> = frequencies
+                            .iter()
+                            .map(|r| (r[j] / mean_hz[j]).powi(2) - 1.0)
+                            .collect();
                         LinearFit::fit(&x, &y)
                             .map(|f| (f.coefficients[0], f.coefficients[1]))
                             .ok_or_else(|| {
@@ -202,12 +263,17 @@ impl ControlChart {
                             })
                     })
                     .collect::<Result<Vec<_>>>()?;
-                Compensation::Measured { fits }
+                let norm = fits.iter().map(|f| f.1 * f.1).sum::<f64>().sqrt();
+                let direction = (settings.project_temperature && norm > 0.0)
+                    .then(|| fits.iter().map(|f| f.1 / norm).collect());
+                Compensation::Measured {
+                    mean_hz,
+                    fits,
+                    direction,
+                }
             }
             None => {
-                let mean_hz: Vec<f64> = (0..m)
-                    .map(|j| frequencies.iter().map(|r| r[j]).sum::<f64>() / n as f64)
-                    .collect();
+                let mean_hz = column_means(frequencies);
                 let z: Vec<Vec<f64>> = frequencies
                     .iter()
                     .map(|r| r.iter().zip(&mean_hz).map(|(f, f0)| f / f0 - 1.0).collect())
@@ -245,6 +311,9 @@ impl ControlChart {
             subgroup: 1,
             residual_mean: vec![0.0; m],
             whitening: Vec::new(),
+            covariance_dof: 0,
+            regressor_mean: Vec::new(),
+            scatter_inverse: Vec::new(),
         };
         let residuals: Vec<Vec<f64>> = frequencies
             .iter()
@@ -265,25 +334,47 @@ impl ControlChart {
             .iter()
             .map(|&i| (0..m).map(|j| u[(j, i)] / lambda[i].sqrt()).collect())
             .collect();
+        let x: Vec<Vec<f64>> = frequencies
+            .iter()
+            .enumerate()
+            .map(|(w, r)| chart.regressors(r, environment.map(|t| t[w])))
+            .collect();
+        let p = x[0].len();
+        if settings.extrapolation_leverage && p > 0 {
+            chart.regressor_mean = column_means(&x);
+            let xm = &chart.regressor_mean;
+            let scatter = nalgebra::DMatrix::<f64>::from_fn(p, p, |a, b| {
+                x.iter().map(|r| (r[a] - xm[a]) * (r[b] - xm[b])).sum()
+            });
+            let inverse = scatter.try_inverse().ok_or_else(|| {
+                Error::numerical(
+                    "control chart: the environment does not vary over the training windows",
+                )
+            })?;
+            chart.scatter_inverse = (0..p)
+                .map(|a| (0..p).map(|b| inverse[(a, b)]).collect())
+                .collect();
+        }
+        if n <= k + 1 + p {
+            return Err(Error::numerical(
+                "control chart: too few training windows for the residuals' covariance",
+            ));
+        }
         chart.dof = k;
+        chart.covariance_dof = n - 1 - p;
         chart.subgroup = settings.subgroup.max(1);
-        chart.threshold = (1.0 + chart.subgroup as f64 / n as f64)
-            * hotelling_upper_quantile(settings.false_alarm_rate, k as f64, (n - 1) as f64);
+        chart.threshold = hotelling_upper_quantile(
+            settings.false_alarm_rate,
+            k as f64,
+            chart.covariance_dof as f64,
+        );
         Ok(chart)
     }
 
-    /// The residual of one window (E1/E2).
-    pub fn residual(&self, frequencies: &[f64], environment: Option<f64>) -> Vec<f64> {
+    /// x_w of (E3): the measured value (E1) or the latent scores (E2).
+    fn regressors(&self, frequencies: &[f64], environment: Option<f64>) -> Vec<f64> {
         match &self.compensation {
-            Compensation::Measured { fits } => frequencies
-                .iter()
-                .zip(fits)
-                .map(|(f, (b0, b1))| {
-                    let predicted = b0 + b1 * environment.unwrap_or(f64::NAN);
-                    // Relative, so modes of different frequency weigh alike in E3.
-                    f / predicted - 1.0
-                })
-                .collect(),
+            Compensation::Measured { .. } => vec![environment.unwrap_or(f64::NAN)],
             Compensation::Latent {
                 mean_hz,
                 directions,
@@ -294,14 +385,47 @@ impl ControlChart {
                     .zip(mean_hz)
                     .map(|(f, f0)| f / f0 - 1.0)
                     .collect();
-                let mut e = z.clone();
-                for d in directions {
-                    let c: f64 = d.iter().zip(&z).map(|(a, b)| a * b).sum();
-                    for (ei, di) in e.iter_mut().zip(d) {
-                        *ei -= c * di;
-                    }
-                }
-                e
+                directions
+                    .iter()
+                    .map(|d| d.iter().zip(&z).map(|(a, b)| a * b).sum())
+                    .collect()
+            }
+        }
+    }
+
+    /// P(T² ≥ `statistic`) in the training state (E3's distribution).
+    pub fn p_value(&self, statistic: f64) -> f64 {
+        hotelling_survival(statistic, self.dof as f64, self.covariance_dof as f64)
+    }
+
+    /// The residual of one window (E1/E2).
+    pub fn residual(&self, frequencies: &[f64], environment: Option<f64>) -> Vec<f64> {
+        match &self.compensation {
+            Compensation::Measured {
+                mean_hz,
+                fits,
+                direction,
+            } => {
+                let t = environment.unwrap_or(f64::NAN);
+                let r: Vec<f64> = frequencies
+                    .iter()
+                    .zip(mean_hz)
+                    .zip(fits)
+                    .map(|((f, f0), (b0, b1))| 0.5 * ((f / f0).powi(2) - 1.0 - b0 - b1 * t))
+                    .collect();
+                project_out(r, direction.as_slice())
+            }
+            Compensation::Latent {
+                mean_hz,
+                directions,
+                ..
+            } => {
+                let z: Vec<f64> = frequencies
+                    .iter()
+                    .zip(mean_hz)
+                    .map(|(f, f0)| f / f0 - 1.0)
+                    .collect();
+                project_out(z, directions)
             }
         }
     }
@@ -311,12 +435,32 @@ impl ControlChart {
     pub fn statistic(&self, windows: &[(&[f64], Option<f64>)]) -> f64 {
         let w = windows.len().max(1) as f64;
         let m = self.residual_mean.len();
+        let p = self.regressor_mean.len();
         let mut mean = vec![0.0; m];
+        let mut x = vec![0.0; p];
         for (f, env) in windows {
             for (acc, e) in mean.iter_mut().zip(self.residual(f, *env)) {
                 *acc += e / w;
             }
+            if p > 0 {
+                for (acc, v) in x.iter_mut().zip(self.regressors(f, *env)) {
+                    *acc += v / w;
+                }
+            }
         }
+        let d: Vec<f64> = x
+            .iter()
+            .zip(&self.regressor_mean)
+            .map(|(a, b)| a - b)
+            .collect();
+        let leverage: f64 = (0..p)
+            .map(|a| {
+                (0..p)
+                    .map(|b| d[a] * self.scatter_inverse[a][b] * d[b])
+                    .sum::<f64>()
+            })
+            .sum();
+        let variance = 1.0 + w / self.training_windows as f64 + w * leverage;
         w * self
             .whitening
             .iter()
@@ -329,6 +473,7 @@ impl ControlChart {
                 v * v
             })
             .sum::<f64>()
+            / variance
     }
 }
 

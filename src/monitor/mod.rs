@@ -13,6 +13,7 @@
 
 pub mod anomaly;
 pub mod change;
+pub mod compensation;
 pub mod environment;
 pub mod tracking;
 pub mod window;
@@ -148,6 +149,9 @@ pub struct Tracking {
     pub change_tests: Vec<Option<crate::modal::change_test::ChangeTestResult>>,
     /// Why no window was tested, if so.
     pub change_note: Option<String>,
+    /// Environmental compensation and its control chart
+    /// ([`compensation::compensate`]; empty until a caller runs it).
+    pub compensation: compensation::RunCompensation,
 }
 
 /// Tracking, bands and anomalies of identified windows (module doc).
@@ -232,6 +236,7 @@ pub fn analyse(
         &Default::default(),
     );
     Ok(Tracking {
+        compensation: Default::default(),
         change_tests,
         change_note,
         anomalous: per_window.iter().map(|a| a.unwrap_or(false)).collect(),

@@ -264,6 +264,13 @@ impl SdsArchive {
         Ok(self)
     }
 
+    /// Drops the stream `id` (`NET.STA.LOC.CHAN`) from the selection, if
+    /// selected: a channel that is not an accelerometer (temperature).
+    pub fn without(mut self, id: &str) -> SdsArchive {
+        self.streams.retain(|c| c.id() != id);
+        self
+    }
+
     pub fn root(&self) -> &Path {
         &self.root
     }

@@ -130,6 +130,7 @@ pub fn write_change_test(
     channels: &[String],
     reference: &Path,
     note: Option<&str>,
+    rate_hz: f64,
     provenance: &Provenance,
 ) -> Result<()> {
     let empty = ChangeTestResult {
@@ -141,6 +142,8 @@ pub fn write_change_test(
         false_alarm_rate: 0.0,
         changed: false,
         channel_contributions: Vec::new(),
+        mode_contributions: Vec::new(),
+        unexplained_contribution: 0.0,
     };
     let (t, channels) = match t {
         Some(t) => (t, channels),
@@ -165,6 +168,25 @@ pub fn write_change_test(
     ));
     if let Some(n) = note {
         metadata.push(("quaketwin.note".into(), n.to_string()));
+    }
+    if n > 0 {
+        // Eq. C8: each reference mode's share of the statistic.
+        let modes: Vec<serde_json::Value> = t
+            .mode_contributions
+            .iter()
+            .map(|m| {
+                serde_json::json!({
+                    "frequency_hz": m.frequency_per_sample * rate_hz,
+                    "damping_ratio": m.damping_ratio,
+                    "contribution": m.contribution,
+                })
+            })
+            .collect();
+        metadata.push((
+            "quaketwin.mode_contributions".into(),
+            serde_json::json!({"modes": modes, "unexplained": t.unexplained_contribution})
+                .to_string(),
+        ));
     }
     write_parquet(path, &[batch], &metadata)
 }

@@ -106,9 +106,20 @@ pub fn write(
         &result.output_ids,
         &reference_file,
         tested.as_ref().err().map(String::as_str),
+        record_rate_hz(event, result),
         provenance,
     )?;
     Ok(tested.ok())
+}
+
+/// Sampling rate of the records the covariances were computed from (the
+/// first output channel's), Hz; NaN when not found.
+fn record_rate_hz(event: &Event, result: &ModalResult) -> f64 {
+    result
+        .output_ids
+        .first()
+        .and_then(|id| event.records.iter().find(|r| &r.channel.id == id))
+        .map_or(f64::NAN, |r| r.channel.sampling_rate_hz)
 }
 
 fn test_against(

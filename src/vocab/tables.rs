@@ -494,6 +494,25 @@ declare!(MODAL_TRACKING, modal_tracking, "modal_tracking", "modal_tracking/modal
     CHANGE_P_VALUE: "change_p_value", F64, nullable, "1", "probability of a statistic at least this large in the training state";
     CHANGE_DOF: "change_dof", I32, nullable, "", "degrees of freedom of the statistic (rank kept of the residual covariance)";
     CHANGE_DETECTED: "change_detected", Bool, nullable, "", "the statistic exceeds the threshold";
+    ENVIRONMENT_VALUE: "environment_value", F64, nullable, "varies", "the measured environmental series (`--temperature` or `--temperature-channel`) over the window: its samples' mean (docs/statistics.md Eq. E1); the series' unit (counts for a channel); null when none was given or it does not cover the window";
+    COMPENSATED_RESIDUAL: "compensated_residual", F64, nullable, "1", "the mode's relative frequency residual after environmental compensation (Eq. E1 with a measured series, else the latent model E2); null when the window is not charted (some reference mode missing) or there is no chart";
+    RESIDUAL_FLAGGED: "residual_flagged", Bool, nullable, "", "the residual lies outside the mode's 99 % band of the training residuals (Eq. E6); null with the residual";
+});
+
+declare!(CONTROL_CHART, control_chart, "control_chart", "control_chart/control_chart.parquet",
+    "one row per subgroup of consecutive windows (a `--cycle`'s worth) of a `quaketwin track` run: Hotelling's T² of the environmentally compensated frequency residuals against the training period, its threshold and the alarm (docs/statistics.md Eqs. E1–E5); no rows when the training period was too short for a chart", {
+    SUBGROUP_START: "subgroup_start", TimestampNsUtc, required, "", "start of the subgroup's first window (UTC)";
+    SUBGROUP_END: "subgroup_end", TimestampNsUtc, required, "", "end of its last window (UTC, exclusive)";
+    WINDOWS: "windows", U32, required, "", "windows of the run's grid in the subgroup";
+    CHARTED_WINDOWS: "charted_windows", U32, required, "", "of those, windows with every reference mode tracked (and a measured value): the ones the statistic averages";
+    TRAINING: "training", Bool, required, "", "the subgroup lies in the training period (no out-of-control decision)";
+    MODEL: "model", Utf8, required, "", "`measured` (regression on the measured series, Eq. E1) or `latent` (principal directions of the training frequencies, Eq. E2)";
+    STATISTIC: "statistic", F64, nullable, "1", "T²_g of Eq. E3; null when no window of the subgroup is charted";
+    THRESHOLD: "threshold", F64, required, "1", "upper α quantile of (1 + w/n) T²(k, n − 1) (Eq. E3; α = 0.1 % per subgroup)";
+    P_VALUE: "p_value", F64, nullable, "1", "probability of a statistic at least this large in the training state";
+    DOF: "dof", I32, required, "", "k of Eq. E3: the rank of the residual covariance";
+    OUT_OF_CONTROL: "out_of_control", Bool, nullable, "", "the statistic exceeds the threshold (Eq. E4); null for training or uncharted subgroups";
+    ALARM: "alarm", Bool, required, "", "this subgroup starts the first alarm (Eq. E5)";
 });
 
 declare!(CHANGE_REFERENCE, change_reference, "change_reference", "change_reference/change_reference.parquet",
@@ -707,6 +726,7 @@ pub const ALL_TABLES: &[&TableSchema] = &[
     &FREQUENCY_TRACK,
     &ASSESSMENT,
     &MODAL_TRACKING,
+    &CONTROL_CHART,
     &CHANGE_REFERENCE,
     &CHANGE_TEST,
     &HISTORY_MODES,

@@ -117,6 +117,11 @@ fn episodes(flags: &[bool], min_run: usize, from: usize, to: usize) -> (usize, O
 struct Outcome {
     before: (usize, Option<usize>),
     measured: (usize, Option<usize>),
+    /// E1 without removing the temperature direction (f² regression only).
+    measured_unprojected: (usize, Option<usize>),
+    /// E1 and E2 without the leverage term of (E3).
+    measured_no_leverage: (usize, Option<usize>),
+    latent_no_leverage: (usize, Option<usize>),
     latent: (usize, Option<usize>),
     retained: usize,
 }
@@ -155,7 +160,27 @@ fn evaluate(year: &Year, training_hours: usize) -> Outcome {
     let training = &year.observed[..training_hours];
     let measured_chart =
         ControlChart::fit(training, Some(&year.measured[..training_hours]), &settings).unwrap();
+    let unprojected_chart = ControlChart::fit(
+        training,
+        Some(&year.measured[..training_hours]),
+        &ChartSettings {
+            project_temperature: false,
+            ..settings
+        },
+    )
+    .unwrap();
     let latent_chart = ControlChart::fit(training, None, &settings).unwrap();
+    let no_leverage = ChartSettings {
+        extrapolation_leverage: false,
+        ..settings
+    };
+    let measured_no_leverage = ControlChart::fit(
+        training,
+        Some(&year.measured[..training_hours]),
+        &no_leverage,
+    )
+    .unwrap();
+    let latent_no_leverage = ControlChart::fit(training, None, &no_leverage).unwrap();
     let retained = match &latent_chart.compensation {
         quaketwin::monitor::environment::Compensation::Latent { retained, .. } => *retained,
         _ => 0,
@@ -175,7 +200,14 @@ fn evaluate(year: &Year, training_hours: usize) -> Outcome {
                     .clone()
                     .map(|h| (year.observed[h].as_slice(), env.then(|| year.measured[h])))
                     .collect();
-                Some(chart.statistic(&rows) > chart.threshold)
+                let s = chart.statistic(&rows);
+                if std::env::var("QT_DEBUG").is_ok()
+                    && s > chart.threshold
+                    && d.end <= year.damage_from
+                {
+                    eprintln!("  day {}: T² {s:.1} > {:.1}", d.start / 24, chart.threshold);
+                }
+                Some(s > chart.threshold)
             })
             .collect();
         let healthy: Vec<bool> = days.iter().map(|d| d.end <= year.damage_from).collect();
@@ -197,6 +229,9 @@ fn evaluate(year: &Year, training_hours: usize) -> Outcome {
     Outcome {
         before: delay(episodes(&before_flags, 3, training_hours, year.damage_from)),
         measured: charted(&measured_chart, true),
+        measured_unprojected: charted(&unprojected_chart, true),
+        measured_no_leverage: charted(&measured_no_leverage, true),
+        latent_no_leverage: charted(&latent_no_leverage, false),
         latent: charted(&latent_chart, false),
         retained,
     }
@@ -215,6 +250,15 @@ fn print(label: &str, o: &Outcome) {
     eprintln!("{label}: before compensation {}", show(o.before));
     eprintln!("{label}: measured temperature {}", show(o.measured));
     eprintln!(
+        "{label}: measured temperature, direction kept {}",
+        show(o.measured_unprojected)
+    );
+    eprintln!(
+        "{label}: without leverage: measured {}; latent {}",
+        show(o.measured_no_leverage),
+        show(o.latent_no_leverage)
+    );
+    eprintln!(
         "{label}: latent (PCA, {} direction(s)) {}",
         o.retained,
         show(o.latent)
@@ -222,13 +266,17 @@ fn print(label: &str, o: &Outcome) {
 }
 
 /// CI version: 40 days of spring (from day 60, when the season moves
-/// fastest), training on the first 10, damage from day 30.  Uncompensated,
-/// the season's drift makes false alarms; both compensations make none and
-/// detect the 1 % loss within 3 days.
+/// fastest), training on the first 10 or 20, damage from day 30.
+/// Uncompensated, the season's drift makes false alarms; both
+/// compensations make none; trained on 20 days they detect the 1 % loss
+/// within 3 days (on 10, the damage lies 7 °C beyond the training mean and
+/// the leverage term of Eq. E3 widens the chart: printed, not asserted).
 #[test]
 fn compensation_removes_the_season_and_keeps_the_damage_short_run() {
     let year = synthetic_year(60, 40 * 24, 30, &MEASURED_RELATIVE_STD, 7);
-    let o = evaluate(&year, 10 * 24);
+    let short = evaluate(&year, 10 * 24);
+    print("40 days, 10 of training", &short);
+    let o = evaluate(&year, 20 * 24);
     let (healthy, damaged) = (frequencies(10.0, 0.0), frequencies(10.0, 0.01));
     eprintln!(
         "1 % ground-storey loss, relative frequency changes: {:?}",
@@ -238,7 +286,10 @@ fn compensation_removes_the_season_and_keeps_the_damage_short_run() {
             .map(|(h, d)| format!("{:+.2e}", d / h - 1.0))
             .collect::<Vec<_>>()
     );
-    print("40 days", &o);
+    print("40 days, 20 of training", &o);
+    for (name, (fa, _)) in [("measured", short.measured), ("latent", short.latent)] {
+        assert_eq!(fa, 0, "{name}, 10 days of training: false alarms");
+    }
     assert!(
         o.before.0 >= 1,
         "the season should trouble the uncompensated band"
@@ -250,34 +301,58 @@ fn compensation_removes_the_season_and_keeps_the_damage_short_run() {
 }
 
 /// Issue 36 "Must show": a year of hourly windows, training on the first
-/// 60 days, damage from day 300, over 5 seeds: false-alarm episodes per
-/// year before (stated, asserted > 1) and after the latent-variable
-/// compensation (≤ 1), detection within 3 days.
+/// 60 days, damage from day 300, over 5 seeds (`QT_SEEDS=N` for more):
+/// false-alarm episodes per year before (stated, asserted > 1) and after
+/// the compensation — latent model (E2) and measured temperature (E1) —
+/// (≤ 1 each), detection within 3 days.
 ///
-/// Run: `cargo test --release --test it environment::synthetic_year -- --ignored --nocapture`
+/// Run: `cargo test --test it environment::synthetic_year -- --ignored --nocapture`
 #[test]
 #[ignore]
 fn synthetic_year_false_alarms_and_detection_delay() {
+    let seeds: u64 = std::env::var("QT_SEEDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(5);
     let mut failures = Vec::new();
-    for seed in 1..=5 {
+    let mut totals = [0usize; 6];
+    let first: u64 = std::env::var("QT_FIRST_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
+    for seed in first..=seeds {
         let year = synthetic_year(0, 365 * 24, 300, &MEASURED_RELATIVE_STD, seed);
         let o = evaluate(&year, 60 * 24);
         print(&format!("seed {seed}"), &o);
-        // The latent model is the one asserted: the measured-temperature
-        // regression, trained on 60 winter days, extrapolates its slope
-        // (and f's curvature in T) to the summer and alarms (figures in
-        // docs/statistics.md).
-        let (fa, delay) = o.latent;
-        if fa > 1 || !delay.is_some_and(|d| d <= 72) {
-            failures.push(format!(
-                "seed {seed} latent: {fa} false alarms, delay {delay:?} h"
-            ));
+        for (k, fa) in [
+            o.before.0,
+            o.latent.0,
+            o.measured.0,
+            o.measured_unprojected.0,
+            o.latent_no_leverage.0,
+            o.measured_no_leverage.0,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            totals[k] += fa;
+        }
+        for (name, (fa, delay)) in [("latent", o.latent), ("measured", o.measured)] {
+            if fa > 1 || !delay.is_some_and(|d| d <= 72) {
+                failures.push(format!(
+                    "seed {seed} {name}: {fa} false alarms, delay {delay:?} h"
+                ));
+            }
         }
         assert!(
             o.before.0 > 1,
             "seed {seed}: the season should trouble the uncompensated band"
         );
     }
+    eprintln!(
+        "{seeds} seeds, false alarms in total: before {}, latent {}, measured {}, measured without projection {}, latent without leverage {}, measured without leverage {}",
+        totals[0], totals[1], totals[2], totals[3], totals[4], totals[5]
+    );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 

@@ -70,6 +70,7 @@ mod stage_params;
 mod structure_inference;
 mod synth;
 mod synth_benchmarks;
+mod track_compensation;
 mod track_damaged;
 mod tracking;
 mod twin;
