@@ -37,14 +37,21 @@
 //!
 //! A mode's estimate is the mean over the poles of the best-converged part
 //! of its column ([`super::selection`]); its σ is the median of the σ of
-//! (up to [`MAX_POLES_PER_MODE`] of) those poles ([`mode_std`] says why).
+//! the mode's poles at the (up to [`MAX_POLES_PER_MODE`]) highest orders
+//! where the first order holds (Eq. S6: the truncation's rotation
+//! [`Sensitivity::cut_rotation`] at most [`MAX_CUT_ROTATION`]; [`mode_std`]
+//! says why).
 //!
 //! Input–output: the factorised matrix L₃₂ is a smooth function of the Gram
 //! matrix G of [U_f; U_p; Y_p; Y_f] (G = L Lᵀ); with dG_t the centred block
 //! Grams, dL = L Φ(L⁻¹ dG L⁻ᵀ) (Φ: the lower triangle, diagonal halved;
 //! the derivative of the Cholesky factor), and dL₃₂ = L₃₂ Φ₂₂ + L₃₃ Φ₃₂.
 //! Analytical, like SSI-COV; [`finite_difference_pole`] checks both
-//! (tests/it/uncertainty.rs).
+//! (tests/it/uncertainty.rs).  The modal stage uses the fast form
+//! [`io_sensitivity`] (a block's Gram is H_k H_kᵀ / c with c ≪ R columns:
+//! L⁻¹ G_k L⁻ᵀ = W Wᵀ / c, W = L⁻¹ H_k, applied straight to the singular
+//! vectors); [`l32_perturbations`] is the dense reference it is tested
+//! against.
 //!
 //! Numerical code only; no I/O.
 
@@ -88,10 +95,11 @@ pub const BLOCK_PERIODS_IO: f64 = 3.0;
 /// 40 Hz, 1640 samples) gets 14 blocks of 3 periods of its 1.05 Hz
 /// fundamental; 4 spans left it 7 blocks and no σ.
 pub const BLOCK_SPANS: usize = 2;
-/// Poles of a mode's column whose sensitivities are averaged (evenly
-/// spaced over its converged part): they are nearly collinear, and each
-/// costs an eigen-decomposition and products over the n_b columns.
-pub const MAX_POLES_PER_MODE: usize = 6;
+/// Poles (orders) of a mode whose σ enter its median ([`mode_std`]): at
+/// the orders where the first order holds their σ agree within a few per
+/// cent, and each costs an eigen-decomposition and products over the n_b
+/// columns (3, not 6: the io σ's cost, docs/performance.md).
+pub const MAX_POLES_PER_MODE: usize = 3;
 
 /// Data-driven standard deviations of one mode's estimates.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -397,13 +405,13 @@ pub fn io_sensitivity<'a>(
     let (ys, zs): (Vec<Mat<f64>>, Vec<Mat<f64>>) = raw.into_iter().unzip();
     let (_, y) = centre_scaled(ys, scale);
     let (_, z) = centre_scaled(zs, scale);
-    Some(Sensitivity {
+    Some(Sensitivity::with_products(
         subspace,
         n_max,
         y,
         z,
-        outside: Vec::new(),
-    })
+        Vec::new(),
+    ))
 }
 
 /// A pole's value and its first-order perturbation along each column of T.
@@ -471,9 +479,30 @@ pub struct Sensitivity<'a> {
     y: Vec<Mat<f64>>,
     z: Vec<Mat<f64>>,
     outside: Vec<Mat<f64>>,
+    /// [`Self::cut_rotation`] per order 0..=n_max.
+    cut_rotations: Vec<f64>,
 }
 
 impl<'a> Sensitivity<'a> {
+    fn with_products(
+        subspace: &'a Subspace,
+        n_max: usize,
+        y: Vec<Mat<f64>>,
+        z: Vec<Mat<f64>>,
+        outside: Vec<Mat<f64>>,
+    ) -> Sensitivity<'a> {
+        let mut s = Sensitivity {
+            subspace,
+            n_max,
+            y,
+            z,
+            outside,
+            cut_rotations: Vec::new(),
+        };
+        s.cut_rotations = s.all_cut_rotations();
+        s
+    }
+
     /// `deltas`: the columns of T as matrices of the factorised matrix's shape.
     pub fn new(subspace: &'a Subspace, deltas: &[Mat<f64>], n_max: usize) -> Sensitivity<'a> {
         let k = subspace.singular_values.len();
@@ -493,13 +522,7 @@ impl<'a> Sensitivity<'a> {
             }
             y.push(yt);
         }
-        Sensitivity {
-            subspace,
-            n_max,
-            y,
-            z,
-            outside,
-        }
+        Sensitivity::with_products(subspace, n_max, y, z, outside)
     }
 
     /// How far the first-order expansion of Eq. S2 can be trusted at
@@ -510,32 +533,39 @@ impl<'a> Sensitivity<'a> {
     /// nearly equal ones (the noise floor above the system order), where
     /// the linearised K overstates what a finite perturbation does.
     pub fn cut_rotation(&self, n: usize) -> f64 {
-        let k = self.subspace.singular_values.len();
-        if n == 0 || n > self.n_max || n >= k {
-            return f64::INFINITY;
-        }
+        self.cut_rotations.get(n).copied().unwrap_or(f64::INFINITY)
+    }
+
+    /// [`Self::cut_rotation`] for every order 0..=n_max at once: the rms
+    /// angles of all pairs (i < n_max, j > i) once, then the running
+    /// maxima over the pairs each truncation separates.
+    fn all_cut_rotations(&self) -> Vec<f64> {
         let s = &self.subspace.singular_values;
-        let mut worst = 0.0f64;
-        for i in 0..n {
-            for j in n..k {
-                let den = s[i] * s[i] - s[j] * s[j];
-                let sum: f64 = self
-                    .y
-                    .iter()
-                    .zip(&self.z)
-                    .map(|(y, z)| {
-                        let kv = (s[i] * y[(j, i)] + s[j] * z[(i, j)]) / den;
-                        kv * kv
-                    })
-                    .sum();
-                worst = worst.max(sum.sqrt());
+        let k = s.len();
+        let n_max = self.n_max.min(k.saturating_sub(1));
+        // angle[i][j] for i < n_max, j in i+1..k.
+        let mut angle = vec![vec![0.0f64; k]; n_max];
+        for (y, z) in self.y.iter().zip(&self.z) {
+            for (i, row) in angle.iter_mut().enumerate() {
+                for (j, a) in row.iter_mut().enumerate().skip(i + 1) {
+                    let kv = (s[i] * y[(j, i)] + s[j] * z[(i, j)]) / (s[i] * s[i] - s[j] * s[j]);
+                    *a += kv * kv;
+                }
             }
         }
-        if worst.is_finite() {
-            worst
-        } else {
-            f64::INFINITY
+        let mut out = vec![f64::INFINITY; self.n_max + 1];
+        for (n, o) in out.iter_mut().enumerate().take(n_max + 1).skip(1) {
+            let worst = (0..n)
+                .flat_map(|i| angle[i][n..].iter().copied())
+                .fold(0.0f64, f64::max)
+                .sqrt();
+            *o = if worst.is_finite() {
+                worst
+            } else {
+                f64::INFINITY
+            };
         }
+        out
     }
 
     /// The pole of order `order` nearest (f, ζ), with its perturbation
@@ -616,7 +646,16 @@ impl<'a> Sensitivity<'a> {
             }
         }
         // ΔΓ ψ per column: U₂ K S^{1/2} ψ (+ the part outside span U).
-        let mut dgamma_psi = cplx(u2) * &ks;
+        // Real products on the real and imaginary parts: U₂ is real, and a
+        // complex copy of it per pole cost more than the product.
+        let real_times = |m: MatRef<'_, f64>, x: &Mat<c64>| -> Mat<c64> {
+            let re = m * Mat::<f64>::from_fn(x.nrows(), x.ncols(), |i, j| x[(i, j)].re);
+            let im = m * Mat::<f64>::from_fn(x.nrows(), x.ncols(), |i, j| x[(i, j)].im);
+            Mat::<c64>::from_fn(re.nrows(), re.ncols(), |i, j| {
+                c64::new(re[(i, j)], im[(i, j)])
+            })
+        };
+        let mut dgamma_psi = real_times(u2, &ks);
         if !self.outside.is_empty() {
             for t in 0..nb {
                 let o = self.outside[t].as_ref().subcols(0, n);
@@ -634,8 +673,8 @@ impl<'a> Sensitivity<'a> {
         let shifted = Mat::<c64>::from_fn(a_rows - l, nb, |r, t| {
             dgamma_psi[(r + l, t)] - mu * dgamma_psi[(r, t)]
         });
-        let rhs = cplx(up.transpose()) * &shifted + &kr;
-        let da_psi = cplx(gram_inv.as_ref()) * &rhs;
+        let rhs = real_times(up.transpose(), &shifted) + &kr;
+        let da_psi = real_times(gram_inv.as_ref(), &rhs);
         let e = &psi_inv * &da_psi;
         let mut d_frequency = Vec::with_capacity(nb);
         let mut d_damping = Vec::with_capacity(nb);
