@@ -761,8 +761,11 @@ pub const SAME_MODE_MAC: f64 = 0.9;
 /// (at single orders 10–100 ×: the 8.3 Hz mode of the 600-s ambient
 /// 5-storey record, seed 2: 0.03–0.09 Hz at five orders, 2.3 Hz at order
 /// 30) while the poles themselves stay put — the first order fails there.
-/// The poles of the lower orders are the same estimate (their spread is
-/// far below σ), so their σ is the estimate's.
+/// Caveat (docs/statistics.md, coverage over 100 seeds): for the strong
+/// modes the σ of the lower orders is the reported estimate's; for the
+/// weak ones (SSI-COV modes 3–5 of the 5-storey record) the estimate of
+/// the upper orders scatters 1.4–1.9 × more than it, so their intervals
+/// are too narrow (80–86 % coverage) — open.
 pub fn mode_std(
     sensitivity: &Sensitivity<'_>,
     poles: &[Pole],
