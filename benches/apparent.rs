@@ -6,8 +6,6 @@
 //! channel as input) and X and Y at the base, 20 dB noise.
 //! Data generation is outside the timed loop.
 
-mod shared;
-
 use criterion::{criterion_group, criterion_main, Criterion};
 use quaketwin::modal::apparent::{track_many, ApparentSettings, TrackRequest};
 use quaketwin::rng::Rng;
@@ -19,7 +17,7 @@ use std::hint::black_box;
 
 /// (base X, base Y, outputs with their axis), 60 s at 200 Hz.
 fn fourteen_channels() -> (Vec<f64>, Vec<f64>, Vec<(Axis, Vec<f64>)>, [f64; 2]) {
-    let building = shared::seven_storey_plan_building();
+    let building = quaketwin::synth::seven_storey_plan_building();
     let n = building.masses_kg.len();
     let spec = |seed| GroundMotionSpec {
         seed,

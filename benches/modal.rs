@@ -10,9 +10,8 @@
 //! and PSD overlay written).  Issue 36: each of the last two also without
 //! the data-driven σ (`uncertainty_blocks = 0`): the difference is what the
 //! uncertainty costs (target ≤ 50 % of the stage).
+//! The 14-channel event is `quaketwin::synth::fourteen_channel_event`.
 //! Data generation is outside the timed loop.
-
-mod shared;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use quaketwin::modal::{
@@ -21,10 +20,9 @@ use quaketwin::modal::{
 use quaketwin::rng::Rng;
 use quaketwin::stages::modal::{identify_and_write, ModalParams};
 use quaketwin::synth::{
-    add_measurement_noise, synthetic_ground_motion, GroundMotionSpec, Sampling, Sensor,
+    add_measurement_noise, fourteen_channel_event, synthetic_ground_motion, GroundMotionSpec,
     ShearBuilding,
 };
-use quaketwin::vocab::{Axis, Event, Structure};
 use std::hint::black_box;
 
 fn five_storey() -> ShearBuilding {
@@ -111,58 +109,12 @@ fn bench_modal(c: &mut Criterion) {
     group.finish();
 }
 
-/// The issue-13 event: 7 storeys of 3.5 m, 30 m × 20 m in plan, 500 t per
-/// floor, ≈ 1.05 Hz (X), 1.27 Hz (Y), 1.6 Hz (torsion) — the proportions of
-/// the issue's 7-storey building — centre of mass 5 % off; 41 s at 200 Hz
-/// of independent X and Y base motions, 20 dB noise; 14 channels.
-fn fourteen_channel_event(storey_heights: bool) -> Event {
-    let building = shared::seven_storey_plan_building();
-    let n = building.masses_kg.len();
-    let spec = |seed| GroundMotionSpec {
-        seed,
-        duration_s: 41.0,
-        sampling: Sampling::RateHz(200.0),
-        ..Default::default()
-    };
-    let gx = synthetic_ground_motion(&spec(31)).unwrap();
-    let gy = synthetic_ground_motion(&spec(32)).unwrap();
-    let response = building
-        .simulate_base_motion(&gx, &gy, spec(31).dt())
-        .unwrap();
-    let mut sensors = Vec::new();
-    for level in (0..=n).filter(|&l| l != 1) {
-        for (axis, name) in [(Axis::X, "X"), (Axis::Y, "Y")] {
-            sensors.push(Sensor {
-                id: format!("L{level}-{name}"),
-                level,
-                position_m: if level == 0 { [0.0, 0.0] } else { [15.0, 10.0] },
-                axis,
-            });
-        }
-    }
-    let mut records = response.to_records(&sensors).unwrap();
-    assert_eq!(records.len(), 14);
-    let mut rng = Rng::new(33);
-    for r in records.iter_mut() {
-        r.samples = add_measurement_noise(&r.samples, 20.0, &mut rng).into();
-    }
-    Event {
-        name: "bench 14 channels".into(),
-        structure: storey_heights.then(|| Structure {
-            storey_heights_m: vec![3.5; n],
-            ..Default::default()
-        }),
-        records,
-        ..Default::default()
-    }
-}
-
 fn bench_modal_stage(c: &mut Criterion) {
     let mut group = c.benchmark_group("modal_stage");
     group.sample_size(20);
     let params = ModalParams::default();
     for (heights, label) in [(false, "no_structure"), (true, "storey_heights")] {
-        let event = fourteen_channel_event(heights);
+        let event = fourteen_channel_event(heights).unwrap();
         let settings = params.settings_for(&event).unwrap();
         assert_eq!(settings.method, Method::Io);
         let choice = ChannelChoice::default();

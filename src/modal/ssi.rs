@@ -37,6 +37,10 @@ pub struct Subspace {
     pub v: Mat<f64>,
     pub outputs: usize,
     pub block_rows: usize,
+    /// PO-MOESP only: the Cholesky factor L of the Gram matrix whose block
+    /// L₃₂ this is the SVD of; the input–output σ (`uncertainty.rs`, fast
+    /// form of Eq. S1') reuses it instead of factorising again.
+    pub gram_cholesky: Option<Mat<f64>>,
 }
 
 /// Largest model order the subspace supports (shift invariance needs
@@ -116,6 +120,7 @@ pub fn thin_svd_subspace(
         v: svd.V().to_owned(),
         outputs,
         block_rows,
+        gram_cholesky: None,
     })
 }
 
@@ -205,7 +210,9 @@ pub fn po_moesp(outputs: &[&[f64]], inputs: &[&[f64]], block_rows: usize) -> Res
     let l32 = big_l
         .as_ref()
         .submatrix(p * m + p * (m + l), p * m, p * l, p * (m + l));
-    thin_svd_subspace(l32, l, p)
+    let mut subspace = thin_svd_subspace(l32, l, p)?;
+    subspace.gram_cholesky = Some(big_l);
+    Ok(subspace)
 }
 
 /// Rows of PO-MOESP's block Hankel matrix [U_f; U_p; Y_p; Y_f] over the

@@ -18,6 +18,7 @@
 //! [`plan`] is the same model with rigid floors moving in plan (x, y, θ per
 //! floor, eccentric masses: torsion), simulated by the same recursion.
 //! The numerical code of this file, [`plan`] and [`ground_motion`] is free of I/O;
+//! [`fourteen_channel`] is the 14-channel event of the modal benchmarks.
 //! [`event`] and [`facade`] write the bundled sample events (`quaketwin synth`);
 //! [`realistic`] the building benchmarks written as the networks publish them
 //! (through [`smc_writer`] and [`csmip_writer`]), one of them a yielding
@@ -27,6 +28,7 @@ pub mod archive;
 pub mod csmip_writer;
 pub mod event;
 pub mod facade;
+pub mod fourteen_channel;
 pub mod ground_motion;
 pub mod hybrid_log;
 pub mod lab_specimen;
@@ -36,6 +38,7 @@ pub mod smc_writer;
 pub mod yielding;
 
 use crate::rng::Rng;
+pub use fourteen_channel::{fourteen_channel_event, seven_storey_plan_building};
 pub use ground_motion::{
     synthetic_ground_motion, Envelope, GroundMotionSpec, Sampling, Shaping, WhiteNoise,
 };
