@@ -14,13 +14,14 @@
 //! sample count of AR(1)-correlated residuals. Dynamic records (a time base)
 //! are fitted the same way: with the restoring force measured, the force
 //! equation is the observation itself and no mass or acceleration enters,
-//! so the whole-history fit applies to both protocols (the instantaneous STFT
-//! identification of `crate::hysteresis` needs the equation of motion because
-//! it has accelerations, not forces).
+//! so the whole-history fit applies to both protocols. A uniformly sampled
+//! record is also identified by the thesis's time–frequency method
+//! ([`instantaneous`], reusing `crate::hysteresis` on the measured force).
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod fit;
+pub mod instantaneous;
 pub mod loops;
 pub mod model;
 
@@ -109,6 +110,9 @@ pub struct LabIdentifySettings {
     pub park_ang_beta: f64,
     /// δ_u of Park–Ang (m); None: Park–Ang not computed.
     pub ultimate_displacement_m: Option<f64>,
+    /// Also run the thesis's time–frequency identification
+    /// ([`instantaneous`]) on records with a uniform time base.
+    pub instantaneous: bool,
 }
 
 impl Default for LabIdentifySettings {
@@ -125,6 +129,7 @@ impl Default for LabIdentifySettings {
             cycle_band: 0.05,
             park_ang_beta: 0.15,
             ultimate_displacement_m: None,
+            instantaneous: true,
         }
     }
 }
