@@ -629,7 +629,7 @@ declare!(LAB_IDENTIFICATION, lab_identification, "lab_identification", "lab_iden
     FORM: "form", Utf8, required, "", "`plain` (Bouc–Wen) or `degrading_pinching` (Bouc–Wen–Baber–Noori, Eq. L1–L6); on `stft_instantaneous` rows `thesis_bouc_wen` (Eq. 21–23, one DoF), or `not_identified` (one row, parameter `none`, the reason in `form_reason`)";
     PARAMETER: "parameter", Utf8, required, "", "`initial_stiffness_n_per_m`, `post_yield_ratio`, `yield_displacement_m`, `beta` (γ = 1 − β), `n`, `strength_degradation` (δ_ν), `stiffness_degradation` (δ_η), `pinching_extent` (ζ_s), `pinching_rate` (p), `pinching_centre` (q), `pinching_width` (ψ); on `stft_instantaneous` rows `initial_stiffness_n_per_m` (K0), `stiffness_degradation_per_j` (δ), `beta`, `gamma` (N^(1−N)/m), `n` (N)";
     VALUE: "value", F64, required, "varies", "the identified value, in the row's `unit`";
-    STD: "std", F64, required, "varies", "its standard deviation from s²(JᵀJ)⁻¹ at the optimum inflated by (1 + ρ₁)/(1 − ρ₁) (Eq. L8); 0 on a fixed row, NaN when JᵀJ is singular; on `stft_instantaneous` rows the spread (standard deviation) of the instantaneous estimates over the informative frames — a measure of time variation, not a standard error";
+    STD: "std", F64, required, "varies", "its standard deviation from s²(JᵀJ)⁻¹ at the optimum inflated by N/N_eff of the chosen model's residuals (Eq. L8, L8a); 0 on a fixed row, NaN when JᵀJ is singular; on `stft_instantaneous` rows the spread (standard deviation) of the instantaneous estimates over the informative frames — a measure of time variation, not a standard error";
     UNIT: "unit", Utf8, required, "", "`N/m`, `m`, `1`, `1/J` or `N^(1-N)/m`";
     FIXED: "fixed", Bool, required, "", "not fitted in this form (the plain form's degradation and pinching, held at 0)";
     FORCE_NRMSE: "force_nrmse", F64, required, "1", "NRMSE of the fitted force against the measured one (Eq. 83: RMS error over the measured force range)";
@@ -638,7 +638,7 @@ declare!(LAB_IDENTIFICATION, lab_identification, "lab_identification", "lab_iden
     CYCLES: "cycles", U32, required, "", "displacement cycles counted (maximum to maximum, dead band `cycle_band` of the range)";
     F_STATISTIC: "f_statistic", F64, nullable, "1", "F-test of the plain model nested in the degrading/pinching one, [(S_plain − S_deg)/6] / [S_deg/(N_eff − 11)] (Eq. L9); null when only one form was fitted; on `stft_instantaneous` rows the thesis's test of the hysteretic terms against the nested linear model";
     P_VALUE: "p_value", F64, nullable, "1", "its p-value: the degrading/pinching form is chosen when p < `significance`";
-    EFFECTIVE_SAMPLES: "effective_samples", U32, nullable, "", "N_eff = N (1 − ρ₁)/(1 + ρ₁) of the F-test (ρ₁: lag-1 autocorrelation of the plain model's residuals)";
+    EFFECTIVE_SAMPLES: "effective_samples", U32, nullable, "", "N_eff of the F-test: N / (1 + 2 Σ_k (1 − k/N) ρ_k) over the lags before the autocorrelation ρ_k of the degrading/pinching model's residuals first drops to ≤ 0 (Eq. L8a); on `stft_instantaneous` rows the non-overlapping STFT windows";
     FORM_REASON: "form_reason", Utf8, required, "", "why this form, in words (the F-test's numbers)";
     YIELD_FORCE_N: "yield_force_n", F64, required, "N", "F_y = k₀ u_y; on `stft_instantaneous` rows the saturation force (K0/(β + γ))^(1/N) (NaN when β + γ ≤ 0)";
     DUCTILITY: "ductility", F64, required, "1", "max |x| / u_y (`stft_instantaneous`: u_y = saturation force / K0)";
