@@ -463,14 +463,19 @@ fn shared_lab_records_table() {
     }
 }
 
-/// Coverage over noise seeds (release, ignored): the share of parameters
-/// within 2 reported standard deviations of the truth.
+/// Coverage over noise seeds (ignored; 2 min on the dev profile): the share
+/// of parameters within 2 reported standard deviations of the truth (95 %
+/// for a Gaussian estimate with the right σ); per parameter within 1σ and
+/// 2σ, and the form chosen, printed for docs/lab-tests.md.
 #[test]
 #[ignore]
 fn synthetic_bwbn_uncertainty_coverage() {
-    let mut inside = 0usize;
-    let mut total = 0usize;
-    for seed in 1..=10u64 {
+    let truth = truth_values();
+    let mut within1 = vec![0usize; truth.len()];
+    let mut within2 = vec![0usize; truth.len()];
+    let mut degrading = 0usize;
+    let seeds = 10usize;
+    for seed in 1..=seeds as u64 {
         let rec = synthetic_specimen(reference_bwbn(), protocol(60), 0.01, 100 + seed);
         let history = SpecimenHistory {
             displacement_m: &rec.displacement_m,
@@ -478,17 +483,31 @@ fn synthetic_bwbn_uncertainty_coverage() {
             time_s: None,
         };
         let id = identify_specimen(&history, &LabIdentifySettings::default()).unwrap();
-        for (name, truth) in truth_values() {
+        if id.form == quaketwin::lab::ModelForm::Degrading {
+            degrading += 1;
+        }
+        for (i, (name, t)) in truth.iter().enumerate() {
             let (v, std) = value(&id, name);
-            total += 1;
-            if (v - truth).abs() <= 2.0 * std {
-                inside += 1;
-            }
+            let z = (v - t).abs() / std;
+            within1[i] += usize::from(z <= 1.0);
+            within2[i] += usize::from(z <= 2.0);
         }
     }
-    let share = inside as f64 / total as f64;
-    println!("within 2σ: {inside}/{total} = {share:.3}");
-    assert!(share > 0.85, "{share}");
+    for (i, (name, _)) in truth.iter().enumerate() {
+        println!(
+            "{name:>28}: within 1σ {}/{seeds}, 2σ {}/{seeds}",
+            within1[i], within2[i]
+        );
+    }
+    let (in1, in2): (usize, usize) = (within1.iter().sum(), within2.iter().sum());
+    let total = seeds * truth.len();
+    println!(
+        "within 1σ: {in1}/{total} = {:.3}; within 2σ: {in2}/{total} = {:.3}; degrading/pinching chosen {degrading}/{seeds}",
+        in1 as f64 / total as f64,
+        in2 as f64 / total as f64
+    );
+    assert!(in2 as f64 / total as f64 > 0.85, "{in2}/{total}");
+    assert_eq!(degrading, seeds);
 }
 
 /// A lab folder with an `event.toml` `[lab]` section (displacement in mm
