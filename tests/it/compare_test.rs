@@ -260,7 +260,8 @@ fn a_log_of_another_design_is_refused() {
 /// yield within the first 0.1 s): the emulated test (8 ms delay, 2·10⁻⁸ m noise) does not diverge
 /// (synth-hybrid-log refuses a diverged one), and compare-test's rehearsal of the same specimen
 /// (the design's 5 ms actuator) does not either: lag within 5 %, noise within 10 %, finite
-/// energy error, the predicted tracking RMS within 20 % of the logged one. The
+/// energy error, the predicted tracking RMS within 20 % of the logged one; the specimen update
+/// (its hinge identified from the log) brings the updated rehearsal within 5 %. The
 /// first specimen form (hysteresis off the diagonal of K_P only) diverged here at 0.02–0.04 s
 /// for every sub-step count (docs/test-design.md).
 #[test]
@@ -303,7 +304,6 @@ fn a_yielding_specimen_log_is_compared_without_divergence() {
         os(&out),
         os("--settings"),
         os(&settings),
-        os("--no-update"),
     ]);
     let s = json(&o);
     eprintln!("yielding: {s}");
@@ -326,4 +326,12 @@ fn a_yielding_specimen_log_is_compared_without_divergence() {
     );
     let e = f("rehearsal_energy_error");
     assert!(e.is_finite() && e < 1.0, "energy error {e}");
+    // The specimen identified from the yielding log (K_P,aa (K_P⁻¹ r)_a, a single hinge) and
+    // the updated rehearsal with it and the identified actuator: within 5 % of the log.
+    assert!(s["specimen_form"].is_string(), "{s}");
+    let u = f("updated_tracking_rms_m");
+    assert!(
+        (u / logged - 1.0).abs() <= 0.05,
+        "updated {u} m, logged {logged} m"
+    );
 }
