@@ -339,6 +339,43 @@ impl DirectionKinematics {
         }
     }
 
+    /// The kinematics of one specimen whose restoring force is measured (a
+    /// laboratory test, `crate::lab::instantaneous`): one DoF of unit mass
+    /// whose "absolute acceleration" is −F, so that Eq. 46 returns F itself
+    /// and the storey shear is F; the base is at rest. The velocity is the
+    /// central difference of the measured displacement (`matched_derivative`,
+    /// the operator the jerk form applies to the record), and ε = ∫ F u̇ dt
+    /// (Eq. 23d). No mass or acceleration enters: the force equation
+    /// (Eq. 23b–c) is then identified on the measured force directly.
+    pub fn from_specimen(displacement_m: &[f64], force_n: &[f64], sampling_rate_hz: f64) -> Self {
+        let n = displacement_m.len().min(force_n.len());
+        let dt = 1.0 / sampling_rate_hz;
+        let velocity = matched_derivative(&displacement_m[..n], dt);
+        let force = force_n[..n].to_vec();
+        let power: Vec<f64> = force.iter().zip(&velocity).map(|(f, v)| f * v).collect();
+        let mut processing = ProcessingHistory::default();
+        processing.push(
+            "hysteresis_specimen_kinematics",
+            serde_json::json!({
+                "rule": "one DoF of unit mass: f = measured force, u = measured displacement, u_dot = central difference of u",
+            }),
+        );
+        DirectionKinematics {
+            sampling_rate_hz,
+            start_s: 0.0,
+            masses: vec![1.0],
+            base_acceleration: vec![0.0; n],
+            absolute_acceleration: vec![force.iter().map(|f| -f).collect()],
+            relative_velocity: vec![velocity.clone()],
+            relative_displacement: vec![displacement_m[..n].to_vec()],
+            restoring_force: vec![force.clone()],
+            storey_shear: vec![force],
+            drift_velocity: vec![velocity],
+            energy_upper: vec![cumulative_trapezoid(&power, dt)],
+            processing,
+        }
+    }
+
     /// Validates the records and derives the kinematics. Absolute floor
     /// accelerations become relative ones with the base channel (METHODS §0);
     /// velocities and displacements are integrated (trapezoid, from rest) unless

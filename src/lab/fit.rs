@@ -360,17 +360,47 @@ pub(crate) fn solve_spd(a: &[f64], b: &[f64], p: usize) -> Option<Vec<f64>> {
     Some(x.iter().zip(&d).map(|(v, s)| v * s).collect())
 }
 
-/// Lag-1 autocorrelation of the residuals, clamped to [0, 0.99].
-pub fn lag1_autocorrelation(r: &[f64]) -> f64 {
+/// Sample autocorrelation of `r` at lags 0..=`max_lag` (mean removed,
+/// biased normalisation by the lag-0 sum, so |ρ_k| ≤ 1).
+pub fn autocorrelation(r: &[f64], max_lag: usize) -> Vec<f64> {
+    let n = r.len();
+    let mean = r.iter().sum::<f64>() / n.max(1) as f64;
+    let var: f64 = r.iter().map(|v| (v - mean) * (v - mean)).sum();
+    if n < 3 || !(var > 0.0) {
+        return vec![1.0];
+    }
+    (0..=max_lag.min(n - 1))
+        .map(|k| {
+            (k..n)
+                .map(|i| (r[i] - mean) * (r[i - k] - mean))
+                .sum::<f64>()
+                / var
+        })
+        .collect()
+}
+
+/// Effective number of independent residuals (Eq. L8a of docs/lab-tests.md):
+/// N_eff = N / (1 + 2 Σ_{k=1}^{K} (1 − k/N) ρ_k), K the last lag before the
+/// sample autocorrelation first drops to ≤ 0 (at most N/4) — the
+/// integral-time-scale estimate of Thiébaux & Zwiers (1984, J. Climate Appl.
+/// Meteor. 23, 800–811), truncated where the estimated correlation ends.
+/// Unlike the AR(1) form N(1 − ρ₁)/(1 + ρ₁) it does not extrapolate ρ₁ to
+/// every lag: a model-error residual that is smooth over a few samples but
+/// uncorrelated beyond them (a real specimen's) keeps its N/(a few).
+/// Returns N_eff in [1, N] and ρ₁.
+pub fn effective_samples(r: &[f64]) -> (f64, f64) {
     let n = r.len();
     if n < 3 {
-        return 0.0;
+        return (n.max(1) as f64, 0.0);
     }
-    let mean = r.iter().sum::<f64>() / n as f64;
-    let var: f64 = r.iter().map(|v| (v - mean) * (v - mean)).sum();
-    if !(var > 0.0) {
-        return 0.0;
+    let rho = autocorrelation(r, n / 4);
+    let mut sum = 0.0;
+    for (k, &rk) in rho.iter().enumerate().skip(1) {
+        if !(rk > 0.0) {
+            break;
+        }
+        sum += (1.0 - k as f64 / n as f64) * rk;
     }
-    let cov: f64 = r.windows(2).map(|w| (w[0] - mean) * (w[1] - mean)).sum();
-    (cov / var).clamp(0.0, 0.99)
+    let n_eff = (n as f64 / (1.0 + 2.0 * sum)).clamp(1.0, n as f64);
+    (n_eff, rho.get(1).copied().unwrap_or(0.0))
 }

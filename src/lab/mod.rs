@@ -11,16 +11,17 @@
 //! The plain model is always fitted; the degrading/pinching one as well, and
 //! it is chosen when the F-test of the nested plain model (6 extra
 //! parameters) rejects the plain model at `significance` with the effective
-//! sample count of AR(1)-correlated residuals. Dynamic records (a time base)
+//! sample count of correlated residuals (`fit::effective_samples`). Dynamic records (a time base)
 //! are fitted the same way: with the restoring force measured, the force
 //! equation is the observation itself and no mass or acceleration enters,
-//! so the whole-history fit applies to both protocols (the instantaneous STFT
-//! identification of `crate::hysteresis` needs the equation of motion because
-//! it has accelerations, not forces).
+//! so the whole-history fit applies to both protocols. A uniformly sampled
+//! record is also identified by the thesis's time–frequency method
+//! ([`instantaneous`], reusing `crate::hysteresis` on the measured force).
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod fit;
+pub mod instantaneous;
 pub mod loops;
 pub mod model;
 
@@ -109,6 +110,9 @@ pub struct LabIdentifySettings {
     pub park_ang_beta: f64,
     /// δ_u of Park–Ang (m); None: Park–Ang not computed.
     pub ultimate_displacement_m: Option<f64>,
+    /// Also run the thesis's time–frequency identification
+    /// ([`instantaneous`]) on records with a uniform time base.
+    pub instantaneous: bool,
 }
 
 impl Default for LabIdentifySettings {
@@ -125,6 +129,7 @@ impl Default for LabIdentifySettings {
             cycle_band: 0.05,
             park_ang_beta: 0.15,
             ultimate_displacement_m: None,
+            instantaneous: true,
         }
     }
 }
@@ -211,7 +216,8 @@ pub struct SpecimenIdentification {
     pub samples: usize,
     pub quasi_static: bool,
     /// Lag-1 autocorrelation of the chosen fit's residuals and the variance
-    /// inflation N/N_eff applied to the standard deviations.
+    /// inflation N/N_eff (`fit::effective_samples`) applied to the standard
+    /// deviations.
     pub residual_autocorrelation: f64,
     pub variance_inflation: f64,
 }
@@ -339,16 +345,14 @@ pub fn identify_specimen(
         )
     };
 
-    let plain_resid: Vec<f64> = f
-        .iter()
-        .zip(&plain.model_force)
-        .map(|(a, b)| a - b)
-        .collect();
     let form_test = degrading.as_ref().map(|d| {
-        let rho = fit::lag1_autocorrelation(&plain_resid);
-        let n_eff = ((x.len() as f64) * (1.0 - rho) / (1.0 + rho))
-            .floor()
-            .max(1.0) as usize;
+        // The noise's correlation is estimated under the unrestricted
+        // (degrading/pinching) model: under H0 its residuals are the plain
+        // model's, under H1 only they are noise — the plain model's carry its
+        // misfit, whose smoothness would shrink N_eff exactly when the plain
+        // model is inadequate (Eq. L9).
+        let deg_resid: Vec<f64> = f.iter().zip(&d.model_force).map(|(a, b)| a - b).collect();
+        let n_eff = fit::effective_samples(&deg_resid).0.floor() as usize;
         let q = 6usize;
         let p = 11usize;
         let d2 = n_eff.saturating_sub(p);
@@ -385,8 +389,8 @@ pub fn identify_specimen(
             d,
             &degrading_problem,
             format!(
-                "the plain model is not enough: F = {:.3} on ({}, {}) dof, p = {:.2e} < {}",
-                t.f_statistic, t.numerator_dof, t.denominator_dof, t.p_value, settings.significance
+                "the plain model is not enough: F = {:.3} on ({}, {}) dof (N_eff = {} of {} samples), p = {:.2e} < {}",
+                t.f_statistic, t.numerator_dof, t.denominator_dof, t.effective_samples, x.len(), t.p_value, settings.significance
             ),
         ),
         (FormChoice::Auto, Some(_), Some(t)) => (
@@ -394,8 +398,8 @@ pub fn identify_specimen(
             plain.clone(),
             &plain_problem,
             format!(
-                "degradation and pinching not significant: F = {:.3} on ({}, {}) dof, p = {:.2e} ≥ {}",
-                t.f_statistic, t.numerator_dof, t.denominator_dof, t.p_value, settings.significance
+                "degradation and pinching not significant: F = {:.3} on ({}, {}) dof (N_eff = {} of {} samples), p = {:.2e} ≥ {}",
+                t.f_statistic, t.numerator_dof, t.denominator_dof, t.effective_samples, x.len(), t.p_value, settings.significance
             ),
         ),
         _ => (
@@ -411,8 +415,8 @@ pub fn identify_specimen(
         .zip(&chosen.model_force)
         .map(|(a, b)| a - b)
         .collect();
-    let rho = fit::lag1_autocorrelation(&resid);
-    let inflation = (1.0 + rho) / (1.0 - rho);
+    let (n_eff, rho) = fit::effective_samples(&resid);
+    let inflation = x.len() as f64 / n_eff;
     let stds = problem.standard_deviations(&chosen, inflation);
     let p = chosen.params;
     let mut estimates = vec![

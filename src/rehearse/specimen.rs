@@ -2,14 +2,19 @@
 //! stiffness K_P condensed onto the actuated DoFs (`model`), optionally with a Bouc–Wen
 //! hysteretic spring on each actuated DoF (Bouc 1967; Wen 1976) — a nonlinear rehearsal:
 //!
-//!   r = K_P d − (1 − α) K_d (d − u_y z),
-//!   dz/dd_a = [1 − |z_a|ⁿ (β sgn(Δd_a z_a) + γ)] / u_y   (A = 1),
+//!   r = K_P (d − d_p),  d_p = (1 − α)(d − u_y z)  (so r = K_P (α d + (1 − α) u_y z)),
+//!   dz/dd_a = [1 − |z_a|ⁿ (β sgn(Δd_a z_a) + γ)] / u_y   (A = 1):
 //!
-//! K_d = diag(K_P): small motions (|d| ≪ u_y, z ≈ d/u_y) give r = K_P d; beyond u_y the diagonal
-//! stiffness tends to α K_d and z to ±(β + γ)^(−1/n). The tangent never exceeds the initial
-//! stiffness, so α-OS (whose implicit part uses K_P) stays unconditionally stable. z is
-//! integrated over each displacement increment by forward Euler on sub-increments of at most
-//! u_y / 20.
+//! a Bouc–Wen hinge in series with the elastic specimen at every actuated DoF, d_p its plastic
+//! slip. Small motions (|d| ≪ u_y, z ≈ d/u_y) give r = K_P d; beyond u_y the whole specimen tends
+//! to α K_P and z to ±(β + γ)^(−1/n); one DoF is Eq. L1 of docs/lab-tests.md. The tangent
+//! K_P diag(α + (1 − α) u_y ∂z/∂d) is similar to K_P^½ diag(·) K_P^½: positive definite while the
+//! diagonal is positive, and no stiffer than K_P while it is ≤ 1 (β ≥ γ), so α-OS (whose
+//! implicit part uses K_P) stays stable. (The first form, r = K_P d − (1 − α) diag(K_P)(d − u_y z),
+//! took the hysteresis off the diagonal only: its post-yield tangent K_P − (1 − α) diag(K_P) is
+//! indefinite for a condensed K_P with strong coupling, and the facade's rehearsal diverged
+//! statically once its DoFs yielded — u_y = 5·10⁻⁵ and 2·10⁻⁴ m.) z is integrated over each
+//! displacement increment by forward Euler on sub-increments of at most u_y / 20.
 
 use serde::{Deserialize, Serialize};
 
@@ -83,10 +88,10 @@ impl SpecimenModel {
     /// The restoring force at displacement `d` (after the previous call's displacement).
     pub fn force(&mut self, d: &[f64], r: &mut [f64]) {
         let m = self.m;
-        for (i, ri) in r.iter_mut().enumerate().take(m) {
-            *ri = (0..m).map(|j| self.kp[i * m + j] * d[j]).sum();
-        }
         let Some((bw, z, last)) = self.bouc_wen.as_mut() else {
+            for (i, ri) in r.iter_mut().enumerate().take(m) {
+                *ri = (0..m).map(|j| self.kp[i * m + j] * d[j]).sum();
+            }
             return;
         };
         let uy = bw.yield_displacement_m;
@@ -100,8 +105,14 @@ impl SpecimenModel {
                 z[a] += h / uy * (1.0 - zn * (bw.beta * s + bw.gamma));
             }
             last[a] = d[a];
-            let k = self.kp[a * m + a];
-            r[a] -= (1.0 - bw.post_yield_ratio) * k * (d[a] - uy * z[a]);
+        }
+        // The elastic deformation d − d_p = α d + (1 − α) u_y z through K_P.
+        let alpha = bw.post_yield_ratio;
+        let elastic: Vec<f64> = (0..m)
+            .map(|a| alpha * d[a] + (1.0 - alpha) * uy * z[a])
+            .collect();
+        for (i, ri) in r.iter_mut().enumerate().take(m) {
+            *ri = (0..m).map(|j| self.kp[i * m + j] * elastic[j]).sum();
         }
     }
 }

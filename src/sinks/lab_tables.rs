@@ -6,7 +6,8 @@ use std::path::Path;
 
 use super::parquet::{write_parquet, TableBuilder};
 use crate::error::Result;
-use crate::lab::{LabIdentifySettings, SpecimenIdentification};
+use crate::lab::instantaneous::InstantaneousFit;
+use crate::lab::{LabIdentifySettings, ParameterEstimate, SpecimenIdentification};
 use crate::vocab::tables::{
     lab_cycles, lab_fit, lab_identification, LAB_CYCLES, LAB_FIT, LAB_IDENTIFICATION,
 };
@@ -18,6 +19,125 @@ pub struct LabOutcome<'a> {
     pub force_n: &'a [f64],
     pub time_s: Option<&'a [f64]>,
     pub identification: &'a SpecimenIdentification,
+    /// The thesis's time–frequency identification (`stft_instantaneous`
+    /// rows): None when not run (no uniform time base, or switched off),
+    /// `Err(reason)` when it identified nothing.
+    pub instantaneous: Option<std::result::Result<&'a InstantaneousFit, &'a str>>,
+}
+
+/// One row of `lab_identification/lab_identification.parquet`: a parameter and its record's
+/// figures, whichever method produced them.
+struct IdRow<'a> {
+    record: &'a str,
+    method: &'static str,
+    form: &'a str,
+    estimate: ParameterEstimate,
+    force_nrmse: f64,
+    plain_nrmse: f64,
+    energy_mean: Option<f64>,
+    cycles: u32,
+    f_statistic: Option<f64>,
+    p_value: Option<f64>,
+    effective_samples: Option<u32>,
+    reason: &'a str,
+    yield_force_n: f64,
+    ductility: f64,
+    hysteretic_energy_j: f64,
+    park_ang: Option<f64>,
+    stiffness_index: f64,
+    samples: u32,
+    samples_fitted: u32,
+    quasi_static: bool,
+}
+
+fn mean_abs(e: &[f64]) -> Option<f64> {
+    (!e.is_empty()).then(|| e.iter().map(|v| v.abs()).sum::<f64>() / e.len() as f64)
+}
+
+fn id_rows<'a>(o: &'a LabOutcome<'a>) -> Vec<IdRow<'a>> {
+    let id = o.identification;
+    let mut rows: Vec<IdRow<'a>> = id
+        .estimates
+        .iter()
+        .map(|e| IdRow {
+            record: o.record,
+            method: "whole_history",
+            form: id.form.name(),
+            estimate: e.clone(),
+            force_nrmse: id.force_nrmse,
+            plain_nrmse: id.plain_nrmse,
+            energy_mean: mean_abs(&id.energy_error_per_cycle),
+            cycles: id.cycles.len() as u32,
+            f_statistic: id.form_test.as_ref().map(|t| t.f_statistic),
+            p_value: id.form_test.as_ref().map(|t| t.p_value),
+            effective_samples: id.form_test.as_ref().map(|t| t.effective_samples as u32),
+            reason: &id.form_reason,
+            yield_force_n: id.damage.yield_force_n,
+            ductility: id.damage.ductility,
+            hysteretic_energy_j: id.damage.hysteretic_energy_j,
+            park_ang: id.damage.park_ang,
+            stiffness_index: id.damage.stiffness_index,
+            samples: id.samples as u32,
+            samples_fitted: id.samples_fitted as u32,
+            quasi_static: id.quasi_static,
+        })
+        .collect();
+    let stft_row = |estimate: ParameterEstimate, form: &'a str, reason: &'a str| IdRow {
+        record: o.record,
+        method: "stft_instantaneous",
+        form,
+        estimate,
+        force_nrmse: f64::NAN,
+        plain_nrmse: f64::NAN,
+        energy_mean: None,
+        cycles: 0,
+        f_statistic: None,
+        p_value: None,
+        effective_samples: None,
+        reason,
+        yield_force_n: f64::NAN,
+        ductility: f64::NAN,
+        hysteretic_energy_j: id.damage.hysteretic_energy_j,
+        park_ang: None,
+        stiffness_index: f64::NAN,
+        samples: id.samples as u32,
+        samples_fitted: id.samples as u32,
+        quasi_static: false,
+    };
+    match o.instantaneous {
+        Some(Ok(fit)) => {
+            let peak = o.displacement_m.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let k0 = fit.estimates[0].value;
+            for e in &fit.estimates {
+                rows.push(IdRow {
+                    force_nrmse: fit.force_nrmse,
+                    plain_nrmse: fit.force_nrmse,
+                    energy_mean: mean_abs(&fit.energy_error_per_cycle),
+                    cycles: fit.cycles.len() as u32,
+                    f_statistic: Some(fit.f_statistic),
+                    p_value: Some(fit.p_value),
+                    effective_samples: Some(fit.effective_samples as u32),
+                    yield_force_n: fit.saturation_force_n,
+                    ductility: peak * k0 / fit.saturation_force_n,
+                    stiffness_index: fit.damage_index_end,
+                    ..stft_row(e.clone(), "thesis_bouc_wen", &fit.verdict)
+                });
+            }
+        }
+        Some(Err(reason)) => rows.push(stft_row(
+            ParameterEstimate {
+                name: "none",
+                value: f64::NAN,
+                std: f64::NAN,
+                units: "",
+                fixed: true,
+            },
+            "not_identified",
+            reason,
+        )),
+        None => {}
+    }
+    rows
 }
 
 fn settings_meta(settings: &LabIdentifySettings) -> Vec<(String, String)> {
@@ -62,105 +182,67 @@ pub fn write_lab_identification(
     provenance: &[(String, String)],
 ) -> Result<()> {
     use lab_identification as c;
-    let mut rows: Vec<(&LabOutcome<'_>, &crate::lab::ParameterEstimate)> = Vec::new();
-    for o in outcomes {
-        for e in &o.identification.estimates {
-            rows.push((o, e));
-        }
-    }
-    let per = |f: &dyn Fn(&SpecimenIdentification) -> f64| -> Vec<f64> {
-        rows.iter().map(|(o, _)| f(o.identification)).collect()
-    };
-    let per_opt = |f: &dyn Fn(&SpecimenIdentification) -> Option<f64>| -> Vec<Option<f64>> {
-        rows.iter().map(|(o, _)| f(o.identification)).collect()
-    };
-    let energy_mean = |id: &SpecimenIdentification| -> Option<f64> {
-        let e = &id.energy_error_per_cycle;
-        (!e.is_empty()).then(|| e.iter().map(|v| v.abs()).sum::<f64>() / e.len() as f64)
-    };
+    let rows: Vec<IdRow<'_>> = outcomes.iter().flat_map(id_rows).collect();
     let batch = TableBuilder::new(&LAB_IDENTIFICATION)
         .str(
             c::RECORD,
-            &rows.iter().map(|(o, _)| o.record).collect::<Vec<_>>(),
+            &rows.iter().map(|r| r.record).collect::<Vec<_>>(),
         )
         .str(
-            c::FORM,
-            &rows
-                .iter()
-                .map(|(o, _)| o.identification.form.name())
-                .collect::<Vec<_>>(),
+            c::METHOD,
+            &rows.iter().map(|r| r.method).collect::<Vec<_>>(),
         )
+        .str(c::FORM, &rows.iter().map(|r| r.form).collect::<Vec<_>>())
         .str(
             c::PARAMETER,
-            &rows.iter().map(|(_, e)| e.name).collect::<Vec<_>>(),
+            &rows.iter().map(|r| r.estimate.name).collect::<Vec<_>>(),
         )
-        .f64(c::VALUE, rows.iter().map(|(_, e)| e.value).collect())
-        .f64(c::STD, rows.iter().map(|(_, e)| e.std).collect())
+        .f64(c::VALUE, rows.iter().map(|r| r.estimate.value).collect())
+        .f64(c::STD, rows.iter().map(|r| r.estimate.std).collect())
         .str(
             c::UNIT,
-            &rows.iter().map(|(_, e)| e.units).collect::<Vec<_>>(),
+            &rows.iter().map(|r| r.estimate.units).collect::<Vec<_>>(),
         )
-        .bool(c::FIXED, rows.iter().map(|(_, e)| e.fixed).collect())
-        .f64(c::FORCE_NRMSE, per(&|i| i.force_nrmse))
-        .f64(c::PLAIN_NRMSE, per(&|i| i.plain_nrmse))
-        .opt_f64(c::ENERGY_ERROR_MEAN, per_opt(&energy_mean))
-        .u32(
-            c::CYCLES,
-            rows.iter()
-                .map(|(o, _)| o.identification.cycles.len() as u32)
-                .collect(),
-        )
+        .bool(c::FIXED, rows.iter().map(|r| r.estimate.fixed).collect())
+        .f64(c::FORCE_NRMSE, rows.iter().map(|r| r.force_nrmse).collect())
+        .f64(c::PLAIN_NRMSE, rows.iter().map(|r| r.plain_nrmse).collect())
         .opt_f64(
-            c::F_STATISTIC,
-            per_opt(&|i| i.form_test.as_ref().map(|t| t.f_statistic)),
+            c::ENERGY_ERROR_MEAN,
+            rows.iter().map(|r| r.energy_mean).collect(),
         )
-        .opt_f64(
-            c::P_VALUE,
-            per_opt(&|i| i.form_test.as_ref().map(|t| t.p_value)),
-        )
+        .u32(c::CYCLES, rows.iter().map(|r| r.cycles).collect())
+        .opt_f64(c::F_STATISTIC, rows.iter().map(|r| r.f_statistic).collect())
+        .opt_f64(c::P_VALUE, rows.iter().map(|r| r.p_value).collect())
         .opt_u32(
             c::EFFECTIVE_SAMPLES,
-            rows.iter()
-                .map(|(o, _)| {
-                    o.identification
-                        .form_test
-                        .as_ref()
-                        .map(|t| t.effective_samples as u32)
-                })
-                .collect(),
+            rows.iter().map(|r| r.effective_samples).collect(),
         )
         .str(
             c::FORM_REASON,
-            &rows
-                .iter()
-                .map(|(o, _)| o.identification.form_reason.as_str())
-                .collect::<Vec<_>>(),
+            &rows.iter().map(|r| r.reason).collect::<Vec<_>>(),
         )
-        .f64(c::YIELD_FORCE_N, per(&|i| i.damage.yield_force_n))
-        .f64(c::DUCTILITY, per(&|i| i.damage.ductility))
+        .f64(
+            c::YIELD_FORCE_N,
+            rows.iter().map(|r| r.yield_force_n).collect(),
+        )
+        .f64(c::DUCTILITY, rows.iter().map(|r| r.ductility).collect())
         .f64(
             c::HYSTERETIC_ENERGY_J,
-            per(&|i| i.damage.hysteretic_energy_j),
+            rows.iter().map(|r| r.hysteretic_energy_j).collect(),
         )
-        .opt_f64(c::PARK_ANG, per_opt(&|i| i.damage.park_ang))
-        .f64(c::STIFFNESS_INDEX, per(&|i| i.damage.stiffness_index))
-        .u32(
-            c::SAMPLES,
-            rows.iter()
-                .map(|(o, _)| o.identification.samples as u32)
-                .collect(),
+        .opt_f64(c::PARK_ANG, rows.iter().map(|r| r.park_ang).collect())
+        .f64(
+            c::STIFFNESS_INDEX,
+            rows.iter().map(|r| r.stiffness_index).collect(),
         )
+        .u32(c::SAMPLES, rows.iter().map(|r| r.samples).collect())
         .u32(
             c::SAMPLES_FITTED,
-            rows.iter()
-                .map(|(o, _)| o.identification.samples_fitted as u32)
-                .collect(),
+            rows.iter().map(|r| r.samples_fitted).collect(),
         )
         .bool(
             c::QUASI_STATIC,
-            rows.iter()
-                .map(|(o, _)| o.identification.quasi_static)
-                .collect(),
+            rows.iter().map(|r| r.quasi_static).collect(),
         )
         .build()?;
     let mut meta = settings_meta(settings);
@@ -176,6 +258,7 @@ pub fn write_lab_fit(
 ) -> Result<()> {
     use lab_fit as c;
     let mut record = Vec::new();
+    let mut fi = Vec::new();
     let (mut step, mut t, mut x, mut fm, mut ff, mut fp) = (
         Vec::new(),
         Vec::new(),
@@ -193,6 +276,10 @@ pub fn write_lab_fit(
             fm.push(o.force_n[i]);
             ff.push(o.identification.fitted_force_n[i]);
             fp.push(o.identification.plain_force_n[i]);
+            fi.push(match o.instantaneous {
+                Some(Ok(fit)) => fit.fitted_force_n.get(i).copied(),
+                _ => None,
+            });
         }
     }
     let batch = TableBuilder::new(&LAB_FIT)
@@ -203,6 +290,7 @@ pub fn write_lab_fit(
         .f64(c::FORCE_MEASURED_N, fm)
         .f64(c::FORCE_FITTED_N, ff)
         .f64(c::FORCE_PLAIN_N, fp)
+        .opt_f64(c::FORCE_INSTANTANEOUS_N, fi)
         .build()?;
     write_parquet(path, &[batch], provenance)
 }
@@ -214,14 +302,26 @@ pub fn write_lab_cycles(
     provenance: &[(String, String)],
 ) -> Result<()> {
     use lab_cycles as c;
-    let rows: Vec<(&str, usize, &crate::lab::CycleEnergy)> = outcomes
+    // The instantaneous fit's cycles are the same (same displacement, same
+    // band); its energy is matched by the cycle's start sample.
+    let rows: Vec<(&str, usize, &crate::lab::CycleEnergy, Option<f64>)> = outcomes
         .iter()
         .flat_map(|o| {
             o.identification
                 .cycles
                 .iter()
                 .enumerate()
-                .map(move |(k, cy)| (o.record, k, cy))
+                .map(move |(k, cy)| {
+                    let other = match o.instantaneous {
+                        Some(Ok(fit)) => fit
+                            .cycles
+                            .iter()
+                            .find(|c| c.start == cy.start && c.end == cy.end)
+                            .map(|c| c.fitted_j),
+                        _ => None,
+                    };
+                    (o.record, k, cy, other)
+                })
         })
         .collect();
     let batch = TableBuilder::new(&LAB_CYCLES)
@@ -247,6 +347,10 @@ pub fn write_lab_cycles(
         .f64(
             c::ENERGY_ERROR,
             rows.iter().map(|r| r.2.relative_error()).collect(),
+        )
+        .opt_f64(
+            c::ENERGY_INSTANTANEOUS_J,
+            rows.iter().map(|r| r.3).collect(),
         )
         .build()?;
     write_parquet(path, &[batch], provenance)

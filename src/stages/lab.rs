@@ -8,13 +8,14 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::event_folder::lab::load_lab;
+use crate::lab::instantaneous::{identify_instantaneous, InstantaneousFit};
 use crate::lab::{history_of, identify_specimen, LabIdentifySettings, SpecimenIdentification};
 use crate::pipeline::{Product, RunContext, Stage, StageKind, StageSource};
 use crate::sinks::lab_tables::{
     lab_provenance, write_lab_cycles, write_lab_fit, write_lab_identification, LabOutcome,
 };
 use crate::vocab::tables::{LAB_CYCLES, LAB_FIT, LAB_IDENTIFICATION};
-use crate::vocab::LabRecord;
+use crate::vocab::{LabRecord, TimeBase};
 
 pub const KIND: StageKind = StageKind {
     kind: "lab_hysteresis",
@@ -43,36 +44,66 @@ struct LabHysteresis {
     settings: LabIdentifySettings,
 }
 
+/// One lab record identified: the whole-history fit and, for a uniformly
+/// sampled (dynamic) record, the thesis's time–frequency identification or
+/// why it identified nothing.
+pub struct LabDone {
+    pub record: LabRecord,
+    pub identification: SpecimenIdentification,
+    pub instantaneous: Option<std::result::Result<InstantaneousFit, String>>,
+}
+
 /// Identifies every lab record of the event at `event` and writes the three
 /// tables into `out_dir`; returns the records and their identifications.
 pub fn identify_lab_event(
     event: &Path,
     settings: &LabIdentifySettings,
     out_dir: &Path,
-) -> Result<Vec<(LabRecord, SpecimenIdentification)>> {
+) -> Result<Vec<LabDone>> {
     let records = load_lab(event)?;
     let mut done = Vec::with_capacity(records.len());
     for record in records {
-        let id = identify_specimen(&history_of(&record)?, settings)
+        let history = history_of(&record)?;
+        let id = identify_specimen(&history, settings)
             .map_err(|e| Error::usage(format!("lab record {:?}: {e}", record.name)))?;
-        done.push((record, id));
+        let instantaneous = match record.time_base {
+            TimeBase::Uniform { dt_s } if settings.instantaneous => Some(
+                identify_instantaneous(
+                    history.displacement_m,
+                    history.force_n,
+                    1.0 / dt_s,
+                    settings.cycle_band,
+                )
+                .map_err(|e| e.to_string()),
+            ),
+            _ => None,
+        };
+        done.push(LabDone {
+            record,
+            identification: id,
+            instantaneous,
+        });
     }
     let histories: Vec<_> = done
         .iter()
-        .map(|(r, _)| history_of(r))
+        .map(|d| history_of(&d.record))
         .collect::<Result<Vec<_>>>()?;
     let outcomes: Vec<LabOutcome<'_>> = done
         .iter()
         .zip(&histories)
-        .map(|((r, id), h)| LabOutcome {
-            record: &r.name,
+        .map(|(d, h)| LabOutcome {
+            record: &d.record.name,
             displacement_m: h.displacement_m,
             force_n: h.force_n,
             time_s: h.time_s,
-            identification: id,
+            identification: &d.identification,
+            instantaneous: d
+                .instantaneous
+                .as_ref()
+                .map(|r| r.as_ref().map_err(String::as_str)),
         })
         .collect();
-    let names: Vec<&str> = done.iter().map(|(r, _)| r.name.as_str()).collect();
+    let names: Vec<&str> = done.iter().map(|d| d.record.name.as_str()).collect();
     let provenance = lab_provenance(&event.display().to_string(), &names, settings);
     write_lab_identification(
         &out_dir.join(LAB_IDENTIFICATION.file),
@@ -91,14 +122,26 @@ impl Stage for LabHysteresis {
     }
     fn run(&self, ctx: &mut RunContext) -> Result<Option<Product>> {
         let done = identify_lab_event(&ctx.event_path.clone(), &self.settings, &ctx.out_dir)?;
-        for (r, id) in &done {
+        for d in &done {
+            let id = &d.identification;
             ctx.info(format!(
                 "lab_hysteresis: {}: {} form, force NRMSE {:.4} ({})",
-                r.name,
+                d.record.name,
                 id.form.name(),
                 id.force_nrmse,
                 id.form_reason
             ));
+            match &d.instantaneous {
+                Some(Ok(fit)) => ctx.info(format!(
+                    "lab_hysteresis: {}: thesis's STFT identification: force NRMSE {:.4} ({})",
+                    d.record.name, fit.force_nrmse, fit.verdict
+                )),
+                Some(Err(e)) => ctx.info(format!(
+                    "lab_hysteresis: {}: thesis's STFT identification: nothing identified ({e})",
+                    d.record.name
+                )),
+                None => {}
+            }
         }
         Ok(None)
     }

@@ -644,25 +644,26 @@ declare!(HISTORY_EVENTS, history_events, "history_events", "history_events/histo
 declare!(LAB_IDENTIFICATION, lab_identification, "lab_identification", "lab_identification/lab_identification.parquet",
     "one row per lab record and model parameter: the hysteresis identified from measured displacement and force (docs/lab-tests.md), with the record's fit figures, form test and damage repeated on its rows", {
     RECORD: "record", Utf8, required, "", "the lab record (the specimen's name, or the file it was read from)";
-    FORM: "form", Utf8, required, "", "`plain` (Bouc–Wen) or `degrading_pinching` (Bouc–Wen–Baber–Noori, Eq. L1–L6)";
-    PARAMETER: "parameter", Utf8, required, "", "`initial_stiffness_n_per_m`, `post_yield_ratio`, `yield_displacement_m`, `beta` (γ = 1 − β), `n`, `strength_degradation` (δ_ν), `stiffness_degradation` (δ_η), `pinching_extent` (ζ_s), `pinching_rate` (p), `pinching_centre` (q), `pinching_width` (ψ)";
+    METHOD: "method", Utf8, required, "", "`whole_history` (the least-squares fit of Eq. L1–L9) or `stft_instantaneous` (the thesis's time–frequency identification of Eq. 15–31 on the measured force, dynamic records with a uniform time base only; its rows carry its own parameters and fit figures, docs/lab-tests.md)";
+    FORM: "form", Utf8, required, "", "`plain` (Bouc–Wen) or `degrading_pinching` (Bouc–Wen–Baber–Noori, Eq. L1–L6); on `stft_instantaneous` rows `thesis_bouc_wen` (Eq. 21–23, one DoF), or `not_identified` (one row, parameter `none`, the reason in `form_reason`)";
+    PARAMETER: "parameter", Utf8, required, "", "`initial_stiffness_n_per_m`, `post_yield_ratio`, `yield_displacement_m`, `beta` (γ = 1 − β), `n`, `strength_degradation` (δ_ν), `stiffness_degradation` (δ_η), `pinching_extent` (ζ_s), `pinching_rate` (p), `pinching_centre` (q), `pinching_width` (ψ); on `stft_instantaneous` rows `initial_stiffness_n_per_m` (K0), `stiffness_degradation_per_j` (δ), `beta`, `gamma` (N^(1−N)/m), `n` (N)";
     VALUE: "value", F64, required, "varies", "the identified value, in the row's `unit`";
-    STD: "std", F64, required, "varies", "its standard deviation from s²(JᵀJ)⁻¹ at the optimum inflated by (1 + ρ₁)/(1 − ρ₁) (Eq. L8); 0 on a fixed row, NaN when JᵀJ is singular";
-    UNIT: "unit", Utf8, required, "", "`N/m`, `m` or `1`";
+    STD: "std", F64, required, "varies", "its standard deviation from s²(JᵀJ)⁻¹ at the optimum inflated by N/N_eff of the chosen model's residuals (Eq. L8, L8a); 0 on a fixed row, NaN when JᵀJ is singular; on `stft_instantaneous` rows the spread (standard deviation) of the instantaneous estimates over the informative frames — a measure of time variation, not a standard error";
+    UNIT: "unit", Utf8, required, "", "`N/m`, `m`, `1`, `1/J` or `N^(1-N)/m`";
     FIXED: "fixed", Bool, required, "", "not fitted in this form (the plain form's degradation and pinching, held at 0)";
     FORCE_NRMSE: "force_nrmse", F64, required, "1", "NRMSE of the fitted force against the measured one (Eq. 83: RMS error over the measured force range)";
     PLAIN_NRMSE: "plain_nrmse", F64, required, "1", "the plain model's NRMSE (equal to `force_nrmse` when plain is chosen)";
     ENERGY_ERROR_MEAN: "energy_error_mean", F64, nullable, "1", "mean of |fitted − measured| / |measured| dissipated energy over the record's cycles (per cycle in lab_cycles/lab_cycles.parquet); null without a complete cycle";
     CYCLES: "cycles", U32, required, "", "displacement cycles counted (maximum to maximum, dead band `cycle_band` of the range)";
-    F_STATISTIC: "f_statistic", F64, nullable, "1", "F-test of the plain model nested in the degrading/pinching one, [(S_plain − S_deg)/6] / [S_deg/(N_eff − 11)] (Eq. L9); null when only one form was fitted";
+    F_STATISTIC: "f_statistic", F64, nullable, "1", "F-test of the plain model nested in the degrading/pinching one, [(S_plain − S_deg)/6] / [S_deg/(N_eff − 11)] (Eq. L9); null when only one form was fitted; on `stft_instantaneous` rows the thesis's test of the hysteretic terms against the nested linear model";
     P_VALUE: "p_value", F64, nullable, "1", "its p-value: the degrading/pinching form is chosen when p < `significance`";
-    EFFECTIVE_SAMPLES: "effective_samples", U32, nullable, "", "N_eff = N (1 − ρ₁)/(1 + ρ₁) of the F-test (ρ₁: lag-1 autocorrelation of the plain model's residuals)";
+    EFFECTIVE_SAMPLES: "effective_samples", U32, nullable, "", "N_eff of the F-test: N / (1 + 2 Σ_k (1 − k/N) ρ_k) over the lags before the autocorrelation ρ_k of the degrading/pinching model's residuals first drops to ≤ 0 (Eq. L8a); on `stft_instantaneous` rows the non-overlapping STFT windows";
     FORM_REASON: "form_reason", Utf8, required, "", "why this form, in words (the F-test's numbers)";
-    YIELD_FORCE_N: "yield_force_n", F64, required, "N", "F_y = k₀ u_y";
-    DUCTILITY: "ductility", F64, required, "1", "max |x| / u_y";
+    YIELD_FORCE_N: "yield_force_n", F64, required, "N", "F_y = k₀ u_y; on `stft_instantaneous` rows the saturation force (K0/(β + γ))^(1/N) (NaN when β + γ ≤ 0)";
+    DUCTILITY: "ductility", F64, required, "1", "max |x| / u_y (`stft_instantaneous`: u_y = saturation force / K0)";
     HYSTERETIC_ENERGY_J: "hysteretic_energy_j", F64, required, "J", "∫ F dx of the measured record";
     PARK_ANG: "park_ang", F64, nullable, "1", "Park–Ang index δ_max/δ_u + β_PA E_h/(F_y δ_u) (null without `ultimate_displacement_m`)";
-    STIFFNESS_INDEX: "stiffness_index", F64, required, "1", "1 − sqrt(k_end/k₀), k_end = k₀ (α + (1 − α)/η_end): the single-DoF form of Eq. 34 (0 for the plain model)";
+    STIFFNESS_INDEX: "stiffness_index", F64, required, "1", "1 − sqrt(k_end/k₀), k_end = k₀ (α + (1 − α)/η_end): the single-DoF form of Eq. 34 (0 for the plain model); on `stft_instantaneous` rows ι at the end of the record, 1 − sqrt(1 − δ ε_end) (Eq. 34, negative when δ < 0: stiffening)";
     SAMPLES: "samples", U32, required, "", "samples of the record";
     SAMPLES_FITTED: "samples_fitted", U32, required, "", "samples the fit used (every k-th beyond `max_samples`)";
     QUASI_STATIC: "quasi_static", Bool, required, "", "no time base: the step index orders the samples";
@@ -677,6 +678,7 @@ declare!(series LAB_FIT, lab_fit, "lab_fit", "lab_fit/lab_fit.parquet",
     FORCE_MEASURED_N: "force_measured_n", F64, required, "N", "measured restoring force";
     FORCE_FITTED_N: "force_fitted_n", F64, required, "N", "force of the identified model (the chosen form) along the measured displacement";
     FORCE_PLAIN_N: "force_plain_n", F64, required, "N", "force of the plain Bouc–Wen fit (equal to `force_fitted_n` when plain is chosen)";
+    FORCE_INSTANTANEOUS_N: "force_instantaneous_n", F64, nullable, "N", "force of the thesis's time–frequency identification (`stft_instantaneous`) along the measured displacement; null when it was not run or identified nothing";
 });
 
 declare!(LAB_CYCLES, lab_cycles, "lab_cycles", "lab_cycles/lab_cycles.parquet",
@@ -689,6 +691,7 @@ declare!(LAB_CYCLES, lab_cycles, "lab_cycles", "lab_cycles/lab_cycles.parquet",
     ENERGY_MEASURED_J: "energy_measured_j", F64, required, "J", "∮ F dx of the measured force over the cycle";
     ENERGY_FITTED_J: "energy_fitted_j", F64, required, "J", "∮ F dx of the fitted force over the cycle";
     ENERGY_ERROR: "energy_error", F64, required, "1", "(fitted − measured) / |measured|";
+    ENERGY_INSTANTANEOUS_J: "energy_instantaneous_j", F64, nullable, "J", "∮ F dx of the `stft_instantaneous` model's force over the cycle; null when it was not run";
 });
 
 /// Every table quaketwin writes, in pipeline order.

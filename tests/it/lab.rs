@@ -463,14 +463,19 @@ fn shared_lab_records_table() {
     }
 }
 
-/// Coverage over noise seeds (release, ignored): the share of parameters
-/// within 2 reported standard deviations of the truth.
+/// Coverage over noise seeds (ignored; 2 min on the dev profile): the share
+/// of parameters within 2 reported standard deviations of the truth (95 %
+/// for a Gaussian estimate with the right σ); per parameter within 1σ and
+/// 2σ, and the form chosen, printed for docs/lab-tests.md.
 #[test]
 #[ignore]
 fn synthetic_bwbn_uncertainty_coverage() {
-    let mut inside = 0usize;
-    let mut total = 0usize;
-    for seed in 1..=10u64 {
+    let truth = truth_values();
+    let mut within1 = vec![0usize; truth.len()];
+    let mut within2 = vec![0usize; truth.len()];
+    let mut degrading = 0usize;
+    let seeds = 10usize;
+    for seed in 1..=seeds as u64 {
         let rec = synthetic_specimen(reference_bwbn(), protocol(60), 0.01, 100 + seed);
         let history = SpecimenHistory {
             displacement_m: &rec.displacement_m,
@@ -478,17 +483,31 @@ fn synthetic_bwbn_uncertainty_coverage() {
             time_s: None,
         };
         let id = identify_specimen(&history, &LabIdentifySettings::default()).unwrap();
-        for (name, truth) in truth_values() {
+        if id.form == quaketwin::lab::ModelForm::Degrading {
+            degrading += 1;
+        }
+        for (i, (name, t)) in truth.iter().enumerate() {
             let (v, std) = value(&id, name);
-            total += 1;
-            if (v - truth).abs() <= 2.0 * std {
-                inside += 1;
-            }
+            let z = (v - t).abs() / std;
+            within1[i] += usize::from(z <= 1.0);
+            within2[i] += usize::from(z <= 2.0);
         }
     }
-    let share = inside as f64 / total as f64;
-    println!("within 2σ: {inside}/{total} = {share:.3}");
-    assert!(share > 0.85, "{share}");
+    for (i, (name, _)) in truth.iter().enumerate() {
+        println!(
+            "{name:>28}: within 1σ {}/{seeds}, 2σ {}/{seeds}",
+            within1[i], within2[i]
+        );
+    }
+    let (in1, in2): (usize, usize) = (within1.iter().sum(), within2.iter().sum());
+    let total = seeds * truth.len();
+    println!(
+        "within 1σ: {in1}/{total} = {:.3}; within 2σ: {in2}/{total} = {:.3}; degrading/pinching chosen {degrading}/{seeds}",
+        in1 as f64 / total as f64,
+        in2 as f64 / total as f64
+    );
+    assert!(in2 as f64 / total as f64 > 0.85, "{in2}/{total}");
+    assert_eq!(degrading, seeds);
 }
 
 /// A lab folder with an `event.toml` `[lab]` section (displacement in mm
@@ -561,7 +580,11 @@ actuator = "A1"
     };
     let done =
         quaketwin::stages::lab::identify_lab_event(dir.path(), &settings, out.path()).unwrap();
-    assert!(done[0].1.force_nrmse < 1e-4, "{}", done[0].1.force_nrmse);
+    assert!(
+        done[0].identification.force_nrmse < 1e-4,
+        "{}",
+        done[0].identification.force_nrmse
+    );
     for f in quaketwin::stages::lab::LAB_FILES {
         assert!(out.path().join(f).is_file(), "{f}");
     }
@@ -583,4 +606,123 @@ actuator = "A1"
     std::fs::write(dir.path().join("event.toml"), bad).unwrap();
     let e = load_lab(dir.path()).unwrap_err().to_string();
     assert!(e.contains("event.toml") && e.contains("kN"), "{e}");
+}
+
+// ---- the thesis's instantaneous identification on a dynamic record -----
+
+use quaketwin::hysteresis::BoucWenChain;
+use quaketwin::lab::instantaneous::identify_instantaneous;
+use quaketwin::synth::{synthetic_ground_motion, GroundMotionSpec};
+
+/// A force-based degrading Bouc–Wen specimen (the thesis's model, Eq. 21–23,
+/// one DoF: m = 1e5 kg, K0 = 4e7 N/m, δ = 6e-7 1/J, β = 0.05, γ = 0.025,
+/// N = 1.6) shaken by the seeded 50 s ground motion at 500 Hz (first 20 s);
+/// its measured (displacement, force) alone — no mass, no acceleration —
+/// give back K0 within 1 %, N within 0.02, β and γ within 5 %, δ within 10 %,
+/// and a force NRMSE below 1 %.
+fn thesis_specimen() -> (Vec<f64>, Vec<f64>) {
+    let chain = BoucWenChain::shear(
+        vec![1e5],
+        &[4e7],
+        &[vec![6e-7]],
+        vec![0.05],
+        vec![0.025],
+        vec![1.6],
+    )
+    .unwrap();
+    let ground = synthetic_ground_motion(&GroundMotionSpec::strong_50s(7, 500.0, 3.5)).unwrap();
+    let response = chain.simulate(&ground[..10_000], 500.0, 8).unwrap();
+    (
+        response.relative_displacement[0].clone(),
+        response.restoring_force[0].clone(),
+    )
+}
+
+#[test]
+fn instantaneous_identification_on_measured_force_recovers_the_thesis_model() {
+    let (x, f) = thesis_specimen();
+    let fit = identify_instantaneous(&x, &f, 500.0, 0.05).unwrap();
+    let get = |name: &str| fit.estimates.iter().find(|e| e.name == name).unwrap().value;
+    eprintln!(
+        "{:?}\nNRMSE {} {}",
+        fit.estimates, fit.force_nrmse, fit.verdict
+    );
+    let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
+    assert!(rel(get("initial_stiffness_n_per_m"), 4e7) < 0.01);
+    assert!((get("n") - 1.6).abs() < 0.02, "N {}", get("n"));
+    assert!(rel(get("beta"), 0.05) < 0.05, "β {}", get("beta"));
+    assert!(rel(get("gamma"), 0.025) < 0.05, "γ {}", get("gamma"));
+    assert!(rel(get("stiffness_degradation_per_j"), 6e-7) < 0.10);
+    assert!(fit.significant);
+    assert!(fit.force_nrmse < 0.01, "NRMSE {}", fit.force_nrmse);
+    assert!(!fit.cycles.is_empty());
+}
+
+/// A dynamic lab folder (a CSV with a time column, no manifest): the stage
+/// runs both methods, and the tables and the report carry the thesis's
+/// identification beside the whole-history fit.
+#[test]
+fn dynamic_lab_folder_gets_the_instantaneous_identification_in_tables_and_report() {
+    let (x, f) = thesis_specimen();
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv = String::from("time,disp,force\n");
+    for (i, (x, f)) in x.iter().zip(&f).enumerate() {
+        csv.push_str(&format!("{},{x},{}\n", i as f64 / 500.0, f * 1e-3));
+    }
+    std::fs::write(dir.path().join("shake.csv"), csv).unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let settings = LabIdentifySettings {
+        form: FormChoice::Plain,
+        max_samples: 1000,
+        ..ci_settings()
+    };
+    let done =
+        quaketwin::stages::lab::identify_lab_event(dir.path(), &settings, out.path()).unwrap();
+    let fit = done[0].instantaneous.as_ref().unwrap().as_ref().unwrap();
+    assert!(fit.force_nrmse < 0.01, "{}", fit.force_nrmse);
+    let page = quaketwin::report::write_report(out.path(), &Default::default()).unwrap();
+    let html = std::fs::read_to_string(page).unwrap();
+    assert!(html.contains("The thesis's time–frequency identification"));
+    assert!(html.contains("STFT identification<"), "third loop drawn");
+}
+
+/// The thesis's method on the ARTS damper's three records (uniform 1024 Hz):
+/// prints its parameters and fit beside nothing else (the whole-history
+/// figures are `shared_lab_records_table`'s).
+#[test]
+#[ignore]
+fn shared_damper_instantaneous_table() {
+    let recs = load_lab(&crate::common::shared_record("arts-friction-damper")).unwrap();
+    for r in &recs {
+        let h = history_of(r).unwrap();
+        let dt = match r.time_base {
+            TimeBase::Uniform { dt_s } => dt_s,
+            ref other => panic!("{other:?}"),
+        };
+        let t0 = std::time::Instant::now();
+        match identify_instantaneous(h.displacement_m, h.force_n, 1.0 / dt, 0.05) {
+            Ok(fit) => {
+                let e = &fit.energy_error_per_cycle;
+                let mean = e.iter().map(|v| v.abs()).sum::<f64>() / e.len().max(1) as f64;
+                println!(
+                    "| {} | NRMSE {:.4} | energy {:.3} ({}) | Fsat {:.3e} | iota {:.4} | {} | {:.1} s",
+                    r.name,
+                    fit.force_nrmse,
+                    mean,
+                    e.len(),
+                    fit.saturation_force_n,
+                    fit.damage_index_end,
+                    fit.verdict,
+                    t0.elapsed().as_secs_f64()
+                );
+                for est in &fit.estimates {
+                    println!(
+                        "    {:>28} {:>14.6e} ± {:.3e}",
+                        est.name, est.value, est.std
+                    );
+                }
+            }
+            Err(e) => println!("| {} | {e}", r.name),
+        }
+    }
 }

@@ -36,14 +36,81 @@ fn num(t: &crate::report::table::Table, c: &str, r: usize) -> Option<f64> {
     t.number(c).and_then(|v| v.get(r).copied().flatten())
 }
 
-fn rows_by_record(t: &crate::report::table::Table) -> BTreeMap<String, Vec<usize>> {
-    let mut m: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+/// Rows per record: (whole-history rows, `stft_instantaneous` rows). A
+/// table without the `method` column (written before it) is all whole-history.
+fn rows_by_record(t: &crate::report::table::Table) -> BTreeMap<String, (Vec<usize>, Vec<usize>)> {
+    let mut m: BTreeMap<String, (Vec<usize>, Vec<usize>)> = BTreeMap::new();
     for r in 0..t.rows {
         if let Some(k) = t.key(lab_identification::RECORD.name, r) {
-            m.entry(k).or_default().push(r);
+            let entry = m.entry(k).or_default();
+            if t.key(lab_identification::METHOD.name, r).as_deref() == Some("stft_instantaneous") {
+                entry.1.push(r);
+            } else {
+                entry.0.push(r);
+            }
         }
     }
     m
+}
+
+fn parameter_rows(id: &crate::report::table::Table, rows: &[usize]) -> Vec<Vec<Cell>> {
+    rows.iter()
+        .map(|&r| {
+            vec![
+                Cell::text(
+                    &id.key(lab_identification::PARAMETER.name, r)
+                        .unwrap_or_default(),
+                ),
+                Cell::number(num(id, lab_identification::VALUE.name, r)),
+                Cell::number(num(id, lab_identification::STD.name, r)),
+                Cell::text(&id.key(lab_identification::UNIT.name, r).unwrap_or_default()),
+                Cell::text(
+                    if id
+                        .boolean(lab_identification::FIXED.name)
+                        .and_then(|b| b.get(r).copied().flatten())
+                        == Some(true)
+                    {
+                        "fixed"
+                    } else {
+                        "fitted"
+                    },
+                ),
+            ]
+        })
+        .collect()
+}
+
+/// The thesis's time–frequency identification of a dynamic record, beside
+/// the whole-history fit.
+fn instantaneous_block(id: &crate::report::table::Table, rows: &[usize]) -> String {
+    let r0 = rows[0];
+    let fmt = |v: Option<f64>| {
+        v.map(crate::report::format_number)
+            .unwrap_or_else(|| "—".into())
+    };
+    let reason = escape(
+        &id.key(lab_identification::FORM_REASON.name, r0)
+            .unwrap_or_default(),
+    );
+    if id.key(lab_identification::FORM.name, r0).as_deref() == Some("not_identified") {
+        return format!(
+            "<h4>The thesis's time–frequency identification (METHODS.md §4)</h4><p>Nothing identified: {reason}</p>"
+        );
+    }
+    let mut out = format!(
+        "<h4>The thesis's time–frequency identification (METHODS.md §4)</h4><dl class=\"facts\"><dt>Verdict</dt><dd>{reason}</dd><dt>Force NRMSE</dt><dd>{}</dd><dt>Mean |energy error| per cycle</dt><dd>{} over {} cycles</dd><dt>Saturation force (K0/(β+γ))^(1/N)</dt><dd>{} N</dd><dt>Damage index ι at the end (Eq. 34)</dt><dd>{}</dd></dl>",
+        fmt(num(id, lab_identification::FORCE_NRMSE.name, r0)),
+        fmt(num(id, lab_identification::ENERGY_ERROR_MEAN.name, r0)),
+        fmt(num(id, lab_identification::CYCLES.name, r0)),
+        fmt(num(id, lab_identification::YIELD_FORCE_N.name, r0)),
+        fmt(num(id, lab_identification::STIFFNESS_INDEX.name, r0)),
+    );
+    out.push_str(&table(
+        None,
+        &["parameter", "value", "spread over time", "unit", ""].map(String::from),
+        &parameter_rows(id, rows),
+    ));
+    out
 }
 
 /// The measured and fitted loops of one record (kN against mm).
@@ -84,6 +151,15 @@ fn loop_figure(
         1,
         Mark::Line,
     ));
+    let stft = points(lab_fit::FORCE_INSTANTANEOUS_N.name);
+    if !stft.is_empty() {
+        chart.series.push(Series::new(
+            "thesis's STFT identification",
+            plot::decimate_curve(&stft, settings.max_points_per_trace),
+            2,
+            Mark::Line,
+        ));
+    }
     let legend = plot::legend(&chart.series);
     figure(
         plot::render(&chart),
@@ -103,8 +179,8 @@ fn lab_body(dir: &Path, settings: &ReportSettings) -> String {
     body.push_str(&note(
         "Bouc–Wen (plain) or Bouc–Wen–Baber–Noori (degrading/pinching) fitted to the measured displacement and force by least squares (docs/lab-tests.md, Eq. L1–L9); standard deviations from s²(JᵀJ)⁻¹ at the optimum, inflated for correlated residuals.",
     ));
-    for (record, rows) in rows_by_record(id) {
-        let r0 = rows[0];
+    for (record, (rows, stft_rows)) in rows_by_record(id) {
+        let Some(&r0) = rows.first() else { continue };
         body.push_str(&format!("<h3>{}</h3>", escape(&record)));
         let text = |c: &str| id.key(c, r0).unwrap_or_default();
         let fmt = |v: Option<f64>| {
@@ -128,36 +204,15 @@ fn lab_body(dir: &Path, settings: &ReportSettings) -> String {
                 None => "not computed (no ultimate displacement δ_u stated)".into(),
             },
         ));
-        let params: Vec<Vec<Cell>> = rows
-            .iter()
-            .map(|&r| {
-                vec![
-                    Cell::text(
-                        &id.key(lab_identification::PARAMETER.name, r)
-                            .unwrap_or_default(),
-                    ),
-                    Cell::number(num(id, lab_identification::VALUE.name, r)),
-                    Cell::number(num(id, lab_identification::STD.name, r)),
-                    Cell::text(&id.key(lab_identification::UNIT.name, r).unwrap_or_default()),
-                    Cell::text(
-                        if id
-                            .boolean(lab_identification::FIXED.name)
-                            .and_then(|b| b.get(r).copied().flatten())
-                            == Some(true)
-                        {
-                            "fixed"
-                        } else {
-                            "fitted"
-                        },
-                    ),
-                ]
-            })
-            .collect();
+        let params = parameter_rows(id, &rows);
         body.push_str(&table(
             None,
             &["parameter", "value", "std", "unit", ""].map(String::from),
             &params,
         ));
+        if !stft_rows.is_empty() {
+            body.push_str(&instantaneous_block(id, &stft_rows));
+        }
         match &fit_loaded {
             Loaded::Ok(fit) => body.push_str(&loop_figure(fit, &record, settings)),
             _ => body.push_str(&note("No loops: the fitted-loop table is absent.")),
