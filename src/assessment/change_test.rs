@@ -53,10 +53,7 @@ pub fn change_test_indicator(e: &ChangeTestEvidence) -> Indicator {
             let ratio = statistic / threshold;
             let mode = leading_mode
                 .map(|(f, share)| {
-                    format!(
-                        "; the mode at {f:.3} Hz carries {:.0} % of it (Eq. C8)",
-                        100.0 * share / statistic
-                    )
+                    format!("; the largest share, {share:.1}, is the mode at {f:.3} Hz's (Eq. C8)")
                 })
                 .unwrap_or_default();
             let verdict = if *changed {
