@@ -15,7 +15,10 @@
 //! - **hysteresis**: the final damage index ι (METHODS §4, a participation-
 //!   weighted loss of modal frequency) on the same scale, where the Bouc-Wen
 //!   identification found significant hysteresis;
-//! - **residual drift**, where resolved: [`RESIDUAL_DRIFT_THRESHOLDS`].
+//! - **residual drift**, where resolved: [`RESIDUAL_DRIFT_THRESHOLDS`];
+//! - **change test**, when the run has a reference: the subspace χ² test of
+//!   the record against the reference run's ([`change_test`]) — a detected
+//!   change is at most slight: a reason to inspect, never alone a RED.
 //!
 //! The colour (ShakeCast's four: GREEN, YELLOW, ORANGE, RED, with inspection
 //! priority low, medium, medium-high, high) follows [`combine`]: a damage
@@ -24,6 +27,7 @@
 //! at most.  I/O free: the `assess` stage gathers the evidence from the
 //! other stages' tables and writes `assessment/assessment.parquet`.
 
+pub mod change_test;
 pub mod fragility;
 pub mod frequency;
 pub mod indicators;
@@ -100,7 +104,8 @@ impl Colour {
     }
 }
 
-/// The four indicators, in the order the assessment lists them.
+/// The indicators, in the order the assessment lists them (the change test
+/// only when the run has a reference).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum IndicatorKind {
@@ -108,6 +113,7 @@ pub enum IndicatorKind {
     Frequency,
     Hysteresis,
     ResidualDrift,
+    ChangeTest,
 }
 
 impl IndicatorKind {
@@ -117,6 +123,7 @@ impl IndicatorKind {
             IndicatorKind::Frequency => "frequency",
             IndicatorKind::Hysteresis => "hysteresis",
             IndicatorKind::ResidualDrift => "residual_drift",
+            IndicatorKind::ChangeTest => "change_test",
         }
     }
     /// For sentences: "peak drift", "apparent frequency", …
@@ -126,6 +133,7 @@ impl IndicatorKind {
             IndicatorKind::Frequency => "apparent frequency",
             IndicatorKind::Hysteresis => "hysteresis",
             IndicatorKind::ResidualDrift => "residual drift",
+            IndicatorKind::ChangeTest => "subspace change test",
         }
     }
 }
@@ -135,7 +143,7 @@ impl IndicatorKind {
 pub struct Indicator {
     pub kind: IndicatorKind,
     /// The rated value (drift ratio, frequency drop, ι, residual drift
-    /// ratio), or the value measured but not rated; `None` when there is none.
+    /// ratio, χ² statistic / threshold), or the value measured but not rated; `None` when there is none.
     pub value: Option<f64>,
     /// Where it was measured ("levels 0–2, X").
     pub subject: String,
@@ -191,11 +199,15 @@ pub struct Assessment {
     pub building_type_source: String,
     /// P(none) … P(complete) at the driving drift.
     pub probabilities: Option<[f64; 5]>,
-    /// Drift, frequency, hysteresis, residual drift — in that order.
+    /// Drift, frequency, hysteresis, residual drift, and the change test
+    /// when the run has a reference — in that order.
     pub indicators: Vec<Indicator>,
     /// The frequency evidence of the driving direction.
     #[serde(skip)]
     pub frequency: Option<indicators::FrequencyEvidence>,
+    /// The change test against the reference run (None: no reference).
+    #[serde(skip)]
+    pub change_test: Option<change_test::ChangeTestEvidence>,
     pub assumptions: Vec<String>,
 }
 

@@ -1,7 +1,8 @@
 //! The assessment of one event from its evidence: the building's drift
 //! fragility (stated type and design level, else the stated default), the
-//! four indicators and their combination (`combine`).  I/O free.
+//! indicators and their combination (`combine`).  I/O free.
 
+use super::change_test::{change_test_indicator, ChangeTestEvidence};
 use super::fragility::{self, DesignLevel, DriftFragility};
 use super::indicators::{
     drift_indicator, frequency_indicator, hysteresis_indicator, residual_indicator, DriftEvidence,
@@ -11,12 +12,14 @@ use super::{combine, Assessment};
 use crate::vocab::{Event, Structure};
 
 /// The assessment of `event` from its drift rows, Bouc-Wen outcomes and
-/// apparent-frequency evidence.
+/// apparent-frequency evidence, and the change test against the reference
+/// run when there is one.
 pub fn assess(
     event: &Event,
     drift_rows: &[DriftEvidence],
     hysteresis: &[HysteresisEvidence],
     frequency: &[FrequencyEvidence],
+    change: Option<&ChangeTestEvidence>,
 ) -> Assessment {
     let structure = event.structure.as_ref();
     let mut assumptions = Vec::new();
@@ -39,7 +42,8 @@ pub fn assess(
     let frequency_verdict = frequency_indicator(frequency);
     let hysteresis = hysteresis_indicator(hysteresis, &frequency_verdict);
     let residual = residual_indicator(drift_rows);
-    let indicators = vec![drift, frequency_verdict, hysteresis, residual];
+    let mut indicators = vec![drift, frequency_verdict, hysteresis, residual];
+    indicators.extend(change.map(change_test_indicator));
     let overall = combine(&indicators);
     // The direction whose drop is rated (else the first tracked).
     let driving = frequency
@@ -70,6 +74,7 @@ pub fn assess(
         probabilities,
         indicators,
         frequency: driving,
+        change_test: change.cloned(),
         assumptions,
     }
 }

@@ -2,11 +2,14 @@
 //! frequency over time with the 99 % band of its regression shaded, the
 //! flagged windows marked, the training period and the anomaly onset as
 //! vertical lines; then a summary table (reference frequency, mean shift of
-//! the flagged windows after training, first flagged window).  Same style
-//! as the event report (inline SVG and CSS, no scripts, no network).
+//! the flagged windows after training, first flagged window); then the
+//! environmental compensation's control chart (T² per subgroup against its
+//! threshold, docs/monitoring.md Eqs. E3–E5).  Same style as the event
+//! report (inline SVG and CSS, no scripts, no network).
 
 use super::html::{escape, format_number};
 use super::plot::{render, shade_band, Chart, Mark, RefLine, Series};
+use crate::monitor::compensation::RunCompensation;
 use crate::monitor::Tracking;
 use crate::vocab::format_epoch_ns;
 
@@ -103,6 +106,92 @@ fn mode_chart(t: &Tracking, id: usize, origin: i64) -> String {
     }
 }
 
+/// The control chart of the compensation (control_chart/control_chart.parquet):
+/// T²_g of each subgroup (Eq. E3) at its mid-time, hours since `origin`,
+/// against the threshold (horizontal line, Eq. E4); training subgroups
+/// hollow, out-of-control ones crossed, the alarm (Eq. E5) a vertical line.
+/// A note when the run has no chart.
+pub fn control_chart_section(c: &RunCompensation, origin: i64) -> String {
+    let head = "<h2 id=\"control-chart\">Control chart (environmental compensation)</h2>\n";
+    let Some(chart_of) = &c.chart else {
+        let why = if c.warnings.is_empty() {
+            "the run was not compensated".to_string()
+        } else {
+            c.warnings.join("; ")
+        };
+        return format!(
+            "{head}<p class=\"note\">No control chart: {}</p>\n",
+            escape(&why)
+        );
+    };
+    let hours = |ns: i64| (ns - origin) as f64 / NS_PER_H;
+    let (mut training, mut in_control, mut out) = (Vec::new(), Vec::new(), Vec::new());
+    for g in &c.subgroups {
+        let Some(t2) = g.statistic else { continue };
+        let point = (0.5 * (hours(g.start_ns) + hours(g.end_ns)), t2);
+        match (g.training, g.out_of_control) {
+            (true, _) => training.push(point),
+            (false, Some(true)) => out.push(point),
+            _ => in_control.push(point),
+        }
+    }
+    let all: Vec<f64> = training
+        .iter()
+        .chain(&in_control)
+        .chain(&out)
+        .map(|p| p.1)
+        .collect();
+    if all.is_empty() {
+        return format!("{head}<p class=\"note\">No subgroup is charted.</p>\n");
+    }
+    let hi = all.iter().fold(chart_of.threshold, |a, &b| a.max(b));
+    let end = c.subgroups.last().map(|g| hours(g.end_ns)).unwrap_or(1.0);
+    let mut chart = Chart::new(
+        880,
+        260,
+        "time since the first window (h)",
+        "T² of the subgroup",
+    );
+    chart.x_range = Some((0.0, end.max(1e-9)));
+    chart.y_range = Some((0.0, 1.08 * hi));
+    for (name, points, colour, mark) in [
+        ("training", training, 6, Mark::HollowCircle),
+        ("in control", in_control, IDENTIFIED, Mark::FilledCircle),
+        ("out of control (Eq. E4)", out, FLAGGED, Mark::Cross),
+    ] {
+        if !points.is_empty() {
+            chart.series.push(Series::new(name, points, colour, mark));
+        }
+    }
+    chart.ref_lines.push(RefLine {
+        at: chart_of.threshold,
+        horizontal: true,
+        colour: FLAGGED,
+    });
+    if let Some(g) = c.alarm_from.and_then(|i| c.subgroups.get(i)) {
+        chart.ref_lines.push(RefLine {
+            at: hours(g.start_ns),
+            horizontal: false,
+            colour: FLAGGED,
+        });
+    }
+    let figure = match render(&chart) {
+        Ok(svg) => format!("{svg}{}", super::plot::legend(&chart.series)),
+        Err(e) => format!("<p class=\"note\">No chart: {}</p>", escape(&e)),
+    };
+    format!(
+        "{head}<p class=\"note\">Model `{}`; horizontal line: the threshold {} (k = {}, α = {}); vertical line: the alarm{}.</p>\n<figure>{figure}</figure>\n",
+        escape(&c.model),
+        format_number(chart_of.threshold),
+        chart_of.dof,
+        chart_of.false_alarm_rate,
+        c.alarm_from
+            .and_then(|i| c.subgroups.get(i))
+            .map(|g| format!(" from {}", escape(&format_epoch_ns(g.start_ns))))
+            .unwrap_or_else(|| " (none)".into()),
+    )
+}
+
 /// The whole page.
 pub fn page(t: &Tracking, units: &str, streams: &[String]) -> String {
     let origin = t.windows.first().map(|w| w.start_ns).unwrap_or(0);
@@ -189,6 +278,7 @@ pub fn page(t: &Tracking, units: &str, streams: &[String]) -> String {
             mode_chart(t, k + 1, origin)
         ));
     }
+    p.push_str(&control_chart_section(&t.compensation, origin));
     let skipped: Vec<String> = t
         .windows
         .iter()

@@ -7,6 +7,7 @@
 use std::path::Path;
 
 use super::parquet::{write_parquet, TableBuilder};
+use crate::assessment::change_test::ChangeTestEvidence;
 use crate::assessment::frequency::TrackRows;
 use crate::assessment::{Assessment, IndicatorKind};
 use crate::error::Result;
@@ -82,6 +83,10 @@ pub fn write_assessment(path: &Path, event: &Event, row: &Assessment) -> Result<
         .and_then(|i| i.state)
         .filter(|_| row.probabilities.is_some())
         .map(|s| s.ems98_grade());
+    let change_p_value = match &row.change_test {
+        Some(ChangeTestEvidence::Tested { p_value, .. }) => Some(*p_value),
+        _ => None,
+    };
     let batch = TableBuilder::new(&ASSESSMENT)
         .str(a::EVENT, &[row.event.as_str()])
         .opt_str(a::STRUCTURE, &[row.structure.as_deref()])
@@ -139,6 +144,13 @@ pub fn write_assessment(path: &Path, event: &Event, row: &Assessment) -> Result<
         .opt_f64(a::RESIDUAL_DRIFT_RATIO, value(IndicatorKind::ResidualDrift))
         .opt_str(a::RESIDUAL_STATE, &state(IndicatorKind::ResidualDrift))
         .str(a::RESIDUAL_VERDICT, &verdict(IndicatorKind::ResidualDrift))
+        .opt_f64(a::CHANGE_TEST_RATIO, value(IndicatorKind::ChangeTest))
+        .opt_f64(a::CHANGE_TEST_P_VALUE, vec![change_p_value])
+        .opt_str(a::CHANGE_TEST_STATE, &state(IndicatorKind::ChangeTest))
+        .opt_str(
+            a::CHANGE_TEST_VERDICT,
+            &[ind(IndicatorKind::ChangeTest).map(|i| i.verdict.as_str())],
+        )
         .list_str(a::ASSUMPTIONS, std::slice::from_ref(&row.assumptions))
         .build()?;
     write_parquet(

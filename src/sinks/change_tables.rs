@@ -7,6 +7,7 @@ use std::path::Path;
 use super::modal_tables::OUTPUT_CHANNELS_KEY;
 use super::parquet::{write_parquet, TableBuilder};
 use super::provenance::Provenance;
+use crate::assessment::change_test::ChangeTestEvidence;
 use crate::error::{Error, Result};
 use crate::modal::change_test::{ChangeTestResult, CovarianceBlocks};
 use crate::vocab::tables::{
@@ -189,4 +190,45 @@ pub fn write_change_test(
         ));
     }
     write_parquet(path, &[batch], &metadata)
+}
+
+/// The test a run's `change_test/change_test.parquet` holds, as the
+/// assessment's evidence (`crate::assessment::change_test`): `None` when
+/// the file is absent (the run had no reference); a table without rows
+/// (no test could be made) gives its note as the reason.
+pub fn read_change_test_evidence(dir: &Path) -> Result<Option<ChangeTestEvidence>> {
+    use arrow_array::{Array, BooleanArray, Float64Array};
+    let path = CHANGE_TEST.locate(dir);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let table = super::parquet::ReadTable::open(&path)?;
+    let Some(b) = table.batches.iter().find(|b| b.num_rows() > 0) else {
+        let reason = table
+            .metadata("quaketwin.note")
+            .unwrap_or("the change test table holds no row")
+            .to_string();
+        return Ok(Some(ChangeTestEvidence::NotTested { reason }));
+    };
+    let number = |spec| -> Result<f64> { Ok(table.declared::<Float64Array>(b, spec)?.value(0)) };
+    let changed = table.declared::<BooleanArray>(b, &ct::CHANGED)?;
+    // Eq. C8's shares, as write_change_test stores them.
+    let leading_mode = table
+        .metadata("quaketwin.mode_contributions")
+        .and_then(|v| serde_json::from_str::<serde_json::Value>(v).ok())
+        .and_then(|v| {
+            v["modes"]
+                .as_array()?
+                .iter()
+                .filter_map(|m| Some((m["frequency_hz"].as_f64()?, m["contribution"].as_f64()?)))
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+        });
+    Ok(Some(ChangeTestEvidence::Tested {
+        statistic: number(&ct::STATISTIC)?,
+        threshold: number(&ct::THRESHOLD)?,
+        p_value: number(&ct::P_VALUE)?,
+        false_alarm_rate: number(&ct::FALSE_ALARM_RATE)?,
+        changed: !changed.is_null(0) && changed.value(0),
+        leading_mode,
+    }))
 }

@@ -7,6 +7,7 @@
 //! `pipeline::Stage` trait.
 
 pub mod assess;
+pub mod assess_evidence;
 pub mod change;
 pub mod compare_test;
 pub mod condition;

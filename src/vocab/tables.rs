@@ -587,6 +587,10 @@ declare!(ASSESSMENT, assessment, "assessment", "assessment/assessment.parquet",
     RESIDUAL_DRIFT_RATIO: "residual_drift_ratio", F64, nullable, "1", "largest resolved residual drift ratio (absolute)";
     RESIDUAL_STATE: "residual_state", Utf8, nullable, "", "its damage state; null when not rated";
     RESIDUAL_VERDICT: "residual_verdict", Utf8, required, "", "the residual-drift indicator's verdict, or `not rated: <reason>`";
+    CHANGE_TEST_RATIO: "change_test_ratio", F64, nullable, "1", "χ² statistic / threshold of the subspace change test against the reference run (change_test/change_test.parquet, docs/statistics.md Eq. C6): > 1 is a detected change; null without a reference or when no test could be made";
+    CHANGE_TEST_P_VALUE: "change_test_p_value", F64, nullable, "1", "the test's p-value: probability of a statistic at least this large in the reference state";
+    CHANGE_TEST_STATE: "change_test_state", Utf8, nullable, "", "`slight` when the change is detected at the test's false-alarm rate (at most slight: a reason to inspect), `none` when not; null when not rated";
+    CHANGE_TEST_VERDICT: "change_test_verdict", Utf8, nullable, "", "the change-test indicator's verdict, or `not rated: <reason>`; null when the run had no reference";
     ASSUMPTIONS: "assumptions", ListUtf8, required, "", "what the assessment assumed: a default building type, an assumed storey height, a roof level…";
 });
 

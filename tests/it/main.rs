@@ -15,6 +15,7 @@ mod architecture;
 
 mod apparent_frequency;
 mod assessment;
+mod assessment_change;
 mod assessment_pipeline;
 
 mod big_input;

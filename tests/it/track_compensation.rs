@@ -117,6 +117,30 @@ fn compensation_of_a_run_charts_days_and_finds_the_damage() {
     }
 }
 
+/// tracking.html's control chart: the subgroups after training in and out
+/// of control (the damage from day 20: six days out), the threshold and the
+/// alarm's date named.
+#[test]
+fn control_chart_is_drawn_with_its_threshold_and_alarm() {
+    let (c, _) = chart(26, 7, true);
+    let origin = c.subgroups[0].start_ns;
+    let html = quaketwin::report::tracking::control_chart_section(&c, origin);
+    assert!(html.contains("<svg"), "{html}");
+    for label in ["training", "in control", "out of control (Eq. E4)"] {
+        assert!(html.contains(label), "{label}: {html}");
+    }
+    let threshold = c.chart.as_ref().unwrap().threshold;
+    assert!(
+        html.contains(&quaketwin::report::format_number(threshold)),
+        "{html}"
+    );
+    let alarm = quaketwin::vocab::format_epoch_ns(c.subgroups[20].start_ns);
+    assert!(html.contains(&format!("the alarm from {alarm}")), "{html}");
+    // Without a chart: said, no figure.
+    let none = quaketwin::report::tracking::control_chart_section(&Default::default(), 0);
+    assert!(none.contains("No control chart") && !none.contains("<svg"));
+}
+
 /// A short training period: a warning (one day: fewer than two
 /// subgroups), and with fewer windows than the chart needs (m + 5) no
 /// chart, said, and no subgroup.

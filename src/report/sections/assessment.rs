@@ -100,7 +100,7 @@ impl AssessmentView {
                 .all(Option::is_some)
                 .then(|| probabilities.map(|p| p.unwrap_or(f64::NAN))),
             ems98_grade: text(t, a::EMS98_GRADE.name),
-            indicators: vec![
+            indicators: [
                 indicator(
                     "peak drift",
                     a::DRIFT_RATIO.name,
@@ -125,7 +125,18 @@ impl AssessmentView {
                     a::RESIDUAL_STATE.name,
                     a::RESIDUAL_VERDICT.name,
                 ),
-            ],
+            ]
+            .into_iter()
+            // The change test only when the run had a reference.
+            .chain(text(t, a::CHANGE_TEST_VERDICT.name).map(|_| {
+                indicator(
+                    "subspace change test (χ² / threshold)",
+                    a::CHANGE_TEST_RATIO.name,
+                    a::CHANGE_TEST_STATE.name,
+                    a::CHANGE_TEST_VERDICT.name,
+                )
+            }))
+            .collect(),
             frequency_before_hz: num(t, a::FREQUENCY_BEFORE_HZ.name),
             frequency_min_during_hz: num(t, a::FREQUENCY_MIN_DURING_HZ.name),
             frequency_after_hz: num(t, a::FREQUENCY_AFTER_HZ.name),
