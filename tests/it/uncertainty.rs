@@ -401,3 +401,82 @@ fn cost_on_the_fourteen_channel_event() {
         100.0 * (b / a - 1.0)
     );
 }
+
+/// The choice of Eq. S7 (docs/statistics.md): coverage of the 95 %
+/// intervals over 100 seeds for the valid-order σ alone, √(σ² + s²) (the
+/// rule) and √(σ² + s²/n) (n poles averaged).  Prints only.
+/// Run: `cargo test --test it uncertainty::coverage_variants -- --ignored --nocapture`
+#[test]
+#[ignore]
+fn coverage_variants_hundred_seeds() {
+    use rayon::prelude::*;
+    let truth = five_storey().modes().unwrap();
+    for (kind, method) in [("ssi-cov", Method::SsiCov), ("io", Method::Io)] {
+        let seeds: Vec<u64> = (1..=100).collect();
+        // per seed, per mode: (ef, ez, σf, σz, sf, sz, n)
+        let all: Vec<Vec<Option<[f64; 7]>>> = seeds
+            .par_iter()
+            .map(|&seed| {
+                let input = if method == Method::SsiCov {
+                    ambient_input_seeded(seed)
+                } else {
+                    earthquake_input_with_noise(seed, 30.0)
+                };
+                let settings = ModalSettings {
+                    method,
+                    ..Default::default()
+                };
+                let result = identify(&input, &settings).unwrap();
+                matched(&truth, &result.modes)
+                    .into_iter()
+                    .enumerate()
+                    .map(|(j, m)| {
+                        let m = m?;
+                        let d = m.data_std.as_ref()?;
+                        Some([
+                            m.frequency_hz - truth.frequencies_hz[j],
+                            m.damping_ratio - truth.damping_ratios[j],
+                            // σ_valid back from the reported √(σ_valid² + s²)
+                            (d.frequency_hz.powi(2) - m.frequency_std_hz.powi(2))
+                                .max(0.0)
+                                .sqrt(),
+                            (d.damping.powi(2) - m.damping_std.powi(2)).max(0.0).sqrt(),
+                            m.frequency_std_hz,
+                            m.damping_std,
+                            m.pole_count as f64,
+                        ])
+                    })
+                    .collect()
+            })
+            .collect();
+        let variants: [(&str, fn(f64, f64, f64) -> f64); 3] = [
+            ("σ_valid", |s, _, _| s),
+            ("√(σ² + s²)", |s, o, _| s.hypot(o)),
+            ("√(σ² + s²/n)", |s, o, n| s.hypot(o / n.sqrt())),
+        ];
+        for (name, rule) in variants {
+            eprintln!("{kind} {name}");
+            for j in 0..5 {
+                let (mut cf, mut cz, mut n) = (0, 0, 0);
+                for e in all.iter().filter_map(|e| e[j]) {
+                    n += 1;
+                    cf += (e[0].abs() <= 1.96 * rule(e[2], e[4], e[6])) as usize;
+                    cz += (e[1].abs() <= 1.96 * rule(e[3], e[5], e[6])) as usize;
+                }
+                let med = |k: usize| {
+                    let mut v: Vec<f64> = all.iter().filter_map(|e| e[j]).map(|e| e[k]).collect();
+                    quaketwin::stats::median_in_place(&mut v)
+                };
+                eprintln!(
+                    "  mode {}: f {cf}/{n} ζ {cz}/{n}   median σf {:.2e} sf {:.2e} σz {:.2e} sz {:.2e} n {:.0}",
+                    j + 1,
+                    med(2),
+                    med(4),
+                    med(3),
+                    med(5),
+                    med(6)
+                );
+            }
+        }
+    }
+}
