@@ -380,11 +380,7 @@ impl ControlChart {
                 directions,
                 ..
             } => {
-                let z: Vec<f64> = frequencies
-                    .iter()
-                    .zip(mean_hz)
-                    .map(|(f, f0)| f / f0 - 1.0)
-                    .collect();
+                let z = relative_deviations(frequencies, mean_hz);
                 directions
                     .iter()
                     .map(|d| d.iter().zip(&z).map(|(a, b)| a * b).sum())
@@ -420,11 +416,7 @@ impl ControlChart {
                 directions,
                 ..
             } => {
-                let z: Vec<f64> = frequencies
-                    .iter()
-                    .zip(mean_hz)
-                    .map(|(f, f0)| f / f0 - 1.0)
-                    .collect();
+                let z = relative_deviations(frequencies, mean_hz);
                 project_out(z, directions)
             }
         }
@@ -485,4 +477,13 @@ pub fn alarm_onset(
     min_run: usize,
 ) -> Option<usize> {
     super::anomaly::anomaly_onset(out_of_control, eligible, min_run)
+}
+
+/// z_w of (E2): each frequency's relative deviation from its training mean.
+fn relative_deviations(frequencies: &[f64], mean_hz: &[f64]) -> Vec<f64> {
+    frequencies
+        .iter()
+        .zip(mean_hz)
+        .map(|(f, f0)| f / f0 - 1.0)
+        .collect()
 }

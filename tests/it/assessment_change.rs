@@ -9,8 +9,7 @@
 use std::path::Path;
 
 use quaketwin::report::table::{load, Table};
-use quaketwin::rng::Rng;
-use quaketwin::synth::event::{sample_building, write_quake_event, QuakeEvent, SynthSettings};
+use quaketwin::synth::event::sample_building;
 use quaketwin::vocab::tables::{assessment as a, change_test as ct, ASSESSMENT, CHANGE_TEST};
 
 /// Storey-1 stiffness of the X direction in the second event.  The 8 % loss
@@ -49,20 +48,7 @@ inputs = ["as-recorded"]
 fn write_event(dir: &Path, retained_k1_x: f64, seed: u64) {
     let mut buildings = sample_building();
     buildings[0].1.storey_stiffness_n_per_m[0] *= retained_k1_x;
-    let settings = SynthSettings {
-        seed,
-        ..Default::default()
-    };
-    let ev = QuakeEvent {
-        name: &format!("synthetic quake {seed}"),
-        origin_time: "2026-03-01T00:00:00Z",
-        structure: "Sample 4-storey frame",
-        storey_heights_m: &quaketwin::synth::event::STOREY_HEIGHTS_M,
-        buildings: &buildings,
-        omit_channels: &[],
-        twin_toml: None,
-    };
-    write_quake_event(dir, &ev, &settings, &mut Rng::new(seed)).unwrap();
+    crate::common::write_sample_quake(dir, &buildings, seed, &[]);
 }
 
 fn run(pipeline: &Path, event: &Path, out: &Path, reference: Option<&Path>) {

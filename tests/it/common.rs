@@ -272,3 +272,28 @@ pub fn test_mode(f: f64, sd: f64, direction: &str, shape: &[f64]) -> quaketwin::
         data_std: None,
     }
 }
+
+/// Writes a seeded synthetic quake of `buildings` (the sample 4-storey frame's
+/// event, `quaketwin::synth::event`) into `dir`, without the `omit` channels.
+pub fn write_sample_quake(
+    dir: &std::path::Path,
+    buildings: &[(&str, quaketwin::synth::ShearBuilding)],
+    seed: u64,
+    omit: &[&str],
+) {
+    use quaketwin::synth::event::{write_quake_event, QuakeEvent, SynthSettings};
+    let settings = SynthSettings {
+        seed,
+        ..Default::default()
+    };
+    let ev = QuakeEvent {
+        name: &format!("synthetic quake {seed}"),
+        origin_time: "2026-03-01T00:00:00Z",
+        structure: "Sample 4-storey frame",
+        storey_heights_m: &quaketwin::synth::event::STOREY_HEIGHTS_M,
+        buildings,
+        omit_channels: omit,
+        twin_toml: None,
+    };
+    write_quake_event(dir, &ev, &settings, &mut quaketwin::rng::Rng::new(seed)).unwrap();
+}

@@ -9,8 +9,7 @@
 use std::path::{Path, PathBuf};
 
 use quaketwin::commands::{modal, ModalFlags};
-use quaketwin::rng::Rng;
-use quaketwin::synth::event::{sample_building, write_quake_event, QuakeEvent, SynthSettings};
+use quaketwin::synth::event::sample_building;
 use quaketwin::synth::ShearBuilding;
 
 /// Storey-1 stiffness of the X direction after the damage, as a fraction.
@@ -30,20 +29,7 @@ fn damaged() -> [(&'static str, ShearBuilding); 2] {
 
 /// Writes a synthetic quake of `buildings` (seeded) into `dir`, without `omit` channels.
 fn write_event(dir: &Path, buildings: &[(&str, ShearBuilding)], seed: u64, omit: &[&str]) {
-    let settings = SynthSettings {
-        seed,
-        ..Default::default()
-    };
-    let ev = QuakeEvent {
-        name: &format!("synthetic quake {seed}"),
-        origin_time: "2026-03-01T00:00:00Z",
-        structure: "Sample 4-storey frame",
-        storey_heights_m: &quaketwin::synth::event::STOREY_HEIGHTS_M,
-        buildings,
-        omit_channels: omit,
-        twin_toml: None,
-    };
-    write_quake_event(dir, &ev, &settings, &mut Rng::new(seed)).unwrap();
+    crate::common::write_sample_quake(dir, buildings, seed, omit);
 }
 
 /// `quaketwin modal EVENT --out OUT [--reference R]`.
