@@ -28,6 +28,7 @@ pub mod archive;
 pub mod csmip_writer;
 pub mod event;
 pub mod facade;
+pub mod five_storey;
 pub mod fourteen_channel;
 pub mod ground_motion;
 pub mod hybrid_log;

@@ -7,11 +7,10 @@ use quaketwin::modal::change_test::{
     covariance_blocks, reference_from, ChangeReference, ChangeTestResult, ChangeTestSettings,
     CovarianceBlocks, HankelShape,
 };
-use quaketwin::rng::Rng;
 use quaketwin::stats::{
     chi2_survival, chi2_upper_quantile, hotelling_survival, hotelling_upper_quantile,
 };
-use quaketwin::synth::{add_measurement_noise, ShearBuilding};
+use quaketwin::synth::ShearBuilding;
 use rayon::prelude::*;
 
 #[test]
@@ -41,16 +40,8 @@ fn ambient_record(
     rate_hz: f64,
     seed: u64,
 ) -> Vec<Vec<f64>> {
-    let mut rng = Rng::new(seed);
     let n = (seconds * rate_hz) as usize;
-    let response = building
-        .simulate_ambient(n, 1.0 / rate_hz, 1.0e4, &mut rng)
-        .unwrap();
-    response
-        .absolute_acceleration
-        .iter()
-        .map(|a| add_measurement_noise(a, 20.0, &mut rng))
-        .collect()
+    quaketwin::synth::five_storey::noisy_ambient(building, n, 1.0 / rate_hz, seed).unwrap()
 }
 
 /// The building with storey `storey` (0 = ground storey) `loss` softer.

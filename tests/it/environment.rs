@@ -367,24 +367,16 @@ fn synthetic_year_false_alarms_and_detection_delay() {
 #[ignore]
 fn estimator_scatter_of_one_hour_windows() {
     use quaketwin::modal::{identify, ModalInput, ModalSettings};
-    use quaketwin::synth::add_measurement_noise;
+    use quaketwin::synth::five_storey::noisy_ambient;
     use rayon::prelude::*;
     let truth = five_storey().modes().unwrap().frequencies_hz;
     let found: Vec<Vec<Option<f64>>> = (0..20u64)
         .into_par_iter()
         .map(|seed| {
-            let mut rng = Rng::new(500 + seed);
-            let r = five_storey()
-                .simulate_ambient(360_000, 0.01, 1.0e4, &mut rng)
-                .unwrap();
             let input = ModalInput {
                 dt: 0.01,
                 output_ids: (1..=5).map(|i| format!("L{i}")).collect(),
-                outputs: r
-                    .absolute_acceleration
-                    .iter()
-                    .map(|a| add_measurement_noise(a, 20.0, &mut rng))
-                    .collect(),
+                outputs: noisy_ambient(&five_storey(), 360_000, 0.01, 500 + seed).unwrap(),
                 ..Default::default()
             };
             let modes = identify(&input, &ModalSettings::default()).unwrap().modes;

@@ -17,11 +17,7 @@ use quaketwin::synth::{
 /// The 5-storey test building: f ≈ 2.0–12.4 Hz (T₁ ≈ 0.5 s, typical of five
 /// storeys), damping 1.5–4 %.
 pub fn five_storey() -> ShearBuilding {
-    ShearBuilding {
-        masses_kg: vec![4.0e5, 3.8e5, 3.6e5, 3.4e5, 3.0e5],
-        storey_stiffness_n_per_m: vec![7.2e8, 6.75e8, 6.3e8, 5.4e8, 4.5e8],
-        damping_ratios: vec![0.015, 0.02, 0.025, 0.03, 0.04],
-    }
+    quaketwin::synth::five_storey::five_storey_building()
 }
 
 struct Accuracy {
@@ -86,16 +82,8 @@ pub fn ambient_input() -> ModalInput {
 }
 
 pub fn ambient_input_seeded(seed: u64) -> ModalInput {
-    let building = five_storey();
-    let mut rng = Rng::new(seed);
-    let response = building
-        .simulate_ambient(60_000, 0.01, 1.0e4, &mut rng)
-        .unwrap();
-    let outputs = response
-        .absolute_acceleration
-        .iter()
-        .map(|a| add_measurement_noise(a, 20.0, &mut rng))
-        .collect();
+    let outputs =
+        quaketwin::synth::five_storey::noisy_ambient(&five_storey(), 60_000, 0.01, seed).unwrap();
     ModalInput {
         dt: 0.01,
         output_ids: (1..=5).map(|i| format!("L{i}")).collect(),
