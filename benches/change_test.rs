@@ -10,27 +10,12 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use quaketwin::modal::change_test::{
     covariance_blocks, reference_from, ChangeTestSettings, CovarianceBlocks, HankelShape,
 };
-use quaketwin::rng::Rng;
-use quaketwin::synth::{add_measurement_noise, ShearBuilding};
+use quaketwin::synth::five_storey::{five_storey_building, noisy_ambient};
 use std::hint::black_box;
 
-fn building() -> ShearBuilding {
-    ShearBuilding {
-        masses_kg: vec![4.0e5, 3.8e5, 3.6e5, 3.4e5, 3.0e5],
-        storey_stiffness_n_per_m: vec![7.2e8, 6.75e8, 6.3e8, 5.4e8, 4.5e8],
-        damping_ratios: vec![0.015, 0.02, 0.025, 0.03, 0.04],
-    }
-}
-
+/// One seeded hour of the 5-storey building's noisy floor accelerations.
 fn hour(seed: u64) -> Vec<Vec<f64>> {
-    let mut rng = Rng::new(seed);
-    let r = building()
-        .simulate_ambient(360_000, 0.01, 1.0e4, &mut rng)
-        .unwrap();
-    r.absolute_acceleration
-        .iter()
-        .map(|a| add_measurement_noise(a, 20.0, &mut rng))
-        .collect()
+    noisy_ambient(&five_storey_building(), 360_000, 0.01, seed).unwrap()
 }
 
 fn blocks(record: &[Vec<f64>], shape: HankelShape) -> CovarianceBlocks {

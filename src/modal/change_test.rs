@@ -138,15 +138,62 @@ pub struct CovarianceBlocks {
     pub mean: Vec<f64>,
     /// Samples of each block.
     pub block_samples: Vec<usize>,
+    /// Each block's mean channel variance over the record's (tr R₀,b / tr R₀;
+    /// 1 for a stationary record): the weights of (C4') — an earthquake
+    /// record's strong phase holds most of it in a few blocks.
+    pub block_power: Vec<f64>,
     /// The same per block (empty once [`CovarianceBlocks::without_blocks`]).
     pub blocks: Vec<Vec<f64>>,
 }
 
 impl CovarianceBlocks {
-    /// The record without its blocks: enough to be tested, not to be a reference.
+    /// The same covariances at lags in steps of `lag_step` samples, a
+    /// multiple of the record's own (lag i at the new step is lag
+    /// i·lag_step/own of the record's); `None` when `lag_step` is not a
+    /// multiple or no lag is left.  Two runs of one structure may decimate
+    /// differently (each event's rate is chosen from its own content): a
+    /// test between them uses the least common multiple of their steps.
+    pub fn at_lag_step(&self, lag_step: usize) -> Option<CovarianceBlocks> {
+        if lag_step == 0 || lag_step % self.lag_step != 0 {
+            return None;
+        }
+        let factor = lag_step / self.lag_step;
+        let max_lag = self.max_lag / factor;
+        if max_lag == 0 {
+            return None;
+        }
+        let l2 = self.channels * self.channels;
+        let pick = |v: &[f64]| -> Vec<f64> {
+            (1..=max_lag)
+                .flat_map(|i| v[(i * factor - 1) * l2..i * factor * l2].iter().copied())
+                .collect()
+        };
+        Some(CovarianceBlocks {
+            channels: self.channels,
+            max_lag,
+            lag_step,
+            samples: self.samples,
+            mean: pick(&self.mean),
+            block_samples: self.block_samples.clone(),
+            block_power: self.block_power.clone(),
+            blocks: self.blocks.iter().map(|b| pick(b)).collect(),
+        })
+    }
+
+    /// The blocks' relative powers P_b (all 1 when not kept: a table
+    /// written before they were).
+    pub fn powers(&self) -> Vec<f64> {
+        if self.block_power.len() == self.block_samples.len() && !self.block_power.is_empty() {
+            self.block_power.clone()
+        } else {
+            vec![1.0; self.block_samples.len().max(1)]
+        }
+    }
+
+    /// The record without its blocks (their powers kept, for C5'): enough
+    /// to be tested, not to be a reference.
     pub fn without_blocks(mut self) -> Self {
         self.blocks = Vec::new();
-        self.block_samples = Vec::new();
         self
     }
 
@@ -195,6 +242,7 @@ pub fn covariance_blocks(
         )));
     }
     let mut raw = Vec::with_capacity(blocks);
+    let mut powers = Vec::with_capacity(blocks);
     let mut variance = 0.0;
     for b in 0..blocks {
         let centred: Vec<Vec<f64>> = signals
@@ -205,11 +253,12 @@ pub fn covariance_blocks(
                 part.iter().map(|v| v - m).collect()
             })
             .collect();
-        variance += centred
+        let block_variance = centred
             .iter()
             .map(|x| dot(x, x) / block_len as f64)
             .sum::<f64>()
-            / (l * blocks) as f64;
+            / l as f64;
+        variance += block_variance / blocks as f64;
         // R_k[o, c] = Σ_t y_o[t + k] y_c[t] / (N − k), lag k = i·lag_step.
         let mut r = vec![0.0; max_lag * l * l];
         for i in 1..=max_lag {
@@ -222,6 +271,7 @@ pub fn covariance_blocks(
                 }
             }
         }
+        powers.push(block_variance);
         raw.push(r);
     }
     if !(variance > 0.0 && variance.is_finite()) {
@@ -247,6 +297,7 @@ pub fn covariance_blocks(
         samples: block_len * blocks,
         mean,
         block_samples: vec![block_len; blocks],
+        block_power: powers.iter().map(|p| p / variance).collect(),
         blocks: raw,
     })
 }
@@ -270,6 +321,10 @@ pub struct ChangeReference {
     pub covariance_dof: usize,
     /// N_ref.
     pub samples: usize,
+    /// κ of (C4'): the mean power² of the blocks Σ is estimated from.
+    scatter_power: f64,
+    /// κ of H₀'s estimation error: the records' κ weighted by their samples.
+    reference_power: f64,
     /// (C8): per mode (one per conjugate pair), μ_j and the real
     /// `cols`-vectors Re c_j, Im c_j, and the row-space map Cᵀ(CCᵀ)⁻¹Ψ
     /// (cols × n, complex) restricted to the pair's column.
@@ -446,34 +501,112 @@ pub fn reference_from(records: &[CovarianceBlocks], shape: HankelShape) -> Resul
     let gram_lambda: Vec<f64> = evd.S().column_vector().iter().copied().collect();
     let modes = mode_factors(&h0, rows, cols, l, n, u, &gram_lambda);
     let d = s_dim * cols;
-    let mut covariance = Mat::<f64>::zeros(d, d);
-    let mut dof = 0usize;
-    for r in records {
-        if r.blocks.len() < 2 {
-            continue;
-        }
-        let mean = residual(&null_space, &r.hankel(&r.mean, shape), rows, cols);
-        for (b, &nb) in r.blocks.iter().zip(&r.block_samples) {
-            let z = residual(&null_space, &r.hankel(b, shape), rows, cols);
-            let y: Vec<f64> = z
-                .iter()
-                .zip(&mean)
-                .map(|(a, m)| (a - m) * (nb as f64).sqrt())
-                .collect();
-            for j in 0..d {
-                let yj = y[j];
-                let col = covariance.col_mut(j);
-                for (c, yi) in col.iter_mut().zip(&y) {
-                    *c += yi * yj;
-                }
-            }
-        }
-        dof += r.blocks.len() - 1;
+    // Streamed, one block at a time: a long `track` training holds tens of
+    // thousands of blocks.
+    let s_ref = &null_space;
+    let centred_blocks = records
+        .iter()
+        .filter(|r| r.blocks.len() >= 2)
+        .flat_map(|r| {
+            let mean = residual(s_ref, &r.hankel(&r.mean, shape), rows, cols);
+            r.blocks.iter().zip(&r.block_samples).map(move |(b, &nb)| {
+                let z = residual(s_ref, &r.hankel(b, shape), rows, cols);
+                z.iter()
+                    .zip(&mean)
+                    .map(|(a, m)| (a - m) * (nb as f64).sqrt())
+                    .collect()
+            })
+        });
+    // (C4'): the blocks' scatter weighs each block by its power², so its
+    // degrees of freedom are Kish's effective count, not blocks − 1.
+    let dof = records
+        .iter()
+        .filter(|r| r.blocks.len() >= 2)
+        .map(|r| effective_blocks(&r.powers()) - 1.0)
+        .sum::<f64>()
+        .floor() as usize;
+    if dof < 4 {
+        let blocks: usize = records.iter().map(|r| r.blocks.len()).sum();
+        let effective: f64 = records.iter().map(|r| effective_blocks(&r.powers())).sum();
+        return Err(Error::usage(format!(
+            "change test: the reference's {blocks} blocks count as {effective:.1} (Eq. C4': their power² weights — an earthquake's strong phase fills few of them), {dof} degrees of freedom for the residual covariance where at least 4 are needed; the subspace test needs a long, steady excitation (ambient records, monitoring windows)"
+        )));
     }
+    let whitening = truncated_whitening(centred_blocks, d, dof, "residual")?;
+    // κ of Σ (the mean power² of its blocks) and of H₀'s error.
+    let all_powers: Vec<f64> = records
+        .iter()
+        .filter(|r| r.blocks.len() >= 2)
+        .flat_map(|r| r.powers())
+        .collect();
+    let scatter_power = mean_square(&all_powers);
+    let reference_power = records
+        .iter()
+        .map(|r| r.samples as f64 / total.max(1) as f64 * mean_square(&r.powers()))
+        .sum();
+    Ok(ChangeReference {
+        shape,
+        channels: l,
+        lag_step: first.lag_step,
+        reference_hankel: h0,
+        null_space,
+        dof: whitening.nrows(),
+        whitening,
+        covariance_dof: dof,
+        samples: total,
+        scatter_power,
+        reference_power,
+        modes,
+    })
+}
+
+/// Kish's effective number of blocks of a scatter whose terms are weighted
+/// by power²: (Σ w)² / Σ w², w = P_b² (C4').
+fn effective_blocks(powers: &[f64]) -> f64 {
+    let (sum, sum_sq) = powers
+        .iter()
+        .fold((0.0, 0.0), |(a, b), p| (a + p * p, b + p.powi(4)));
+    if sum_sq > 0.0 {
+        sum * sum / sum_sq
+    } else {
+        0.0
+    }
+}
+
+/// κ = the mean of P_b² (1 for a stationary record; C4').
+fn mean_square(powers: &[f64]) -> f64 {
+    if powers.is_empty() {
+        1.0
+    } else {
+        powers.iter().map(|p| p * p).sum::<f64>() / powers.len() as f64
+    }
+}
+
+/// (C4, C6): from `centred` vectors of length `d` (a block's √N_b-scaled
+/// deviation from its record's mean) with `dof` degrees of freedom, the
+/// covariance per sample Σ's W (k × d) with Σ⁺ = WᵀW, truncated to the k
+/// largest eigenvalues (k ≤ dof/2, λ > 10⁻¹⁰ λ_max).  `what` names the
+/// vector in errors.
+fn truncated_whitening(
+    centred: impl Iterator<Item = Vec<f64>>,
+    d: usize,
+    dof: usize,
+    what: &str,
+) -> Result<Mat<f64>> {
     if dof < 4 {
         return Err(Error::usage(format!(
-            "change test: the reference has {dof} degrees of freedom for the residual covariance (blocks − 1 per record): at least 4 needed"
+            "change test: the reference has {dof} degrees of freedom for the {what} covariance (blocks − 1 per record): at least 4 needed"
         )));
+    }
+    let mut covariance = Mat::<f64>::zeros(d, d);
+    for y in centred {
+        for j in 0..d {
+            let yj = y[j];
+            let col = covariance.col_mut(j);
+            for (c, yi) in col.iter_mut().zip(&y) {
+                *c += yi * yj;
+            }
+        }
     }
     let covariance = covariance * faer::Scale(1.0 / dof as f64);
     let evd = covariance
@@ -487,26 +620,15 @@ pub fn reference_from(records: &[CovarianceBlocks], shape: HankelShape) -> Resul
         .take(dof / 2)
         .collect();
     if keep.is_empty() {
-        return Err(Error::numerical(
-            "change test: the residual covariance is zero",
-        ));
+        return Err(Error::numerical(format!(
+            "change test: the {what} covariance is zero"
+        )));
     }
     let u = evd.U();
     let whitening = Mat::<f64>::from_fn(keep.len(), d, |r, c| {
         u[(c, keep[r])] / lambda[keep[r]].sqrt()
     });
-    Ok(ChangeReference {
-        shape,
-        channels: l,
-        lag_step: first.lag_step,
-        reference_hankel: h0,
-        null_space,
-        dof: keep.len(),
-        whitening,
-        covariance_dof: dof,
-        samples: total,
-        modes,
-    })
+    Ok(whitening)
 }
 
 /// The outcome of one test (C6, C7).
@@ -569,7 +691,10 @@ impl ChangeReference {
             .map(|(a, b)| a - b)
             .collect();
         let n = record.samples as f64;
-        let scale = (n / (1.0 + n / self.samples as f64)).sqrt();
+        // (C5'): Cov ζ = (κ_test + κ_ref N/N_ref) / κ_Σ · Σ.
+        let scale = (n * self.scatter_power
+            / (mean_square(&record.powers()) + self.reference_power * n / self.samples as f64))
+            .sqrt();
         let zeta: Vec<f64> = residual(&self.null_space, &centred, rows, cols)
             .into_iter()
             .map(|v| v * scale)

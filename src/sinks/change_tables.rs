@@ -28,16 +28,18 @@ pub fn write_change_reference(
     note: Option<&str>,
     provenance: &Provenance,
 ) -> Result<()> {
-    let (samples, blocks): (Vec<u32>, Vec<Vec<f64>>) = match c {
+    let (samples, blocks, powers): (Vec<u32>, Vec<Vec<f64>>, Vec<Option<f64>>) = match c {
         Some(c) => (
             c.block_samples.iter().map(|&n| n as u32).collect(),
             c.blocks.clone(),
+            c.powers().into_iter().map(Some).collect(),
         ),
-        None => (Vec::new(), Vec::new()),
+        None => (Vec::new(), Vec::new(), Vec::new()),
     };
     let batch = TableBuilder::new(&CHANGE_REFERENCE)
         .u32(cr::BLOCK.name, (0..blocks.len() as u32).collect())
         .u32(cr::BLOCK_SAMPLES.name, samples)
+        .opt_f64(cr::BLOCK_POWER.name, powers)
         .list_f64(cr::COVARIANCES.name, &blocks)
         .build()?;
     let mut metadata = provenance.metadata();
@@ -74,9 +76,15 @@ pub fn read_change_reference(path: &Path) -> Result<Option<(CovarianceBlocks, Ve
         .ok_or_else(|| Error::input(loc(), format!("metadata {LAG_STEP_KEY} missing")))?;
     let l = channels.len();
     let mut block_samples = Vec::new();
+    let mut block_power = Vec::new();
     let mut blocks = Vec::new();
     for b in &table.batches {
         let n = table.declared::<UInt32Array>(b, &cr::BLOCK_SAMPLES)?;
+        // Absent from tables written before it was kept: read as 1 (C4').
+        let power = match b.schema().index_of(cr::BLOCK_POWER.name) {
+            Ok(_) => Some(table.declared::<Float64Array>(b, &cr::BLOCK_POWER)?),
+            Err(_) => None,
+        };
         let lists = table.declared::<ListArray>(b, &cr::COVARIANCES)?;
         for i in 0..b.num_rows() {
             let values = lists.value(i);
@@ -95,7 +103,18 @@ pub fn read_change_reference(path: &Path) -> Result<Option<(CovarianceBlocks, Ve
                     ),
                 ));
             }
+            let p = power
+                .as_ref()
+                .and_then(|p| (!p.is_null(i)).then(|| p.value(i)))
+                .unwrap_or(1.0);
+            if !(p.is_finite() && p >= 0.0) {
+                return Err(Error::input(
+                    loc(),
+                    format!("block_power of block {i}: {p} is not a finite non-negative number"),
+                ));
+            }
             block_samples.push(n.value(i) as usize);
+            block_power.push(p);
             blocks.push(v);
         }
     }
@@ -117,6 +136,7 @@ pub fn read_change_reference(path: &Path) -> Result<Option<(CovarianceBlocks, Ve
             samples,
             mean,
             block_samples,
+            block_power,
             blocks,
         },
         channels,

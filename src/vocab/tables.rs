@@ -519,6 +519,7 @@ declare!(CHANGE_REFERENCE, change_reference, "change_reference", "change_referen
     "one row per block of the identified record: its normalised output covariances, what a later run's change test (`reference_modes`) builds the reference state from (docs/statistics.md Eqs. C1, C4); written by every `modal` run with 2–16 output channels, empty otherwise", {
     BLOCK: "block", U32, required, "", "0-based block of the record (consecutive, equal length)";
     BLOCK_SAMPLES: "block_samples", U32, required, "", "samples of the block";
+    BLOCK_POWER: "block_power", F64, nullable, "1", "the block's mean channel variance over the record's (1 for a stationary record): the weight of the block in the covariance of Eq. C4' (null in tables written before it was kept: read as 1)";
     COVARIANCES: "covariances", ListF64, required, "1", "R_k / (tr R₀ / l) of the block for k = 1…max_lag, entry (k − 1)·l² + o·l + c for output channel o and reference channel c (channel order: `quaketwin.output_channels`; max_lag: `quaketwin.max_lag`)";
 });
 
