@@ -287,8 +287,10 @@ fn print(label: &str, o: &Outcome) {
 /// fastest), training on the first 10 or 20, damage from day 30.
 /// Uncompensated, the season's drift makes false alarms; both
 /// compensations make none; trained on 20 days they detect the 1 % loss
-/// within 3 days (on 10, the damage lies 7 °C beyond the training mean and
-/// the leverage term of Eq. E3 widens the chart: printed, not asserted).
+/// within 3 days with the training error averaged, within 5 with it
+/// bounded (the default, Eq. E3: the damage lies ~5 °C beyond a short
+/// training's mean and the bound widens the chart there); on 10 days of
+/// training, detection is printed, not asserted.
 #[test]
 fn compensation_removes_the_season_and_keeps_the_damage_short_run() {
     let year = synthetic_year(60, 40 * 24, 30, &MEASURED_RELATIVE_STD, 7);
@@ -312,9 +314,21 @@ fn compensation_removes_the_season_and_keeps_the_damage_short_run() {
         o.before.0 >= 1,
         "the season should trouble the uncompensated band"
     );
-    for (name, (fa, delay)) in [("measured", o.measured), ("latent", o.latent)] {
+    for (name, (fa, delay)) in [
+        ("measured, averaged", o.measured_averaged),
+        ("latent, averaged", o.latent_averaged),
+    ] {
         assert_eq!(fa, 0, "{name}: false alarms");
         assert!(delay.is_some_and(|d| d <= 72), "{name}: delay {delay:?} h");
+    }
+    // The bounded chart (the default) pays for its guarantee where the
+    // model extrapolates: here 3 (E1) and 5 (E2) days.
+    for (name, (fa, delay)) in [("measured", o.measured), ("latent", o.latent)] {
+        assert_eq!(fa, 0, "{name}: false alarms");
+        assert!(
+            delay.is_some_and(|d| d <= 5 * 24),
+            "{name}: delay {delay:?} h"
+        );
     }
 }
 
@@ -322,7 +336,8 @@ fn compensation_removes_the_season_and_keeps_the_damage_short_run() {
 /// 60 days, damage from day 300, over 5 seeds (`QT_SEEDS=N` for more):
 /// false-alarm episodes per year before (stated, asserted > 1) and after
 /// the compensation — latent model (E2) and measured temperature (E1) —
-/// (≤ 1 each), detection within 3 days.
+/// (≤ 1 each), detection within 3 days.  Default 5 seeds (CI-independent,
+/// a few seconds); the figures of docs/statistics.md are from 100.
 ///
 /// Run: `cargo test --test it environment::synthetic_year -- --ignored --nocapture`
 #[test]
