@@ -35,27 +35,51 @@
 //!      hold the damage.)
 //! (E3) control chart on subgroups of w consecutive windows (w = 24: one
 //!      day of hourly windows; w = 1: each window): Hotelling's
-//!      T²_g = w (ē_g − ē)ᵀ S⁺ (ē_g − ē) / (1 + w/n + w h_g),
+//!      T²_g = w (ē_g − ē)ᵀ S⁺ (ē_g − ē),
 //!      ē_g the subgroup's mean residual, ē and S the n training residuals'
 //!      mean and covariance (S truncated to its rank k: m − 1 for E1, m − q
-//!      for E2), h_g = (x̄_g − x̄)ᵀ (Σ_w (x_w − x̄)(x_w − x̄)ᵀ)⁻¹ (x̄_g − x̄)
-//!      the leverage of the subgroup's mean regressor x̄_g (E1: the measured
+//!      for E2).  Beside its own scatter, ē_g − ē carries the error of the
+//!      fitted model — means, slopes (E1) or directions (E2) — which grows
+//!      with the leverage h_g = (x̄_g − x̄)ᵀ (Σ_w (x_w − x̄)(x_w − x̄)ᵀ)⁻¹
+//!      (x̄_g − x̄) of the subgroup's mean regressor x̄_g (E1: the measured
 //!      value T; E2: the q latent scores u_iᵀ z) among the training
-//!      windows' x_w.  The denominator is the subgroup mean's prediction
-//!      variance in units of S/w: its own scatter (1), the error of the
-//!      fitted means (w/n) and that of the fitted slopes or directions,
-//!      which grows with the distance from the training conditions (w h_g,
-//!      the leverage term of the band's Eq. M3; for E2 the principal
+//!      windows' x_w: its whitened size is w (1/n + h_g) χ²-ish, the
+//!      leverage term of the band's Eq. M3 (for E2 the principal
 //!      directions' estimation error, ≈ σ²/(n λ) per direction, leaks the
-//!      same way).  Threshold: the upper α quantile of T²(k, n − 1 − p),
-//!      Hotelling's T² with the covariance estimated on n − 1 − p degrees of
-//!      freedom, p regressors (Montgomery, *Introduction to Statistical
-//!      Quality Control*, the Phase II chart; `stats::hotelling_upper_quantile`).
-//!      Without the leverage term (`extrapolation_leverage` off, h_g = 0) a
-//!      chart trained in winter alarms in summer: the slopes' error, ~10⁻⁵
-//!      per °C per mode, is 2 × 10⁻⁴ at 30 °C from the training mean —
-//!      a daily mean's scatter (docs/statistics.md, "Synthetic year").
-//!      Why subgroups: a 1 % stiffness
+//!      same way).  That error is drawn once, at training, and every later
+//!      subgroup shares it.  [`TrainingError`] says how the chart treats it:
+//!      - `Bounded` (default, confidence 1 − γ = 99 %): given the training,
+//!        T²_g is non-central with λ_g = w b̃_gᵀ b̃_g, b̃_g the whitened bias;
+//!        b̃_g = A c_g, A the k × (p + 1) whitened errors of the fitted
+//!        intercepts and slopes (standard normal entries), |c_g|² = 1/n +
+//!        h_g, so λ_g ≤ w (1/n + h_g) ‖A‖²_F and ‖A‖²_F ~ χ²_{k(p+1)}: with
+//!        probability 1 − γ over trainings, for *every* subgroup at once,
+//!        λ_g ≤ λ̄_g = w (1/n + h_g) χ²_{k(p+1)}(1 − γ).  The threshold of
+//!        subgroup g is the upper α quantile of the non-central T²(k, n − 1
+//!        − p, λ̄_g) (`stats::noncentral_hotelling_upper_quantile`), its
+//!        p-value that distribution's survival (an upper bound of the
+//!        conditional one); the reported T²_g is rescaled by
+//!        threshold / that quantile, so that one threshold serves the chart.
+//!        The conditional false-alarm rate is then ≤ α per subgroup for all
+//!        but a share γ of trainings (the "guaranteed conditional
+//!        performance" of Gandy & Kvaløy 2013, Scand. J. Statist. 40; the
+//!        parameter-estimation effect on charts: Jensen et al. 2006, J.
+//!        Qual. Technol. 38).
+//!      - `Averaged`: the error as a random term of each subgroup, T²_g /
+//!        (1 + w/n + w h_g) against T²(k, n − 1 − p): α per subgroup on
+//!        average over trainings, but not for the one at hand — the shared
+//!        error makes a year's false alarms come in bunches (a 1-in-300
+//!        training: 6–14 in a year, docs/statistics.md "Synthetic year").
+//!      - `Ignored`: T²_g / (1 + w/n) (h_g = 0): a chart trained in winter
+//!        alarms all summer.
+//!      Threshold: the upper α quantile of T²(k, n − 1 − p), Hotelling's T²
+//!      with the covariance estimated on n − 1 − p degrees of freedom, p
+//!      regressors (Montgomery, *Introduction to Statistical Quality
+//!      Control*, the Phase II chart; `stats::hotelling_upper_quantile`).
+//!      Why subgroups: a 1 % stiffness loss changes the frequencies by
+//!      ~0.1 %, mostly along the environment's own direction; what the
+//!      model leaves of it is one window's scatter, a day's mean brings it
+//!      out (docs/statistics.md).
 //! (E4) a subgroup is out of control when T²_g exceeds the threshold;
 //! (E5) an alarm: at least `min_run` consecutive out-of-control subgroups
 //!      after training, dated at the first.
