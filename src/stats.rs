@@ -1,6 +1,7 @@
 //! Distribution functions of the statistical tests (generic special functions,
 //! no crate in the tree provides them): the F distribution's survival function
-//! through the regularised incomplete beta function, and ln Γ; the
+//! through the regularised incomplete beta function (central and non-central
+//! Hotelling's T², Eq. E3 of docs/statistics.md), and ln Γ; the
 //! least-squares fit with its prediction interval ([`LinearFit`]).
 
 // `!(x > 0.0)` checks deliberately reject NaN as well.
