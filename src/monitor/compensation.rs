@@ -194,7 +194,8 @@ pub fn compensate(
         let members: Vec<(&[f64], Option<f64>)> = (a..b)
             .filter_map(|i| charted[i].as_deref().map(|f| (f, out.environment[i])))
             .collect();
-        let statistic = (!members.is_empty()).then(|| chart.statistic(&members));
+        let test = (!members.is_empty()).then(|| chart.test(&members));
+        let statistic = test.map(|t| t.statistic);
         let is_training = b <= first_after;
         out.subgroups.push(Subgroup {
             first: a,
@@ -204,7 +205,7 @@ pub fn compensate(
             charted: members.len(),
             training: is_training,
             statistic,
-            p_value: statistic.map(|s| chart.p_value(s)),
+            p_value: test.map(|t| t.p_value),
             out_of_control: statistic
                 .filter(|_| !is_training)
                 .map(|s| s > chart.threshold),

@@ -507,9 +507,9 @@ declare!(CONTROL_CHART, control_chart, "control_chart", "control_chart/control_c
     CHARTED_WINDOWS: "charted_windows", U32, required, "", "of those, windows with every reference mode tracked (and a measured value): the ones the statistic averages";
     TRAINING: "training", Bool, required, "", "the subgroup lies in the training period (no out-of-control decision)";
     MODEL: "model", Utf8, required, "", "`measured` (regression on the measured series, Eq. E1) or `latent` (principal directions of the training frequencies, Eq. E2)";
-    STATISTIC: "statistic", F64, nullable, "1", "T²_g of Eq. E3; null when no window of the subgroup is charted";
-    THRESHOLD: "threshold", F64, required, "1", "upper α quantile of (1 + w/n) T²(k, n − 1) (Eq. E3; α = 0.1 % per subgroup)";
-    P_VALUE: "p_value", F64, nullable, "1", "probability of a statistic at least this large in the training state";
+    STATISTIC: "statistic", F64, nullable, "1", "T²_g of Eq. E3 (w dᵀS⁺d rescaled by the threshold over the subgroup's own: the α quantile of the non-central T² with the training error's bounded non-centrality); null when no window of the subgroup is charted";
+    THRESHOLD: "threshold", F64, required, "1", "upper α quantile of T²(k, n − 1 − p) (Eq. E3; α = 0.1 % per subgroup): every subgroup's statistic is rescaled onto it";
+    P_VALUE: "p_value", F64, nullable, "1", "probability of a statistic at least this large in the training state (an upper bound, for all but 1 % of trainings: Eq. E3)";
     DOF: "dof", I32, required, "", "k of Eq. E3: the rank of the residual covariance";
     OUT_OF_CONTROL: "out_of_control", Bool, nullable, "", "the statistic exceeds the threshold (Eq. E4); null for training or uncharted subgroups";
     ALARM: "alarm", Bool, required, "", "this subgroup starts the first alarm (Eq. E5)";
