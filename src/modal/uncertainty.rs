@@ -859,6 +859,24 @@ pub fn with_order_spread(valid_std: f64, order_spread: f64) -> f64 {
     }
 }
 
+/// Confidence of the intervals reported with the data-driven σ.
+pub const INTERVAL_CONFIDENCE: f64 = 0.95;
+
+/// The factor k of the 95 % interval θ̂ ± k σ of a data-driven σ from
+/// `blocks` blocks (Eq. S8 of docs/statistics.md): Student's
+/// t_{0.975, n_b − 1}, not the normal 1.96.  σ² is estimated from the
+/// n_b block matrices (Eq. S1), i.e. with n_b − 1 degrees of freedom, so
+/// (θ̂ − θ)/σ̂ is t-distributed, not normal: with 30 blocks ±1.96 σ̂
+/// covers 94.0 % instead of 95 %, with 20 blocks 93.5 %; the factor is
+/// 2.045 and 2.093 there.  NaN below 2 blocks (no σ is given below
+/// [`MIN_BLOCKS`] anyway).
+pub fn interval_factor(blocks: usize) -> f64 {
+    if blocks < 2 {
+        return f64::NAN;
+    }
+    crate::stats::student_t_upper_quantile(0.5 * (1.0 - INTERVAL_CONFIDENCE), (blocks - 1) as f64)
+}
+
 /// Central finite differences of a pole along each column of T, for the
 /// validation of the analytical sensitivities (tests/it/uncertainty.rs):
 /// `factorised(t, ε)` returns the factorised matrix perturbed by ε along

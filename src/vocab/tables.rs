@@ -184,7 +184,7 @@ declare!(MODES, modes, "modes", "modes/modes.parquet",
     DAMPING_STD: "damping_std", F64, required, "1", "order spread: standard deviation of the damping ratio over the poles of the cluster";
     FREQUENCY_STD_DATA_HZ: "frequency_std_data_hz", F64, nullable, "Hz", "data-driven standard deviation of `frequency_hz`: √(σ² + s²), σ the first-order propagation of the covariance of the factorised matrix (estimated from `uncertainty_blocks` blocks of the record) at the orders where it holds, s the order spread `frequency_std_hz` of the poles whose mean is reported (docs/statistics.md, Eqs. S6–S7); null when not computed (record too short for enough blocks, ssi-data, `uncertainty_blocks = 0`)";
     DAMPING_STD_DATA: "damping_std_data", F64, nullable, "1", "data-driven standard deviation of `damping_ratio` (as `frequency_std_data_hz`, with the order spread `damping_std`); null when not computed";
-    UNCERTAINTY_BLOCKS: "uncertainty_blocks", U32, nullable, "", "blocks the record was cut into for the data-driven standard deviations; null when they were not computed";
+    UNCERTAINTY_BLOCKS: "uncertainty_blocks", U32, nullable, "", "blocks the record was cut into for the data-driven standard deviations; their 95 % interval is value ± t × std, t = Student's t_{0.975, uncertainty_blocks − 1} (the std is estimated from these blocks: 2.045 for 30, 2.093 for 20; docs/statistics.md, Eq. S8); null when they were not computed";
     MPC: "mpc", F64, required, "1", "modal phase collinearity of the shape";
     MPD_DEG: "mpd_deg", F64, required, "deg", "mean phase deviation of the shape";
     MEAN_MAC: "mean_mac", F64, required, "1", "mean MAC of the cluster's poles to the mean shape";

@@ -11,8 +11,8 @@ use quaketwin::modal::ssi::{
     cholesky_lower, covariance_toeplitz, eigen_structure, thin_svd_subspace,
 };
 use quaketwin::modal::uncertainty::{
-    finite_difference_pole, io_sensitivity, l32_perturbations, po_moesp_blocks, po_moesp_l32,
-    ssi_cov_blocks, Sensitivity,
+    finite_difference_pole, interval_factor, io_sensitivity, l32_perturbations, po_moesp_blocks,
+    po_moesp_l32, ssi_cov_blocks, Sensitivity,
 };
 use quaketwin::modal::{identify, Method, ModalInput, ModalSettings, Mode};
 use quaketwin::synth::BuildingModes;
@@ -200,12 +200,13 @@ fn matched<'a>(truth: &BuildingModes, modes: &'a [Mode]) -> Vec<Option<&'a Mode>
 }
 
 /// Normalised errors (f̂ − f)/σ_f and (ζ̂ − ζ)/σ_ζ of one identification,
-/// per true mode (None: missed or no σ).
+/// per true mode, with the factor k of the 95 % interval θ̂ ± k σ
+/// (`uncertainty::interval_factor` of the σ's blocks; None: missed or no σ).
 fn normalised_errors(
     truth: &BuildingModes,
     input: &ModalInput,
     method: Method,
-) -> Vec<Option<(f64, f64)>> {
+) -> Vec<Option<(f64, f64, f64)>> {
     let settings = ModalSettings {
         method,
         ..Default::default()
@@ -220,6 +221,7 @@ fn normalised_errors(
             Some((
                 (m.frequency_hz - truth.frequencies_hz[j]) / d.frequency_hz,
                 (m.damping_ratio - truth.damping_ratios[j]) / d.damping,
+                interval_factor(d.blocks),
             ))
         })
         .collect()
@@ -238,7 +240,7 @@ fn ambient_normalised_errors_have_a_sensible_spread() {
         let errors = normalised_errors(&truth, &ambient_input_seeded(seed), Method::SsiCov);
         eprintln!("seed {seed}: {errors:?}");
         for (j, e) in errors.iter().enumerate() {
-            let (f, _) = e.unwrap_or_else(|| panic!("seed {seed}: mode {} without σ", j + 1));
+            let (f, _, _) = e.unwrap_or_else(|| panic!("seed {seed}: mode {} without σ", j + 1));
             zf.push(f);
         }
     }
@@ -247,7 +249,8 @@ fn ambient_normalised_errors_have_a_sensible_spread() {
     assert!((0.4..=2.0).contains(&rms), "rms {rms:.2}");
 }
 
-/// Coverage of the 95 % intervals f̂ ± 1.96 σ_f and ζ̂ ± 1.96 σ_ζ over
+/// Coverage of the 95 % intervals f̂ ± k σ_f and ζ̂ ± k σ_ζ
+/// (k = t_{0.975, n_b − 1}, Eq. S8 of docs/statistics.md) over
 /// `seeds` (in parallel), per mode: (covered f, covered ζ, identified with
 /// σ, rms of (f̂ − f)/σ_f, rms of (ζ̂ − ζ)/σ_ζ).
 fn coverage(
@@ -257,7 +260,7 @@ fn coverage(
 ) -> Vec<(usize, usize, usize, f64, f64)> {
     use rayon::prelude::*;
     let truth = five_storey().modes().unwrap();
-    let all: Vec<Vec<Option<(f64, f64)>>> = seeds
+    let all: Vec<Vec<Option<(f64, f64, f64)>>> = seeds
         .par_iter()
         .map(|&seed| normalised_errors(&truth, &input(seed), method))
         .collect();
@@ -268,15 +271,15 @@ fn coverage(
             method.name(),
             errors
                 .iter()
-                .map(|e| e.map_or("—".into(), |(f, z)| format!("{f:+.2} {z:+.2}")))
+                .map(|e| e.map_or("—".into(), |(f, z, _)| format!("{f:+.2} {z:+.2}")))
                 .collect::<Vec<_>>()
                 .join(" | ")
         );
         for (j, e) in errors.iter().enumerate() {
-            if let Some((f, z)) = e {
+            if let Some((f, z, k)) = e {
                 out[j].2 += 1;
-                out[j].0 += (f.abs() <= 1.96) as usize;
-                out[j].1 += (z.abs() <= 1.96) as usize;
+                out[j].0 += (f.abs() <= *k) as usize;
+                out[j].1 += (z.abs() <= *k) as usize;
                 out[j].3 += f * f;
                 out[j].4 += z * z;
             }
@@ -477,6 +480,108 @@ fn coverage_variants_hundred_seeds() {
                     med(6)
                 );
             }
+        }
+    }
+}
+
+/// The factor of the 95 % interval (Eq. S8): Student's t_{0.975, n_b − 1}
+/// against tabulated values (Abramowitz & Stegun, Table 26.10: 2.2622 for
+/// 9, 2.0930 for 19, 2.0452 for 29 degrees of freedom), tending to the
+/// normal 1.960 for many blocks; none below 2 blocks.
+#[test]
+fn interval_factor_is_students_t_of_the_blocks() {
+    for (blocks, t) in [(10, 2.2622), (20, 2.0930), (30, 2.0452), (200, 1.9720)] {
+        let k = interval_factor(blocks);
+        assert!((k - t).abs() < 5e-4, "{blocks} blocks: {k} against {t}");
+    }
+    assert!(interval_factor(1).is_nan());
+}
+
+/// The 40-s earthquake record of `earthquake_input_with_noise(seed, 30)`
+/// with the measured base input exact: the same floor records (the same
+/// noise: drawn first from the same generator), no noise on the input.
+fn earthquake_input_exact_base(seed: u64) -> ModalInput {
+    let mut input = earthquake_input_with_noise(seed, 30.0);
+    let (ag, dt) = crate::modal::earthquake_base_motion(seed);
+    let response = five_storey().simulate_base_motion(&ag, dt).unwrap();
+    input.inputs = vec![response.base_acceleration];
+    input
+}
+
+/// Diagnosis of the coverage study's cells (docs/statistics.md, "Why three
+/// cells missed"): per mode, over 100 seeds, the mean error against its
+/// standard error and against the median σ (a bias?), the error's
+/// standard deviation against the median σ (σ too small on the whole?),
+/// and the σ of the seeds whose interval missed (a few seeds with too
+/// small a σ?); for io also with the base input exact, the input's 30 dB
+/// noise's part.  Prints only.
+/// Run: `cargo test --test it uncertainty::coverage_diagnosis -- --ignored --nocapture`
+#[test]
+#[ignore]
+fn coverage_diagnosis_hundred_seeds() {
+    use rayon::prelude::*;
+    let truth = five_storey().modes().unwrap();
+    let seeds: Vec<u64> = (1..=100).collect();
+    let kinds: [(&str, Method, fn(u64) -> ModalInput); 3] = [
+        ("ssi-cov", Method::SsiCov, ambient_input_seeded),
+        ("io", Method::Io, |s| earthquake_input_with_noise(s, 30.0)),
+        ("io, exact input", Method::Io, earthquake_input_exact_base),
+    ];
+    for (kind, method, input) in kinds {
+        // per seed, per mode: (e_f, e_ζ, σ_f, σ_ζ, k)
+        let all: Vec<Vec<Option<[f64; 5]>>> = seeds
+            .par_iter()
+            .map(|&seed| {
+                let settings = ModalSettings {
+                    method,
+                    ..Default::default()
+                };
+                let result = identify(&input(seed), &settings).unwrap();
+                matched(&truth, &result.modes)
+                    .into_iter()
+                    .enumerate()
+                    .map(|(j, m)| {
+                        let m = m?;
+                        let d = m.data_std.as_ref()?;
+                        Some([
+                            m.frequency_hz - truth.frequencies_hz[j],
+                            m.damping_ratio - truth.damping_ratios[j],
+                            d.frequency_hz,
+                            d.damping,
+                            interval_factor(d.blocks),
+                        ])
+                    })
+                    .collect()
+            })
+            .collect();
+        eprintln!("{kind}: mean e / median σ (t of the mean), std e / median σ, covered, σ / median σ of the missed seeds");
+        for j in 0..5 {
+            let rows: Vec<[f64; 5]> = all.iter().filter_map(|e| e[j]).collect();
+            let n = rows.len() as f64;
+            let mut cells = Vec::new();
+            for (e, s) in [(0, 2), (1, 3)] {
+                let mean = rows.iter().map(|r| r[e]).sum::<f64>() / n;
+                let sd =
+                    (rows.iter().map(|r| (r[e] - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+                let mut sigmas: Vec<f64> = rows.iter().map(|r| r[s]).collect();
+                let med = quaketwin::stats::median_in_place(&mut sigmas);
+                let missed: Vec<f64> = rows
+                    .iter()
+                    .filter(|r| r[e].abs() > r[4] * r[s])
+                    .map(|r| r[s] / med)
+                    .collect();
+                let (lo, hi) = missed
+                    .iter()
+                    .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+                cells.push(format!(
+                    "{:+.2} (t {:+.1}), {:.2}, {:.0} %, {lo:.2}–{hi:.2}",
+                    mean / med,
+                    mean / (sd / n.sqrt()),
+                    sd / med,
+                    100.0 * (rows.len() - missed.len()) as f64 / n,
+                ));
+            }
+            eprintln!("  mode {}: f {} | ζ {}", j + 1, cells[0], cells[1]);
         }
     }
 }

@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use super::{figure, load, require, Loaded, Outputs};
+use crate::modal::uncertainty;
 use crate::report::html::{
     cells, column_notes, escape, format_number, missing_columns_note, note, table, Cell,
 };
@@ -135,19 +136,19 @@ pub(super) fn modal_section(dir: &Path, o: &Outputs, settings: &ReportSettings) 
             let bars = error_bars(modes);
             if !bars.is_empty() {
                 legend_series.push(Series::new(
-                    "95 % interval f ± 2σ (data-driven σ), above the mode's column",
+                    "95 % interval f ± t σ (data-driven σ, Student's t of its blocks), above the mode's column",
                     vec![],
                     1,
                     Mark::Line,
                 ));
             }
             let top = ocol.iter().flatten().fold(0.0f64, |a, b| a.max(*b));
-            for (f, sd, order) in &bars {
+            for (f, half, order) in &bars {
                 chart.series.push(Series::new(
                     "",
                     error_bar(
                         *f,
-                        2.0 * sd,
+                        *half,
                         (order + 2.0).min(top + 1.0),
                         0.01 * top.max(10.0),
                     ),
@@ -240,8 +241,10 @@ pub(super) fn modal_section(dir: &Path, o: &Outputs, settings: &ReportSettings) 
     body
 }
 
-/// (f, σ_f, highest order of the column) of every mode of `modes` with a
-/// data-driven σ (`frequency_std_data_hz`).
+/// (f, half-width of the 95 % interval, highest order of the column) of
+/// every mode of `modes` with a data-driven σ (`frequency_std_data_hz`):
+/// the half-width is t_{0.975, n_b − 1} σ, n_b = `uncertainty_blocks`
+/// (Eq. S8 of docs/statistics.md; 2σ for a table without that column).
 fn error_bars(modes: &Loaded) -> Vec<(f64, f64, f64)> {
     let Loaded::Ok(t) = modes else {
         return Vec::new();
@@ -253,12 +256,16 @@ fn error_bars(modes: &Loaded) -> Vec<(f64, f64, f64)> {
     ) else {
         return Vec::new();
     };
+    let blocks = t.number(modes::UNCERTAINTY_BLOCKS.name);
     (0..t.rows)
         .filter_map(|r| {
             let v = |c: &[Option<f64>]| c.get(r).copied().flatten();
-            Some((v(f)?, v(sd)?, v(order)?))
+            let factor = blocks
+                .and_then(v)
+                .map_or(2.0, |b| uncertainty::interval_factor(b as usize));
+            Some((v(f)?, factor * v(sd)?, v(order)?))
         })
-        .filter(|(f, sd, _)| f.is_finite() && sd.is_finite() && *sd >= 0.0)
+        .filter(|(f, half, _)| f.is_finite() && half.is_finite() && *half >= 0.0)
         .collect()
 }
 
