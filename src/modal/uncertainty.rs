@@ -50,10 +50,11 @@
 //! the derivative of the Cholesky factor), and dL₃₂ = L₃₂ Φ₂₂ + L₃₃ Φ₃₂.
 //! Analytical, like SSI-COV; [`finite_difference_pole`] checks both
 //! (tests/it/uncertainty.rs).  The modal stage uses the fast form
-//! [`io_sensitivity`] (a block's Gram is H_k H_kᵀ / c with c ≪ R columns:
-//! L⁻¹ G_k L⁻ᵀ = W Wᵀ / c, W = L⁻¹ H_k, applied straight to the singular
-//! vectors); [`l32_perturbations`] is the dense reference it is tested
-//! against.
+//! [`io_sensitivity`] (Eq. S1'' of docs/statistics.md: step 2 needs dL₃₂
+//! only through d(L₃₂L₃₂ᵀ), where Φ drops out; a block's Gram is
+//! H_k H_kᵀ / c with c ≪ R columns, L⁻¹ G_k L⁻ᵀ = W Wᵀ / c, W = L⁻¹ H_k,
+//! applied straight to the singular vectors); [`l32_perturbations`] is the
+//! dense reference it is tested against.
 //!
 //! Numerical code only; no I/O.
 
@@ -67,9 +68,12 @@ use super::ssi::{
 use super::Method;
 use crate::error::{Error, Result};
 use crate::stats::median_in_place;
+use faer::linalg::matmul::matmul;
 use faer::linalg::solvers::DenseSolveCore;
-use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
-use faer::{c64, Mat, MatRef, Par};
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+};
+use faer::{c64, Accum, Mat, MatRef, Par};
 
 /// Fewest blocks for a data-driven σ: with n_b blocks the σ itself carries
 /// a relative error of about 1/√(2 (n_b − 1)) (24 % at 10).  Below, the
@@ -278,74 +282,34 @@ pub fn l32_perturbations(
         .collect())
 }
 
-/// Rows of the Φ products formed together in [`io_sensitivity`]: the
-/// strict lower triangle of X = W₂W₂ᵀ/c is applied a row block at a time
-/// through prefix sums of W₂ᵀV₁ (and suffix sums of Ã₁W₂), never formed.
-const PHI_BLOCK: usize = 32;
-
-/// Φ(X) V (r₂ × n) and A Φ(X) (n × r₂) for X = W Wᵀ / c, Φ = the lower
-/// triangle with the diagonal halved (Eq. S1'), without forming the
-/// r₂ × r₂ matrix X: off the diagonal blocks, Σ_{J<I} X_IJ V_J =
-/// W_I (Σ_{J<I} W_Jᵀ V_J) / c (prefix sums) and Σ_{I>J} A_I X_IJ =
-/// (Σ_{I>J} A_I W_I) W_Jᵀ / c (suffix sums); only the β × β diagonal
-/// blocks of X are formed.  Cost 4 r₂ c n + r₂ β (c + 2n) instead of
-/// r₂² (c + 2n).
-fn phi_products(
-    w: MatRef<'_, f64>,
-    v: MatRef<'_, f64>,
-    a: MatRef<'_, f64>,
-    c: f64,
-) -> (Mat<f64>, Mat<f64>) {
-    let (r2, cols) = (w.nrows(), w.ncols());
-    let n = v.ncols();
-    let mut phi_v = Mat::<f64>::zeros(r2, n);
-    let mut a_phi = Mat::<f64>::zeros(n, r2);
-    let starts: Vec<usize> = (0..r2).step_by(PHI_BLOCK).collect();
-    let lower_half = |d: MatRef<'_, f64>| {
-        let b = d.nrows();
-        Mat::<f64>::from_fn(b, b, |i, j| match i.cmp(&j) {
-            std::cmp::Ordering::Greater => d[(i, j)] / c,
-            std::cmp::Ordering::Equal => 0.5 * d[(i, j)] / c,
-            std::cmp::Ordering::Less => 0.0,
-        })
-    };
-    let mut prefix = Mat::<f64>::zeros(cols, n);
-    for &i0 in &starts {
-        let b = PHI_BLOCK.min(r2 - i0);
-        let wi = w.subrows(i0, b);
-        let vi = v.subrows(i0, b);
-        let diag = lower_half((wi * wi.transpose()).as_ref());
-        let block = wi * &prefix * faer::Scale(1.0 / c) + &diag * vi;
-        phi_v.as_mut().subrows_mut(i0, b).copy_from(&block);
-        prefix += wi.transpose() * vi;
-    }
-    let mut suffix = Mat::<f64>::zeros(n, cols);
-    for &j0 in starts.iter().rev() {
-        let b = PHI_BLOCK.min(r2 - j0);
-        let wj = w.subrows(j0, b);
-        let aj = a.subcols(j0, b);
-        let diag = lower_half((wj * wj.transpose()).as_ref());
-        let block = &suffix * wj.transpose() * faer::Scale(1.0 / c) + aj * &diag;
-        a_phi.as_mut().subcols_mut(j0, b).copy_from(&block);
-        suffix += aj * wj;
-    }
-    (phi_v, a_phi)
+/// `a b` without thread hand-offs: the small products of one block or one
+/// pole run inside a rayon loop over blocks or modes, and faer's own
+/// parallel kernels nested there cost more in hand-offs than they gain.
+fn mul_seq(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let mut out = Mat::<f64>::zeros(a.nrows(), b.ncols());
+    matmul(out.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
+    out
 }
 
-/// Input–output, the fast form of Eq. S1' (docs/performance.md): the
-/// SVD-level products Y_t = Uᵀ dL₃₂,t V₁ and Z_t = U₁ᵀ dL₃₂,t V of every
-/// block straight from the block's c Hankel columns H_k (R × c), never
-/// forming dG_t, M or dL₃₂.  The block's Gram is H_k H_kᵀ / c, so with
-/// W = L⁻¹ H_k, L⁻¹ G_k L⁻ᵀ = W Wᵀ / c: M₂₂ = W₂W₂ᵀ/c, M₃₂ = W₃W₂ᵀ/c and
-/// L₃₃ W₃ = H₃ − L₃₁ W₁ − L₃₂ W₂ (block row 3 of L W = H_k), whence
-///   dL₃₂ = L₃₂ Φ(W₂W₂ᵀ/c) + (H₃ − L₃₁W₁ − L₃₂W₂) W₂ᵀ / c,
-/// applied to V₁ from the right and U₁ᵀ from the left with Uᵀ L₃₂ = S Vᵀ.
-/// The map G_k ↦ (Y, Z) is linear, so the centring of Eq. S1 is done on
-/// (Y, Z): Σ_t (G_k − Ḡ) = 0 makes that exact whatever Ḡ the factor L
-/// came from.  `cholesky` must be the L whose L₃₂ `subspace` is the SVD of
-/// (`Subspace::gram_cholesky`).  Cost per block ≈ (r₁+r₂)² c / 2 (the
-/// triangular solve) + 8 r₂ c n + 2 k r₂ n, against 2 R² r₂ for
-/// [`l32_perturbations`] (R = 784, c = 117, n = 42: ≈ 45 M against 480 M
+/// Input–output, the fast form of Eqs. S1'–S2 (docs/statistics.md,
+/// docs/performance.md): the products N_t = Uᵀ d(L₃₂L₃₂ᵀ)_t U₁ that K of
+/// Eq. S2 needs (K_ji = N_ji / (σ_i² − σ_j²)), for every block straight
+/// from its c Hankel columns H_k (R × c), never forming dG_t, M, Φ or dL₃₂.
+/// With dL₃₂ = L₃₂ Φ(M₂₂) + L₃₃ M₃₂ (Eq. S1') and M symmetric,
+/// d(L₃₂L₃₂ᵀ) = L₃₂ M₂₂ L₃₂ᵀ + L₃₃ M₃₂ L₃₂ᵀ + L₃₂ M₂₃ L₃₃ᵀ: the halved
+/// diagonal and the triangle of Φ drop out.  A block's Gram is
+/// H_k H_kᵀ / c, so M = W Wᵀ / c with W = L⁻¹ H_k, and with A = L₃₂ W₂,
+/// B = L₃₃ W₃ and P = A + B = H₃ − L₃₁ W₁ (block row 3 of L W = H_k):
+///   c · d(L₃₂L₃₂ᵀ) = A Aᵀ + B Aᵀ + A Bᵀ = P Aᵀ + A Bᵀ.
+/// With Uᵀ L₃₂ = S Vᵀ, Uᵀ A = Â E where E = H₂ − L₂₁ W₁ = L₂₂ W₂ and
+/// Â = S Vᵀ L₂₂⁻¹ (once per record), so W₂ is never formed either:
+///   c · N = Uᵀ P (Â₁ E)ᵀ + Â E (U₁ᵀ P − Â₁ E)ᵀ.
+/// The map G_k ↦ N is linear, so the centring of Eq. S1 is done on N:
+/// Σ_t (G_k − Ḡ) = 0 makes that exact whatever Ḡ the factor L came from.
+/// `cholesky` must be the L whose L₃₂ `subspace` is the SVD of
+/// (`Subspace::gram_cholesky`).  Cost per block ≈ r₁² c / 2 + (r₂ + r₃)
+/// r₁ c + 2 (r₂ + r₃) c n + k (r₂ + r₃) n, against 2 R² r₂ for
+/// [`l32_perturbations`] (R = 784, c = 117, n = 42: ≈ 22 M against 480 M
 /// multiply–adds).  `None` when U is not square (the part of ΔH outside
 /// span U would be needed: [`l32_perturbations`] then).
 pub fn io_sensitivity<'a>(
@@ -371,51 +335,75 @@ pub fn io_sensitivity<'a>(
     let rows = po_moesp_rows(m, l, p);
     let c = per_block as f64;
     let v = subspace.v.as_ref();
-    let v1 = v.subcols(0, n_max);
-    let u1t = u.subcols(0, n_max).transpose();
-    // Ã = Uᵀ L₃₂ = S Vᵀ (k × r₂), Ã₁ its first n_max rows.
     let s = &subspace.singular_values;
-    let a_tilde = Mat::<f64>::from_fn(k, r2, |i, j| s[i] * v[(j, i)]);
-    let a1 = a_tilde.as_ref().subrows(0, n_max);
-    let l12 = cholesky.submatrix(0, 0, r1 + r2, r1 + r2);
-    let l31 = cholesky.submatrix(r1 + r2, 0, r3, r1);
-    let u1t_l31 = u1t * l31;
-    let raw: Vec<(Mat<f64>, Mat<f64>)> = (0..blocks)
+    let u1t = u.subcols(0, n_max).transpose();
+    let l11 = cholesky.submatrix(0, 0, r1, r1);
+    let l22 = cholesky.submatrix(r1, r1, r2, r2);
+    // [L₂₁; L₃₁]: block rows 2 and 3 of L W = H_k, minus their W₁ part.
+    let l_23_1 = cholesky.submatrix(r1, 0, r2 + r3, r1);
+    // Âᵀ = L₂₂⁻ᵀ V S (r₂ × k), then [Uᵀ  Â] (k × (r₃ + r₂)) for the one
+    // product that gives N.
+    let mut a_hat_t = Mat::<f64>::from_fn(r2, k, |i, j| v[(i, j)] * s[j]);
+    solve_upper_triangular_in_place(
+        l22.transpose(),
+        a_hat_t.as_mut(),
+        faer::get_global_parallelism(),
+    );
+    let a_hat1 = a_hat_t.as_ref().subcols(0, n_max).transpose();
+    let ut_a_hat = Mat::<f64>::from_fn(k, r3 + r2, |i, j| {
+        if j < r3 {
+            u[(j, i)]
+        } else {
+            a_hat_t[(j - r3, i)]
+        }
+    });
+    let raw: Vec<Mat<f64>> = (0..blocks)
         .into_par_iter()
         .map(|b| {
             let start = b * per_block;
             let h = Mat::<f64>::from_fn(r1 + r2 + r3, per_block, |r, j| {
                 signals[rows[r].signal][start + j + rows[r].shift]
             });
-            let mut w = h.as_ref().subrows(0, r1 + r2).to_owned();
-            solve_lower_triangular_in_place(l12, w.as_mut(), Par::Seq);
-            let (w1, w2) = (w.as_ref().subrows(0, r1), w.as_ref().subrows(r1, r2));
-            let h3 = h.as_ref().subrows(r1 + r2, r3);
-            let (phi_v1, a1_phi) = phi_products(w2, v1, a1, c);
-            // Y = Ã (Φ V₁ − W₂G/c) + Uᵀ (H₃G − L₃₁W₁G)/c, G = W₂ᵀV₁.
-            let g = w2.transpose() * v1;
-            let left = phi_v1 - (w2 * &g) * faer::Scale(1.0 / c);
-            let right = (h3 * &g - l31 * (w1 * &g)) * faer::Scale(1.0 / c);
-            let y = &a_tilde * left + u.transpose() * right;
-            // Z = [Ã₁ Φ + (U₁ᵀH₃ − U₁ᵀL₃₁ W₁ − Ã₁W₂) W₂ᵀ/c] V.
-            let u1t_q = u1t * h3 - &u1t_l31 * w1 - a1 * w2;
-            let z = (a1_phi + (u1t_q * w2.transpose()) * faer::Scale(1.0 / c)) * v;
-            (y, z)
+            let mut w1 = h.as_ref().subrows(0, r1).to_owned();
+            solve_lower_triangular_in_place(l11, w1.as_mut(), Par::Seq);
+            // [E; P] = [H₂; H₃] − [L₂₁; L₃₁] W₁.
+            let mut ep = h.as_ref().subrows(r1, r2 + r3).to_owned();
+            matmul(ep.as_mut(), Accum::Add, l_23_1, w1.as_ref(), -1.0, Par::Seq);
+            let (e, pp) = (ep.as_ref().subrows(0, r2), ep.as_ref().subrows(r2, r3));
+            // F = Â₁ E = U₁ᵀ A; U₁ᵀ B = U₁ᵀ P − F.
+            let f = mul_seq(a_hat1, e);
+            let mut u1t_b = mul_seq(u1t, pp);
+            u1t_b -= &f;
+            // [P Fᵀ; E (U₁ᵀB)ᵀ] / c, then N = [Uᵀ  Â] times it.
+            let mut x = Mat::<f64>::zeros(r3 + r2, n_max);
+            matmul(
+                x.as_mut().subrows_mut(0, r3),
+                Accum::Replace,
+                pp,
+                f.transpose(),
+                1.0 / c,
+                Par::Seq,
+            );
+            matmul(
+                x.as_mut().subrows_mut(r3, r2),
+                Accum::Replace,
+                e,
+                u1t_b.transpose(),
+                1.0 / c,
+                Par::Seq,
+            );
+            mul_seq(ut_a_hat.as_ref(), x.as_ref())
         })
         .collect();
     let scale = 1.0 / ((blocks * (blocks - 1)) as f64).sqrt();
-    let (ys, zs): (Vec<Mat<f64>>, Vec<Mat<f64>>) = raw.into_iter().unzip();
-    let (_, y) = centre_scaled(ys, scale);
-    let (_, z) = centre_scaled(zs, scale);
+    let (_, products) = centre_scaled(raw, scale);
     Some(Sensitivity::with_products(
         subspace,
         n_max,
-        y,
-        z,
+        products,
         Vec::new(),
     ))
 }
-
 /// A pole's value and its first-order perturbation along each column of T.
 #[derive(Debug, Clone)]
 pub struct PoleSensitivity {
@@ -473,33 +461,68 @@ fn modal_deltas(mu: c64, d_mu: c64, dt: f64) -> (f64, f64) {
 }
 
 /// The SVD-level products of every column of T, shared by all poles of
-/// orders up to `n_max` (module doc, step 2): Y_t = Uᵀ ΔH_t V₁, Z_t =
-/// U₁ᵀ ΔH_t V, and (I − UUᵀ) ΔH_t V₁ when U is not square.
+/// orders up to `n_max` (module doc, step 2): N_t = Uᵀ d(HHᵀ)_t U₁
+/// (k × n_max), of which K_{ji} of Eq. S2 is N_ji / (σ_i² − σ_j²)
+/// (σ_i u_jᵀ ΔH v_i + σ_j u_iᵀ ΔH v_j = u_jᵀ (ΔH Hᵀ + H ΔHᵀ) u_i), and
+/// (I − UUᵀ) ΔH_t V₁ when U is not square.
 pub struct Sensitivity<'a> {
     subspace: &'a Subspace,
     n_max: usize,
-    y: Vec<Mat<f64>>,
-    z: Vec<Mat<f64>>,
+    products: Vec<Mat<f64>>,
     outside: Vec<Mat<f64>>,
     /// [`Self::cut_rotation`] per order 0..=n_max.
     cut_rotations: Vec<f64>,
+    /// What every pole of one order shares (realisation, eigenvectors),
+    /// computed once for all the modes that use the order.
+    orders: Vec<std::sync::OnceLock<Result<OrderWork>>>,
+}
+
+/// The realisation of one order and what its poles' sensitivities share.
+struct OrderWork {
+    a_rows: usize,
+    c: Mat<f64>,
+    /// Γ↑ and Γ↓ − Γ↑ A (Eq. S3).
+    up: Mat<f64>,
+    residual: Mat<f64>,
+    /// (Γ↑ᵀΓ↑)⁻¹.
+    gram_inv: Mat<f64>,
+    mus: Vec<c64>,
+    psi_all: Mat<c64>,
+    psi_inv: Mat<c64>,
+    /// S^{1/2} of the kept singular values.
+    sh: Vec<f64>,
+    /// 1 / (σ_q² − σ_{n+j}²), column q, row j (Eq. S2).
+    inv_gap: Mat<f64>,
+}
+
+/// (m re, m im) of a complex matrix.
+fn split(x: MatRef<'_, c64>) -> (Mat<f64>, Mat<f64>) {
+    (
+        Mat::<f64>::from_fn(x.nrows(), x.ncols(), |i, j| x[(i, j)].re),
+        Mat::<f64>::from_fn(x.nrows(), x.ncols(), |i, j| x[(i, j)].im),
+    )
+}
+
+/// m (re + i im) for a real m.
+fn real_times(m: MatRef<'_, f64>, re: MatRef<'_, f64>, im: MatRef<'_, f64>) -> Mat<c64> {
+    let (a, b) = (mul_seq(m, re), mul_seq(m, im));
+    Mat::<c64>::from_fn(a.nrows(), a.ncols(), |i, j| c64::new(a[(i, j)], b[(i, j)]))
 }
 
 impl<'a> Sensitivity<'a> {
     fn with_products(
         subspace: &'a Subspace,
         n_max: usize,
-        y: Vec<Mat<f64>>,
-        z: Vec<Mat<f64>>,
+        products: Vec<Mat<f64>>,
         outside: Vec<Mat<f64>>,
     ) -> Sensitivity<'a> {
         let mut s = Sensitivity {
             subspace,
             n_max,
-            y,
-            z,
+            products,
             outside,
             cut_rotations: Vec::new(),
+            orders: (0..=n_max).map(|_| std::sync::OnceLock::new()).collect(),
         };
         s.cut_rotations = s.all_cut_rotations();
         s
@@ -508,23 +531,27 @@ impl<'a> Sensitivity<'a> {
     /// `deltas`: the columns of T as matrices of the factorised matrix's shape.
     pub fn new(subspace: &'a Subspace, deltas: &[Mat<f64>], n_max: usize) -> Sensitivity<'a> {
         let k = subspace.singular_values.len();
+        let s = &subspace.singular_values;
         let n_max = n_max.min(k);
         let u = subspace.u.as_ref();
         let v = subspace.v.as_ref();
         let v1 = v.subcols(0, n_max);
         let u1t = u.subcols(0, n_max).transpose();
         let square = u.nrows() == k;
-        let (mut y, mut z, mut outside) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut products, mut outside) = (Vec::new(), Vec::new());
         for d in deltas {
             let x = d * v1;
-            let yt = u.transpose() * &x;
-            z.push((u1t * d) * v);
+            let y = u.transpose() * &x;
+            let z = (u1t * d) * v;
             if !square {
-                outside.push(&x - u * &yt);
+                outside.push(&x - u * &y);
             }
-            y.push(yt);
+            // N_ji = σ_i Y_ji + σ_j Z_ij.
+            products.push(Mat::<f64>::from_fn(k, n_max, |j, i| {
+                s[i] * y[(j, i)] + s[j] * z[(i, j)]
+            }));
         }
-        Sensitivity::with_products(subspace, n_max, y, z, outside)
+        Sensitivity::with_products(subspace, n_max, products, outside)
     }
 
     /// How far the first-order expansion of Eq. S2 can be trusted at
@@ -547,10 +574,11 @@ impl<'a> Sensitivity<'a> {
         let n_max = self.n_max.min(k.saturating_sub(1));
         // angle[i][j] for i < n_max, j in i+1..k.
         let mut angle = vec![vec![0.0f64; k]; n_max];
-        for (y, z) in self.y.iter().zip(&self.z) {
+        for products in &self.products {
             for (i, row) in angle.iter_mut().enumerate() {
+                let col = products.col_as_slice(i);
                 for (j, a) in row.iter_mut().enumerate().skip(i + 1) {
-                    let kv = (s[i] * y[(j, i)] + s[j] * z[(i, j)]) / (s[i] * s[i] - s[j] * s[j]);
+                    let kv = col[j] / (s[i] * s[i] - s[j] * s[j]);
                     *a += kv * kv;
                 }
             }
@@ -570,6 +598,51 @@ impl<'a> Sensitivity<'a> {
         out
     }
 
+    /// The realisation of order `n` and what its poles share, once.
+    fn order_work(&self, n: usize) -> Result<&OrderWork> {
+        self.orders[n]
+            .get_or_init(|| {
+                let sub = self.subspace;
+                let l = sub.outputs;
+                let a_rows = sub.u.nrows();
+                let k = sub.singular_values.len();
+                let s = &sub.singular_values;
+                let (a, c) = sub.realise(n)?;
+                let sh: Vec<f64> = s[..n].iter().map(|x| x.sqrt()).collect();
+                let gamma = Mat::<f64>::from_fn(a_rows, n, |i, j| sub.u[(i, j)] * sh[j]);
+                let up = gamma.as_ref().subrows(0, a_rows - l).to_owned();
+                let down = gamma.as_ref().subrows(l, a_rows - l);
+                let residual = down - mul_seq(up.as_ref(), a.as_ref());
+                let gram_inv = mul_seq(up.transpose(), up.as_ref())
+                    .partial_piv_lu()
+                    .inverse();
+                let eig = a.eigen().map_err(|e| {
+                    Error::numerical(format!("eigenvalues of the state matrix: {e:?}"))
+                })?;
+                let mus: Vec<c64> = eig.S().column_vector().iter().copied().collect();
+                let psi_all = eig.U().to_owned();
+                let psi_inv = psi_all.partial_piv_lu().inverse();
+                let inv_gap = Mat::<f64>::from_fn(k - n, n, |j, q| {
+                    let sj = s[n + j];
+                    1.0 / (s[q] * s[q] - sj * sj)
+                });
+                Ok(OrderWork {
+                    a_rows,
+                    c,
+                    up,
+                    residual,
+                    gram_inv,
+                    mus,
+                    psi_all,
+                    psi_inv,
+                    sh,
+                    inv_gap,
+                })
+            })
+            .as_ref()
+            .map_err(Error::duplicate)
+    }
+
     /// The pole of order `order` nearest (f, ζ), with its perturbation
     /// along each column of T (module doc, steps 2–5).
     pub fn pole(
@@ -587,32 +660,18 @@ impl<'a> Sensitivity<'a> {
                 self.n_max
             )));
         }
+        let w = self.order_work(n)?;
         let l = sub.outputs;
-        let a_rows = sub.u.nrows();
+        let a_rows = w.a_rows;
         let k = sub.singular_values.len();
-        let s = &sub.singular_values;
-        let (a, c) = sub.realise(n)?;
-        let sh: Vec<f64> = s[..n].iter().map(|x| x.sqrt()).collect();
-        let gamma = Mat::<f64>::from_fn(a_rows, n, |i, j| sub.u[(i, j)] * sh[j]);
-        let up = gamma.as_ref().subrows(0, a_rows - l);
-        let down = gamma.as_ref().subrows(l, a_rows - l);
-        let residual = down - up * &a;
-        let gram_inv = (up.transpose() * up).partial_piv_lu().inverse();
-        let eig = a
-            .eigen()
-            .map_err(|e| Error::numerical(format!("eigenvalues of the state matrix: {e:?}")))?;
-        let mus: Vec<c64> = eig.S().column_vector().iter().copied().collect();
-        let psi_all = eig.U().to_owned();
-        let i = matching_eigenvalue(&mus, frequency_hz, damping, dt).ok_or_else(|| {
+        let sh = &w.sh;
+        let mus = &w.mus;
+        let i = matching_eigenvalue(mus, frequency_hz, damping, dt).ok_or_else(|| {
             Error::numerical(format!("uncertainty: no oscillating pole at order {n}"))
         })?;
         let mu = mus[i];
         let (_, f, z) = continuous(mu, dt);
-        let psi_inv = psi_all.partial_piv_lu().inverse();
-        let psi: Vec<c64> = (0..n).map(|j| psi_all[(j, i)]).collect();
-        let cplx = |m: MatRef<'_, f64>| {
-            Mat::<c64>::from_fn(m.nrows(), m.ncols(), |r, q| c64::new(m[(r, q)], 0.0))
-        };
+        let psi: Vec<c64> = (0..n).map(|j| w.psi_all[(j, i)]).collect();
         let times = |m: MatRef<'_, f64>, x: &[c64]| -> Vec<c64> {
             (0..m.nrows())
                 .map(|r| (0..m.ncols()).map(|q| x[q] * m[(r, q)]).sum())
@@ -623,41 +682,39 @@ impl<'a> Sensitivity<'a> {
                 .map(|q| (0..m.nrows()).map(|r| x[r] * m[(r, q)]).sum())
                 .collect()
         };
-        let shape = times(c.as_ref(), &psi);
-        let rho = times(residual.as_ref(), &psi);
+        let shape = times(w.c.as_ref(), &psi);
+        let rho = times(w.residual.as_ref(), &psi);
         let u2 = sub.u.as_ref().subcols(n, k - n);
         let u2_rho = times_t(u2.subrows(0, a_rows - l), &rho);
-        let s_psi: Vec<c64> = psi.iter().zip(&sh).map(|(x, h)| x * *h).collect();
-        let is_psi: Vec<c64> = psi.iter().zip(&sh).map(|(x, h)| x / *h).collect();
-        let nb = self.y.len();
-        // Column t of `ks`: K_t S^{1/2} ψ; of `kr`: S^{1/2} K_tᵀ U₂↑ᵀ ρ.
-        let mut ks = Mat::<c64>::zeros(k - n, nb);
+        let s_psi: Vec<c64> = psi.iter().zip(sh).map(|(x, h)| x * *h).collect();
+        let is_psi: Vec<c64> = psi.iter().zip(sh).map(|(x, h)| x / *h).collect();
+        let nb = self.products.len();
+        // Column t of `ks`: K_t S^{1/2} ψ (real and imaginary parts); of
+        // `kr`: S^{1/2} K_tᵀ U₂↑ᵀ ρ.
+        let mut ks_re = Mat::<f64>::zeros(k - n, nb);
+        let mut ks_im = Mat::<f64>::zeros(k - n, nb);
         let mut kr = Mat::<c64>::zeros(n, nb);
         for t in 0..nb {
-            let (y, zt) = (&self.y[t], &self.z[t]);
-            for j in 0..k - n {
-                let sj = s[n + j];
-                let mut acc = c64::new(0.0, 0.0);
-                for q in 0..n {
-                    let den = s[q] * s[q] - sj * sj;
-                    let kv = (s[q] * y[(n + j, q)] + sj * zt[(q, n + j)]) / den;
-                    acc += s_psi[q] * kv;
-                    kr[(q, t)] += u2_rho[j] * (kv * sh[q]);
+            let products = &self.products[t];
+            let re = ks_re.col_as_slice_mut(t);
+            let im = ks_im.col_as_slice_mut(t);
+            for q in 0..n {
+                let dropped = &products.col_as_slice(q)[n..];
+                let gap = w.inv_gap.col_as_slice(q);
+                let (sp, mut acc) = (s_psi[q], c64::new(0.0, 0.0));
+                for j in 0..k - n {
+                    let kv = dropped[j] * gap[j];
+                    re[j] += sp.re * kv;
+                    im[j] += sp.im * kv;
+                    acc += u2_rho[j] * kv;
                 }
-                ks[(j, t)] = acc;
+                kr[(q, t)] = acc * sh[q];
             }
         }
         // ΔΓ ψ per column: U₂ K S^{1/2} ψ (+ the part outside span U).
         // Real products on the real and imaginary parts: U₂ is real, and a
         // complex copy of it per pole cost more than the product.
-        let real_times = |m: MatRef<'_, f64>, x: &Mat<c64>| -> Mat<c64> {
-            let re = m * Mat::<f64>::from_fn(x.nrows(), x.ncols(), |i, j| x[(i, j)].re);
-            let im = m * Mat::<f64>::from_fn(x.nrows(), x.ncols(), |i, j| x[(i, j)].im);
-            Mat::<c64>::from_fn(re.nrows(), re.ncols(), |i, j| {
-                c64::new(re[(i, j)], im[(i, j)])
-            })
-        };
-        let mut dgamma_psi = real_times(u2, &ks);
+        let mut dgamma_psi = real_times(u2, ks_re.as_ref(), ks_im.as_ref());
         if !self.outside.is_empty() {
             for t in 0..nb {
                 let o = self.outside[t].as_ref().subcols(0, n);
@@ -675,28 +732,48 @@ impl<'a> Sensitivity<'a> {
         let shifted = Mat::<c64>::from_fn(a_rows - l, nb, |r, t| {
             dgamma_psi[(r + l, t)] - mu * dgamma_psi[(r, t)]
         });
-        let rhs = real_times(up.transpose(), &shifted) + &kr;
-        let da_psi = real_times(gram_inv.as_ref(), &rhs);
-        let e = &psi_inv * &da_psi;
+        let (sr, si) = split(shifted.as_ref());
+        let rhs = real_times(w.up.transpose(), sr.as_ref(), si.as_ref()) + &kr;
+        let (rr, ri) = split(rhs.as_ref());
+        let da_psi = real_times(w.gram_inv.as_ref(), rr.as_ref(), ri.as_ref());
+        let mut e = Mat::<c64>::zeros(n, nb);
+        matmul(
+            e.as_mut(),
+            Accum::Replace,
+            w.psi_inv.as_ref(),
+            da_psi.as_ref(),
+            c64::new(1.0, 0.0),
+            Par::Seq,
+        );
+        // Δψ = Σ_{j≠i} ψ_j e_j / (μ_i − μ_j) for all columns at once, then C Δψ.
+        let coeff = Mat::<c64>::from_fn(n, nb, |j, t| {
+            if j == i {
+                c64::new(0.0, 0.0)
+            } else {
+                e[(j, t)] / (mu - mus[j])
+            }
+        });
+        let mut d_psi = Mat::<c64>::zeros(n, nb);
+        matmul(
+            d_psi.as_mut(),
+            Accum::Replace,
+            w.psi_all.as_ref(),
+            coeff.as_ref(),
+            c64::new(1.0, 0.0),
+            Par::Seq,
+        );
+        let (dr, di) = split(d_psi.as_ref());
+        let c_dpsi = real_times(w.c.as_ref(), dr.as_ref(), di.as_ref());
         let mut d_frequency = Vec::with_capacity(nb);
         let mut d_damping = Vec::with_capacity(nb);
         let mut d_shape = Vec::with_capacity(nb);
-        let c_c = cplx(c.as_ref());
         for t in 0..nb {
             let (df, dz) = modal_deltas(mu, e[(i, t)], dt);
             d_frequency.push(df);
             d_damping.push(dz);
-            let mut coeff = Mat::<c64>::zeros(n, 1);
-            for j in 0..n {
-                if j != i {
-                    coeff[(j, 0)] = e[(j, t)] / (mu - mus[j]);
-                }
-            }
-            let d_psi = &psi_all * &coeff;
-            let c_dpsi = &c_c * &d_psi;
             d_shape.push(
                 (0..l)
-                    .map(|r| dgamma_psi[(r, t)] + c_dpsi[(r, 0)])
+                    .map(|r| dgamma_psi[(r, t)] + c_dpsi[(r, t)])
                     .collect(),
             );
         }
@@ -838,7 +915,7 @@ pub fn mode_std(
         frequency_hz: with_order_spread(median_in_place(&mut sf), mode.frequency_std_hz),
         damping: with_order_spread(median_in_place(&mut sz), mode.damping_std),
         shape_modulus: sm.iter_mut().map(|v| median_in_place(v)).collect(),
-        blocks: sensitivity.y.len(),
+        blocks: sensitivity.products.len(),
     })
 }
 
@@ -1023,11 +1100,24 @@ pub fn of_modes(
             Sensitivity::new(id.subspace, &deltas, n_max)
         }
     };
-    for (m, mode) in modes.iter().enumerate() {
-        if members[m].is_empty() {
+    // The modes in parallel (each mode's σ is the same whatever the thread;
+    // the orders they share are realised once, `Sensitivity::order_work`).
+    let stds: Vec<Option<Result<ModeStd>>> = {
+        use rayon::prelude::*;
+        modes
+            .par_iter()
+            .enumerate()
+            .map(|(m, mode)| {
+                (!members[m].is_empty())
+                    .then(|| mode_std(&sensitivity, poles, &members[m], mode, id.dt))
+            })
+            .collect()
+    };
+    for (m, (mode, std)) in modes.iter().zip(stds).enumerate() {
+        let Some(std) = std else {
             continue;
-        }
-        match mode_std(&sensitivity, poles, &members[m], mode, id.dt) {
+        };
+        match std {
             Ok(s) if s.frequency_hz.is_finite() && s.damping.is_finite() => out.modes[m] = Some(s),
             Ok(_) => out.warnings.push(format!(
                 "data-driven σ of the {:.3} Hz mode not computed: not finite (coinciding singular values)",
