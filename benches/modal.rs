@@ -19,33 +19,17 @@ use quaketwin::modal::{
 };
 use quaketwin::rng::Rng;
 use quaketwin::stages::modal::{identify_and_write, ModalParams};
+use quaketwin::synth::five_storey::{five_storey_building, noisy_ambient};
 use quaketwin::synth::{
     add_measurement_noise, fourteen_channel_event, synthetic_ground_motion, GroundMotionSpec,
-    ShearBuilding,
 };
 use std::hint::black_box;
 
-fn five_storey() -> ShearBuilding {
-    ShearBuilding {
-        masses_kg: vec![4.0e5, 3.8e5, 3.6e5, 3.4e5, 3.0e5],
-        storey_stiffness_n_per_m: vec![7.2e8, 6.75e8, 6.3e8, 5.4e8, 4.5e8],
-        damping_ratios: vec![0.015, 0.02, 0.025, 0.03, 0.04],
-    }
-}
-
 fn ambient() -> ModalInput {
-    let mut rng = Rng::new(1);
-    let r = five_storey()
-        .simulate_ambient(60_000, 0.01, 1.0e4, &mut rng)
-        .unwrap();
     ModalInput {
         dt: 0.01,
         output_ids: (1..=5).map(|i| format!("L{i}")).collect(),
-        outputs: r
-            .absolute_acceleration
-            .iter()
-            .map(|a| add_measurement_noise(a, 20.0, &mut rng))
-            .collect(),
+        outputs: noisy_ambient(&five_storey_building(), 60_000, 0.01, 1).unwrap(),
         ..Default::default()
     }
 }
@@ -57,7 +41,7 @@ fn earthquake() -> ModalInput {
         ..Default::default()
     };
     let ag = synthetic_ground_motion(&params).unwrap();
-    let r = five_storey()
+    let r = five_storey_building()
         .simulate_base_motion(&ag, params.dt())
         .unwrap();
     let mut rng = Rng::new(99);
