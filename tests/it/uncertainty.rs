@@ -182,6 +182,30 @@ fn io_sensitivity_matches_finite_differences() {
 }
 
 /// Per true mode: the identified mode nearest in frequency (within 10 %).
+/// Identifies `input` with the default settings of `method` and maps each
+/// true mode's matched estimate (with its data σ) through `row`; `None` where
+/// no mode or no σ.  The studies' one identification per seed.
+fn per_true_mode<T>(
+    truth: &BuildingModes,
+    input: &ModalInput,
+    method: Method,
+    row: impl Fn(usize, &Mode, &quaketwin::modal::uncertainty::ModeStd) -> T,
+) -> Vec<Option<T>> {
+    let settings = ModalSettings {
+        method,
+        ..Default::default()
+    };
+    let result = identify(input, &settings).unwrap();
+    matched(truth, &result.modes)
+        .into_iter()
+        .enumerate()
+        .map(|(j, m)| {
+            let m = m?;
+            Some(row(j, m, m.data_std.as_ref()?))
+        })
+        .collect()
+}
+
 fn matched<'a>(truth: &BuildingModes, modes: &'a [Mode]) -> Vec<Option<&'a Mode>> {
     truth
         .frequencies_hz
@@ -207,24 +231,13 @@ fn normalised_errors(
     input: &ModalInput,
     method: Method,
 ) -> Vec<Option<(f64, f64, f64)>> {
-    let settings = ModalSettings {
-        method,
-        ..Default::default()
-    };
-    let result = identify(input, &settings).unwrap();
-    matched(truth, &result.modes)
-        .into_iter()
-        .enumerate()
-        .map(|(j, m)| {
-            let m = m?;
-            let d = m.data_std.as_ref()?;
-            Some((
-                (m.frequency_hz - truth.frequencies_hz[j]) / d.frequency_hz,
-                (m.damping_ratio - truth.damping_ratios[j]) / d.damping,
-                interval_factor(d.blocks),
-            ))
-        })
-        .collect()
+    per_true_mode(truth, input, method, |j, m, d| {
+        (
+            (m.frequency_hz - truth.frequencies_hz[j]) / d.frequency_hz,
+            (m.damping_ratio - truth.damping_ratios[j]) / d.damping,
+            interval_factor(d.blocks),
+        )
+    })
 }
 
 /// CI version of the coverage study: three seeds of the 600-s ambient
@@ -425,31 +438,20 @@ fn coverage_variants_hundred_seeds() {
                 } else {
                     earthquake_input_with_noise(seed, 30.0)
                 };
-                let settings = ModalSettings {
-                    method,
-                    ..Default::default()
-                };
-                let result = identify(&input, &settings).unwrap();
-                matched(&truth, &result.modes)
-                    .into_iter()
-                    .enumerate()
-                    .map(|(j, m)| {
-                        let m = m?;
-                        let d = m.data_std.as_ref()?;
-                        Some([
-                            m.frequency_hz - truth.frequencies_hz[j],
-                            m.damping_ratio - truth.damping_ratios[j],
-                            // σ_valid back from the reported √(σ_valid² + s²)
-                            (d.frequency_hz.powi(2) - m.frequency_std_hz.powi(2))
-                                .max(0.0)
-                                .sqrt(),
-                            (d.damping.powi(2) - m.damping_std.powi(2)).max(0.0).sqrt(),
-                            m.frequency_std_hz,
-                            m.damping_std,
-                            m.pole_count as f64,
-                        ])
-                    })
-                    .collect()
+                per_true_mode(&truth, &input, method, |j, m, d| {
+                    [
+                        m.frequency_hz - truth.frequencies_hz[j],
+                        m.damping_ratio - truth.damping_ratios[j],
+                        // σ_valid back from the reported √(σ_valid² + s²)
+                        (d.frequency_hz.powi(2) - m.frequency_std_hz.powi(2))
+                            .max(0.0)
+                            .sqrt(),
+                        (d.damping.powi(2) - m.damping_std.powi(2)).max(0.0).sqrt(),
+                        m.frequency_std_hz,
+                        m.damping_std,
+                        m.pole_count as f64,
+                    ]
+                })
             })
             .collect();
         let variants: [(&str, fn(f64, f64, f64) -> f64); 3] = [
@@ -532,26 +534,15 @@ fn coverage_diagnosis_hundred_seeds() {
         let all: Vec<Vec<Option<[f64; 5]>>> = seeds
             .par_iter()
             .map(|&seed| {
-                let settings = ModalSettings {
-                    method,
-                    ..Default::default()
-                };
-                let result = identify(&input(seed), &settings).unwrap();
-                matched(&truth, &result.modes)
-                    .into_iter()
-                    .enumerate()
-                    .map(|(j, m)| {
-                        let m = m?;
-                        let d = m.data_std.as_ref()?;
-                        Some([
-                            m.frequency_hz - truth.frequencies_hz[j],
-                            m.damping_ratio - truth.damping_ratios[j],
-                            d.frequency_hz,
-                            d.damping,
-                            interval_factor(d.blocks),
-                        ])
-                    })
-                    .collect()
+                per_true_mode(&truth, &input(seed), method, |j, m, d| {
+                    [
+                        m.frequency_hz - truth.frequencies_hz[j],
+                        m.damping_ratio - truth.damping_ratios[j],
+                        d.frequency_hz,
+                        d.damping,
+                        interval_factor(d.blocks),
+                    ]
+                })
             })
             .collect();
         eprintln!("{kind}: mean e / median σ (t of the mean), std e / median σ, covered, σ / median σ of the missed seeds");
