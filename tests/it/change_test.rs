@@ -203,6 +203,63 @@ fn change_test_refuses_a_record_of_another_shape() {
     assert!(e.contains("channels"), "{e}");
 }
 
+/// Two runs that decimated differently are compared at a common lag step:
+/// the covariances of a record kept every sample, taken every second lag,
+/// are those kept every second sample (the same blocks, the same lags), and
+/// a step that is not a multiple, or leaves no lag, is refused.
+#[test]
+fn covariances_at_a_coarser_lag_step_are_the_coarser_records() {
+    let r = ambient_record(&five_storey(), 120.0, 50.0, 3);
+    let views: Vec<&[f64]> = r.iter().map(|s| s.as_slice()).collect();
+    let fine = covariance_blocks(&views, 12, 1, 10).unwrap();
+    let coarse = covariance_blocks(&views, 6, 2, 10).unwrap();
+    let taken = fine.at_lag_step(2).unwrap();
+    assert_eq!((taken.max_lag, taken.lag_step), (6, 2));
+    assert_eq!(taken.mean, coarse.mean);
+    assert_eq!(taken.blocks, coarse.blocks);
+    assert_eq!(taken.block_power, coarse.block_power);
+    assert_eq!(taken.samples, coarse.samples);
+    // Every third lag of the fine record: lags 3, 6, 9, 12.
+    assert_eq!(fine.at_lag_step(3).unwrap().max_lag, 4);
+    assert!(coarse.at_lag_step(3).is_none(), "3 is not a multiple of 2");
+    assert!(fine.at_lag_step(13).is_none(), "no lag left");
+    // A stationary record's blocks have nearly equal powers (Eq. C4').
+    let mean_power = fine.block_power.iter().sum::<f64>() / 10.0;
+    assert!((mean_power - 1.0).abs() < 1e-12, "{mean_power}");
+    assert!(
+        fine.block_power.iter().all(|p| (p - 1.0).abs() < 0.2),
+        "{:?}",
+        fine.block_power
+    );
+}
+
+/// Eq. C4': a record whose power lies in one of its blocks (an earthquake's
+/// strong phase) has about one effective block, and no reference is built
+/// from it; the same record at a steady level is a reference.
+#[test]
+fn a_record_with_its_power_in_one_block_is_no_reference() {
+    let steady = ambient_record(&five_storey(), 600.0, 50.0, 4);
+    let block = steady[0].len() / 12;
+    let burst: Vec<Vec<f64>> = steady
+        .iter()
+        .map(|s| {
+            s.iter()
+                .enumerate()
+                .map(|(i, v)| if i / block == 5 { 30.0 * v } else { *v })
+                .collect()
+        })
+        .collect();
+    let of = |r: &[Vec<f64>]| {
+        let views: Vec<&[f64]> = r.iter().map(|s| s.as_slice()).collect();
+        covariance_blocks(&views, shape().max_lag(), lag_step(), 12).unwrap()
+    };
+    assert!(reference_from(&[of(&steady)], shape()).is_ok());
+    let e = reference_from(&[of(&burst)], shape())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("12 blocks count as 1.0"), "{e}");
+}
+
 fn env_count(name: &str, default: u64) -> u64 {
     std::env::var(name)
         .ok()
