@@ -16,7 +16,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::vocab::Record;
 
-fn gcd(a: usize, b: usize) -> usize {
+/// Greatest common divisor (also the lag steps of the change test's two records).
+pub(crate) fn gcd(a: usize, b: usize) -> usize {
     if b == 0 {
         a
     } else {

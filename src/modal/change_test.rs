@@ -519,25 +519,25 @@ pub fn reference_from(records: &[CovarianceBlocks], shape: HankelShape) -> Resul
         });
     // (C4'): the blocks' scatter weighs each block by its power², so its
     // degrees of freedom are Kish's effective count, not blocks − 1.
-    let dof = records
+    // Per record with a scatter: its blocks' powers and effective count.
+    let scattered: Vec<(&CovarianceBlocks, Vec<f64>)> = records
         .iter()
         .filter(|r| r.blocks.len() >= 2)
-        .map(|r| effective_blocks(&r.powers()) - 1.0)
-        .sum::<f64>()
-        .floor() as usize;
+        .map(|r| (r, r.powers()))
+        .collect();
+    let effective: f64 = scattered.iter().map(|(_, p)| effective_blocks(p)).sum();
+    let dof = (effective - scattered.len() as f64).max(0.0).floor() as usize;
     if dof < 4 {
         let blocks: usize = records.iter().map(|r| r.blocks.len()).sum();
-        let effective: f64 = records.iter().map(|r| effective_blocks(&r.powers())).sum();
         return Err(Error::usage(format!(
             "change test: the reference's {blocks} blocks count as {effective:.1} (Eq. C4': their power² weights — an earthquake's strong phase fills few of them), {dof} degrees of freedom for the residual covariance where at least 4 are needed; the subspace test needs a long, steady excitation (ambient records, monitoring windows)"
         )));
     }
-    let whitening = truncated_whitening(centred_blocks, d, dof, "residual")?;
+    let whitening = truncated_whitening(centred_blocks, d, dof)?;
     // κ of Σ (the mean power² of its blocks) and of H₀'s error.
-    let all_powers: Vec<f64> = records
+    let all_powers: Vec<f64> = scattered
         .iter()
-        .filter(|r| r.blocks.len() >= 2)
-        .flat_map(|r| r.powers())
+        .flat_map(|(_, p)| p.iter().copied())
         .collect();
     let scatter_power = mean_square(&all_powers);
     let reference_power = records
@@ -583,21 +583,15 @@ fn mean_square(powers: &[f64]) -> f64 {
 }
 
 /// (C4, C6): from `centred` vectors of length `d` (a block's √N_b-scaled
-/// deviation from its record's mean) with `dof` degrees of freedom, the
-/// covariance per sample Σ's W (k × d) with Σ⁺ = WᵀW, truncated to the k
-/// largest eigenvalues (k ≤ dof/2, λ > 10⁻¹⁰ λ_max).  `what` names the
-/// vector in errors.
+/// deviation from its record's mean) with `dof` (≥ 4, the caller checks)
+/// degrees of freedom, the covariance per sample Σ's W (k × d) with
+/// Σ⁺ = WᵀW, truncated to the k largest eigenvalues (k ≤ dof/2,
+/// λ > 10⁻¹⁰ λ_max).
 fn truncated_whitening(
     centred: impl Iterator<Item = Vec<f64>>,
     d: usize,
     dof: usize,
-    what: &str,
 ) -> Result<Mat<f64>> {
-    if dof < 4 {
-        return Err(Error::usage(format!(
-            "change test: the reference has {dof} degrees of freedom for the {what} covariance (blocks − 1 per record): at least 4 needed"
-        )));
-    }
     let mut covariance = Mat::<f64>::zeros(d, d);
     for y in centred {
         for j in 0..d {
@@ -620,9 +614,9 @@ fn truncated_whitening(
         .take(dof / 2)
         .collect();
     if keep.is_empty() {
-        return Err(Error::numerical(format!(
-            "change test: the {what} covariance is zero"
-        )));
+        return Err(Error::numerical(
+            "change test: the residual covariance is zero",
+        ));
     }
     let u = evd.U();
     let whitening = Mat::<f64>::from_fn(keep.len(), d, |r, c| {

@@ -149,7 +149,7 @@ fn test_against(
     let shape = HankelShape::for_order((2 * modes).clamp(2, DEFAULT_MAX_ORDER), channels.len());
     // One lag step for both records: their decimations may differ.
     let (a, b) = (blocks.lag_step, own.lag_step);
-    let step = a / gcd(a, b) * b;
+    let step = a / crate::conditioning::resample::gcd(a, b).max(1) * b;
     let (blocks, own) = match (blocks.at_lag_step(step), own.at_lag_step(step)) {
         (Some(r), Some(o)) if r.max_lag >= shape.max_lag() && o.max_lag >= shape.max_lag() => {
             (r, o)
@@ -165,13 +165,4 @@ fn test_against(
     reference
         .test(&own, false_alarm_rate)
         .map_err(|e| e.to_string())
-}
-
-/// Greatest common divisor (of two lag steps, ≥ 1).
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 {
-        a.max(1)
-    } else {
-        gcd(b, a % b)
-    }
 }
