@@ -316,6 +316,23 @@ pub fn student_t_upper_quantile(tail: f64, nu: f64) -> f64 {
     })
 }
 
+/// Kish's effective number of terms of a sum weighted by `weights`,
+/// (Σ w)² / Σ w²: n for equal weights, 1 when one term carries all.  The
+/// degrees of freedom of a scatter of blocks whose errors have unequal
+/// variances w follow from it (Satterthwaite): the change test's Eq. C4'
+/// (w = block power²) and the modal σ's Eq. S8' (docs/statistics.md).
+/// 0 when the weights are all zero or empty.
+pub fn kish_effective_count(weights: &[f64]) -> f64 {
+    let (sum, sum_sq) = weights
+        .iter()
+        .fold((0.0, 0.0), |(a, b), w| (a + w, b + w * w));
+    if sum_sq > 0.0 {
+        sum * sum / sum_sq
+    } else {
+        0.0
+    }
+}
+
 /// Median of `values` (reordered in place): the middle element, the upper
 /// of the two middle ones for an even count; 0 when empty.
 pub fn median_in_place(values: &mut [f64]) -> f64 {

@@ -563,14 +563,8 @@ pub fn reference_from(records: &[CovarianceBlocks], shape: HankelShape) -> Resul
 /// Kish's effective number of blocks of a scatter whose terms are weighted
 /// by power²: (Σ w)² / Σ w², w = P_b² (C4').
 fn effective_blocks(powers: &[f64]) -> f64 {
-    let (sum, sum_sq) = powers
-        .iter()
-        .fold((0.0, 0.0), |(a, b), p| (a + p * p, b + p.powi(4)));
-    if sum_sq > 0.0 {
-        sum * sum / sum_sq
-    } else {
-        0.0
-    }
+    let weights: Vec<f64> = powers.iter().map(|p| p * p).collect();
+    crate::stats::kish_effective_count(&weights)
 }
 
 /// κ = the mean of P_b² (1 for a stationary record; C4').

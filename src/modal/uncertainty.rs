@@ -119,6 +119,52 @@ pub struct ModeStd {
     pub shape_modulus: Vec<f64>,
     /// Blocks the covariance was estimated from.
     pub blocks: usize,
+    /// Degrees of freedom of the estimated σ (Eq. S8' of
+    /// docs/statistics.md): Kish's effective number of blocks − 1, which
+    /// is `blocks` − 1 for a steady record and fewer where the record's
+    /// power lies in a few blocks (an earthquake's strong phase).
+    #[serde(default = "unknown_dof")]
+    pub dof: f64,
+    /// Which estimate the frequency's and damping's σ were computed for
+    /// (Eq. S9 of docs/statistics.md).
+    #[serde(default)]
+    pub basis: StdBasis,
+}
+
+fn unknown_dof() -> f64 {
+    f64::NAN
+}
+
+/// How a mode's σ of frequency and damping was obtained (Eq. S9 of
+/// docs/statistics.md; the `uncertainty_basis` column of modes.parquet).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StdBasis {
+    /// √(σ_valid² + s²) (Eq. S7): the pole at the valid orders agrees with
+    /// the reported estimate, so its σ stands for it.
+    #[default]
+    ValidOrders,
+    /// The first-order σ of the reported estimate itself, the mean of the
+    /// mode's poles (Eq. S9): the valid-order pole lies outside its own
+    /// 95 % interval of the reported estimate, so it is another estimate.
+    ReportedPoles,
+}
+
+impl StdBasis {
+    /// The name in modes.parquet's `uncertainty_basis`.
+    pub fn name(self) -> &'static str {
+        match self {
+            StdBasis::ValidOrders => "valid_orders",
+            StdBasis::ReportedPoles => "reported_poles",
+        }
+    }
+
+    /// The basis named `name` (as [`Self::name`] writes it).
+    pub fn from_name(name: &str) -> Option<StdBasis> {
+        [StdBasis::ValidOrders, StdBasis::ReportedPoles]
+            .into_iter()
+            .find(|b| b.name() == name)
+    }
 }
 
 /// The automatic number of blocks for `samples` samples at `dt`, block rows
@@ -851,6 +897,7 @@ pub fn mode_std(
     members: &[usize],
     mode: &Mode,
     dt: f64,
+    dof: f64,
 ) -> Result<ModeStd> {
     // One pole per order: the mode's own, else the nearest physical pole
     // of the same mode.
@@ -899,6 +946,7 @@ pub fn mode_std(
     let l = mode.shape.len();
     let rss = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
     let (mut sf, mut sz) = (Vec::new(), Vec::new());
+    let (mut pf, mut pz) = (Vec::new(), Vec::new());
     let mut sm = vec![Vec::new(); l];
     for &i in &chosen {
         let p = &poles[i];
@@ -907,16 +955,99 @@ pub fn mode_std(
         let (f, z) = s.std();
         sf.push(f);
         sz.push(z);
+        pf.push(s.frequency_hz);
+        pz.push(s.damping_ratio);
         for (j, acc) in sm.iter_mut().enumerate() {
             acc.push(rss(&mut moduli.iter().map(|d| d[j])));
         }
     }
+    let blocks = sensitivity.products.len();
+    let valid = ValidOrderPole {
+        frequency_hz: median_in_place(&mut pf),
+        damping: median_in_place(&mut pz),
+        frequency_std_hz: median_in_place(&mut sf),
+        damping_std: median_in_place(&mut sz),
+    };
+    let (frequency_hz, damping, basis) = if valid.stands_for(mode, interval_factor(dof)) {
+        (
+            with_order_spread(valid.frequency_std_hz, mode.frequency_std_hz),
+            with_order_spread(valid.damping_std, mode.damping_std),
+            StdBasis::ValidOrders,
+        )
+    } else {
+        let (f, z) = mean_of_poles_std(sensitivity, poles, members, dt)?;
+        (f, z, StdBasis::ReportedPoles)
+    };
     Ok(ModeStd {
-        frequency_hz: with_order_spread(median_in_place(&mut sf), mode.frequency_std_hz),
-        damping: with_order_spread(median_in_place(&mut sz), mode.damping_std),
+        frequency_hz,
+        damping,
         shape_modulus: sm.iter_mut().map(|v| median_in_place(v)).collect(),
-        blocks: sensitivity.products.len(),
+        blocks,
+        dof,
+        basis,
     })
+}
+
+/// A mode at its valid orders (Eq. S6): the median frequency and damping
+/// of the chosen poles and the median of their first-order σ.
+struct ValidOrderPole {
+    frequency_hz: f64,
+    damping: f64,
+    frequency_std_hz: f64,
+    damping_std: f64,
+}
+
+impl ValidOrderPole {
+    /// Does this pole stand for the mode's reported estimate (Eq. S9)?
+    /// Yes when the estimate lies inside the pole's own interval ± k σ
+    /// (k of Eq. S8) in frequency and in damping: then the two differ by
+    /// no more than the pole's statistical error, and σ_valid ⊕ s is the
+    /// reported estimate's σ.  No when the pole at the low, valid orders
+    /// has not converged to the mode the upper orders report (io modes
+    /// 3–4 of the 5-storey building in 14–23 % of the seeds, SSI-COV's
+    /// weak modes in 4–15 %): its σ is then another estimate's.
+    fn stands_for(&self, mode: &Mode, k: f64) -> bool {
+        (mode.frequency_hz - self.frequency_hz).abs() <= k * self.frequency_std_hz
+            && (mode.damping_ratio - self.damping).abs() <= k * self.damping_std
+    }
+}
+
+/// The first-order σ of a mode's reported estimate itself (Eq. S9 of
+/// docs/statistics.md): the estimate is the mean of its poles `members`,
+/// so its perturbation along column t of T is the mean of theirs,
+/// J_θ̂ T_t = (1/m) Σ_i J_{θ_i} T_t, and σ² = Σ_t (J_θ̂ T_t)².  At the
+/// members' orders the first order does not hold (Eq. S6) and this σ
+/// overstates the error of a weak mode (SSI-COV modes 3–5: 1.6–4.6 × the
+/// valid-order σ, coverage 99–100 %); it is used only where the valid-order
+/// pole does not stand for the estimate ([`ValidOrderPole::stands_for`]),
+/// where erring wide is the safe side.
+fn mean_of_poles_std(
+    sensitivity: &Sensitivity<'_>,
+    poles: &[Pole],
+    members: &[usize],
+    dt: f64,
+) -> Result<(f64, f64)> {
+    let (mut df, mut dz) = (vec![0.0; sensitivity.products.len()], vec![0.0; sensitivity.products.len()]);
+    let mut count = 0usize;
+    for &i in members {
+        let p = &poles[i];
+        if p.order > sensitivity.n_max {
+            continue;
+        }
+        let s = sensitivity.pole(p.order, p.frequency_hz, p.damping_ratio, dt)?;
+        for (acc, d) in df.iter_mut().zip(&s.d_frequency) {
+            *acc += d;
+        }
+        for (acc, d) in dz.iter_mut().zip(&s.d_damping) {
+            *acc += d;
+        }
+        count += 1;
+    }
+    if count == 0 {
+        return Err(Error::numerical("uncertainty: no pole of the reported estimate"));
+    }
+    let rss = |v: &[f64]| v.iter().map(|x| (x / count as f64).powi(2)).sum::<f64>().sqrt();
+    Ok((rss(&df), rss(&dz)))
 }
 
 /// The total σ of a mode's reported estimate (Eq. S7 of
@@ -939,19 +1070,54 @@ pub fn with_order_spread(valid_std: f64, order_spread: f64) -> f64 {
 /// Confidence of the intervals reported with the data-driven σ.
 pub const INTERVAL_CONFIDENCE: f64 = 0.95;
 
-/// The factor k of the 95 % interval θ̂ ± k σ of a data-driven σ from
-/// `blocks` blocks (Eq. S8 of docs/statistics.md): Student's
-/// t_{0.975, n_b − 1}, not the normal 1.96.  σ² is estimated from the
-/// n_b block matrices (Eq. S1), i.e. with n_b − 1 degrees of freedom, so
-/// (θ̂ − θ)/σ̂ is t-distributed, not normal: with 30 blocks ±1.96 σ̂
-/// covers 94.0 % instead of 95 %, with 20 blocks 93.5 %; the factor is
-/// 2.045 and 2.093 there.  NaN below 2 blocks (no σ is given below
-/// [`MIN_BLOCKS`] anyway).
-pub fn interval_factor(blocks: usize) -> f64 {
-    if blocks < 2 {
+/// The factor k of the 95 % interval θ̂ ± k σ of a data-driven σ with
+/// `dof` degrees of freedom ([`ModeStd::dof`]; Eqs. S8–S8' of
+/// docs/statistics.md): Student's t_{0.975, dof}, not the normal 1.96.
+/// σ² is estimated from the n_b block matrices (Eq. S1), so
+/// (θ̂ − θ)/σ̂ is t-distributed, not normal: with 30 equal blocks (29
+/// degrees of freedom) ±1.96 σ̂ covers 94.0 % instead of 95 %, with 20
+/// blocks 93.5 %; the factor is 2.045 and 2.093 there.  NaN below 1
+/// degree of freedom.
+pub fn interval_factor(dof: f64) -> f64 {
+    if !(dof >= 1.0) {
         return f64::NAN;
     }
-    crate::stats::student_t_upper_quantile(0.5 * (1.0 - INTERVAL_CONFIDENCE), (blocks - 1) as f64)
+    crate::stats::student_t_upper_quantile(0.5 * (1.0 - INTERVAL_CONFIDENCE), dof)
+}
+
+/// The degrees of freedom of a σ estimated from blocks of these powers
+/// (Eq. S8' of docs/statistics.md; Satterthwaite): σ̂² is a sum of the
+/// blocks' squared deviations, each with a variance that grows with its
+/// block's power P_k, so its degrees of freedom are Kish's effective count
+/// of the weights w_k minus one (the centring).  w_k = P_k² for SSI-COV
+/// (output-only: the response itself is the random part, and a
+/// covariance's error grows with the power), w_k = P_k for input–output
+/// (the measured input drives the response; what is random is the
+/// measurement noise, and its products with the signal grow with the
+/// signal's power).  n_b − 1 for equal powers.
+pub fn effective_dof(method: Method, powers: &[f64]) -> f64 {
+    let weights: Vec<f64> = match method {
+        Method::Io => powers.to_vec(),
+        _ => powers.iter().map(|p| p * p).collect(),
+    };
+    crate::stats::kish_effective_count(&weights) - 1.0
+}
+
+/// The outputs' power in each of `blocks` consecutive runs of `len`
+/// samples (the blocks of Eq. S1: [`ssi_cov_blocks`] cuts the record so,
+/// [`po_moesp_blocks`] runs of Hankel columns starting there).
+pub fn block_powers(outputs: &[&[f64]], blocks: usize, len: usize) -> Vec<f64> {
+    (0..blocks)
+        .map(|k| {
+            outputs
+                .iter()
+                .map(|s| {
+                    s.get(k * len..(k + 1) * len)
+                        .map_or(0.0, |b| b.iter().map(|x| x * x).sum::<f64>())
+                })
+                .sum()
+        })
+        .collect()
 }
 
 /// Central finite differences of a pole along each column of T, for the
@@ -1060,6 +1226,29 @@ pub fn of_modes(
         ));
         return out;
     }
+    // Eq. S8': the blocks' powers give the σ's degrees of freedom.
+    let block_len = match id.method {
+        Method::Io => {
+            let n = id
+                .outputs
+                .iter()
+                .chain(id.inputs)
+                .map(|s| s.len())
+                .min()
+                .unwrap_or(0);
+            (n + 1).saturating_sub(span) / nb
+        }
+        _ => samples / nb,
+    };
+    let powers = block_powers(id.outputs, nb, block_len);
+    let dof = effective_dof(id.method, &powers);
+    if !(dof >= 1.0) {
+        out.warnings.push(format!(
+            "data-driven σ not computed: the record's power lies in one of its {nb} blocks (they count as {:.1}, Eq. S8'), no degree of freedom is left to estimate it — frequency_std_data_hz and damping_std_data are null",
+            dof + 1.0
+        ));
+        return out;
+    }
     let members: Vec<Vec<usize>> = (0..modes.len())
         .map(|m| {
             (0..poles.len())
@@ -1109,7 +1298,7 @@ pub fn of_modes(
             .enumerate()
             .map(|(m, mode)| {
                 (!members[m].is_empty())
-                    .then(|| mode_std(&sensitivity, poles, &members[m], mode, id.dt))
+                    .then(|| mode_std(&sensitivity, poles, &members[m], mode, id.dt, dof))
             })
             .collect()
     };
@@ -1129,9 +1318,23 @@ pub fn of_modes(
             )),
         }
     }
+    let switched = out
+        .modes
+        .iter()
+        .flatten()
+        .filter(|s| s.basis == StdBasis::ReportedPoles)
+        .count();
     out.notes.push(format!(
-        "data-driven σ from {nb} blocks of {} samples ({rule}); first-order propagation (Reynders et al. 2008, Döhler & Mevel 2013)",
-        samples / nb
+        "data-driven σ from {nb} blocks of {} samples ({rule}), counting as {:.1} by their power (Eq. S8': {:.1} degrees of freedom, 95 % interval ± {:.3} σ); first-order propagation (Reynders et al. 2008, Döhler & Mevel 2013){}",
+        samples / nb,
+        dof + 1.0,
+        dof,
+        interval_factor(dof),
+        if switched > 0 {
+            format!("; {switched} mode(s) with the σ of their reported mean of poles (Eq. S9: the pole at the valid orders disagrees with the estimate)")
+        } else {
+            String::new()
+        }
     ));
     out
 }

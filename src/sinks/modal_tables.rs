@@ -212,10 +212,22 @@ pub fn modes_batch(r: &ModalResult) -> Result<arrow_array::RecordBatch> {
                 .map(|x| x.data_std.as_ref().map(|d| d.damping))
                 .collect(),
         )
+        .opt_str(
+            modes::UNCERTAINTY_BASIS,
+            &m.iter()
+                .map(|x| x.data_std.as_ref().map(|d| d.basis.name()))
+                .collect::<Vec<_>>(),
+        )
         .opt_u32(
             modes::UNCERTAINTY_BLOCKS,
             m.iter()
                 .map(|x| x.data_std.as_ref().map(|d| d.blocks as u32))
+                .collect(),
+        )
+        .opt_f64(
+            modes::UNCERTAINTY_DOF,
+            m.iter()
+                .map(|x| x.data_std.as_ref().map(|d| d.dof))
                 .collect(),
         )
         .f64(modes::MPC, m.iter().map(|x| x.mpc).collect())
@@ -569,6 +581,13 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
             .column_by_name(modes::UNCERTAINTY_BLOCKS.name)
             .and_then(|c| c.as_any().downcast_ref::<UInt32Array>())
             .cloned();
+        // Optional: files written before Eq. S8' have blocks − 1.
+        let dof = optional_f64(&modes::UNCERTAINTY_DOF);
+        // Optional: files written before Eq. S9 have no basis (all were valid_orders).
+        let basis = b
+            .column_by_name(modes::UNCERTAINTY_BASIS.name)
+            .and_then(|c| c.as_any().downcast_ref::<arrow_array::StringArray>())
+            .cloned();
         let valid = |a: &Option<Float64Array>, i: usize| {
             a.as_ref().filter(|a| a.is_valid(i)).map(|a| a.value(i))
         };
@@ -621,14 +640,21 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
                     .unwrap_or_default(),
                 // The shape's data-driven σ lives in mode_shapes/mode_shapes.parquet.
                 data_std: valid(&fs_data, i).zip(valid(&zs_data, i)).map(|(f, z)| {
+                    let blocks = blocks
+                        .as_ref()
+                        .filter(|a| a.is_valid(i))
+                        .map_or(0, |a| a.value(i) as usize);
                     crate::modal::uncertainty::ModeStd {
                         frequency_hz: f,
                         damping: z,
                         shape_modulus: Vec::new(),
-                        blocks: blocks
+                        blocks,
+                        dof: valid(&dof, i).unwrap_or(blocks as f64 - 1.0),
+                        basis: basis
                             .as_ref()
                             .filter(|a| a.is_valid(i))
-                            .map_or(0, |a| a.value(i) as usize),
+                            .and_then(|a| crate::modal::uncertainty::StdBasis::from_name(a.value(i)))
+                            .unwrap_or_default(),
                     }
                 }),
             });

@@ -192,6 +192,8 @@ pub(super) fn modal_section(dir: &Path, o: &Outputs, settings: &ReportSettings) 
             modes::FREQUENCY_STD_DATA_HZ.name,
             modes::DAMPING_STD_DATA.name,
             modes::UNCERTAINTY_BLOCKS.name,
+            modes::UNCERTAINTY_DOF.name,
+            modes::UNCERTAINTY_BASIS.name,
             modes::DIRECTION.name,
             modes::MPC.name,
             modes::MPD_DEG.name,
@@ -257,12 +259,15 @@ fn error_bars(modes: &Loaded) -> Vec<(f64, f64, f64)> {
         return Vec::new();
     };
     let blocks = t.number(modes::UNCERTAINTY_BLOCKS.name);
+    // Tables written before Eq. S8' have no dof column: blocks − 1.
+    let dof = t.number(modes::UNCERTAINTY_DOF.name);
     (0..t.rows)
         .filter_map(|r| {
             let v = |c: &[Option<f64>]| c.get(r).copied().flatten();
-            let factor = blocks
+            let factor = dof
                 .and_then(v)
-                .map_or(2.0, |b| uncertainty::interval_factor(b as usize));
+                .or_else(|| blocks.and_then(v).map(|b| b - 1.0))
+                .map_or(2.0, uncertainty::interval_factor);
             Some((v(f)?, factor * v(sd)?, v(order)?))
         })
         .filter(|(f, half, _)| f.is_finite() && half.is_finite() && *half >= 0.0)
