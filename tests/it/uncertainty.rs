@@ -262,8 +262,48 @@ fn ambient_normalised_errors_have_a_sensible_spread() {
     assert!((0.4..=2.0).contains(&rms), "rms {rms:.2}");
 }
 
+/// CI version of the coverage study for input–output: twenty seeds of the
+/// 40-s earthquake with base input (30 dB).  Every mode gets a σ; Eq. S8'
+/// counts the 20 blocks of a transient record as fewer (its power lies in
+/// the strong phase); Eq. S9 is exercised (on these seeds the valid-order
+/// pole of mode 3 or 4 disagrees with the reported estimate in 14–23 % of
+/// the seeds: here at least twice); and the 100 normalised frequency errors
+/// have an rms in [0.6, 1.6] (1 for a correct σ; the 95 % range of an exact
+/// σ over 100 values is about 0.86–1.14).
+#[test]
+fn earthquake_normalised_errors_have_a_sensible_spread() {
+    use quaketwin::modal::uncertainty::StdBasis;
+    let truth = five_storey().modes().unwrap();
+    let (mut zf, mut switched) = (Vec::new(), 0);
+    for seed in 1..=20 {
+        let errors = per_true_mode(
+            &truth,
+            &earthquake_input_with_noise(seed, 30.0),
+            Method::Io,
+            |j, m, d| {
+                assert!(
+                    d.dof < d.blocks as f64 - 1.0 && d.dof >= 3.0,
+                    "seed {seed}: {} blocks, {} degrees of freedom",
+                    d.blocks,
+                    d.dof
+                );
+                ((m.frequency_hz - truth.frequencies_hz[j]) / d.frequency_hz, d.basis)
+            },
+        );
+        for (j, e) in errors.iter().enumerate() {
+            let (z, basis) = e.unwrap_or_else(|| panic!("seed {seed}: mode {} without σ", j + 1));
+            zf.push(z);
+            switched += (basis == StdBasis::ReportedPoles) as usize;
+        }
+    }
+    let rms = (zf.iter().map(|z| z * z).sum::<f64>() / zf.len() as f64).sqrt();
+    eprintln!("rms of (f̂ − f)/σ_f over {} estimates: {rms:.2}; {switched} with Eq. S9", zf.len());
+    assert!((0.6..=1.6).contains(&rms), "rms {rms:.2}");
+    assert!(switched >= 2, "Eq. S9 used {switched} times on twenty seeds");
+}
+
 /// Coverage of the 95 % intervals f̂ ± k σ_f and ζ̂ ± k σ_ζ
-/// (k = t_{0.975, n_b − 1}, Eq. S8 of docs/statistics.md) over
+/// (k = t_{0.975, ν}, Eqs. S8–S8' of docs/statistics.md) over
 /// `seeds` (in parallel), per mode: (covered f, covered ζ, identified with
 /// σ, rms of (f̂ − f)/σ_f, rms of (ζ̂ − ζ)/σ_ζ).
 fn coverage(
@@ -302,6 +342,28 @@ fn coverage(
         let n = o.2.max(1) as f64;
         o.3 = (o.3 / n).sqrt();
         o.4 = (o.4 / n).sqrt();
+    }
+    // Each half of the seeds apart: how much a 100-seed table moves.
+    for (half, range) in all.chunks(all.len().div_ceil(2)).enumerate() {
+        let cells: Vec<String> = (0..5)
+            .map(|j| {
+                let hits = |q: usize| {
+                    range
+                        .iter()
+                        .filter_map(|e| e[j])
+                        .filter(|&(f, z, k)| [f, z][q].abs() <= k)
+                        .count()
+                };
+                format!("mode {} {}/{}", j + 1, hits(0), hits(1))
+            })
+            .collect();
+        eprintln!(
+            "  {} half {} of the seeds ({} seeds), covered f/ζ: {}",
+            method.name(),
+            half + 1,
+            range.len(),
+            cells.join(", ")
+        );
     }
     out
 }
