@@ -21,7 +21,11 @@
 //! Shift and uncertainty: s = (f − f_ref)/f_ref; with the two frequency
 //! standard deviations σ, σ_ref (independent estimates), first-order
 //! propagation gives σ_s = √((σ/f_ref)² + (f σ_ref/f_ref²)²).  A shift is
-//! significant when |s| > 2 σ_s; unknown (None) when both σ are zero.
+//! significant when |s| > k σ_s, k = Student's t_{0.975, ν} with ν the
+//! Welch–Satterthwaite degrees of freedom of σ_s from those of the
+//! data-driven σ (Eq. S8' of docs/statistics.md; an order-spread σ counts
+//! as known exactly), k = 2 when neither σ is data-driven; unknown (None)
+//! when both σ are zero.
 //! Each σ is the mode's data-driven standard deviation
 //! (`frequency_std_data_hz` of modes/modes.parquet, issue 36: the statistical
 //! error of that record's estimate, docs/statistics.md) when it was
@@ -185,7 +189,11 @@ pub struct FrequencyShift {
     pub frequency_current_std_data_hz: Option<f64>,
     /// Which σ entered `shift_std_percent`: `data`, `order_spread` or `mixed`.
     pub shift_std_basis: &'static str,
-    /// |shift| > 2σ; None when the uncertainty is unknown (both σ zero).
+    /// Welch–Satterthwaite degrees of freedom of `shift_std_percent`;
+    /// None when no data-driven σ entered it.
+    pub shift_dof: Option<f64>,
+    /// |shift| > t_{0.975, shift_dof} σ (2σ without `shift_dof`); None
+    /// when the uncertainty is unknown (both σ zero).
     pub significant: Option<bool>,
     pub damping_reference: f64,
     pub damping_current: f64,
@@ -211,6 +219,21 @@ pub fn relative_shift(f_ref: f64, sd_ref: f64, f: f64, sd: f64) -> (f64, f64) {
     let s = (f - f_ref) / f_ref;
     let sd_s = ((sd / f_ref).powi(2) + (f * sd_ref / (f_ref * f_ref)).powi(2)).sqrt();
     (s, sd_s)
+}
+
+/// Welch–Satterthwaite degrees of freedom of a sum of two independent
+/// variances a² + b², each term (its standard deviation, its mode): ν =
+/// (a² + b²)² / (a⁴/ν_a + b⁴/ν_b), ν of a data-driven σ its
+/// [`super::uncertainty::ModeStd::dof`], an order-spread σ taken as known
+/// (ν = ∞, no term).  None when neither is data-driven.
+fn shift_dof((a, ra): (f64, &Mode), (b, rb): (f64, &Mode)) -> Option<f64> {
+    let term = |x: f64, m: &Mode| m.data_std.as_ref().map(|d| x.powi(4) / d.dof);
+    let (ta, tb) = (term(a, ra), term(b, rb));
+    if ta.is_none() && tb.is_none() {
+        return None;
+    }
+    let denominator = ta.unwrap_or(0.0) + tb.unwrap_or(0.0);
+    Some((a * a + b * b).powi(2) / denominator)
 }
 
 /// `shape` at `indices`, renormalised (largest component 1), and the share
@@ -618,6 +641,11 @@ fn shift(
         })
     };
     let (s, sd) = relative_shift(r.frequency_hz, sigma(r), c.frequency_hz, sigma(c));
+    let dof = shift_dof(
+        (c.frequency_hz * sigma(r) / r.frequency_hz.powi(2), r),
+        (sigma(c) / r.frequency_hz, c),
+    );
+    let factor = dof.map_or(2.0, super::uncertainty::interval_factor);
     let basis = match (data(r).is_some(), data(c).is_some()) {
         (true, true) => "data",
         (false, false) => "order_spread",
@@ -637,7 +665,9 @@ fn shift(
         frequency_reference_std_data_hz: data(r),
         frequency_current_std_data_hz: data(c),
         shift_std_basis: basis,
-        significant: (sd.is_finite() && sd > 0.0).then(|| s.abs() > 2.0 * sd),
+        shift_dof: dof,
+        significant: (sd.is_finite() && sd > 0.0 && factor.is_finite())
+            .then(|| s.abs() > factor * sd),
         damping_reference: r.damping_ratio,
         damping_current: c.damping_ratio,
         mac,

@@ -427,6 +427,7 @@ pub fn write_shifts(
             fs::SHIFT_STD_BASIS,
             &s.iter().map(|x| x.shift_std_basis).collect::<Vec<_>>(),
         )
+        .opt_f64(fs::SHIFT_DOF, s.iter().map(|x| x.shift_dof).collect())
         .opt_bool(fs::SIGNIFICANT, s.iter().map(|x| x.significant).collect())
         .f64(fs::DAMPING_REFERENCE, f(|x| x.damping_reference))
         .f64(fs::DAMPING_CURRENT, f(|x| x.damping_current))

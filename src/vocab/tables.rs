@@ -236,7 +236,8 @@ declare!(FREQUENCY_SHIFTS, frequency_shifts, "frequency_shifts", "frequency_shif
     FREQUENCY_REFERENCE_STD_DATA_HZ: "frequency_reference_std_data_hz", F64, nullable, "Hz", "data-driven standard deviation of the reference frequency (`frequency_std_data_hz` of the reference); null when not computed";
     FREQUENCY_CURRENT_STD_DATA_HZ: "frequency_current_std_data_hz", F64, nullable, "Hz", "data-driven standard deviation of this event's frequency; null when not computed";
     SHIFT_STD_BASIS: "shift_std_basis", Utf8, required, "", "the σ behind `shift_std_percent`: `data` (both data-driven), `order_spread` (both from the order spread with the floor), `mixed` (one of each)";
-    SIGNIFICANT: "significant", Bool, nullable, "", "|shift| > 2 `shift_std_percent`; null when that is zero (no uncertainty known)";
+    SHIFT_DOF: "shift_dof", F64, nullable, "1", "Welch–Satterthwaite degrees of freedom of `shift_std_percent` from the data-driven σ's `uncertainty_dof` (an order-spread σ counts as exact): (a² + b²)² / (a⁴/ν_ref + b⁴/ν_cur) (docs/statistics.md, Pre/post shifts); null when neither σ is data-driven";
+    SIGNIFICANT: "significant", Bool, nullable, "", "|shift| > t_{0.975, shift_dof} × `shift_std_percent` (2 × when `shift_dof` is null); null when that is zero (no uncertainty known)";
     DAMPING_REFERENCE: "damping_reference", F64, required, "1", "reference damping ratio";
     DAMPING_CURRENT: "damping_current", F64, required, "1", "damping ratio of this event";
     MAC: "mac", F64, nullable, "1", "MAC of the two shapes restricted to the shared channels (renormalised); null when paired by frequency and direction";

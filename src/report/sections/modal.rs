@@ -409,6 +409,7 @@ fn shifts_part(shifts: &Loaded, settings: &ReportSettings) -> String {
             fs::SHIFT_STD_BASIS.name,
             fs::MAC.name,
             fs::SIGNIFICANT.name,
+            fs::SHIFT_DOF.name,
             fs::DAMPING_REFERENCE.name,
             fs::DAMPING_CURRENT.name,
         ];
@@ -423,7 +424,7 @@ fn shifts_part(shifts: &Loaded, settings: &ReportSettings) -> String {
             "shift ± σ (%)",
             "σ from",
             "MAC",
-            "significant (|shift| > 2σ)",
+            "significant (|shift| > t σ, 95 %)",
             "damping reference → this event",
         ]
         .iter()
@@ -447,6 +448,16 @@ fn shifts_part(shifts: &Loaded, settings: &ReportSettings) -> String {
                     Some(true) => "yes: rise",
                     Some(false) => "no",
                     None => "unknown (no frequency std)",
+                };
+                // The factor of the test: Student's t of the shift's
+                // degrees of freedom (Eq. S8'), 2 without them.
+                let significant = match num(fs::SHIFT_DOF.name, r) {
+                    Some(dof) if significant != "unknown (no frequency std)" => format!(
+                        "{significant} (t = {:.2}, {:.1} dof)",
+                        uncertainty::interval_factor(dof),
+                        dof
+                    ),
+                    _ => significant.to_string(),
                 };
                 vec![
                     Cell::of(t, fs::REFERENCE_MODE.name, r),
@@ -480,7 +491,7 @@ fn shifts_part(shifts: &Loaded, settings: &ReportSettings) -> String {
                         },
                     ),
                     Cell::of(t, fs::MAC.name, r),
-                    Cell::text(significant),
+                    Cell::text(&significant),
                     Cell::raw(format!(
                         "{} → {}",
                         pm(num(fs::DAMPING_REFERENCE.name, r), None),
