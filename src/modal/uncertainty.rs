@@ -42,7 +42,12 @@
 //! [`Sensitivity::cut_rotation`] at most [`MAX_CUT_ROTATION`]; [`mode_std`]
 //! says why), combined in quadrature with the spread of the averaged poles
 //! over the orders (Eq. S7, [`with_order_spread`]) for frequency and
-//! damping.
+//! damping — where that valid-order pole agrees with the reported
+//! estimate; where it does not, the σ is the first-order σ of the
+//! reported mean of poles itself (Eq. S9, [`StdBasis`]).  The σ's degrees
+//! of freedom are the blocks' effective count by power (Eq. S8',
+//! [`effective_dof`]), and the 95 % interval is θ̂ ± t_{0.975, ν} σ
+//! ([`interval_factor`]).
 //!
 //! Input–output: the factorised matrix L₃₂ is a smooth function of the Gram
 //! matrix G of [U_f; U_p; Y_p; Y_f] (G = L Lᵀ); with dG_t the centred block
@@ -101,6 +106,11 @@ pub const BLOCK_PERIODS_IO: f64 = 3.0;
 /// 40 Hz, 1640 samples) gets 14 blocks of 3 periods of its 1.05 Hz
 /// fundamental; 4 spans left it 7 blocks and no σ.
 pub const BLOCK_SPANS: usize = 2;
+/// Below this many degrees of freedom (Eq. S8') the σ is still given, with
+/// its wide Student-t interval, but the modal stage warns: the σ is then
+/// itself uncertain by more than a third (1/√(2ν)).  4, as the change
+/// test's least (Eq. C4').
+pub const FEW_DEGREES_OF_FREEDOM: f64 = 4.0;
 /// Poles (orders) of a mode whose σ enter its median ([`mode_std`]): at
 /// the orders where the first order holds their σ agree within a few per
 /// cent, and each costs an eigen-decomposition and products over the n_b
@@ -890,7 +900,10 @@ pub const SAME_MODE_MAC: f64 = 0.9;
 /// estimate is the mean over the column's upper orders, whose scatter
 /// over the orders is added in quadrature ([`with_order_spread`], Eq. S7):
 /// with it the weak SSI-COV modes 3–5 of the 5-storey record go from
-/// 79–86 % coverage to 89–95 % (docs/statistics.md, 100 seeds).
+/// 79–86 % coverage to 89–95 % (docs/statistics.md, 100 seeds).  Where
+/// the valid-order pole is not the reported estimate (outside the
+/// interval ± k σ_valid, k of `dof`), the σ of the reported mean of poles
+/// is given instead (Eq. S9, [`StdBasis::ReportedPoles`]).
 pub fn mode_std(
     sensitivity: &Sensitivity<'_>,
     poles: &[Pole],
@@ -1004,8 +1017,8 @@ impl ValidOrderPole {
     /// no more than the pole's statistical error, and σ_valid ⊕ s is the
     /// reported estimate's σ.  No when the pole at the low, valid orders
     /// has not converged to the mode the upper orders report (io modes
-    /// 3–4 of the 5-storey building in 14–23 % of the seeds, SSI-COV's
-    /// weak modes in 4–15 %): its σ is then another estimate's.
+    /// 3–4 of the 5-storey building in 13–22 % of 200 seeds, SSI-COV's
+    /// weak modes 3–5 in 11–26 %): its σ is then another estimate's.
     fn stands_for(&self, mode: &Mode, k: f64) -> bool {
         (mode.frequency_hz - self.frequency_hz).abs() <= k * self.frequency_std_hz
             && (mode.damping_ratio - self.damping).abs() <= k * self.damping_std
@@ -1027,7 +1040,10 @@ fn mean_of_poles_std(
     members: &[usize],
     dt: f64,
 ) -> Result<(f64, f64)> {
-    let (mut df, mut dz) = (vec![0.0; sensitivity.products.len()], vec![0.0; sensitivity.products.len()]);
+    let (mut df, mut dz) = (
+        vec![0.0; sensitivity.products.len()],
+        vec![0.0; sensitivity.products.len()],
+    );
     let mut count = 0usize;
     for &i in members {
         let p = &poles[i];
@@ -1044,9 +1060,16 @@ fn mean_of_poles_std(
         count += 1;
     }
     if count == 0 {
-        return Err(Error::numerical("uncertainty: no pole of the reported estimate"));
+        return Err(Error::numerical(
+            "uncertainty: no pole of the reported estimate",
+        ));
     }
-    let rss = |v: &[f64]| v.iter().map(|x| (x / count as f64).powi(2)).sum::<f64>().sqrt();
+    let rss = |v: &[f64]| {
+        v.iter()
+            .map(|x| (x / count as f64).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
     Ok((rss(&df), rss(&dz)))
 }
 
@@ -1248,6 +1271,14 @@ pub fn of_modes(
             dof + 1.0
         ));
         return out;
+    }
+    if dof < FEW_DEGREES_OF_FREEDOM {
+        out.warnings.push(format!(
+            "data-driven σ from few effective blocks: the record's {nb} blocks count as {:.1} by their power (Eq. S8': its strong phase fills few of them), {dof:.1} degrees of freedom — the σ is itself uncertain by about {:.0} % and its 95 % intervals are ± {:.2} σ; an ambient record or a longer strong phase gives a σ to rely on",
+            dof + 1.0,
+            100.0 / (2.0 * dof).sqrt(),
+            interval_factor(dof)
+        ));
     }
     let members: Vec<Vec<usize>> = (0..modes.len())
         .map(|m| {

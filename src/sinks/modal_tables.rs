@@ -654,7 +654,9 @@ pub fn read_modes(path: &Path) -> Result<(Vec<crate::modal::Mode>, Vec<String>)>
                         basis: basis
                             .as_ref()
                             .filter(|a| a.is_valid(i))
-                            .and_then(|a| crate::modal::uncertainty::StdBasis::from_name(a.value(i)))
+                            .and_then(|a| {
+                                crate::modal::uncertainty::StdBasis::from_name(a.value(i))
+                            })
                             .unwrap_or_default(),
                     }
                 }),

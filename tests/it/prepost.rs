@@ -108,8 +108,9 @@ fn read_shifts(out: &Path) -> Shifts {
 /// σ): the X modes' drops of 0.8–1.6 % are, the 4th X mode's 0.5 % sits
 /// near the threshold, the Y modes' zero is not.  Returns the table printed.
 fn check_against_theory(s: &Shifts) -> String {
-    let mut table =
-        String::from("dir  f_ref (Hz)  shift (%) ± σ         theory (%)  MAC      k     significant\n");
+    let mut table = String::from(
+        "dir  f_ref (Hz)  shift (%) ± σ         theory (%)  MAC      k     significant\n",
+    );
     assert_eq!(s.shift_percent.len(), 8, "pairs: {:?}", s.f_reference);
     for (dir, f0, rel) in theory() {
         let row = (0..s.f_reference.len())

@@ -267,7 +267,7 @@ fn ambient_normalised_errors_have_a_sensible_spread() {
 /// 40-s earthquake with base input (30 dB).  Every mode gets a σ; Eq. S8'
 /// counts the 20 blocks of a transient record as fewer (its power lies in
 /// the strong phase); Eq. S9 is exercised (on these seeds the valid-order
-/// pole of mode 3 or 4 disagrees with the reported estimate in 14–23 % of
+/// pole of mode 3 or 4 disagrees with the reported estimate in 13–22 % of
 /// the seeds: here at least twice); and the 100 normalised frequency errors
 /// have an rms in [0.6, 1.6] (1 for a correct σ; the 95 % range of an exact
 /// σ over 100 values is about 0.86–1.14).
@@ -288,7 +288,10 @@ fn earthquake_normalised_errors_have_a_sensible_spread() {
                     d.blocks,
                     d.dof
                 );
-                ((m.frequency_hz - truth.frequencies_hz[j]) / d.frequency_hz, d.basis)
+                (
+                    (m.frequency_hz - truth.frequencies_hz[j]) / d.frequency_hz,
+                    d.basis,
+                )
             },
         );
         for (j, e) in errors.iter().enumerate() {
@@ -298,9 +301,15 @@ fn earthquake_normalised_errors_have_a_sensible_spread() {
         }
     }
     let rms = (zf.iter().map(|z| z * z).sum::<f64>() / zf.len() as f64).sqrt();
-    eprintln!("rms of (f̂ − f)/σ_f over {} estimates: {rms:.2}; {switched} with Eq. S9", zf.len());
+    eprintln!(
+        "rms of (f̂ − f)/σ_f over {} estimates: {rms:.2}; {switched} with Eq. S9",
+        zf.len()
+    );
     assert!((0.6..=1.6).contains(&rms), "rms {rms:.2}");
-    assert!(switched >= 2, "Eq. S9 used {switched} times on twenty seeds");
+    assert!(
+        switched >= 2,
+        "Eq. S9 used {switched} times on twenty seeds"
+    );
 }
 
 /// Coverage of the 95 % intervals f̂ ± k σ_f and ζ̂ ± k σ_ζ
@@ -562,9 +571,17 @@ fn coverage_variants_hundred_seeds() {
 /// normal 1.960 for many; none below 1 degree of freedom.
 #[test]
 fn interval_factor_is_students_t_of_the_blocks() {
-    for (dof, t) in [(9.0, 2.2622), (19.0, 2.0930), (29.0, 2.0452), (199.0, 1.9720)] {
+    for (dof, t) in [
+        (9.0, 2.2622),
+        (19.0, 2.0930),
+        (29.0, 2.0452),
+        (199.0, 1.9720),
+    ] {
         let k = interval_factor(dof);
-        assert!((k - t).abs() < 5e-4, "{dof} degrees of freedom: {k} against {t}");
+        assert!(
+            (k - t).abs() < 5e-4,
+            "{dof} degrees of freedom: {k} against {t}"
+        );
     }
     // Eq. S8' gives fractional degrees of freedom: between its neighbours.
     let k = interval_factor(9.5);
@@ -589,7 +606,9 @@ fn effective_degrees_of_freedom_follow_the_block_powers() {
     let mut strong = vec![1.0; 20];
     strong[..5].iter_mut().for_each(|p| *p = 4.0);
     assert!((effective_dof(Method::Io, &strong) - (35.0f64.powi(2) / 95.0 - 1.0)).abs() < 1e-9);
-    assert!((effective_dof(Method::SsiCov, &strong) - (95.0f64.powi(2) / 1295.0 - 1.0)).abs() < 1e-9);
+    assert!(
+        (effective_dof(Method::SsiCov, &strong) - (95.0f64.powi(2) / 1295.0 - 1.0)).abs() < 1e-9
+    );
     // The blocks' powers: runs of `len` samples, every output summed.
     let a: Vec<f64> = (0..12).map(|i| i as f64).collect();
     let b = vec![1.0; 12];
@@ -674,4 +693,3 @@ fn coverage_diagnosis_hundred_seeds() {
         }
     }
 }
-
