@@ -236,7 +236,7 @@ fn normalised_errors(
             (m.frequency_hz - truth.frequencies_hz[j]) / d.frequency_hz,
             (m.damping_ratio - truth.damping_ratios[j]) / d.damping,
             interval_factor(d.dof),
-            d.basis == quaketwin::modal::uncertainty::StdBasis::ReportedPoles,
+            d.basis == quaketwin::modal::uncertainty::StdBasis::Discrepancy,
         )
     })
 }
@@ -297,7 +297,7 @@ fn earthquake_normalised_errors_have_a_sensible_spread() {
         for (j, e) in errors.iter().enumerate() {
             let (z, basis) = e.unwrap_or_else(|| panic!("seed {seed}: mode {} without σ", j + 1));
             zf.push(z);
-            switched += (basis == StdBasis::ReportedPoles) as usize;
+            switched += (basis == StdBasis::Discrepancy) as usize;
         }
     }
     let rms = (zf.iter().map(|z| z * z).sum::<f64>() / zf.len() as f64).sqrt();
@@ -357,7 +357,7 @@ fn coverage(
         .map(|j| all.iter().filter(|e| e[j].is_some_and(|x| x.3)).count())
         .collect();
     eprintln!(
-        "  {} seeds with Eq. S9 (the σ of the reported mean), per mode: {s9:?}",
+        "  {} seeds with Eq. S9 (the discrepancy added), per mode: {s9:?}",
         method.name()
     );
     // Each half of the seeds apart: how much a 100-seed table moves.
