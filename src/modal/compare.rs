@@ -225,15 +225,19 @@ pub fn relative_shift(f_ref: f64, sd_ref: f64, f: f64, sd: f64) -> (f64, f64) {
 /// variances a² + b², each term (its standard deviation, its mode): ν =
 /// (a² + b²)² / (a⁴/ν_a + b⁴/ν_b), ν of a data-driven σ its
 /// [`super::uncertainty::ModeStd::dof`], an order-spread σ taken as known
-/// (ν = ∞, no term).  None when neither is data-driven.
+/// (ν = ∞, no term).  None when neither is data-driven, or when a
+/// data-driven σ's ν is not known (a table of a run before Eq. S8' without
+/// its blocks): then the 2 σ of before.
 fn shift_dof((a, ra): (f64, &Mode), (b, rb): (f64, &Mode)) -> Option<f64> {
     let term = |x: f64, m: &Mode| m.data_std.as_ref().map(|d| x.powi(4) / d.dof);
     let (ta, tb) = (term(a, ra), term(b, rb));
-    if ta.is_none() && tb.is_none() {
+    let known = |t: Option<f64>| t.is_none_or(|t| t.is_finite() && t >= 0.0);
+    if (ta.is_none() && tb.is_none()) || !known(ta) || !known(tb) {
         return None;
     }
     let denominator = ta.unwrap_or(0.0) + tb.unwrap_or(0.0);
-    Some((a * a + b * b).powi(2) / denominator)
+    let dof = (a * a + b * b).powi(2) / denominator;
+    dof.is_finite().then_some(dof)
 }
 
 /// `shape` at `indices`, renormalised (largest component 1), and the share

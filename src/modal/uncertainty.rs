@@ -135,8 +135,8 @@ pub struct ModeStd {
     /// power lies in a few blocks (an earthquake's strong phase).
     #[serde(default = "unknown_dof")]
     pub dof: f64,
-    /// Which estimate the frequency's and damping's σ were computed for
-    /// (Eq. S9 of docs/statistics.md).
+    /// How the frequency's and damping's σ were formed (Eqs. S7, S9 of
+    /// docs/statistics.md).
     #[serde(default)]
     pub basis: StdBasis,
 }

@@ -344,6 +344,53 @@ mod pairing {
         compare_events(set(reference), set(current), &settings)
     }
 
+    /// A mode with a data-driven σ of `nu` degrees of freedom.
+    fn with_data_std(mut m: Mode, sd: f64, nu: f64) -> Mode {
+        m.data_std = Some(quaketwin::modal::uncertainty::ModeStd {
+            frequency_hz: sd,
+            damping: 0.001,
+            shape_modulus: Vec::new(),
+            blocks: 20,
+            dof: nu,
+            basis: Default::default(),
+        });
+        m
+    }
+
+    /// The shift's significance is Student's t of the Welch–Satterthwaite
+    /// degrees of freedom of the two data-driven σ: a 2.5σ_s shift between
+    /// two records of ν = 2 each (a = b: ν_s = 4, t = 2.776) is not
+    /// significant, the same shift with ν = 28 each (ν_s = 56, t = 2.003)
+    /// is; with order-spread σ alone the factor stays 2 and no ν is given.
+    #[test]
+    fn shift_significance_follows_the_degrees_of_freedom() {
+        let ch = ids(&["A", "B"]);
+        let shape = [0.5, 1.0];
+        // Each record's σ 0.01 Hz at 2 Hz; the shift 2.5 σ_s (σ_s ≈ √2 × 0.5 %).
+        let sd: f64 = 0.01;
+        let f = 2.0 - 2.5 * (2.0f64 * (sd / 2.0).powi(2)).sqrt() * 2.0;
+        let case = |nu: Option<f64>| {
+            let (mut r, mut c) = (mode(2.0, sd, "X", &shape), mode(f, sd, "X", &shape));
+            if let Some(nu) = nu {
+                r = with_data_std(r, sd, nu);
+                c = with_data_std(c, sd, nu);
+            }
+            compare((&[r], &ch), (&[c], &ch)).shifts[0].clone()
+        };
+        let few = case(Some(2.0));
+        let k = few.shift_percent.abs() / few.shift_std_percent;
+        assert!((k - 2.5).abs() < 0.05, "shift / σ_s = {k}");
+        let nu = few.shift_dof.unwrap();
+        assert!((nu - 4.0).abs() < 0.1, "ν_s {nu}");
+        assert_eq!(few.significant, Some(false));
+        let many = case(Some(28.0));
+        assert!((many.shift_dof.unwrap() - 56.0).abs() < 1.5);
+        assert_eq!(many.significant, Some(true));
+        let spread = case(None);
+        assert_eq!(spread.shift_dof, None);
+        assert_eq!(spread.significant, Some(true), "2σ without ν");
+    }
+
     /// Shapes at different channel lists are compared on the shared ids (in
     /// any order); the frequency window keeps a high-MAC mode too far away out.
     #[test]
