@@ -145,6 +145,56 @@ class Modes:
         return self.table.column("damping_ratio").to_numpy()
 
     @property
+    def frequency_std_data_hz(self) -> "Any":
+        """Data-driven standard deviation of each frequency, Hz (numpy array;
+        NaN where none was computed): the statistical error of the estimate
+        from the record's own blocks (docs/statistics.md, Eqs. S1–S9), not
+        the order spread ``frequency_std_hz`` of the table."""
+        return self._column_or_nan("frequency_std_data_hz", "Modes.frequency_std_data_hz")
+
+    @property
+    def damping_std_data(self) -> "Any":
+        """Data-driven standard deviation of each damping ratio (numpy array;
+        NaN where none was computed), as :attr:`frequency_std_data_hz`."""
+        return self._column_or_nan("damping_std_data", "Modes.damping_std_data")
+
+    @property
+    def frequency_intervals_hz(self) -> "Any":
+        """95 % intervals of the frequencies, Hz: a numpy array of one row
+        ``[low, high]`` per mode, f ± t σ with σ :attr:`frequency_std_data_hz`
+        and t Student's t of the σ's degrees of freedom (``uncertainty_dof``,
+        Eqs. S8–S8' of docs/statistics.md: wide for an earthquake record whose
+        response lies in a few seconds); NaN where no σ."""
+        return self._intervals(self.frequencies_hz, self.frequency_std_data_hz)
+
+    @property
+    def damping_intervals(self) -> "Any":
+        """95 % intervals of the damping ratios, as :attr:`frequency_intervals_hz`."""
+        return self._intervals(self.damping_ratios, self.damping_std_data)
+
+    def _column_or_nan(self, name: str, what: str) -> "Any":
+        np = need("numpy", what)
+        if name not in self.table.column_names:
+            return np.full(len(self), np.nan)
+        return np.array([np.nan if v is None else v for v in self.table.column(name).to_pylist()], dtype=float)
+
+    def _interval_factors(self) -> "Any":
+        """t of each mode's interval: from ``uncertainty_dof``, else (tables
+        written before it) ``uncertainty_blocks`` − 1; NaN without either."""
+        np = need("numpy", "Modes intervals")
+        from . import _native
+
+        dof = self._column_or_nan("uncertainty_dof", "Modes intervals")
+        blocks = self._column_or_nan("uncertainty_blocks", "Modes intervals")
+        dof = np.where(np.isnan(dof), blocks - 1.0, dof)
+        return np.array([_native.interval_factor(float(d)) if np.isfinite(d) else np.nan for d in dof])
+
+    def _intervals(self, value: "Any", std: "Any") -> "Any":
+        np = need("numpy", "Modes intervals")
+        half = self._interval_factors() * std
+        return np.stack([value - half, value + half], axis=1)
+
+    @property
     def shapes(self) -> "Any":
         """Complex mode shapes, a numpy array of one row per mode and one
         column per channel of :attr:`output_channels` (largest component 1)."""
@@ -159,13 +209,20 @@ class Modes:
 
     def _repr_html_(self) -> str:
         rows = []
-        for r in self.table.select(
-            ["mode", "frequency_hz", "damping_ratio", "direction", "mpc", "pole_count"]
-        ).to_pylist():
+        try:
+            half = (self.frequency_intervals_hz[:, 1] - self.frequencies_hz).tolist()
+        except ImportError:  # without numpy: no intervals
+            half = [float("nan")] * len(self)
+        for r, h in zip(
+            self.table.select(["mode", "frequency_hz", "damping_ratio", "direction", "mpc", "pole_count"]).to_pylist(),
+            half,
+        ):
+            interval = f" ± {h:.4f}" if h == h else ""
             rows.append(
-                "<tr><td>{}</td><td>{:.4f}</td><td>{:.2f}</td><td>{}</td><td>{:.3f}</td><td>{}</td></tr>".format(
+                "<tr><td>{}</td><td>{:.4f}{}</td><td>{:.2f}</td><td>{}</td><td>{:.3f}</td><td>{}</td></tr>".format(
                     r["mode"],
                     r["frequency_hz"],
+                    interval,
                     100.0 * r["damping_ratio"],
                     html.escape(r["direction"] or ""),
                     r["mpc"],
@@ -175,7 +232,7 @@ class Modes:
         notes = "".join(f"<li>{html.escape(w)}</li>" for w in self.warnings)
         return (
             f"<div><strong>{len(self)} modes</strong> of {html.escape(str(self.event.get('name', '')))}"
-            "<table><thead><tr><th>mode</th><th>frequency (Hz)</th><th>damping (%)</th>"
+            "<table><thead><tr><th>mode</th><th>frequency (Hz, 95 % interval)</th><th>damping (%)</th>"
             "<th>direction</th><th>MPC</th><th>poles</th></tr></thead><tbody>"
             + "".join(rows)
             + "</tbody></table>"

@@ -363,6 +363,14 @@ fn track_finish_json(py: Python<'_>, options_json: &str, parts: Vec<String>) -> 
     })
 }
 
+/// The factor t of the 95 % interval θ̂ ± t σ of a data-driven σ with
+/// `dof` degrees of freedom (`uncertainty_dof`; docs/statistics.md,
+/// Eqs. S8–S8'); NaN below 1.
+#[pyfunction]
+fn interval_factor(dof: f64) -> f64 {
+    quaketwin::modal::uncertainty::interval_factor(dof)
+}
+
 /// A deliberate panic inside [`guarded`]: the test that a panic reaches
 /// Python as `QuaketwinError` (python/tests), not `PanicException`.
 #[pyfunction]
@@ -395,6 +403,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(track_windows_json, m)?)?;
     m.add_function(wrap_pyfunction!(track_finish_json, m)?)?;
     m.add_function(wrap_pyfunction!(watch_json, m)?)?;
+    m.add_function(wrap_pyfunction!(interval_factor, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_probe, m)?)?;
     Ok(())
 }

@@ -323,6 +323,30 @@ class Objects(unittest.TestCase):
         # Normalised: the largest component of every shape is 1 (real).
         np.testing.assert_allclose(np.abs(shapes).max(axis=1), 1.0, rtol=1e-9)
 
+    @skip_without("numpy")
+    def test_intervals_are_students_t_of_the_degrees_of_freedom(self):
+        import numpy as np
+
+        f = self.modes.frequencies_hz
+        sd = self.modes.frequency_std_data_hz
+        intervals = self.modes.frequency_intervals_hz
+        self.assertEqual(intervals.shape, (len(self.modes), 2))
+        known = np.isfinite(sd)
+        self.assertTrue(known.any(), "no mode with a data-driven σ")
+        dof = np.array(self.modes.table.column("uncertainty_dof").to_pylist(), dtype=float)
+        k = (intervals[known, 1] - f[known]) / sd[known]
+        np.testing.assert_allclose(intervals[known, 0], f[known] - k * sd[known], rtol=1e-12)
+        # Student's t_{0.975, ν}: above the normal 1.96, and tabulated values.
+        self.assertTrue(np.all(k > 1.96) and np.all(k < 13.0), k)
+        for t, nu in [(2.2622, 9.0), (2.0452, 29.0)]:
+            self.assertAlmostEqual(quaketwin._native.interval_factor(nu), t, places=3)
+        if importlib.util.find_spec("scipy") is not None:
+            from scipy import stats
+
+            np.testing.assert_allclose(k, stats.t.ppf(0.975, dof[known]), rtol=1e-6)
+        self.assertTrue(np.all(np.isnan(intervals[~known])))
+        self.assertIn("±", self.modes._repr_html_())
+
     def test_modes_equal_the_functional_call(self):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", quaketwin.QuaketwinWarning)
