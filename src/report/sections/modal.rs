@@ -136,7 +136,7 @@ pub(super) fn modal_section(dir: &Path, o: &Outputs, settings: &ReportSettings) 
             let bars = error_bars(modes);
             if !bars.is_empty() {
                 legend_series.push(Series::new(
-                    "95 % interval f ± t σ (data-driven σ, Student's t of its blocks), above the mode's column",
+                    "95 % interval f ± t σ (data-driven σ, Student's t of its degrees of freedom), above the mode's column",
                     vec![],
                     1,
                     Mark::Line,
@@ -245,8 +245,9 @@ pub(super) fn modal_section(dir: &Path, o: &Outputs, settings: &ReportSettings) 
 
 /// (f, half-width of the 95 % interval, highest order of the column) of
 /// every mode of `modes` with a data-driven σ (`frequency_std_data_hz`):
-/// the half-width is t_{0.975, n_b − 1} σ, n_b = `uncertainty_blocks`
-/// (Eq. S8 of docs/statistics.md; 2σ for a table without that column).
+/// the half-width is t_{0.975, ν} σ, ν = `uncertainty_dof` (Eqs. S8–S8'
+/// of docs/statistics.md; `uncertainty_blocks` − 1 for a table without
+/// it, 2σ for a table without either).
 fn error_bars(modes: &Loaded) -> Vec<(f64, f64, f64)> {
     let Loaded::Ok(t) = modes else {
         return Vec::new();
