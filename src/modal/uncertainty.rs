@@ -248,6 +248,24 @@ pub fn ssi_cov_blocks(
     centre(mats)
 }
 
+/// Columns of PO-MOESP's block Hankel matrix in each of `blocks` equal
+/// runs (the input–output blocks of Eq. S1): the record's n + 1 − 2p
+/// columns shared out, n the shortest signal.
+fn io_block_columns(
+    outputs: &[&[f64]],
+    inputs: &[&[f64]],
+    block_rows: usize,
+    blocks: usize,
+) -> usize {
+    let n = inputs
+        .iter()
+        .chain(outputs)
+        .map(|s| s.len())
+        .min()
+        .unwrap_or(0);
+    (n + 1).saturating_sub(2 * block_rows) / blocks
+}
+
 /// Input–output: the Gram matrix of PO-MOESP's block Hankel matrix over
 /// each of `blocks` equal runs of its columns; returns Ḡ and the columns
 /// of T (the centred block Grams).
@@ -259,9 +277,7 @@ pub fn po_moesp_blocks(
 ) -> (Mat<f64>, Vec<Mat<f64>>) {
     let (l, m, p) = (outputs.len(), inputs.len(), block_rows);
     let signals: Vec<&[f64]> = inputs.iter().chain(outputs).copied().collect();
-    let n = signals.iter().map(|s| s.len()).min().unwrap_or(0);
-    let columns = n + 1 - 2 * p;
-    let per_block = columns / blocks;
+    let per_block = io_block_columns(outputs, inputs, p, blocks);
     let rows = po_moesp_rows(m, l, p);
     let r = rows.len();
     let mats = (0..blocks)
@@ -386,8 +402,7 @@ pub fn io_sensitivity<'a>(
     }
     let n_max = n_max.min(k);
     let signals: Vec<&[f64]> = inputs.iter().chain(outputs).copied().collect();
-    let samples = signals.iter().map(|s| s.len()).min().unwrap_or(0);
-    let per_block = (samples + 1 - 2 * p) / blocks;
+    let per_block = io_block_columns(outputs, inputs, p, blocks);
     let rows = po_moesp_rows(m, l, p);
     let c = per_block as f64;
     let v = subspace.v.as_ref();
@@ -1212,16 +1227,7 @@ pub fn of_modes(
     }
     // Eq. S8': the blocks' powers give the σ's degrees of freedom.
     let block_len = match id.method {
-        Method::Io => {
-            let n = id
-                .outputs
-                .iter()
-                .chain(id.inputs)
-                .map(|s| s.len())
-                .min()
-                .unwrap_or(0);
-            (n + 1).saturating_sub(span) / nb
-        }
+        Method::Io => io_block_columns(id.outputs, id.inputs, id.block_rows, nb),
         _ => samples / nb,
     };
     let powers = block_powers(id.outputs, nb, block_len);

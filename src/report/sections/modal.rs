@@ -441,24 +441,23 @@ fn shifts_part(shifts: &Loaded, settings: &ReportSettings) -> String {
                     (Some(v), None) => format_number(v),
                     _ => "—".into(),
                 };
+                // With the factor of the test beside the verdict: Student's
+                // t of the shift's degrees of freedom (Eq. S8'), 2 without them.
+                let factor = num(fs::SHIFT_DOF.name, r).map_or(String::new(), |dof| {
+                    format!(
+                        " (t = {:.2}, {:.1} dof)",
+                        uncertainty::interval_factor(dof),
+                        dof
+                    )
+                });
                 let significant = match t
                     .boolean(fs::SIGNIFICANT.name)
                     .and_then(|v| v.get(r).copied().flatten())
                 {
-                    Some(true) if shift.is_some_and(|s| s < 0.0) => "yes: drop",
-                    Some(true) => "yes: rise",
-                    Some(false) => "no",
-                    None => "unknown (no frequency std)",
-                };
-                // The factor of the test: Student's t of the shift's
-                // degrees of freedom (Eq. S8'), 2 without them.
-                let significant = match num(fs::SHIFT_DOF.name, r) {
-                    Some(dof) if significant != "unknown (no frequency std)" => format!(
-                        "{significant} (t = {:.2}, {:.1} dof)",
-                        uncertainty::interval_factor(dof),
-                        dof
-                    ),
-                    _ => significant.to_string(),
+                    Some(true) if shift.is_some_and(|s| s < 0.0) => format!("yes: drop{factor}"),
+                    Some(true) => format!("yes: rise{factor}"),
+                    Some(false) => format!("no{factor}"),
+                    None => "unknown (no frequency std)".to_string(),
                 };
                 vec![
                     Cell::of(t, fs::REFERENCE_MODE.name, r),
